@@ -1,0 +1,151 @@
+"""Exceptions of pkm_pin.
+
+Every error a user can provoke is a :class:`PkmError`. Subclasses carry the data
+that describes the problem and build a message that says what was wrong, where,
+and how to fix it. Errors raised by Pinocchio, yourdfpy or the XML parser are
+re-raised as one of these, chained with ``raise ... from``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+
+def _listing(names: Iterable[str], limit: int = 25) -> str:
+    """Comma-separated, quoted list of names, cut after ``limit`` entries."""
+    names = list(names)
+    shown = ", ".join(repr(n) for n in names[:limit])
+    if len(names) > limit:
+        shown += f", … ({len(names) - limit} more)"
+    return shown or "(none)"
+
+
+class PkmError(Exception):
+    """Base class of every error raised by pkm_pin."""
+
+
+class InputError(PkmError, ValueError):
+    """An argument of an API call has the wrong shape, type or value."""
+
+
+class UrdfError(PkmError):
+    """A URDF cannot be read, parsed or turned into a kinematic model.
+
+    Attributes:
+        source: File path or a short description of the XML string.
+        reason: What is wrong.
+    """
+
+    def __init__(self, source: str, reason: str, hint: str = ""):
+        self.source = source
+        self.reason = reason
+        self.hint = hint
+        message = f"URDF {source}: {reason}"
+        if hint:
+            message += f". {hint}"
+        super().__init__(message)
+
+
+class FrameNotFound(PkmError, KeyError):
+    """A frame (link or named frame) is not in the model.
+
+    Attributes:
+        name: The frame that was asked for.
+        frames: The frames that exist.
+        where: Which model was searched.
+    """
+
+    def __init__(self, name: str, frames: Sequence[str], where: str = "the model"):
+        self.name = name
+        self.frames = list(frames)
+        self.where = where
+        super().__init__(name)
+
+    def __str__(self) -> str:
+        return (
+            f"frame {self.name!r} is not a link or frame of {self.where}; "
+            f"the frames are: {_listing(self.frames)}"
+        )
+
+
+class JointNotFound(PkmError, KeyError):
+    """A joint is not a movable joint where one was expected.
+
+    Attributes:
+        name: The joint that was asked for.
+        joints: The joints that would have been valid.
+        where: Which model or chain was searched.
+    """
+
+    def __init__(self, name: str, joints: Sequence[str], where: str = "the model"):
+        self.name = name
+        self.joints = list(joints)
+        self.where = where
+        super().__init__(name)
+
+    def __str__(self) -> str:
+        return (
+            f"joint {self.name!r} is not a movable joint of {self.where}; "
+            f"the movable joints are: {_listing(self.joints)}"
+        )
+
+
+class MechanismFileError(PkmError):
+    """A mechanism (TOML) file is wrong.
+
+    Attributes:
+        path: The file.
+        where: The table or key in the file (e.g. ``legs[2].actuated``).
+        reason: What is wrong and how to fix it.
+    """
+
+    def __init__(self, path: str, where: str, reason: str):
+        self.path = path
+        self.where = where
+        self.reason = reason
+        location = f"{path}" + (f", {where}" if where else "")
+        super().__init__(f"{location}: {reason}")
+
+
+class AssemblyError(PkmError):
+    """A leg cannot reach the pose asked of it.
+
+    Attributes:
+        leg: Name of the leg.
+        residual: Remaining pose error of the leg's best attempt (norm of the log6
+            error, angular part in rad and linear part divided by the characteristic
+            length).
+    """
+
+    def __init__(self, leg: str, residual: float, detail: str = ""):
+        self.leg = leg
+        self.residual = float(residual)
+        message = (
+            f"leg {leg!r} cannot reach the pose: the best configuration found within the "
+            f"joint limits leaves a relative pose error of {self.residual:.3g}"
+        )
+        if detail:
+            message += f" ({detail})"
+        super().__init__(message)
+
+
+class SingularityError(PkmError):
+    """A velocity map was asked for at or too close to a singular configuration.
+
+    Attributes:
+        kind: Which map ("forward", "inverse", ...).
+        index: The closeness index that was below the threshold.
+    """
+
+    def __init__(self, message: str, kind: str = "", index: float = float("nan")):
+        self.kind = kind
+        self.index = index
+        super().__init__(message)
+
+
+class ForwardKinematicsError(PkmError):
+    """The forward position problem did not converge to a valid assembly."""
+
+    def __init__(self, message: str, reached=None):
+        self.reached = reached
+        super().__init__(message)

@@ -1,0 +1,443 @@
+"""A leg: one serial chain from a URDF, its joint twists, tip placement and inverse kinematics.
+
+Conventions: twists are axis-first ``(ω; v_O)`` about the **world** origin
+(see :mod:`pkm_pin.screws`); placements are ``pinocchio.SE3`` in the world frame, the
+leg's ``base`` placement included; SI units and radians.
+
+The joint twists are the columns of Pinocchio's spatial (``WORLD``) frame Jacobian of
+the tip: column ``k`` is the twist of the tip produced by a unit rate of the ``k``-th
+velocity coordinate. A mimic pair (a parallelogram written as a revolute plus a
+mimicking revolute) therefore contributes one column: the combined twist of the pair.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+import pinocchio as pin
+
+from . import screws, urdf
+from .errors import FrameNotFound, InputError, JointNotFound
+from .serial import SerialChainMixin
+
+
+@dataclass
+class LegSolution:
+    """Result of :meth:`Leg.solve`.
+
+    Attributes:
+        q: Joint configuration (inside the joint limits).
+        residual: Relative pose error left: norm of ``log6(tip⁻¹ target)`` with the
+            linear part divided by the leg's characteristic length.
+        iterations: Newton iterations spent, all restarts included.
+        converged: Whether ``residual <= tol``.
+    """
+
+    q: np.ndarray
+    residual: float
+    iterations: int
+    converged: bool
+
+
+@dataclass(eq=False)
+class Leg(SerialChainMixin):
+    """One serial chain of a parallel mechanism (or a serial robot on its own).
+
+    Build it with :meth:`from_urdf` or :meth:`from_example_robot_data`. The Pinocchio
+    model holds only the chain from the URDF root to ``tip``: joints of other branches
+    are locked at their neutral value.
+
+    Attributes:
+        model: Pinocchio model of the chain (mimic joints honoured).
+        tip: Name of the frame of the chain fixed to the platform (or end effector).
+        actuated: Names of the actuated joints, in the order of the actuated coordinates.
+        base: Placement of the URDF root in the world.
+        name: Name of the leg.
+        source: Where the URDF came from (file path or a string label).
+    """
+
+    model: pin.Model
+    tip: str
+    actuated: tuple[str, ...] = ()
+    base: pin.SE3 = field(default_factory=pin.SE3.Identity)
+    name: str = "leg"
+    source: str = "<model>"
+    xml: str | None = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        if not self.model.existFrame(self.tip):
+            raise FrameNotFound(self.tip, self._frame_names(), f"leg {self.name!r}")
+        self.tip_id = self.model.getFrameId(self.tip)
+        self.data = self.model.createData()
+        self.actuated = tuple(self.actuated)
+        for a in self.actuated:
+            if a not in self.joint_names:
+                raise JointNotFound(a, self.joint_names, f"the chain of leg {self.name!r}")
+        if len(set(self.actuated)) != len(self.actuated):
+            raise InputError(f"leg {self.name!r}: an actuated joint is listed twice")
+        if not isinstance(self.base, pin.SE3):
+            raise InputError(f"leg {self.name!r}: base must be a pinocchio.SE3")
+
+    # ------------------------------------------------------------------ builders
+    @classmethod
+    def from_urdf(
+        cls,
+        source: str | os.PathLike,
+        tip: str,
+        actuated=(),
+        base: pin.SE3 | None = None,
+        name: str | None = None,
+    ) -> Leg:
+        """Leg from a URDF file path or XML text.
+
+        Args:
+            source: Path of a ``.urdf`` file, or the URDF text itself.
+            tip: Link or frame of the URDF fixed to the platform / end effector.
+            actuated: Names of the actuated joints (movable joints of the chain).
+            base: Placement of the URDF root in the world (identity by default).
+            name: Leg name (default: the robot name of the URDF).
+
+        Raises:
+            UrdfError: missing file, malformed XML or structure, unbuildable model.
+            FrameNotFound: ``tip`` is not a link or frame of the URDF.
+            JointNotFound: an actuated name is not a movable joint from root to tip.
+        """
+        src = urdf.read(source)
+        full = urdf.build_model(src)
+        name = name if name is not None else src.robot.name or "leg"
+        if isinstance(actuated, str):
+            actuated = (actuated,)
+        if not full.existFrame(tip):
+            raise FrameNotFound(tip, _frame_names(full), f"the URDF {src.label}")
+        model = _chain_model(full, tip)
+        for a in actuated:
+            if not model.existJointName(a) or model.joints[model.getJointId(a)].nv == 0:
+                chain = _movable_joint_names(model)
+                raise JointNotFound(a, chain, f"the chain from the root to {tip!r} in {src.label}")
+        return cls(
+            model=model,
+            tip=tip,
+            actuated=tuple(actuated),
+            base=base if base is not None else pin.SE3.Identity(),
+            name=name,
+            source=src.label,
+            xml=src.xml,
+        )
+
+    @classmethod
+    def from_example_robot_data(
+        cls,
+        robot: str,
+        tip: str | None = None,
+        actuated=None,
+        base: pin.SE3 | None = None,
+        name: str | None = None,
+    ) -> Leg:
+        """Leg from a robot of the example-robot-data package (``"ur5"``, ``"panda"``…).
+
+        ``tip`` defaults to the robot's flange frame; ``actuated`` to every joint of the
+        chain (a serial robot).
+        """
+        path = urdf.example_robot_path(robot)
+        if tip is None:
+            if robot not in urdf.EXAMPLE_ROBOTS:
+                raise InputError(f"give the tip frame of {robot!r}")
+            tip = urdf.EXAMPLE_ROBOTS[robot][1]
+        leg = cls.from_urdf(path, tip, (), base, name or robot)
+        leg.actuated = tuple(leg.joint_names if actuated is None else actuated)
+        leg.__post_init__()
+        return leg
+
+    def _frame_names(self) -> list[str]:
+        return _frame_names(self.model)
+
+    # --------------------------------------------------------------- properties
+    @cached_property
+    def joint_names(self) -> list[str]:
+        """Movable joints of the chain (mimicking joints excluded), in velocity order."""
+        return _movable_joint_names(self.model)
+
+    @property
+    def nq(self) -> int:
+        """Dimension of the configuration vector."""
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        """Number of velocity coordinates (the leg's joint twists)."""
+        return self.model.nv
+
+    @cached_property
+    def actuated_v(self) -> np.ndarray:
+        """Velocity indices of the actuated joints, in :attr:`actuated` order."""
+        return np.array([self.model.joints[self.model.getJointId(a)].idx_v for a in self.actuated],
+                        dtype=int)
+
+    @cached_property
+    def passive_v(self) -> np.ndarray:
+        """Velocity indices of the passive (not actuated) coordinates."""
+        return np.setdiff1d(np.arange(self.nv), self.actuated_v)
+
+    @cached_property
+    def actuated_q(self) -> np.ndarray:
+        """Configuration indices of the actuated joints (1-DOF joints)."""
+        out = []
+        for a in self.actuated:
+            j = self.model.joints[self.model.getJointId(a)]
+            if j.nq != 1:
+                raise InputError(f"actuated joint {a!r} of leg {self.name!r} is not a 1-DOF joint")
+            out.append(j.idx_q)
+        return np.array(out, dtype=int)
+
+    @property
+    def lower(self) -> np.ndarray:
+        """Lower joint limits (configuration space)."""
+        return self.model.lowerPositionLimit
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Upper joint limits (configuration space)."""
+        return self.model.upperPositionLimit
+
+    @cached_property
+    def characteristic_length(self) -> float:
+        """Sum of the offsets between consecutive joint frames up to the tip [m].
+
+        The unit of length for the leg's relative tolerances; 1.0 for a chain with no
+        offset at all. For prismatic joints the midpoint of the limits is added.
+        """
+        L = sum(np.linalg.norm(self.model.jointPlacements[j].translation)
+                for j in range(1, self.model.njoints))
+        L += np.linalg.norm(self.model.frames[self.tip_id].placement.translation)
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            if jm.nq == 1 and "P" in jm.shortname().replace("Mimic", ""):
+                lo, up = self.lower[jm.idx_q], self.upper[jm.idx_q]
+                if np.isfinite(lo) and np.isfinite(up):
+                    L += 0.5 * (abs(lo) + abs(up))
+        return float(L) if L > 0 else 1.0
+
+    # ------------------------------------------------------------ configurations
+    def neutral(self) -> np.ndarray:
+        """Neutral configuration, moved inside the joint limits where it lies outside."""
+        return self.clip(pin.neutral(self.model))
+
+    @cached_property
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Limits used for projection: those of 1-DOF joints (revolute, prismatic);
+        unbounded for the others (continuous joints, free flyers)."""
+        lo = np.full(self.nq, -np.inf)
+        up = np.full(self.nq, np.inf)
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            if jm.nq == 1 and jm.nv == 1:
+                lo[jm.idx_q] = self.model.lowerPositionLimit[jm.idx_q]
+                up[jm.idx_q] = self.model.upperPositionLimit[jm.idx_q]
+        return lo, up
+
+    def clip(self, q: np.ndarray) -> np.ndarray:
+        """Project ``q`` onto the joint limits of the 1-DOF joints."""
+        return np.clip(q, *self._bounds)
+
+    def within_limits(self, q: np.ndarray, tol: float = 1e-9) -> bool:
+        """Whether ``q`` respects the joint limits (with absolute slack ``tol``)."""
+        lo, up = self._bounds
+        return bool(np.all(q >= lo - tol) and np.all(q <= up + tol))
+
+    def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
+        """A configuration drawn uniformly inside the limits (infinite limits: ±π)."""
+        lo, up = self._bounds
+        q = rng.uniform(np.where(np.isfinite(lo), lo, -np.pi), np.where(np.isfinite(up), up, np.pi))
+        return pin.normalize(self.model, q) if self.model.nq != self.model.nv else q
+
+    def check_q(self, q, name: str = "q") -> np.ndarray:
+        """``q`` as a finite float array of shape (nq,), or a specific :class:`InputError`."""
+        a = np.asarray(q, dtype=float)
+        if a.shape != (self.nq,):
+            raise InputError(
+                f"{name} of leg {self.name!r} must have {self.nq} values "
+                f"(joints {self.joint_names}), got shape {a.shape}"
+            )
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"{name} of leg {self.name!r} must be finite, got {a}")
+        return a
+
+    # ---------------------------------------------------------------- kinematics
+    def _update(self, q: np.ndarray) -> None:
+        pin.computeJointJacobians(self.model, self.data, q)
+        pin.updateFramePlacement(self.model, self.data, self.tip_id)
+
+    def tip_placement(self, q) -> pin.SE3:
+        """World placement of the tip frame (base placement included)."""
+        q = self.check_q(q)
+        pin.framesForwardKinematics(self.model, self.data, q)
+        return self.base * self.data.oMf[self.tip_id]
+
+    def kinematics(self, q) -> tuple[pin.SE3, np.ndarray]:
+        """Tip placement and the 6×nv axis-first world Jacobian, from one Pinocchio pass."""
+        q = self.check_q(q)
+        self._update(q)
+        J = pin.getFrameJacobian(self.model, self.data, self.tip_id, pin.WORLD).reshape(6, -1)
+        J = screws.adjoint(self.base) @ screws.from_pinocchio(J)
+        return self.base * self.data.oMf[self.tip_id], J
+
+    def jacobian(self, q) -> np.ndarray:
+        """Spatial Jacobian, 6×nv, axis-first: column k is the twist (ω; v_O) of joint k."""
+        return self.kinematics(q)[1]
+
+    def joint_twists(self, q) -> np.ndarray:
+        """Joint twists (nv × 6), axis-first, about the world origin (rows of Jᵀ)."""
+        return self.jacobian(q).T
+
+    def joint_origins(self, q) -> np.ndarray:
+        """World positions of the joint frames of the chain (njoints − 1) × 3, after
+        the last call's configuration ``q``."""
+        q = self.check_q(q)
+        pin.forwardKinematics(self.model, self.data, q)
+        return np.array([(self.base * self.data.oMi[j]).translation
+                         for j in range(1, self.model.njoints)])
+
+    @cached_property
+    def spherical_groups(self) -> list[tuple[int, int, int]]:
+        """Velocity indices of runs of three revolutes that form a spherical joint.
+
+        Three consecutive 1-DOF revolute joints (none of them mimic-coupled) whose frames
+        coincide (zero offsets between them) have concurrent axes: written as a
+        spherical joint, they lose rank only because of the parametrisation (gimbal
+        lock). The analysis replaces their twists by three orthogonal lines through the
+        centre.
+        """
+        m = self.model
+        coupled = {m.joints[j].idx_v for j in range(1, m.njoints) if m.joints[j].nv == 0}
+        rev = []
+        for j in range(1, m.njoints):
+            jm = m.joints[j]
+            short = jm.shortname()
+            rev.append(jm.nv == 1 and short.startswith("JointModelR") and "UB" not in short
+                       and jm.idx_v not in coupled)
+        L = self.characteristic_length
+        groups, j = [], 1
+        while j + 2 < m.njoints:
+            trio = (j, j + 1, j + 2)
+            if all(rev[k - 1] for k in trio) and all(
+                m.parents[k] == k - 1
+                and np.linalg.norm(m.jointPlacements[k].translation) <= 1e-9 * L
+                for k in trio[1:]
+            ):
+                groups.append(tuple(m.joints[k].idx_v for k in trio))
+                j += 3
+            else:
+                j += 1
+        return groups
+
+    def motion_twists(self, q, J: np.ndarray | None = None) -> np.ndarray:
+        """Joint twists (nv × 6) with spherical groups replaced by 3 orthogonal lines.
+
+        Same span as :meth:`joint_twists` away from the gimbal lock of the spherical
+        groups; at the gimbal lock the true (3-dimensional) span of the spherical joint.
+        ``J`` may pass a Jacobian already computed at ``q`` (then the placements of the
+        joints must be current: call :meth:`kinematics` first).
+        """
+        if J is None:
+            _, J = self.kinematics(q)
+        T = J.T.copy()
+        for group in self.spherical_groups:
+            j = _joint_of_v(self.model, group[0])
+            centre = (self.base * self.data.oMi[j]).translation
+            T[list(group)] = np.hstack([np.eye(3), np.cross(centre, np.eye(3))])
+        return T
+
+    # ----------------------------------------------------------------------- IK
+    def solve(
+        self,
+        target: pin.SE3,
+        q0=None,
+        *,
+        tol: float = 1e-12,
+        max_iter: int = 100,
+        restarts: int = 24,
+        seed: int = 0,
+    ) -> LegSolution:
+        """Joint configuration placing the tip at ``target`` (world), inside the limits.
+
+        Damped Newton on the SE(3) error ``log6(tip⁻¹ target)`` (linear part divided by
+        the characteristic length), each step projected onto the joint limits, warm
+        started from ``q0`` (default: neutral). If it stalls above ``tol`` (a local
+        minimum, a limit), it restarts deterministically from the neutral configuration,
+        the middle of the limits and ``restarts`` configurations drawn with ``seed``,
+        and returns the best result found. It never raises for an unreachable target:
+        check :attr:`LegSolution.converged`.
+        """
+        target_local = self.base.actInv(target)
+        starts = [self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))]
+        best = self._newton(target_local, starts[0], tol, max_iter)
+        if best.converged:
+            return best
+        rng = np.random.default_rng(seed)
+        lo, up = self._bounds
+        middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), self.neutral())
+        extra = [self.neutral(), middle] + [self.random_configuration(rng) for _ in range(restarts)]
+        iterations = best.iterations
+        for q_start in extra:
+            sol = self._newton(target_local, q_start, tol, max_iter)
+            iterations += sol.iterations
+            if sol.residual < best.residual:
+                best = sol
+            if best.converged:
+                break
+        best.iterations = iterations
+        return best
+
+    def _newton(self, target_local: pin.SE3, q: np.ndarray, tol: float, max_iter: int):
+        model, data = self.model, self.data
+        w = np.r_[np.full(3, 1.0 / self.characteristic_length), np.ones(3)]
+        q = q.copy()
+        residual, damping = np.inf, 1e-10
+        for it in range(1, max_iter + 1):
+            pin.forwardKinematics(model, data, q)
+            pin.updateFramePlacement(model, data, self.tip_id)
+            iMd = data.oMf[self.tip_id].actInv(target_local)
+            err = w * pin.log6(iMd).vector
+            residual = float(np.linalg.norm(err))
+            if residual <= tol:
+                return LegSolution(q, residual, it, True)
+            J = pin.computeFrameJacobian(model, data, q, self.tip_id, pin.LOCAL).reshape(6, -1)
+            J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J)
+            dq = np.linalg.solve(J.T @ J + damping * np.eye(self.nv), J.T @ err)
+            q_new = self.clip(pin.integrate(model, q, dq))
+            if np.linalg.norm(q_new - q) < 1e-15 * (1 + np.linalg.norm(q)):
+                break  # stalled (at a limit or a local minimum)
+            q = q_new
+        return LegSolution(q, residual, it, residual <= tol)
+
+
+# ---------------------------------------------------------------------- helpers
+def _frame_names(model: pin.Model) -> list[str]:
+    return [f.name for f in model.frames if f.type != pin.FrameType.JOINT and f.name != "universe"]
+
+
+def _movable_joint_names(model: pin.Model) -> list[str]:
+    return [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0]
+
+
+def _joint_of_v(model: pin.Model, idx_v: int) -> int:
+    for j in range(1, model.njoints):
+        if model.joints[j].nv > 0 and model.joints[j].idx_v == idx_v:
+            return j
+    raise InputError(f"no joint has velocity index {idx_v}")
+
+
+def _chain_model(full: pin.Model, tip: str) -> pin.Model:
+    """The chain from the root to ``tip``: joints of other branches locked at neutral."""
+    parent = full.frames[full.getFrameId(tip)].parentJoint
+    chain = set(full.supports[parent])
+    # a mimicking joint on the chain needs its primary; keep both
+    lock = [j for j in range(1, full.njoints) if j not in chain]
+    if not lock:
+        return full
+    q_ref = pin.neutral(full)
+    q_ref = np.clip(q_ref, full.lowerPositionLimit, full.upperPositionLimit)
+    return pin.buildReducedModel(full, lock, q_ref)

@@ -1,0 +1,341 @@
+"""Screw algebra in axis-first (Plücker) coordinates — seed 000, sections 1–2.
+
+Conventions (the papers'):
+
+* A screw is ``$ = (s; s0)``: the direction part ``s`` first, then the moment part
+  ``s0``, both about the **world origin** unless a name says otherwise.
+* A twist is ``(ω; v_O)``: angular velocity [rad/s], then the velocity [m/s] of the body
+  point that coincides with the origin. A wrench is ``(f; m_O)``: force [N], then the
+  moment [N m] about the origin.
+* A line through ``r`` along unit ``s`` is ``(s; r × s)``; a screw of pitch ``h`` is
+  ``(s; r × s + h s)``; a couple (pitch infinite) is ``(0; s)``.
+* Reciprocal product ``a ∘ b = a[:3]·b[3:] + a[3:]·b[:3] = aᵀ Δ b`` with
+  ``Δ = [[0, I], [I, 0]]`` (:data:`DELTA`). A twist and a wrench are reciprocal when the
+  wrench does no work on the twist.
+* Arrays of screws have shape ``(6,)`` or ``(k, 6)``, one screw per row.
+
+Pinocchio's ``Motion``/``Force`` and its Jacobians are linear-first ``(v; ω)``,
+``(f; τ)``... :func:`from_pinocchio` and :func:`to_pinocchio` are the only place in
+pkm_pin where the two orders are swapped.
+
+Rank decisions (:func:`rank`, :func:`basis`, :func:`reciprocal`, ...) are made on a
+*unit-homogenised* copy: the moment part is divided by a characteristic length ``length``
+[m], then every row is scaled to unit norm, and singular values below ``rtol`` times the
+largest are taken as zero. The same geometry expressed in millimetres with ``length`` in
+millimetres gives the same ranks. When ``length`` is omitted it is estimated from the
+screws themselves (:func:`characteristic_length`), which is also unit-invariant.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import InputError
+
+#: Matrix of the reciprocal product: ``a ∘ b = a @ DELTA @ b``.
+DELTA = np.block([[np.zeros((3, 3)), np.eye(3)], [np.eye(3), np.zeros((3, 3))]])
+DELTA.setflags(write=False)
+
+#: Default relative tolerance of rank decisions (on unit-homogenised, row-normalised
+#: screws, relative to the largest singular value).
+RTOL = 1e-9
+
+_SWAP = np.r_[3:6, 0:3]
+
+
+# --------------------------------------------------------------------------- checks
+def as_vector3(x, name: str = "vector") -> np.ndarray:
+    """Return ``x`` as a finite float array of shape (3,), or raise :class:`InputError`."""
+    a = np.asarray(x, dtype=float)
+    if a.shape != (3,):
+        raise InputError(f"{name} must have 3 components, got shape {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{name} must be finite, got {a}")
+    return a
+
+
+def as_screws(S, name: str = "screws") -> np.ndarray:
+    """Return ``S`` as a finite float array of shape (k, 6); accepts (6,) or (k, 6)."""
+    a = np.asarray(S, dtype=float)
+    if a.ndim == 1 and a.shape[0] == 6:
+        a = a[None, :]
+    if a.ndim == 2 and a.shape[0] == 0:
+        return a.reshape(0, 6)
+    if a.ndim != 2 or a.shape[1] != 6:
+        raise InputError(
+            f"{name} must have shape (6,) or (k, 6) (one screw per row), got {a.shape}"
+        )
+    if not np.all(np.isfinite(a)):
+        raise InputError(f"{name} must be finite (found NaN or inf)")
+    return a
+
+
+def _unit(direction, name: str = "direction") -> np.ndarray:
+    d = as_vector3(direction, name)
+    n = np.linalg.norm(d)
+    if n == 0.0:
+        raise InputError(f"{name} must be a non-zero vector")
+    return d / n
+
+
+# --------------------------------------------------------------------- constructors
+def line(point, direction) -> np.ndarray:
+    """Unit line screw (pitch 0) through ``point`` along ``direction``: ``(s; r × s)``.
+
+    >>> line([1, 0, 0], [0, 0, 2])
+    array([ 0.,  0.,  1.,  0., -1.,  0.])
+    """
+    s = _unit(direction)
+    r = as_vector3(point, "point")
+    return np.concatenate([s, np.cross(r, s)])
+
+
+def couple(direction) -> np.ndarray:
+    """Unit couple (pitch infinite) ``(0; s)``: a pure translation or a pure moment.
+
+    >>> couple([0, 3, 0])
+    array([0., 0., 0., 0., 1., 0.])
+    """
+    return np.concatenate([np.zeros(3), _unit(direction)])
+
+
+def screw(point, direction, pitch: float) -> np.ndarray:
+    """Unit screw ``(s; r × s + h s)`` of pitch ``h`` [m/rad]; ``inf`` pitch gives a couple."""
+    h = float(pitch)
+    if np.isinf(h):
+        return couple(direction)
+    if np.isnan(h):
+        raise InputError("pitch must be a number or inf, got NaN")
+    s = _unit(direction)
+    return np.concatenate([s, np.cross(as_vector3(point, "point"), s) + h * s])
+
+
+# ------------------------------------------------------------------------- products
+def reciprocal_product(a, b) -> np.ndarray | float:
+    """Reciprocal product ``a ∘ b = a[:3]·b[3:] + a[3:]·b[:3]`` (broadcasts over rows).
+
+    For a twist and a wrench it is the instantaneous power of the wrench on the twist.
+    """
+    a = np.asarray(a, dtype=float)
+    b = np.asarray(b, dtype=float)
+    if a.shape[-1] != 6 or b.shape[-1] != 6:
+        raise InputError(f"screws must have 6 coordinates, got shapes {a.shape} and {b.shape}")
+    out = np.sum(a[..., :3] * b[..., 3:] + a[..., 3:] * b[..., :3], axis=-1)
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def pitch(s, length: float = 1.0, rtol: float = RTOL) -> np.ndarray | float:
+    """Pitch ``h = s·s0 / s·s`` [m/rad]; ``inf`` for a couple (``|s|`` negligible).
+
+    ``|s|`` is negligible when ``|s| · length <= rtol · |s0|``; ``length`` [m] is a
+    characteristic length of the problem.
+    """
+    S = as_screws(s)
+    w, v = S[:, :3], S[:, 3:]
+    ww = np.einsum("ij,ij->i", w, w)
+    is_couple = np.sqrt(ww) * length <= rtol * np.linalg.norm(v, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = np.where(is_couple, np.inf, np.einsum("ij,ij->i", w, v) / np.where(is_couple, 1, ww))
+    return float(h[0]) if np.ndim(s) == 1 else h
+
+
+def axis(s, length: float = 1.0, rtol: float = RTOL) -> tuple[np.ndarray, np.ndarray]:
+    """Axis of a single screw: (point of the axis nearest the origin, unit direction).
+
+    For a couple the axis has no location: the parallel line through the origin is
+    returned (point = 0). A zero screw raises :class:`InputError`.
+    """
+    S = as_screws(s)
+    if S.shape[0] != 1:
+        raise InputError(f"axis() takes one screw, got {S.shape[0]}")
+    w, v = S[0, :3], S[0, 3:]
+    if np.linalg.norm(w) * length <= rtol * np.linalg.norm(v):
+        if not np.any(v):
+            raise InputError("the zero screw has no axis")
+        return np.zeros(3), v / np.linalg.norm(v)
+    if not np.any(w):
+        raise InputError("the zero screw has no axis")
+    return np.cross(w, v) / w.dot(w), w / np.linalg.norm(w)
+
+
+# -------------------------------------------------------------------- linear algebra
+def characteristic_length(S) -> float:
+    """A length [m] that scales with the geometry of ``S``, for homogenising.
+
+    The root mean square distance from the origin of the axes of the rows of ``S`` that
+    are not couples; 1.0 when there is no such axis or every axis passes through the
+    origin. Scaling the geometry by ``k`` scales the result by ``k``.
+    """
+    S = as_screws(S)
+    w, v = S[:, :3], S[:, 3:]
+    ww = np.einsum("ij,ij->i", w, w)
+    keep = ww > 0
+    if not np.any(keep):
+        return 1.0
+    d2 = np.einsum("ij,ij->i", *(2 * [np.cross(w[keep], v[keep])])) / ww[keep] ** 2
+    L = float(np.sqrt(np.mean(d2)))
+    return L if L > 0 else 1.0
+
+
+def _homogenise(S: np.ndarray, length: float) -> np.ndarray:
+    """Divide the moment part by ``length`` (twists and wrenches alike)."""
+    H = S.copy()
+    H[:, 3:] /= length
+    return H
+
+
+def _dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
+    S = H.copy()
+    S[:, 3:] *= length
+    return S
+
+
+def _normalised_rows(S: np.ndarray, length: float) -> np.ndarray:
+    H = _homogenise(S, length)
+    n = np.linalg.norm(H, axis=1)
+    return H[n > 0] / n[n > 0, None]
+
+
+def _length(S: np.ndarray, length: float | None) -> float:
+    if length is None:
+        return characteristic_length(S)
+    L = float(length)
+    if not (np.isfinite(L) and L > 0):
+        raise InputError(f"characteristic length must be a positive number, got {length}")
+    return L
+
+
+def _svd(H: np.ndarray, rtol: float) -> tuple[int, np.ndarray]:
+    """Rank and full right singular vectors (rows) of a row-normalised matrix."""
+    if H.shape[0] == 0:
+        return 0, np.eye(6)
+    _, sv, Vt = np.linalg.svd(H, full_matrices=True)
+    r = int(np.sum(sv > rtol * sv[0])) if sv[0] > 0 else 0
+    return r, Vt
+
+
+def rank(S, length: float | None = None, rtol: float = RTOL) -> int:
+    """Number of linearly independent screws among the rows of ``S``."""
+    S = as_screws(S)
+    L = _length(S, length)
+    return _svd(_normalised_rows(S, L), rtol)[0]
+
+
+def basis(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
+    """Independent rows (rank × 6) spanning the same screw system as ``S``.
+
+    The rows are orthonormal in the homogenised coordinates ``(s; s0/length)``.
+    """
+    S = as_screws(S)
+    L = _length(S, length)
+    r, Vt = _svd(_normalised_rows(S, L), rtol)
+    return _dehomogenise(Vt[:r], L)
+
+
+def reciprocal(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
+    """Basis ((6 − rank) × 6) of every screw reciprocal to all rows of ``S``.
+
+    Empty ``S`` (shape (0, 6)) gives 6 rows. Twists of a joint system give its
+    constraint wrenches and vice versa (seed 000, eq. 11 and 23).
+    """
+    S = as_screws(S)
+    L = _length(S, length)
+    H = _normalised_rows(S, L)
+    # a_h Δ b_h = (a Δ b) / L for homogenised a_h, b_h: reciprocity is preserved.
+    r, Vt = _svd(H @ DELTA, rtol)
+    return _dehomogenise(Vt[r:], L)
+
+
+def union(*systems, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
+    """Basis of the screw system spanned by all the given systems together (eq. 34, 37)."""
+    stacked = np.vstack([as_screws(S) for S in systems]) if systems else np.zeros((0, 6))
+    return basis(stacked, length, rtol)
+
+
+def intersection(*systems, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
+    """Basis of the screws common to all the given systems (eq. 35, 36).
+
+    Computed as the reciprocal of the union of the reciprocals.
+    """
+    if not systems:
+        return np.eye(6)
+    arrays = [as_screws(S) for S in systems]
+    L = _length(np.vstack(arrays), length)
+    recips = [reciprocal(S, L, rtol) for S in arrays]
+    return reciprocal(np.vstack(recips), L, rtol)
+
+
+def contains(S, x, length: float | None = None, rtol: float = 1e-7) -> np.ndarray | bool:
+    """Whether each row of ``x`` lies in the span of ``S`` (relative tolerance ``rtol``)."""
+    S = as_screws(S)
+    X = as_screws(x, "x")
+    L = _length(np.vstack([S, X]), length)
+    B = _normalised_rows(basis(S, L), L) if S.shape[0] else np.zeros((0, 6))
+    H = _homogenise(X, L)
+    n = np.linalg.norm(H, axis=1)
+    resid = H - (H @ B.T) @ B if B.shape[0] else H
+    out = np.linalg.norm(resid, axis=1) <= rtol * np.where(n > 0, n, 1.0)
+    return bool(out[0]) if np.ndim(x) == 1 else out
+
+
+# ------------------------------------------------------------------ transformations
+def adjoint(placement: pin.SE3) -> np.ndarray:
+    """6×6 matrix mapping axis-first screw coordinates from frame b to frame a.
+
+    ``placement`` is ``aMb``. For a twist ``(ω; v)`` and a wrench ``(f; m)`` alike:
+    ``ω_a = R ω_b``, ``v_a = R v_b + p × R ω_b``.
+    """
+    if not isinstance(placement, pin.SE3):
+        raise InputError(f"placement must be a pinocchio.SE3, got {type(placement).__name__}")
+    R, p = placement.rotation, placement.translation
+    X = np.zeros((6, 6))
+    X[:3, :3] = R
+    X[3:, 3:] = R
+    X[3:, :3] = pin.skew(p) @ R
+    return X
+
+
+def transform(S, placement: pin.SE3) -> np.ndarray:
+    """Coordinates of screws ``S`` (given in frame b) in frame a, ``placement = aMb``."""
+    arr = np.asarray(S, dtype=float)
+    out = as_screws(S) @ adjoint(placement).T
+    return out[0] if arr.ndim == 1 else out
+
+
+def from_pinocchio(x) -> np.ndarray:
+    """Pinocchio linear-first ``(v; ω)`` → axis-first ``(ω; v)``.
+
+    Works on a 6-vector, a ``pin.Motion``/``pin.Force``, and on a 6×n Jacobian (the rows
+    are swapped; the result is still 6×n). This and :func:`to_pinocchio` are the only
+    place where the two orders meet.
+    """
+    if isinstance(x, (pin.Motion, pin.Force)):
+        x = x.vector
+    a = np.asarray(x, dtype=float)
+    if a.shape[0] != 6:
+        raise InputError(f"expected 6 rows in Pinocchio order (v; w), got shape {a.shape}")
+    return a[_SWAP].copy()
+
+
+def to_pinocchio(x) -> np.ndarray:
+    """Axis-first ``(ω; v)`` → Pinocchio linear-first ``(v; ω)`` (vector or 6×n)."""
+    a = np.asarray(x, dtype=float)
+    if a.shape[0] != 6:
+        raise InputError(f"expected 6 rows in axis-first order (w; v), got shape {a.shape}")
+    return a[_SWAP].copy()
+
+
+def exp(twist) -> pin.SE3:
+    """Rigid displacement ``exp`` of an axis-first twist (ω; v_O) held for unit time.
+
+    The result is the world-frame displacement ``D`` such that a body at ``M`` moves to
+    ``D * M`` (a spatial twist about the world origin).
+    """
+    t = as_screws(twist, "twist")[0]
+    return pin.exp6(pin.Motion(to_pinocchio(t)))
+
+
+def log(displacement: pin.SE3) -> np.ndarray:
+    """Axis-first twist (ω; v_O) whose :func:`exp` is the world displacement given."""
+    return from_pinocchio(pin.log6(displacement).vector)

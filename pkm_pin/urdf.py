@@ -1,0 +1,275 @@
+"""Reading, validating and building URDF models.
+
+A URDF is first parsed as XML (errors carry line and column), then loaded with
+yourdfpy, then checked for the structural mistakes that yourdfpy and Pinocchio let
+through or report obscurely (a joint naming a link that does not exist, two parents, a
+loop, a mimic of an unknown joint, a zero axis, inverted limits). Only then is the
+Pinocchio model built, with mimic joints honoured (a parallelogram is a revolute plus a
+mimicking revolute with multiplier −1). Every failure is a :class:`~pkm_pin.UrdfError`.
+"""
+
+from __future__ import annotations
+
+import io
+import logging
+import os
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import yourdfpy
+
+from .errors import UrdfError
+
+_MOVABLE = ("revolute", "continuous", "prismatic", "floating", "planar")
+_TYPES = ("fixed",) + _MOVABLE
+
+
+@dataclass(frozen=True)
+class UrdfSource:
+    """A URDF's text and where it came from.
+
+    Attributes:
+        xml: The URDF text.
+        label: The file path, or ``"<string: robot NAME>"`` for text given directly.
+        directory: Folder that relative mesh paths are resolved against (None for text).
+        robot: yourdfpy's parsed robot description.
+    """
+
+    xml: str
+    label: str
+    directory: Path | None
+    robot: yourdfpy.Robot
+
+
+def _looks_like_xml(source: str) -> bool:
+    return source.lstrip().startswith("<")
+
+
+def read(source: str | os.PathLike) -> UrdfSource:
+    """Read and validate a URDF given as a file path or as XML text.
+
+    Raises:
+        UrdfError: missing file, malformed XML, or a structural mistake; the message
+            names the file and what to fix.
+    """
+    if isinstance(source, (str, os.PathLike)) and not (
+        isinstance(source, str) and _looks_like_xml(source)
+    ):
+        path = Path(source)
+        if not path.is_file():
+            hint = "check the path" + (
+                f" (relative paths are taken from {Path.cwd()})" if not path.is_absolute() else ""
+            )
+            raise UrdfError(str(path), "no such file", hint)
+        try:
+            xml = path.read_text()
+        except (OSError, UnicodeDecodeError) as e:
+            raise UrdfError(str(path), f"cannot be read: {e}") from e
+        label, directory = str(path), path.parent
+    elif isinstance(source, str):
+        xml, label, directory = source, "<string>", None
+    else:
+        raise UrdfError(repr(type(source).__name__), "a URDF source must be a path or XML text")
+    root = _parse_xml(xml, label)
+    if label == "<string>":
+        label = f"<string: robot {root.get('name', '?')!r}>"
+    _check_structure(root, label)
+    robot = _load_yourdfpy(xml, label)
+    return UrdfSource(xml=xml, label=label, directory=directory, robot=robot)
+
+
+def _parse_xml(xml: str, label: str) -> ET.Element:
+    try:
+        root = ET.fromstring(xml)
+    except ET.ParseError as e:
+        line, col = e.position
+        raise UrdfError(label, f"malformed XML at line {line}, column {col}: {e}") from e
+    if root.tag != "robot":
+        raise UrdfError(label, f"the root element is <{root.tag}>, a URDF's must be <robot>")
+    return root
+
+
+def _floats(text: str | None, n: int, what: str, label: str) -> np.ndarray | None:
+    if text is None:
+        return None
+    try:
+        values = np.array([float(t) for t in text.split()])
+    except ValueError as e:
+        raise UrdfError(label, f"{what} must be {n} numbers, got {text!r}") from e
+    if values.shape != (n,) or not np.all(np.isfinite(values)):
+        raise UrdfError(label, f"{what} must be {n} finite numbers, got {text!r}")
+    return values
+
+
+def _check_structure(root: ET.Element, label: str) -> None:
+    """Check the link/joint tree: names, references, parents, loops, axes, limits."""
+    links = [l.get("name") for l in root.findall("link")]
+    if not links:
+        raise UrdfError(label, "the robot has no <link>")
+    if None in links:
+        raise UrdfError(label, "a <link> has no name attribute")
+    dup = {n for n in links if links.count(n) > 1}
+    if dup:
+        raise UrdfError(label, f"link names must be unique; repeated: {sorted(dup)}")
+    link_set = set(links)
+    joints = root.findall("joint")
+    names = [j.get("name") for j in joints]
+    if None in names:
+        raise UrdfError(label, "a <joint> has no name attribute")
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise UrdfError(label, f"joint names must be unique; repeated: {sorted(dup)}")
+    parent_of: dict[str, str] = {}
+    for j in joints:
+        _check_joint(j, link_set, parent_of, label)
+    movable = {j.get("name") for j in joints if j.get("type") != "fixed"}
+    for j in joints:
+        m = j.find("mimic")
+        if m is not None and m.get("joint") not in movable:
+            raise UrdfError(
+                label,
+                f"joint {j.get('name')!r} mimics {m.get('joint')!r}, which is not a movable joint",
+                f"movable joints: {sorted(movable)}",
+            )
+    roots = [l for l in links if l not in parent_of]
+    if len(roots) != 1:
+        raise UrdfError(
+            label,
+            f"the links must form one tree with one root; roots found: {roots}",
+            "connect every link to the tree with a joint, or remove it",
+        )
+    for link in links:  # a loop would leave some link without a path to the root
+        seen, cur = set(), link
+        while cur in parent_of:
+            if cur in seen:
+                raise UrdfError(label, f"the joints form a loop through link {cur!r}")
+            seen.add(cur)
+            cur = parent_of[cur]
+
+
+def _check_joint(j: ET.Element, link_set: set, parent_of: dict, label: str) -> None:
+    name, jtype = j.get("name"), j.get("type")
+    where = f"joint {name!r}"
+    if jtype not in _TYPES:
+        raise UrdfError(label, f"{where} has type {jtype!r}", f"use one of {list(_TYPES)}")
+    ends = {}
+    for tag in ("parent", "child"):
+        el = j.find(tag)
+        if el is None or el.get("link") is None:
+            raise UrdfError(label, f"{where} has no <{tag} link=...>")
+        if el.get("link") not in link_set:
+            raise UrdfError(
+                label,
+                f"{where} names {tag} link {el.get('link')!r}, which does not exist",
+                f"links: {sorted(link_set)}",
+            )
+        ends[tag] = el.get("link")
+    if ends["child"] in parent_of:
+        raise UrdfError(label, f"link {ends['child']!r} is the child of two joints")
+    parent_of[ends["child"]] = ends["parent"]
+    origin = j.find("origin")
+    if origin is not None:
+        _floats(origin.get("xyz"), 3, f"{where} origin xyz", label)
+        _floats(origin.get("rpy"), 3, f"{where} origin rpy", label)
+    if jtype in ("revolute", "continuous", "prismatic"):
+        ax = j.find("axis")
+        a = _floats(ax.get("xyz") if ax is not None else None, 3, f"{where} axis", label)
+        if a is not None and np.linalg.norm(a) == 0:
+            raise UrdfError(label, f"{where} has a zero axis", "give a non-zero axis xyz")
+    if jtype in ("revolute", "prismatic"):
+        lim = j.find("limit")
+        if lim is None:
+            raise UrdfError(label, f"{where} ({jtype}) has no <limit>", "URDF requires one")
+        try:
+            lo, up = float(lim.get("lower", 0.0)), float(lim.get("upper", 0.0))
+        except ValueError as e:
+            raise UrdfError(label, f"{where} has a non-numeric limit") from e
+        if not (np.isfinite(lo) and np.isfinite(up)) or lo > up:
+            raise UrdfError(label, f"{where} has limits lower={lo} > upper={up}")
+
+
+def _load_yourdfpy(xml: str, label: str) -> yourdfpy.Robot:
+    logger = logging.getLogger("yourdfpy")
+    previous = logger.level
+    logger.setLevel(logging.CRITICAL)
+    try:
+        urdf = yourdfpy.URDF.load(
+            io.BytesIO(xml.encode()), build_scene_graph=False, load_meshes=False
+        )
+    except Exception as e:  # yourdfpy raises many kinds; give one clear error
+        raise UrdfError(label, f"yourdfpy cannot load it: {e}") from e
+    finally:
+        logger.setLevel(previous)
+    return urdf.robot
+
+
+def build_model(src: UrdfSource) -> pin.Model:
+    """Pinocchio model of a validated URDF, with mimic joints honoured."""
+    try:
+        return pin.buildModelFromXML(src.xml, mimic=True)
+    except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
+        raise UrdfError(src.label, f"Pinocchio cannot build a model: {e}") from e
+
+
+def example_robot_data_dir() -> Path:
+    """Folder ``robots/`` of the installed example-robot-data package.
+
+    The 6.x wheels ship the data under ``cmeel.prefix/share/example-robot-data`` and no
+    Python module; older installs ship ``example_robot_data`` with a path helper.
+    """
+    import site
+    import sys
+
+    candidates = []
+    try:  # older wheels
+        import example_robot_data  # type: ignore
+
+        getter = getattr(example_robot_data, "getModelPath", None)
+        if getter is not None:
+            candidates.append(Path(getter("ur_description/urdf/ur5_robot.urdf")).parent)
+    except ImportError:
+        pass
+    roots = list(dict.fromkeys(site.getsitepackages() + [site.getusersitepackages()] + sys.path))
+    for r in roots:
+        candidates.append(Path(r) / "cmeel.prefix" / "share" / "example-robot-data" / "robots")
+    candidates.append(Path(sys.prefix) / "share" / "example-robot-data" / "robots")
+    for c in candidates:
+        if (c / "ur_description").is_dir():
+            return c
+    raise UrdfError(
+        "example-robot-data",
+        "the package is not installed",
+        "install it with: pip install 'pkm_pin[robots]' (or pip install example-robot-data)",
+    )
+
+
+#: name -> (path inside robots/, default tip frame)
+EXAMPLE_ROBOTS = {
+    "ur5": ("ur_description/urdf/ur5_robot.urdf", "tool0"),
+    "ur5_limited": ("ur_description/urdf/ur5_joint_limited_robot.urdf", "tool0"),
+    "panda": ("panda_description/urdf/panda.urdf", "panda_link8"),
+}
+
+
+def example_robot_path(name: str) -> Path:
+    """Path of an example-robot-data URDF: a name of :data:`EXAMPLE_ROBOTS`, or a path
+    relative to the package's ``robots/`` folder (e.g. ``"ur_description/urdf/ur10_robot.urdf"``).
+    """
+    if name in EXAMPLE_ROBOTS:
+        relative = EXAMPLE_ROBOTS[name][0]
+    elif name.endswith(".urdf"):
+        relative = name
+    else:
+        raise UrdfError(
+            f"example-robot-data:{name}",
+            "unknown robot name",
+            f"known names: {sorted(EXAMPLE_ROBOTS)}, or a path ending in .urdf relative to "
+            "the package's robots/ folder",
+        )
+    path = example_robot_data_dir() / relative
+    if not path.is_file():
+        raise UrdfError(str(path), "not found in the installed example-robot-data")
+    return path
