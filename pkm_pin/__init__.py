@@ -17,11 +17,15 @@ from .errors import (
     SingularityError,
     UrdfError,
 )
+from .analysis import Analysis
 from .leg import Leg, LegSolution
+from .mechanism import Assembly, Mechanism, load_mechanism
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "Analysis",
+    "Assembly",
     "AssemblyError",
     "ForwardKinematicsError",
     "FrameNotFound",
@@ -29,10 +33,12 @@ __all__ = [
     "JointNotFound",
     "Leg",
     "LegSolution",
+    "Mechanism",
     "MechanismFileError",
     "PkmError",
     "SingularityError",
     "UrdfError",
     "__version__",
+    "load_mechanism",
     "screws",
 ]

@@ -191,10 +191,16 @@ def _dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
     return S
 
 
+#: Rows whose homogenised norm is below this fraction of the largest are zero screws.
+_ZERO_ROW = 1e-12
+
+
 def _normalised_rows(S: np.ndarray, length: float) -> np.ndarray:
+    """Homogenised rows scaled to unit norm; (numerically) zero rows dropped."""
     H = _homogenise(S, length)
     n = np.linalg.norm(H, axis=1)
-    return H[n > 0] / n[n > 0, None]
+    keep = n > _ZERO_ROW * n.max() if n.size else n > 0
+    return H[keep] / n[keep, None]
 
 
 def _length(S: np.ndarray, length: float | None) -> float:

@@ -1,0 +1,341 @@
+"""Screw analysis of an assembled mechanism — seed 000, sections 3 and 4.
+
+Everything is derived from one Jacobian per leg (its columns are the joint twists):
+
+* **Mobility** (§3): leg ``i``'s constraint wrenches ``W_i`` are reciprocal to all its
+  joint twists; the mechanism's constraint system is their union; the platform twist
+  system is the reciprocal of that union, and its dimension is the (instantaneous)
+  degree of freedom.
+* **Actuation** (§4.1): for each actuated joint, the wrench reciprocal to every other
+  joint twist of its leg that does work on the platform twist system: the actuation
+  wrench ``ζ``. Multiplying the leg's velocity equation by it removes the passive rates:
+  ``ζᵀ Δ t = (ζ ∘ $_a) q̇_a``. Stacked: ``A Δ t = B q̇_a`` with the rows of ``A`` the
+  actuation wrenches and ``B = diag(ζ_i ∘ $_a,i)`` (eq. 43–45).
+* **Singularities** (§4.2): type I when ``B`` is singular, type II when ``A Δ`` is
+  singular on the platform twist system, type III both; a constraint singularity when
+  the constraint system loses rank (the platform gains a motion).
+
+Conventions: twists ``(ω; v_O)`` and wrenches ``(f; m_O)`` axis-first about the world
+origin. Every rank and singularity decision is made on unit-homogenised screws (moment
+parts divided by the mechanism's characteristic length, then rows normalised), so the
+same mechanism in millimetres or metres gives the same DOF and classes. Actuation
+wrenches are scaled to a unit force (or, for a pure moment, a unit moment) and signed so
+that ``B_ii >= 0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+
+from . import screws
+from .errors import InputError, SingularityError
+
+#: Dimensionless threshold below which a closeness index counts as singular.
+SINGULAR_TOL = 1e-7
+
+
+@dataclass
+class LegScrews:
+    """Screws of one leg at one configuration (all axis-first, world origin).
+
+    Attributes:
+        jacobian: 6 × nv Jacobian (columns: joint twists).
+        twists: nv × 6 joint twists with spherical groups replaced by their full span.
+        constraint_wrenches: basis of the wrenches reciprocal to every joint twist.
+    """
+
+    jacobian: np.ndarray
+    twists: np.ndarray
+    constraint_wrenches: np.ndarray
+
+
+class Analysis:
+    """Mobility, Jacobians and singularity classes of a mechanism at an assembly.
+
+    Args:
+        assembly: The assembled configuration (see :meth:`Mechanism.assemble`).
+        rtol: Relative tolerance of rank decisions (see :mod:`pkm_pin.screws`).
+        singular_tol: Threshold of the dimensionless closeness indices (default
+            :data:`SINGULAR_TOL`): below it the configuration is singular and the
+            velocity maps refuse to answer.
+    """
+
+    def __init__(self, assembly, rtol: float = screws.RTOL, singular_tol: float = SINGULAR_TOL):
+        self.assembly = assembly
+        self.mechanism = assembly.mechanism
+        self.rtol = rtol
+        self.singular_tol = singular_tol
+        self.length = self.mechanism.characteristic_length
+        self.legs = [self._leg_screws(leg, q) for leg, q in zip(self.mechanism.legs, assembly.leg_q)]
+
+    def _leg_screws(self, leg, q) -> LegScrews:
+        _, J = leg.kinematics(q)
+        T = leg.motion_twists(q, J)
+        return LegScrews(J, T, screws.reciprocal(T, self.length, self.rtol))
+
+    # ------------------------------------------------------------------ mobility
+    @property
+    def leg_constraint_wrenches(self) -> list[np.ndarray]:
+        """Per leg, a basis of its constraint wrench system (k_i × 6)."""
+        return [ls.constraint_wrenches for ls in self.legs]
+
+    @cached_property
+    def constraint_wrenches(self) -> np.ndarray:
+        """Basis of the mechanism's constraint wrench system (union over the legs, eq. 37)."""
+        return screws.union(*self.leg_constraint_wrenches, np.zeros((0, 6)),
+                            length=self.length, rtol=self.rtol)
+
+    @cached_property
+    def platform_twists(self) -> np.ndarray:
+        """Basis (dof × 6) of the platform's twist system: reciprocal of the constraints."""
+        return screws.reciprocal(self.constraint_wrenches, self.length, self.rtol)
+
+    @property
+    def dof(self) -> int:
+        """Instantaneous degree of freedom of the platform."""
+        return int(self.platform_twists.shape[0])
+
+    @cached_property
+    def translations(self) -> int:
+        """Dimension of the pure translations (couples) in the platform twist system."""
+        if not self.dof:
+            return 0
+        # rows of P are orthonormal in homogenised coordinates: |ω| <= 1 row-wise
+        sv = np.linalg.svd(self.platform_twists[:, :3], compute_uv=False)
+        return self.dof - int(np.sum(sv > 1e-7))
+
+    @property
+    def motion_type(self) -> str:
+        """``"3T"``, ``"2T1R"``, ``"1T2R"``, ``"3R"``, ``"3T3R"``…; ``"0"`` when rigid."""
+        t, r = self.translations, self.dof - self.translations
+        return (f"{t}T" if t else "") + (f"{r}R" if r else "") or "0"
+
+    @property
+    def grubler(self) -> int:
+        """Grübler–Kutzbach count of the mechanism (see :attr:`Mechanism.grubler`)."""
+        return self.mechanism.grubler
+
+    @cached_property
+    def redundant_constraints(self) -> int:
+        """Σ rank(leg constraints) − rank(union): the constraints counted more than once.
+
+        ``dof = grubler + redundant_constraints`` when no leg has an idle motion.
+        """
+        return int(sum(w.shape[0] for w in self.leg_constraint_wrenches)
+                   - self.constraint_wrenches.shape[0])
+
+    # ----------------------------------------------------------------- actuation
+    @cached_property
+    def _actuation(self) -> tuple[np.ndarray, np.ndarray]:
+        rows, b = [], []
+        P = self.platform_twists
+        for leg, ls in zip(self.mechanism.legs, self.legs):
+            for k in leg.actuated_v:
+                others = np.delete(ls.twists, k, axis=0)
+                R = screws.reciprocal(others, self.length, self.rtol)
+                zeta = self._working_wrench(R, P)
+                bk = screws.reciprocal_product(zeta, ls.jacobian[:, k])
+                if bk < 0 or (bk == 0 and zeta[np.argmax(np.abs(zeta))] < 0):
+                    zeta, bk = -zeta, -bk
+                rows.append(zeta)
+                b.append(bk)
+        return np.array(rows).reshape(-1, 6), np.array(b)
+
+    def _working_wrench(self, R: np.ndarray, P: np.ndarray) -> np.ndarray:
+        """The member of span(R) that does the most work on the platform twists.
+
+        In homogenised coordinates: the top right singular vector of ``P Δ Rᵀ``; it is
+        orthogonal to the leg's constraint wrenches (which do no work on ``P``), also at
+        a type I singularity where the actuated twist falls into the passive ones.
+        """
+        L = self.length
+        Rh, Ph = R.copy(), P.copy()
+        Rh[:, 3:] /= L
+        Ph[:, 3:] /= L
+        if Rh.shape[0] == 0 or Ph.shape[0] == 0:
+            return np.zeros(6)
+        _, _, Vt = np.linalg.svd(Ph @ screws.DELTA @ Rh.T)
+        w = Vt[0] @ Rh
+        w[3:] *= L
+        f, m = np.linalg.norm(w[:3]), np.linalg.norm(w[3:])
+        return w / (f if f * L > self.rtol * m else m)
+
+    @property
+    def actuation_wrenches(self) -> np.ndarray:
+        """Actuation wrenches (n × 6), one per actuated joint, in actuated-coordinate order."""
+        return self._actuation[0]
+
+    @property
+    def A(self) -> np.ndarray:
+        """Parallel Jacobian (n × 6): rows are the actuation wrenches; ``A Δ t = B q̇_a``."""
+        return self._actuation[0]
+
+    @property
+    def B(self) -> np.ndarray:
+        """Serial Jacobian (n × n, diagonal): ``B_ii = ζ_i ∘ $_a,i``."""
+        return np.diag(self._actuation[1])
+
+    @cached_property
+    def actuated_twists(self) -> np.ndarray:
+        """Twists (n × 6) of the actuated joints, in actuated-coordinate order."""
+        return np.array([ls.jacobian[:, k] for leg, ls in zip(self.mechanism.legs, self.legs)
+                         for k in leg.actuated_v]).reshape(-1, 6)
+
+    @property
+    def full_jacobian(self) -> np.ndarray:
+        """Actuation rows stacked on constraint rows: ``[A; C] Δ t = [B q̇_a; 0]``."""
+        return np.vstack([self.A, self.constraint_wrenches])
+
+    # ------------------------------------------------------------- singularities
+    def _homogenised_unit(self, S: np.ndarray) -> np.ndarray:
+        H = S.copy()
+        H[:, 3:] /= self.length
+        n = np.linalg.norm(H, axis=1, keepdims=True)
+        return H / np.where(n > 0, n, 1.0)
+
+    @cached_property
+    def _M(self) -> np.ndarray:
+        """``A Δ Pᵀ`` in homogenised unit coordinates (n × dof)."""
+        Ah = self._homogenised_unit(self.A)
+        Ph = self.platform_twists.copy()
+        Ph[:, 3:] /= self.length  # orthonormal rows already in homogenised coordinates
+        return Ah @ screws.DELTA @ Ph.T
+
+    @cached_property
+    def indices(self) -> dict[str, float]:
+        """Dimensionless closeness indices (0 at the singularity, unit-invariant).
+
+        * ``type_II``: smallest singular value of ``A Δ`` on the platform twist system
+          (rows unit-homogenised, platform basis orthonormal); 0 when the platform has
+          more degrees of freedom than actuators.
+        * ``type_I``: smallest ``|ζ_i ∘ $_a,i|`` of unit-homogenised screws.
+        * ``condition_A``: condition number of that ``A Δ`` (inf when singular).
+        """
+        M = self._M
+        sv = np.linalg.svd(M, compute_uv=False) if M.size else np.zeros(1)
+        ii = 0.0 if M.shape[0] < M.shape[1] or not M.size else float(sv[min(M.shape) - 1])
+        cond = float(sv[0] / ii) if ii > 0 else np.inf
+        i1 = np.inf
+        if self.A.shape[0]:
+            Th = self._homogenised_unit(self.actuated_twists)
+            Ah = self._homogenised_unit(self.A)
+            i1 = float(np.min(np.abs(screws.reciprocal_product(Ah, Th))))
+        return {"type_I": i1, "type_II": ii, "condition_A": cond}
+
+    @property
+    def singularity(self) -> str:
+        """``"none"``, ``"I"`` (B singular), ``"II"`` (A Δ singular), or ``"III"`` (both)."""
+        one = self.indices["type_I"] < self.singular_tol
+        two = self.indices["type_II"] < self.singular_tol
+        return {(False, False): "none", (True, False): "I",
+                (False, True): "II", (True, True): "III"}[(one, two)]
+
+    @cached_property
+    def constraint_singular(self) -> bool:
+        """Whether the constraint system has lost rank compared with the home assembly."""
+        mech = self.mechanism
+        if self.assembly is mech.__dict__.get("home_assembly"):
+            return False
+        home = mech.analyze() if "home_analysis" not in mech.__dict__ else mech.home_analysis
+        mech.__dict__["home_analysis"] = home
+        return self.constraint_wrenches.shape[0] < home.constraint_wrenches.shape[0]
+
+    @cached_property
+    def uncontrolled_twist(self) -> np.ndarray | None:
+        """At a type II/III singularity, the platform twist the locked actuators allow
+        (unit-homogenised, axis-first); ``None`` elsewhere."""
+        if self.indices["type_II"] >= self.singular_tol:
+            return None
+        M = self._M
+        if M.shape[1] == 0:
+            return None
+        _, _, Vt = np.linalg.svd(M, full_matrices=True)
+        return self._homogenised_unit((Vt[-1] @ self.platform_twists)[None])[0] * np.r_[
+            np.ones(3), np.full(3, self.length)]
+
+    @cached_property
+    def unresisted_wrench(self) -> np.ndarray | None:
+        """At a type II/III singularity, a platform wrench that no combination of
+        actuation and constraint wrenches balances; ``None`` elsewhere."""
+        if self.indices["type_II"] >= self.singular_tol:
+            return None
+        H = self._homogenised_unit(self.full_jacobian)
+        _, sv, Vt = np.linalg.svd(H, full_matrices=True)
+        w = Vt[-1].copy()
+        w[3:] *= self.length
+        return w
+
+    @cached_property
+    def lost_actuated_rates(self) -> np.ndarray | None:
+        """At a type I/III singularity, actuated rates that move no platform twist."""
+        if self.indices["type_I"] >= self.singular_tol:
+            return None
+        b = np.abs(np.diag(self.B))
+        e = np.zeros(len(b))
+        e[int(np.argmin(b))] = 1.0
+        return e
+
+    # ---------------------------------------------------------------- velocities
+    def _check_twist(self, twist) -> np.ndarray:
+        t = screws.as_screws(twist, "twist")
+        if t.shape[0] != 1:
+            raise InputError(f"twist must have shape (6,), got {np.shape(twist)}")
+        return t[0]
+
+    def forward_velocity(self, qdot_actuated) -> np.ndarray:
+        """Platform twist (6,) axis-first about the world origin from the actuated rates.
+
+        Solves ``A Δ t = B q̇_a`` on the platform twist system.
+
+        Raises:
+            SingularityError: at or near a type II singularity (index below
+                ``singular_tol``), or when the actuators do not control every DOF.
+        """
+        qd = self.mechanism.check_actuated(qdot_actuated, "qdot_actuated")
+        if self.indices["type_II"] < self.singular_tol:
+            raise SingularityError(
+                f"forward velocity undefined: type II closeness index "
+                f"{self.indices['type_II']:.3g} < {self.singular_tol:g} (the platform is "
+                f"not controlled by the {self.mechanism.n_actuated} actuators here)",
+                "forward", self.indices["type_II"])
+        A_P = self.A @ screws.DELTA @ self.platform_twists.T
+        x, *_ = np.linalg.lstsq(A_P, self.B @ qd, rcond=None)
+        if A_P.shape[0] > A_P.shape[1]:
+            resid = np.linalg.norm(A_P @ x - self.B @ qd)
+            if resid > 1e-9 * max(1.0, np.linalg.norm(self.B @ qd)):
+                raise InputError("these actuated rates are incompatible (redundant actuation)")
+        return x @ self.platform_twists
+
+    def inverse_velocity(self, twist) -> np.ndarray:
+        """Actuated rates producing the platform twist ``twist`` (axis-first, world origin).
+
+        Raises:
+            InputError: the twist is outside the platform twist system.
+            SingularityError: at or near a type I singularity.
+        """
+        t = self._check_twist(twist)
+        if not screws.contains(self.platform_twists, t, self.length):
+            raise InputError(
+                f"twist {np.round(t, 6)} is not a motion of the platform here "
+                f"(motion type {self.motion_type}); project it onto platform_twists first"
+            )
+        if self.indices["type_I"] < self.singular_tol:
+            raise SingularityError(
+                f"inverse velocity undefined: type I closeness index "
+                f"{self.indices['type_I']:.3g} < {self.singular_tol:g}",
+                "inverse", self.indices["type_I"])
+        return (self.A @ screws.DELTA @ t) / np.diag(self.B)
+
+    def passive_rates(self, twist) -> list[np.ndarray]:
+        """Every leg's joint rates (all joints, velocity order) for a platform twist."""
+        t = self._check_twist(twist)
+        if not screws.contains(self.platform_twists, t, self.length):
+            raise InputError(f"twist {np.round(t, 6)} is not a motion of the platform here")
+        out = []
+        for leg, ls in zip(self.mechanism.legs, self.legs):
+            qd, *_ = np.linalg.lstsq(ls.jacobian, t, rcond=None)
+            out.append(qd)
+        return out

@@ -1,0 +1,375 @@
+"""Mechanisms (legs joined by a platform), their description files, and assemblies.
+
+A :class:`Mechanism` is a list of :class:`~pkm_pin.leg.Leg` whose tips are fixed to one
+platform: the tip frame of leg ``i`` coincides with ``pose * anchors[i]`` where ``pose``
+is the platform placement in the world. An :class:`Assembly` is one solution of those
+closure equations: the platform pose and one configuration per leg.
+
+Mechanism files are TOML (read with the standard library)::
+
+    name = "3-RPR (seed 000)"
+    [[legs]]
+    name = "A"
+    urdf = "../urdf/rpr_leg_a.urdf"                 # relative to this file
+    tip = "tip"                                     # link/frame fixed to the platform
+    actuated = ["A1"]                               # joint names
+    base = { xyz = [0, 0, 0], rpy = [0, 0, 0] }     # leg root in the world
+    anchor = { xyz = [0, 0, 0], rpy = [0, 0, 0] }   # tip frame in the platform frame
+    home_q = [0.0, 1.2, 0.3]                        # optional: leg configuration at home
+    [home]                                          # a pose where the mechanism assembles
+    xyz = [0.0, 0.0, 0.0]
+    rpy = [0.0, 0.0, 0.0]
+
+``home_q`` (optional) selects the working mode (e.g. elbow up/down) of each leg at home;
+without it the leg's inverse kinematics starts from its neutral configuration.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import (
+    AssemblyError,
+    FrameNotFound,
+    InputError,
+    JointNotFound,
+    MechanismFileError,
+    PkmError,
+    UrdfError,
+)
+from .leg import Leg
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+
+def placement(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> pin.SE3:
+    """``pin.SE3`` from a translation [m] and URDF roll-pitch-yaw angles [rad]."""
+    xyz = np.asarray(xyz, dtype=float)
+    rpy = np.asarray(rpy, dtype=float)
+    if xyz.shape != (3,) or rpy.shape != (3,):
+        raise InputError(f"xyz and rpy must have 3 values each, got {xyz.shape} and {rpy.shape}")
+    if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
+        raise InputError(f"xyz and rpy must be finite, got {xyz} and {rpy}")
+    return pin.SE3(pin.rpy.rpyToMatrix(*rpy), xyz)
+
+
+def as_pose(pose) -> pin.SE3:
+    """A platform pose from a ``pin.SE3``, a 4×4 matrix, or 6 numbers (x, y, z, roll, pitch, yaw)."""
+    if isinstance(pose, pin.SE3):
+        if not (np.all(np.isfinite(pose.translation)) and np.all(np.isfinite(pose.rotation))):
+            raise InputError("the pose must be finite")
+        return pose
+    a = np.asarray(pose, dtype=float)
+    if a.shape == (6,):
+        return placement(a[:3], a[3:])
+    if a.shape == (4, 4):
+        if not np.all(np.isfinite(a)):
+            raise InputError("the pose must be finite")
+        R = a[:3, :3]
+        if not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
+            raise InputError("the 4×4 pose has no rotation matrix in its upper-left block")
+        return pin.SE3(R, a[:3, 3])
+    raise InputError(
+        "a pose is a pinocchio.SE3, a 4×4 homogeneous matrix or 6 numbers "
+        f"(x, y, z, roll, pitch, yaw); got shape {a.shape}"
+    )
+
+
+@dataclass
+class Assembly:
+    """One assembled configuration of a mechanism.
+
+    Attributes:
+        mechanism: The mechanism.
+        pose: Platform placement in the world (``pin.SE3``).
+        leg_q: One configuration per leg (legs in mechanism order).
+        residual: Largest relative closure error over the legs (see :meth:`Leg.solve`).
+        info: Free-form details from the solver that produced it (steps, iterations…).
+    """
+
+    mechanism: Mechanism
+    pose: pin.SE3
+    leg_q: list[np.ndarray]
+    residual: float = 0.0
+    info: dict = field(default_factory=dict)
+
+    @property
+    def q_actuated(self) -> np.ndarray:
+        """Actuated coordinates: legs in mechanism order, each in its ``actuated`` order."""
+        return np.concatenate(
+            [q[leg.actuated_q] for leg, q in zip(self.mechanism.legs, self.leg_q)]
+        ) if self.leg_q else np.zeros(0)
+
+
+class Mechanism:
+    """A parallel mechanism: legs whose tips are fixed to one platform.
+
+    Args:
+        legs: The legs; their names must be distinct.
+        anchors: Placement of each leg's tip frame in the platform frame (identity by
+            default).
+        name: Name of the mechanism.
+        home: A platform pose where the mechanism assembles (identity by default).
+        home_q: Optional leg configurations at home, selecting the working mode.
+        description: One line saying what it is.
+    """
+
+    def __init__(
+        self,
+        legs: Sequence[Leg],
+        anchors: Sequence[pin.SE3] | None = None,
+        name: str = "mechanism",
+        home: pin.SE3 | None = None,
+        home_q: Sequence | None = None,
+        description: str = "",
+    ):
+        self.legs = list(legs)
+        if not self.legs:
+            raise InputError("a mechanism needs at least one leg")
+        for i, leg in enumerate(self.legs):
+            if not isinstance(leg, Leg):
+                raise InputError(f"legs[{i}] is a {type(leg).__name__}, not a pkm_pin.Leg")
+        names = [leg.name for leg in self.legs]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise InputError(f"leg names must be distinct; repeated: {dup}")
+        anchors = [pin.SE3.Identity()] * len(self.legs) if anchors is None else list(anchors)
+        if len(anchors) != len(self.legs):
+            raise InputError(f"{len(anchors)} anchors given for {len(self.legs)} legs")
+        for a in anchors:
+            if not isinstance(a, pin.SE3):
+                raise InputError("every anchor must be a pinocchio.SE3")
+        self.anchors = anchors
+        self.name = name
+        self.description = description
+        self.home = as_pose(home) if home is not None else pin.SE3.Identity()
+        if home_q is not None:
+            if len(home_q) != len(self.legs):
+                raise InputError(f"home_q has {len(home_q)} entries for {len(self.legs)} legs")
+            home_q = [None if q is None else leg.check_q(q, "home_q")
+                      for leg, q in zip(self.legs, home_q)]
+        self.home_q = home_q
+
+    def __repr__(self) -> str:
+        return f"Mechanism({self.name!r}, legs={[leg.name for leg in self.legs]})"
+
+    # ------------------------------------------------------------------ counts
+    @property
+    def actuated_names(self) -> list[str]:
+        """Actuated joints as ``"leg/joint"``, in the order of the actuated coordinates."""
+        return [f"{leg.name}/{a}" for leg in self.legs for a in leg.actuated]
+
+    @property
+    def n_actuated(self) -> int:
+        """Number of actuated coordinates."""
+        return sum(len(leg.actuated) for leg in self.legs)
+
+    @cached_property
+    def characteristic_length(self) -> float:
+        """Unit of length of the relative tolerances [m]: mean of the legs' lengths."""
+        return float(np.mean([leg.characteristic_length for leg in self.legs]))
+
+    @property
+    def grubler(self) -> int:
+        """Grübler–Kutzbach count ``6 (1 − legs) + Σ leg nv`` (1-DOF joints, mimic pairs
+        counted once). Wrong for overconstrained mechanisms: compare with
+        :attr:`Analysis.dof`."""
+        return 6 * (1 - len(self.legs)) + sum(leg.nv for leg in self.legs)
+
+    # ---------------------------------------------------------------- assembly
+    @cached_property
+    def home_assembly(self) -> Assembly:
+        """The assembly at :attr:`home` (working mode from ``home_q`` when given)."""
+        return self.assemble(self.home, guess=self.home_q)
+
+    def assemble(self, pose, guess=None, *, tol: float = 1e-12) -> Assembly:
+        """Solve every leg so that its tip coincides with ``pose * anchor``.
+
+        Args:
+            pose: Platform pose (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw).
+            guess: An :class:`Assembly` or a list of leg configurations to warm-start
+                from (default: the home assembly), which keeps the legs on its branch.
+            tol: Relative closure tolerance of each leg.
+
+        Raises:
+            AssemblyError: a leg cannot reach the pose within its joint limits.
+        """
+        pose = as_pose(pose)
+        starts = self._guess_q(guess)
+        leg_q, worst = [], 0.0
+        for leg, anchor, q0 in zip(self.legs, self.anchors, starts):
+            sol = leg.solve(pose * anchor, q0, tol=tol)
+            if not sol.converged:
+                raise AssemblyError(leg.name, sol.residual)
+            leg_q.append(sol.q)
+            worst = max(worst, sol.residual)
+        return Assembly(self, pose, leg_q, worst)
+
+    def _guess_q(self, guess) -> list:
+        if guess is None:
+            if "home_assembly" in self.__dict__:
+                return list(self.home_assembly.leg_q)
+            return list(self.home_q) if self.home_q is not None else [None] * len(self.legs)
+        if isinstance(guess, Assembly):
+            return list(guess.leg_q)
+        guess = list(guess)
+        if len(guess) != len(self.legs):
+            raise InputError(f"guess has {len(guess)} leg configurations for {len(self.legs)} legs")
+        return [None if q is None else leg.check_q(q, "guess") for leg, q in zip(self.legs, guess)]
+
+    def check_actuated(self, q_actuated, name: str = "q_actuated") -> np.ndarray:
+        """``q_actuated`` as a finite array of the right length, or a specific error."""
+        a = np.asarray(q_actuated, dtype=float)
+        if a.shape != (self.n_actuated,):
+            raise InputError(
+                f"{name} must have {self.n_actuated} values ({', '.join(self.actuated_names)}), "
+                f"got shape {a.shape}"
+            )
+        if not np.all(np.isfinite(a)):
+            raise InputError(f"{name} must be finite, got {a}")
+        return a
+
+    # ----------------------------------------------------------------- analysis
+    def analyze(self, pose_or_assembly=None, **options):
+        """Screw analysis (:class:`~pkm_pin.analysis.Analysis`) at a pose or assembly
+        (default: home)."""
+        from .analysis import Analysis
+
+        if pose_or_assembly is None:
+            assembly = self.home_assembly
+        elif isinstance(pose_or_assembly, Assembly):
+            assembly = pose_or_assembly
+        else:
+            assembly = self.assemble(pose_or_assembly)
+        return Analysis(assembly, **options)
+
+
+# --------------------------------------------------------------------- TOML files
+_LEG_KEYS = {"name", "urdf", "tip", "actuated", "base", "anchor", "home_q"}
+_TOP_KEYS = {"name", "description", "legs", "home"}
+_POSE_KEYS = {"xyz", "rpy"}
+
+
+def load_mechanism(path: str | os.PathLike) -> Mechanism:
+    """Read a mechanism file (TOML, format in this module's docstring).
+
+    Raises:
+        MechanismFileError: the file is missing or wrong; the message names the file,
+            the leg and the key.
+    """
+    path = Path(path)
+    label = str(path)
+    if not path.is_file():
+        raise MechanismFileError(label, "", "no such file")
+    try:
+        with path.open("rb") as f:
+            doc = tomllib.load(f)
+    except tomllib.TOMLDecodeError as e:
+        raise MechanismFileError(label, "", f"not valid TOML: {e}") from e
+    except (OSError, UnicodeDecodeError) as e:
+        raise MechanismFileError(label, "", f"cannot be read: {e}") from e
+    _unknown(doc, _TOP_KEYS, label, "")
+    name = _typed(doc, "name", str, label, "", default=path.stem)
+    description = _typed(doc, "description", str, label, "", default="")
+    legs_doc = doc.get("legs")
+    if not isinstance(legs_doc, list) or not legs_doc:
+        raise MechanismFileError(label, "legs", "needs at least one [[legs]] table")
+    legs, anchors, home_q = [], [], []
+    for i, entry in enumerate(legs_doc):
+        leg, anchor, q = _load_leg(entry, i, path)
+        legs.append(leg)
+        anchors.append(anchor)
+        home_q.append(q)
+    home = _pose_table(doc.get("home", {}), label, "home")
+    try:
+        return Mechanism(legs, anchors, name=name, home=home,
+                         home_q=home_q if any(q is not None for q in home_q) else None,
+                         description=description)
+    except InputError as e:
+        raise MechanismFileError(label, "", str(e)) from e
+
+
+def _load_leg(entry, i: int, path: Path):
+    label = str(path)
+    if not isinstance(entry, dict):
+        raise MechanismFileError(label, f"legs[{i}]", "must be a table")
+    leg_name = entry.get("name", f"leg{i}")
+    where = f"leg {leg_name!r} (legs[{i}])"
+    _unknown(entry, _LEG_KEYS, label, where)
+    leg_name = _typed(entry, "name", str, label, where, default=f"leg{i}")
+    urdf_rel = _typed(entry, "urdf", str, label, where)
+    tip = _typed(entry, "tip", str, label, where)
+    actuated = entry.get("actuated", [])
+    if not (isinstance(actuated, list) and all(isinstance(a, str) for a in actuated)):
+        raise MechanismFileError(label, f"{where}.actuated", "must be a list of joint names")
+    base = _pose_table(entry.get("base", {}), label, f"{where}.base")
+    anchor = _pose_table(entry.get("anchor", {}), label, f"{where}.anchor")
+    urdf_path = (path.parent / urdf_rel).resolve()
+    try:
+        leg = Leg.from_urdf(urdf_path, tip, actuated, base, leg_name)
+    except (FrameNotFound, JointNotFound) as e:
+        key = "tip" if isinstance(e, FrameNotFound) else "actuated"
+        raise MechanismFileError(label, f"{where}.{key}", str(e)) from e
+    except UrdfError as e:
+        raise MechanismFileError(label, f"{where}.urdf", str(e)) from e
+    except PkmError as e:
+        raise MechanismFileError(label, where, str(e)) from e
+    q = None
+    if "home_q" in entry:
+        q = _numbers(entry["home_q"], leg.nq, label, f"{where}.home_q")
+    return leg, anchor, q
+
+
+def _unknown(table: dict, allowed: set, label: str, where: str) -> None:
+    extra = sorted(set(table) - allowed)
+    if extra:
+        raise MechanismFileError(
+            label, where or "top level",
+            f"unknown key(s) {extra}; the allowed keys are {sorted(allowed)}",
+        )
+
+
+def _typed(table: dict, key: str, kind: type, label: str, where: str, default=None):
+    if key not in table:
+        if default is None:
+            raise MechanismFileError(label, f"{where}.{key}" if where else key, "is missing")
+        return default
+    value = table[key]
+    if not isinstance(value, kind):
+        raise MechanismFileError(
+            label, f"{where}.{key}" if where else key,
+            f"must be a {kind.__name__}, got {type(value).__name__} {value!r}",
+        )
+    return value
+
+
+def _numbers(value, n: int, label: str, where: str) -> np.ndarray:
+    if not (isinstance(value, list) and all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                            for v in value)):
+        raise MechanismFileError(label, where, f"must be a list of {n} numbers, got {value!r}")
+    if len(value) != n:
+        raise MechanismFileError(label, where, f"must have {n} numbers, got {len(value)}")
+    a = np.array(value, dtype=float)
+    if not np.all(np.isfinite(a)):
+        raise MechanismFileError(label, where, f"must be finite, got {value!r}")
+    return a
+
+
+def _pose_table(table, label: str, where: str) -> pin.SE3:
+    if not isinstance(table, dict):
+        raise MechanismFileError(label, where, "must be a table { xyz = [...], rpy = [...] }")
+    _unknown(table, _POSE_KEYS, label, where)
+    xyz = _numbers(table.get("xyz", [0.0, 0.0, 0.0]), 3, label, f"{where}.xyz")
+    rpy = _numbers(table.get("rpy", [0.0, 0.0, 0.0]), 3, label, f"{where}.rpy")
+    return placement(xyz, rpy)
