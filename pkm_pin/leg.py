@@ -207,7 +207,8 @@ class Leg(SerialChainMixin):
         """Sum of the offsets between consecutive joint frames up to the tip [m].
 
         The unit of length for the leg's relative tolerances; 1.0 for a chain with no
-        offset at all. For prismatic joints the midpoint of the limits is added.
+        offset at all. For each prismatic joint with finite limits,
+        ``(|lower| + |upper|) / 2`` is added.
         """
         L = sum(np.linalg.norm(self.model.jointPlacements[j].translation)
                 for j in range(1, self.model.njoints))
@@ -293,8 +294,7 @@ class Leg(SerialChainMixin):
         return self.jacobian(q).T
 
     def joint_origins(self, q) -> np.ndarray:
-        """World positions of the joint frames of the chain (njoints − 1) × 3, after
-        the last call's configuration ``q``."""
+        """World positions of the joint frames of the chain at ``q``, (njoints − 1) × 3."""
         q = self.check_q(q)
         pin.forwardKinematics(self.model, self.data, q)
         return np.array([(self.base * self.data.oMi[j]).translation
@@ -338,12 +338,13 @@ class Leg(SerialChainMixin):
 
         Same span as :meth:`joint_twists` away from the gimbal lock of the spherical
         groups; at the gimbal lock the true (3-dimensional) span of the spherical joint.
-        ``J`` may pass a Jacobian already computed at ``q`` (then the placements of the
-        joints must be current: call :meth:`kinematics` first).
+        ``J`` may pass the Jacobian already computed at ``q`` to save a pass.
         """
         if J is None:
             _, J = self.kinematics(q)
         T = J.T.copy()
+        if self.spherical_groups:
+            pin.forwardKinematics(self.model, self.data, self.check_q(q))
         for group in self.spherical_groups:
             j = _joint_of_v(self.model, group[0])
             centre = (self.base * self.data.oMi[j]).translation
@@ -434,7 +435,6 @@ def _chain_model(full: pin.Model, tip: str) -> pin.Model:
     """The chain from the root to ``tip``: joints of other branches locked at neutral."""
     parent = full.frames[full.getFrameId(tip)].parentJoint
     chain = set(full.supports[parent])
-    # a mimicking joint on the chain needs its primary; keep both
     lock = [j for j in range(1, full.njoints) if j not in chain]
     if not lock:
         return full

@@ -14,9 +14,10 @@ Conventions (the papers'):
   wrench does no work on the twist.
 * Arrays of screws have shape ``(6,)`` or ``(k, 6)``, one screw per row.
 
-Pinocchio's ``Motion``/``Force`` and its Jacobians are linear-first ``(v; ω)``,
-``(f; τ)``... :func:`from_pinocchio` and :func:`to_pinocchio` are the only place in
-pkm_pin where the two orders are swapped.
+Pinocchio's ``Motion`` and its Jacobians are linear-first ``(v; ω)``:
+:func:`from_pinocchio` and :func:`to_pinocchio` are the only place in pkm_pin where the
+two orders are swapped. (Pinocchio's ``Force`` is ``(f; τ)``, already the axis-first
+order of a wrench.)
 
 Rank decisions (:func:`rank`, :func:`basis`, :func:`reciprocal`, ...) are made on a
 *unit-homogenised* copy: the moment part is divided by a characteristic length ``length``
@@ -163,19 +164,20 @@ def axis(s, length: float = 1.0, rtol: float = RTOL) -> tuple[np.ndarray, np.nda
 def characteristic_length(S) -> float:
     """A length [m] that scales with the geometry of ``S``, for homogenising.
 
-    The root mean square distance from the origin of the axes of the rows of ``S`` that
-    are not couples; 1.0 when there is no such axis or every axis passes through the
-    origin. Scaling the geometry by ``k`` scales the result by ``k``.
+    The median distance from the origin of the axes of the rows of ``S`` that are not
+    couples (rows whose direction part is below 1e-12 of the row norm count as couples).
+    Round-off distances (below 1e-12) do not count; 1.0 when no distance is left.
+    Scaling the geometry by ``k`` scales the result by ``k``.
     """
     S = as_screws(S)
     w, v = S[:, :3], S[:, 3:]
     ww = np.einsum("ij,ij->i", w, w)
-    keep = ww > 0
+    keep = ww > (1e-12) ** 2 * np.einsum("ij,ij->i", S, S)
     if not np.any(keep):
         return 1.0
-    d2 = np.einsum("ij,ij->i", *(2 * [np.cross(w[keep], v[keep])])) / ww[keep] ** 2
-    L = float(np.sqrt(np.mean(d2)))
-    return L if L > 0 else 1.0
+    d = np.linalg.norm(np.cross(w[keep], v[keep]), axis=1) / ww[keep]
+    d = d[d > 1e-12]
+    return float(np.median(d)) if d.size else 1.0
 
 
 def _homogenise(S: np.ndarray, length: float) -> np.ndarray:
@@ -310,13 +312,16 @@ def transform(S, placement: pin.SE3) -> np.ndarray:
 
 
 def from_pinocchio(x) -> np.ndarray:
-    """Pinocchio linear-first ``(v; ω)`` → axis-first ``(ω; v)``.
+    """Pinocchio motion coordinates ``(v; ω)`` → axis-first twist ``(ω; v)``.
 
-    Works on a 6-vector, a ``pin.Motion``/``pin.Force``, and on a 6×n Jacobian (the rows
-    are swapped; the result is still 6×n). This and :func:`to_pinocchio` are the only
-    place where the two orders meet.
+    Works on a 6-vector, a ``pin.Motion``, and on a 6×n Jacobian (the rows are swapped;
+    the result is still 6×n). A ``pin.Force`` is ``(f; τ)``: force first, which is
+    already the axis-first order of a wrench, so it is returned unchanged. This and
+    :func:`to_pinocchio` are the only place where the two orders meet.
     """
-    if isinstance(x, (pin.Motion, pin.Force)):
+    if isinstance(x, pin.Force):
+        return x.vector.copy()
+    if isinstance(x, pin.Motion):
         x = x.vector
     a = np.asarray(x, dtype=float)
     if a.shape[0] != 6:
@@ -325,7 +330,8 @@ def from_pinocchio(x) -> np.ndarray:
 
 
 def to_pinocchio(x) -> np.ndarray:
-    """Axis-first ``(ω; v)`` → Pinocchio linear-first ``(v; ω)`` (vector or 6×n)."""
+    """Axis-first twist ``(ω; v)`` → Pinocchio motion coordinates ``(v; ω)`` (vector or
+    6×n). Wrenches need no conversion: ``pin.Force(wrench[:3], wrench[3:])``."""
     a = np.asarray(x, dtype=float)
     if a.shape[0] != 6:
         raise InputError(f"expected 6 rows in axis-first order (w; v), got shape {a.shape}")

@@ -15,7 +15,7 @@ from fractions import Fraction
 import numpy as np
 import pinocchio as pin
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from pkm_pin import InputError, screws
@@ -361,6 +361,8 @@ def test_basis_is_independent_and_spans(S):
 
 @SETTINGS
 @given(grid_systems())
+@example(np.array([[0, 1, 1, 0, 0, 0], [0, 0, 1, 0, 0, 0]], float))  # lines through O
+@example(np.array([[0, 0, 0, 0, 1, 1], [0, 0, 0, 0, 0, 1]], float))  # two couples
 def test_default_length_ranks_of_computed_systems_are_right(S):
     """With the length estimated, rank, reciprocal and basis of computed (round-off
     carrying) systems still have the exact dimensions."""

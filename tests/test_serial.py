@@ -182,7 +182,7 @@ def test_manipulator_seed002_structure(manipulator):
                    [c3 * c4 * s5 - s3 * s4, c3 * c5, -c4 * s3 - c3 * s4 * s5],
                    [c3 * s4 + s3 * c4 * s5, s3 * c5, c3 * c4 - s3 * s4 * s5]])
     np.testing.assert_allclose(manipulator.tip_placement(q).rotation, U4, atol=1e-14)
-    # E = (0, AB? no: BC + s + CD + R(0, DE, 0)) above the base
+    # E = (0, BC + s + CD, AB) + U4 (0, DE, 0)
     d = serial_chains.SEED002_DIMENSIONS
     E = np.array([0.0, d["BC"] + q[2] + d["CD"], d["AB"]]) + U4 @ [0.0, d["DE"], 0.0]
     np.testing.assert_allclose(manipulator.tip_placement(q).translation, E, atol=1e-15)
@@ -454,9 +454,8 @@ def test_serial_inverse_velocity_redundant_is_minimum_norm(panda):
 def test_serial_inverse_velocity_deficient_chain():
     """A 5-joint UR5 chain (tip wrist_2_link) recovers reachable twists exactly and
     raises SingularityError for a twist outside the span of its joint twists."""
-    leg = Leg.from_example_robot_data("ur5", tip="wrist_3_link")
     leg5 = Leg.from_example_robot_data("ur5", tip="wrist_2_link")
-    assert leg5.nv == 5 and leg.nv == 6
+    assert leg5.nv == 5
     q, qd, _ = next(_states(leg5, 1))
     V = leg5.serial_forward_velocity(q, qd)
     np.testing.assert_allclose(leg5.serial_inverse_velocity(q, V), qd, rtol=1e-9, atol=1e-12)
@@ -561,6 +560,18 @@ def test_singularity_index_is_unit_invariant(request, name):
         q_mm[P] *= 1000.0
         assert mm.serial_singularity_index(q_mm) == pytest.approx(
             leg.serial_singularity_index(q), rel=1e-9)
+        if leg.serial_singularity_index(q) < 1e-6:
+            continue
+        V = leg.serial_forward_velocity(q, qd)
+        qd_mm = qd.copy()
+        qd_mm[P] *= 1000.0
+        V_mm = np.r_[V[:3], 1000.0 * V[3:]]
+        np.testing.assert_allclose(mm.serial_forward_velocity(q_mm, qd_mm), V_mm,
+                                   rtol=1e-12, atol=1e-9)
+        x = leg.serial_inverse_velocity(q, V)  # qd itself, or the least-norm rates (Panda)
+        x[P] *= 1000.0
+        np.testing.assert_allclose(mm.serial_inverse_velocity(q_mm, V_mm), x,
+                                   rtol=1e-7, atol=1e-7)
 
 
 def test_singularity_index_of_seed003_example_is_regular(chain_6r):

@@ -142,8 +142,9 @@ def test_point_velocities_pinocchio_reduction_finite_differences(leg):
             P = _world_point(states, f, p)
             np.testing.assert_allclose(P, leg.point_position(name, p, q), atol=1e-12)
             v_red = red.point_velocity(states[f.parentJoint - 1], P)
-            x_plus = leg.point_position(name, p, pin.integrate(leg.model, q, qd * h + qdd * h * h / 2))
-            x_minus = leg.point_position(name, p, pin.integrate(leg.model, q, -qd * h + qdd * h * h / 2))
+            x_plus, x_minus = (
+                leg.point_position(name, p, pin.integrate(leg.model, q, qd * t + qdd * t * t / 2))
+                for t in (h, -h))
             v_fd = (x_plus - x_minus) / (2 * h)
             assert _close(v_pin, v_red, TOL_EXACT), name
             assert _close(v_pin, v_fd, TOL_FD_V), name
@@ -218,9 +219,9 @@ def test_seed002_constant_rates_end_point(tmp_path_factory):
     rng = np.random.default_rng(SEED)
     for _ in range(20):
         q, qd = leg.random_configuration(rng), rng.uniform(-1.0, 1.0, 6)
-        E = red.chain_kinematics(chain, q, qd, np.zeros(6))[-1]
-        tip = leg.model.frames[leg.tip_id]
-        P = _world_point([E] * leg.nv, tip, np.zeros(3))
+        states = red.chain_kinematics(chain, q, qd, np.zeros(6))
+        E = states[-1]
+        P = _world_point(states, leg.model.frames[leg.tip_id], np.zeros(3))
         assert _close(leg.point_velocity("tip", np.zeros(3), q, qd),
                       red.point_velocity(E, P), TOL_EXACT)
         assert _close(leg.point_acceleration("tip", np.zeros(3), q, qd, np.zeros(6)),

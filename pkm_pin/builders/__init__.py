@@ -1,5 +1,69 @@
-"""Builders of parallel mechanisms: URDF legs written with yourdfpy, and designs."""
+"""Parametric builders of parallel mechanisms: legs written as URDF with yourdfpy.
 
+Each builder returns a :class:`MechanismDesign` (legs with URDF text, base placements
+and anchors, a home pose at which it assembles); :data:`MECHANISMS` names them.
+Regenerate the committed models with ``python -m pkm_pin.builders``.
+"""
+
+from .design import LegDesign, MechanismDesign
+from .planar import (
+    rpr3,
+    rpr3_type2_pose,
+    rpr3_wrench_lines,
+    rrr3,
+    rrr3_elbow_signs,
+    rrr3_stretched_pose,
+)
+from .spatial import (
+    delta,
+    rps3,
+    stewart,
+    stewart_default_points,
+    upu3,
+    upu3_constraint_singular_pose,
+)
 from .urdf_writer import JointSpec, chain_robot, chain_urdf, robot_to_xml
 
-__all__ = ["JointSpec", "chain_robot", "chain_urdf", "robot_to_xml"]
+#: Builder of every mechanism of the project, by registry name (same signature:
+#: ``builder(scale=1.0, **geometry) -> MechanismDesign``; ``stewart`` takes its points first).
+MECHANISMS = {
+    "rpr3": rpr3,
+    "rrr3": rrr3,
+    "stewart": stewart,
+    "delta": delta,
+    "upu3": upu3,
+    "rps3": rps3,
+}
+
+#: One line per registry entry.
+DESCRIPTIONS = {
+    "rpr3": "planar 3-RPR of seed 000 (xz-plane), actuated A1 (P), B0 (R), C1 (P)",
+    "rrr3": "planar 3-RRR (xy-plane), first revolute of each leg actuated",
+    "stewart": "6-UPS Gough–Stewart platform, classic 6-6 layout, prismatic actuators",
+    "delta": "Delta robot, parallelograms as mimic joints, 3T with 3 redundant constraints",
+    "upu3": "3-UPU translational mechanism (Tsai), prismatic actuators, 3T",
+    "rps3": "3-RPS mechanism, prismatic actuators, 1T2R",
+}
+
+__all__ = [
+    "DESCRIPTIONS",
+    "JointSpec",
+    "LegDesign",
+    "MECHANISMS",
+    "MechanismDesign",
+    "chain_robot",
+    "chain_urdf",
+    "delta",
+    "robot_to_xml",
+    "rpr3",
+    "rpr3_type2_pose",
+    "rpr3_wrench_lines",
+    "rps3",
+    "rrr3",
+    "rrr3_elbow_signs",
+    "rrr3_stretched_pose",
+    "stewart",
+    "stewart_default_points",
+    "upu3",
+    "upu3_constraint_singular_pose",
+]
