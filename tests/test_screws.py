@@ -496,26 +496,36 @@ def test_ranks_unchanged_when_geometry_scaled(S, k):
     assert screws.reciprocal(S_k).shape[0] == 6 - exact_rank(S)
 
 
+@st.composite
+def offset_lines(draw):
+    """(line, distance of its axis from the origin), the distance in [0.05, 2]."""
+    d = draw(directions)
+    u = _rotate(_perpendicular(d), d, draw(st.floats(0, 2 * np.pi)))
+    rho = draw(st.floats(0.05, 2.0))
+    t = draw(st.floats(-2.0, 2.0))
+    return rho * u + t * d, d, rho
+
+
 @SETTINGS
-@given(st.lists(st.tuples(points, directions), min_size=1, max_size=6),
-       st.floats(1e-3, 1e3))
-def test_characteristic_length_scales_with_geometry(lines, k):
-    """characteristic_length of the geometry scaled by k is k times the original."""
-    S = np.array([screws.line(r, s) for r, s in lines])
-    L = screws.characteristic_length(S)
-    S_k = np.array([screws.line(k * r, s) for r, s in lines])
-    if np.all(np.linalg.norm(np.cross(S[:, :3], S[:, 3:]), axis=1) == 0):
-        assert L == 1.0  # every axis through the origin: documented fallback
-    else:
-        assert abs(screws.characteristic_length(S_k) - k * L) <= 1e-9 * k * L
+@given(st.lists(offset_lines(), min_size=1, max_size=7), st.floats(1e-3, 1e3))
+def test_characteristic_length_is_median_axis_distance_and_scales(lines, k):
+    """characteristic_length is the median distance of the axes from the origin, and
+    scaling the geometry by k scales it by k."""
+    S = np.array([screws.line(p, d) for p, d, _ in lines])
+    expected = float(np.median([rho for _, _, rho in lines]))
+    assert abs(screws.characteristic_length(S) - expected) <= 1e-12 * expected
+    S_k = np.array([screws.line(k * p, d) for p, d, _ in lines])
+    assert abs(screws.characteristic_length(S_k) - k * expected) <= 1e-12 * k * expected
 
 
-def test_characteristic_length_is_rms_axis_distance():
-    """characteristic_length is the RMS distance of the non-couple axes from the origin."""
-    S = np.array([screws.line([3, 0, 0], [0, 0, 1]), screws.line([0, 4, 0], [1, 0, 0]),
-                  screws.couple([1, 0, 0])])
-    assert abs(screws.characteristic_length(S) - np.sqrt((9 + 16) / 2)) <= 1e-12
+def test_characteristic_length_ignores_couples_and_origin_lines():
+    """Couples do not count; only axes through the origin (or none) give 1.0."""
+    S = np.array([screws.line([1, 0, 0], [0, 0, 1]), screws.line([0, 2, 0], [1, 0, 0]),
+                  screws.line([0, 0, 10], [0, 1, 0]), screws.couple([1, 0, 0]),
+                  screws.couple([0, 1, 1])])
+    assert abs(screws.characteristic_length(S) - 2.0) <= 1e-12
     assert screws.characteristic_length(screws.couple([0, 1, 0])) == 1.0
+    assert screws.characteristic_length(screws.line([0, 0, 0], [1, 2, 3])) == 1.0
 
 
 # ------------------------------------------------------ union and intersection

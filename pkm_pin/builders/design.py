@@ -117,6 +117,8 @@ class MechanismDesign:
             anchors=[leg.anchor for leg in self.legs],
             name=self.name,
             home=self.home,
+            home_q=[np.array(q, dtype=float) for q in self.home_q],
+            description=self.description,
         )
 
     def urdf_files(self) -> dict[str, str]:
@@ -128,9 +130,12 @@ class MechanismDesign:
         return files
 
     def toml(self) -> str:
-        """Text of the mechanism file (URDF paths relative to ``models/mechanisms/``)."""
+        """Text of the mechanism file (URDF paths relative to ``models/mechanisms/``).
+
+        Each leg's ``home_q`` is written too: it selects the working mode at home.
+        """
         lines = [f"name = {_string(self.name)}", f"description = {_string(self.description)}"]
-        for leg in self.legs:
+        for leg, q in zip(self.legs, self.home_q):
             lines += [
                 "",
                 "[[legs]]",
@@ -140,6 +145,7 @@ class MechanismDesign:
                 f"actuated = [{', '.join(_string(a) for a in leg.actuated)}]",
                 f"base = {_inline_placement(leg.base)}",
                 f"anchor = {_inline_placement(leg.anchor)}",
+                f"home_q = {_numbers(q)}",
             ]
         xyz, rpy = _xyz_rpy(self.home)
         lines += ["", "[home]", f"xyz = {xyz}", f"rpy = {rpy}", ""]
@@ -172,7 +178,7 @@ def _string(text: str) -> str:
 
 
 def _numbers(values) -> str:
-    return "[" + ", ".join(repr(float(v)) for v in values) + "]"
+    return "[" + ", ".join(repr(float(v) + 0.0) for v in values) + "]"  # + 0.0: no "-0.0"
 
 
 def _xyz_rpy(placement: pin.SE3) -> tuple[str, str]:

@@ -84,11 +84,12 @@ def rpr3(
             JointSpec(f"{X}0", "revolute", axis=_Y, lower=-1.5 * math.pi, upper=0.5 * math.pi),
             JointSpec(f"{X}1", "prismatic", axis=(1.0, 0.0, 0.0),
                       lower=scale * stroke[0], upper=scale * stroke[1]),
-            JointSpec(f"{X}2", "revolute", axis=_Y, lower=-math.pi, upper=math.pi),
+            JointSpec(f"{X}2", "revolute", axis=_Y, lower=-2 * math.pi, upper=2 * math.pi),
         ]
         xml = chain_urdf(f"rpr_leg_{X.lower()}", joints, tip="tip")
         d = home.act(platform[i]) - base[i]
-        q = np.array([-math.atan2(d[2], d[0]), np.linalg.norm(d), 0.0])
+        q0 = -math.atan2(d[2], d[0])
+        q = np.array([q0, np.linalg.norm(d), home_angle - q0])
         legs.append(LegDesign.assembled(X, xml, "tip", (actuated[X],),
                                         pin.SE3(np.eye(3), base[i]), q, home,
                                         f"rpr_leg_{X.lower()}.urdf"))

@@ -164,7 +164,9 @@ def delta(
     coordinates: R1, R2, R3, R6 (nv = 4).
 
     Home: platform horizontal, below the base, centred on the z axis; ``R1 =
-    home_arm_angle`` (arms turned downwards), ``R2 = R3 = R6 = 0``. For the defaults the
+    home_arm_angle`` (arms turned downwards), ``R2 = R3 = 0`` and R6 cancelling the
+    turn of the bar about u (``R6 = −(R1 + forearm pitch)``: the tip frames have the
+    platform's orientation turned by the leg's azimuth). For the defaults the
     forearm is 58° below horizontal and at 99° to the upper arm: far from the
     stretched/folded type I and the coplanar-forearm type II singularities. Expected
     mobility 3T with 3 redundant constraints (couples normal to each u).
@@ -194,7 +196,7 @@ def delta(
     ]
     xml = chain_urdf("delta_leg", joints, tip="tip")
     home = pin.SE3(np.eye(3), np.array([0.0, 0.0, -h]))
-    q = _delta_q(xml, q1)
+    q = _delta_q(xml, {"R1": q1, "R6": -(q1 + beta)})
     legs, home_q = [], []
     for i, phi in enumerate(_AZIMUTHS):
         Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
@@ -208,13 +210,14 @@ def delta(
         legs=legs, home=home, home_q=home_q, slug="delta")
 
 
-def _delta_q(xml: str, q1: float) -> np.ndarray:
-    """Configuration vector of the Delta leg with R1 = q1, every other joint at 0."""
+def _delta_q(xml: str, values: dict[str, float]) -> np.ndarray:
+    """Configuration vector of the Delta leg with the given joints set, the others 0."""
     from ..leg import Leg
 
     leg = Leg.from_urdf(xml, "tip")
     q = np.zeros(leg.nq)
-    q[leg.model.joints[leg.model.getJointId("R1")].idx_q] = q1
+    for joint, value in values.items():
+        q[leg.model.joints[leg.model.getJointId(joint)].idx_q] = value
     return q
 
 
