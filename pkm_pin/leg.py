@@ -435,6 +435,10 @@ def _chain_model(full: pin.Model, tip: str) -> pin.Model:
     """The chain from the root to ``tip``: joints of other branches locked at neutral."""
     parent = full.frames[full.getFrameId(tip)].parentJoint
     chain = set(full.supports[parent])
+    # a mimicking joint on the chain (nv = 0) needs its primary joint, wherever it is
+    for j in list(chain):
+        if j > 0 and full.joints[j].nv == 0 and full.joints[j].nq == 0:
+            chain.add(_joint_of_v(full, full.joints[j].idx_v))
     lock = [j for j in range(1, full.njoints) if j not in chain]
     if not lock:
         return full

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from pkm_pin import AssemblyError, InputError, SingularityError, screws
+from pkm_pin import Assembly, AssemblyError, InputError, SingularityError, screws
 from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.planar import rpr3_type2_pose, rrr3_stretched_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
@@ -33,8 +33,16 @@ def mechanism(name: str, scale: float = 1.0):
     return _CACHE[key]
 
 
+#: mechanisms whose platform motion is not a subgroup (exp of a platform twist leaves
+#: the assembly manifold): their random poses need the forward position solution
+CURVED = {"rps3"}
+
+
 def nearby_pose(mech, rng, size=0.03):
-    """A pose reached from home by a small random motion inside the platform twists."""
+    """A pose reached from home by a small random motion inside the platform twists
+    (home itself for mechanisms in CURVED)."""
+    if mech.name.startswith("3-RPS"):
+        return mech.home
     an = mech.analyze()
     # rows of platform_twists are orthonormal once v is divided by the characteristic
     # length: this motion turns by about `size` rad and moves by about `size` lengths
@@ -65,9 +73,9 @@ def test_velocity_maps_match_finite_differences(name):
         qd = rng.normal(size=mech.n_actuated)
         t = an.forward_velocity(qd)
         np.testing.assert_allclose(an.inverse_velocity(t), qd, rtol=1e-9, atol=1e-9)
-        h = 1e-6
-        plus = mech.assemble(screws.exp(h * t) * assembly.pose, assembly)
-        minus = mech.assemble(screws.exp(-h * t) * assembly.pose, assembly)
+        h = 1e-6  # exp(±h t) leaves a curved assembly manifold by O(h²): tol 1e-9
+        plus = mech.assemble(screws.exp(h * t) * assembly.pose, assembly, tol=1e-9)
+        minus = mech.assemble(screws.exp(-h * t) * assembly.pose, assembly, tol=1e-9)
         fd = (plus.q_actuated - minus.q_actuated) / (2 * h)
         np.testing.assert_allclose(fd, qd, rtol=1e-5, atol=1e-6 * np.abs(qd).max())
 
@@ -122,30 +130,55 @@ def test_rrr3_stretched_leg_is_type_I():
 
 def test_rrr3_type_III_pose():
     """A stretched 3-RRR leg whose distal lines are also concurrent is type III."""
-    from scipy.optimize import least_squares
+    from scipy.optimize import brentq
 
     mech = mechanism("rrr3")
     home = mech.home_assembly
+    stretched = mech.assemble(rrr3_stretched_pose(), home)
+    leg1 = mech.legs[0]
+    base1 = leg1.joint_origins(stretched.leg_q[0])[0]
+    reach = np.linalg.norm(leg1.tip_placement(stretched.leg_q[0]).translation - base1)
+    anchor_xy = mech.anchors[0].translation
+    theta = pin.rpy.matrixToRpy(stretched.pose.rotation)[2]
+    R = pin.rpy.rpyToMatrix(0, 0, theta)
 
-    def conditions(x):
-        pose = pin.SE3(pin.rpy.rpyToMatrix(0, 0, x[2]), np.r_[x[:2], 0.0])
-        try:
-            asm = mech.assemble(pose, home)
-        except AssemblyError:
-            return np.array([1.0, 1.0])
-        stretch = asm.leg_q[0][1]  # elbow angle of leg 1
-        # distal link lines: through the elbow (joint 2) and the platform pivot (joint 3)
+    def pose_at(phi):
+        """Platform pose with leg 1 stretched towards direction phi (orientation fixed)."""
+        pivot = base1 + reach * np.array([np.cos(phi), np.sin(phi), 0.0])
+        return pin.SE3(R, pivot - R @ anchor_xy)
+
+    d = stretched.pose.translation + R @ anchor_xy - base1
+    phi0 = np.arctan2(d[1], d[0])
+
+    def assembly_at(phi):
+        """Leg 1 set exactly stretched (solving it would stop ~1e-5 rad short of it)."""
+        q1 = stretched.leg_q[0] + (phi - phi0) * np.array([1.0, 0.0, -1.0])
+        pose = pose_at(phi)
+        assert leg1.tip_placement(q1).isApprox(pose * mech.anchors[0], 1e-12)
+        others = mech.assemble(pose, stretched, tol=1e-10).leg_q[1:]
+        return Assembly(mech, pose, [q1, *others])
+
+    def concurrency(phi):
+        asm = assembly_at(phi)
         pts = [leg.joint_origins(q) for leg, q in zip(mech.legs, asm.leg_q)]
         lines = np.array([screws.line(p[1], p[2] - p[1]) for p in pts])
-        planar = lines[:, [2, 3, 4]]  # ω_z, m_x, m_y of lines in the xy-plane
-        return np.array([np.sin(stretch), np.linalg.det(planar)])
+        return np.linalg.det(lines[:, [0, 1, 5]])  # (d_x, d_y, m_z) of planar lines
 
-    x0 = np.r_[rrr3_stretched_pose().translation[:2], pin.rpy.matrixToRpy(
-        rrr3_stretched_pose().rotation)[2]]
-    sol = least_squares(conditions, x0, xtol=1e-15, ftol=1e-15, gtol=1e-15)
-    assert np.max(np.abs(sol.fun)) < 1e-10
-    pose = pin.SE3(pin.rpy.rpyToMatrix(0, 0, sol.x[2]), np.r_[sol.x[:2], 0.0])
-    assert mech.analyze(mech.assemble(pose, home)).singularity == "III"
+    grid = phi0 + np.linspace(-0.6, 0.6, 49)
+    values = []
+    for phi in grid:
+        try:
+            values.append(concurrency(phi))
+        except AssemblyError:
+            values.append(np.nan)
+    values = np.array(values)
+    k = next(i for i in range(len(grid) - 1)
+             if np.isfinite(values[i]) and np.isfinite(values[i + 1])
+             and values[i] * values[i + 1] < 0)
+    phi = brentq(concurrency, grid[k], grid[k + 1], xtol=1e-15)
+    an = mech.analyze(assembly_at(phi))
+    assert an.singularity == "III"
+    assert an.indices["type_I"] < 1e-9 and an.indices["type_II"] < 1e-9
 
 
 def test_upu3_constraint_singularity():
