@@ -46,6 +46,7 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
+from .position import PositionMixin
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -112,7 +113,7 @@ class Assembly:
         ) if self.leg_q else np.zeros(0)
 
 
-class Mechanism:
+class Mechanism(PositionMixin):
     """A parallel mechanism: legs whose tips are fixed to one platform.
 
     Args:
