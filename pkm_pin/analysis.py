@@ -239,9 +239,7 @@ class Analysis:
         mech = self.mechanism
         if self.assembly is mech.__dict__.get("home_assembly"):
             return False
-        home = mech.analyze() if "home_analysis" not in mech.__dict__ else mech.home_analysis
-        mech.__dict__["home_analysis"] = home
-        return self.constraint_wrenches.shape[0] < home.constraint_wrenches.shape[0]
+        return self.constraint_wrenches.shape[0] < mech.home_analysis.constraint_wrenches.shape[0]
 
     @cached_property
     def uncontrolled_twist(self) -> np.ndarray | None:

@@ -13,7 +13,7 @@ mimicking revolute) therefore contributes one column: the combined twist of the 
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -146,10 +146,8 @@ class Leg(SerialChainMixin):
             if robot not in urdf.EXAMPLE_ROBOTS:
                 raise InputError(f"give the tip frame of {robot!r}")
             tip = urdf.EXAMPLE_ROBOTS[robot][1]
-        leg = cls.from_urdf(path, tip, (), base, name or robot)
-        leg.actuated = tuple(leg.joint_names if actuated is None else actuated)
-        leg.__post_init__()
-        return leg
+        leg = cls.from_urdf(path, tip, () if actuated is None else actuated, base, name or robot)
+        return leg if actuated is not None else replace(leg, actuated=tuple(leg.joint_names))
 
     def _frame_names(self) -> list[str]:
         return _frame_names(self.model)
@@ -395,23 +393,27 @@ class Leg(SerialChainMixin):
     def _newton(self, target_local: pin.SE3, q: np.ndarray, tol: float, max_iter: int):
         model, data = self.model, self.data
         w = np.r_[np.full(3, 1.0 / self.characteristic_length), np.ones(3)]
-        q = q.copy()
-        residual, damping = np.inf, 1e-10
-        for it in range(1, max_iter + 1):
+
+        def error(q):
             pin.forwardKinematics(model, data, q)
             pin.updateFramePlacement(model, data, self.tip_id)
             iMd = data.oMf[self.tip_id].actInv(target_local)
-            err = w * pin.log6(iMd).vector
-            residual = float(np.linalg.norm(err))
-            if residual <= tol:
-                return LegSolution(q, residual, it, True)
+            return iMd, w * pin.log6(iMd).vector
+
+        q = q.copy()
+        iMd, err = error(q)
+        it = 0
+        while it < max_iter and np.linalg.norm(err) > tol:
+            it += 1
             J = pin.computeFrameJacobian(model, data, q, self.tip_id, pin.LOCAL).reshape(6, -1)
             J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J)
-            dq = np.linalg.solve(J.T @ J + damping * np.eye(self.nv), J.T @ err)
+            dq = np.linalg.solve(J.T @ J + 1e-10 * np.eye(self.nv), J.T @ err)
             q_new = self.clip(pin.integrate(model, q, dq))
             if np.linalg.norm(q_new - q) < 1e-15 * (1 + np.linalg.norm(q)):
                 break  # stalled (at a limit or a local minimum)
             q = q_new
+            iMd, err = error(q)
+        residual = float(np.linalg.norm(err))
         return LegSolution(q, residual, it, residual <= tol)
 
 

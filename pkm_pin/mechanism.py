@@ -194,6 +194,12 @@ class Mechanism(PositionMixin):
         """The assembly at :attr:`home` (working mode from ``home_q`` when given)."""
         return self.assemble(self.home, guess=self.home_q)
 
+    @cached_property
+    def home_analysis(self):
+        """The :class:`~pkm_pin.analysis.Analysis` of the home assembly (the reference
+        for constraint singularities: the home pose is taken as a generic pose)."""
+        return self.analyze(self.home_assembly)
+
     def assemble(self, pose, guess=None, *, tol: float = 1e-12) -> Assembly:
         """Solve every leg so that its tip coincides with ``pose * anchor``.
 

@@ -55,6 +55,8 @@ def read(source: str | os.PathLike) -> UrdfSource:
         UrdfError: missing file, malformed XML, or a structural mistake; the message
             names the file and what to fix.
     """
+    if isinstance(source, str) and not source.strip():
+        raise UrdfError("<empty string>", "no URDF given", "pass a file path or the URDF text")
     if isinstance(source, (str, os.PathLike)) and not (
         isinstance(source, str) and _looks_like_xml(source)
     ):

@@ -372,6 +372,28 @@ def test_ups_ranks_and_twists_unit_invariant(k):
         assert screws.rank(leg_k.motion_twists(q_k)) == 6
 
 
+def test_ups_joint_origins_are_the_joint_centres():
+    """joint_origins gives the world joint-frame origins: U centre twice, then the S
+    centre for the prismatic (its frame moves with it) and the three S revolutes."""
+    leg = ups_leg(BASE)
+    q = random_q(leg, np.random.default_rng(15))
+    _, centre_s, _ = ups_hand_twists_and_tip(UPS_POINT, q, BASE)
+    centre_u = BASE.act(UPS_POINT)
+    np.testing.assert_allclose(leg.joint_origins(q), [centre_u, centre_u] + 4 * [centre_s],
+                               atol=1e-13)
+
+
+def test_motion_twists_accepts_precomputed_jacobian():
+    """motion_twists(q, J) with J = jacobian(q) equals motion_twists(q), even after
+    another configuration was evaluated in between."""
+    leg = ups_leg(BASE)
+    rng = np.random.default_rng(16)
+    q, other = random_q(leg, rng), random_q(leg, rng)
+    J = leg.jacobian(q)
+    leg.tip_placement(other)
+    np.testing.assert_allclose(leg.motion_twists(q, J), leg.motion_twists(q), atol=1e-14)
+
+
 # -------------------------------------------------------- parallelogram (mimic)
 def test_parallelogram_is_one_coordinate():
     """A revolute plus a mimicking revolute (multiplier −1) is one joint coordinate."""
@@ -570,6 +592,19 @@ def test_solve_unreachable_target_reports_failure():
     err = pin.log6(leg.tip_placement(sol.q).inverse() * target)
     w = np.r_[np.full(3, 1.0 / leg.characteristic_length), np.ones(3)]
     assert abs(np.linalg.norm(w * err.vector) - sol.residual) <= 1e-9 * sol.residual
+
+
+@pytest.mark.parametrize("max_iter", [1, 2, 3, 5])
+def test_solve_residual_is_that_of_the_returned_q(ur5, max_iter):
+    """When Newton stops at max_iter, LegSolution.residual is the pose error of the q it
+    returns (not of the iterate before the last step)."""
+    rng = np.random.default_rng(31)
+    target = ur5.tip_placement(random_q(ur5, rng))
+    sol = ur5.solve(target, max_iter=max_iter, restarts=0)
+    w = np.r_[np.full(3, 1.0 / ur5.characteristic_length), np.ones(3)]
+    actual = np.linalg.norm(w * pin.log6(ur5.tip_placement(sol.q).inverse() * target).vector)
+    assert abs(actual - sol.residual) <= 1e-9 * max(actual, 1e-12)
+    assert sol.converged == (actual <= 1e-12)
 
 
 # ---------------------------------------------------------------------- inputs

@@ -94,6 +94,13 @@ def test_name_argument_overrides_robot_name():
     assert Leg.from_urdf(GOOD, "tip", name="left").name == "left"
 
 
+def test_fixed_joint_frame_may_be_the_tip():
+    """A fixed joint's frame name is a valid tip, placed like its child link."""
+    by_joint = Leg.from_urdf(GOOD, "T")
+    by_link = Leg.from_urdf(GOOD, "tip")
+    assert by_joint.tip_placement([0.3]).isApprox(by_link.tip_placement([0.3]), 1e-15)
+
+
 def test_side_branch_is_locked_out_of_the_chain():
     """Joints of branches other than root→tip are not coordinates of the leg."""
     leg = Leg.from_urdf(GOOD, "tip")
@@ -158,8 +165,9 @@ def test_malformed_xml_in_file_names_file_and_line(tmp_path):
         (_bad('<link name="arm2"/>', '<link name="arm2"/><link name="stray"/>'),
          r"one root.*'base'.*'stray'"),
         (_bad('type="fixed"', 'type="hinge"'), r"'T' has type 'hinge'"),
-        (_bad('<parent link="rod"/><child link="plate"/>', '<parent link="rod"/><child link="rod"/>'),
-         r"(child of two joints|loop)"),
+        (_bad("</robot>", '<joint name="extra" type="fixed"><parent link="arm2"/>'
+                          '<child link="rod"/></joint></robot>'),
+         r"'rod' is the child of two joints"),
         ("<robt name='x'><link name='a'/></robt>", r"<robot>"),
         ("<robot name='x'></robot>", r"no <link>"),
     ],
