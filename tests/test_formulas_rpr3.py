@@ -27,19 +27,6 @@ def _rp(a, b):
     return a[:3] @ b[3:] + a[3:] @ b[:3]
 
 
-def test_module_is_independent_of_pkm_pin_and_pinocchio():
-    """rpr3.py imports only numpy / stdlib: no pkm_pin, no pinocchio, no relative import."""
-    tree = ast.parse(Path(rpr3.__file__).read_text())
-    names = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            assert node.level == 0
-            names.append(node.module)
-    assert all(n.split(".")[0] in {"__future__", "typing", "numpy"} for n in names), names
-
-
 def test_leg_screws_match_printed_50_51_52():
     """Unit joint screws equal (50)-(52) once the prismatic ones are divided by L1, L4, L7."""
     a, b, c = 0.9, 1.3, 2.1

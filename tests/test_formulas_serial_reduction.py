@@ -44,20 +44,6 @@ def _poses(chain, q):
     return out
 
 
-def test_module_is_independent_of_pkm_pin_and_pinocchio():
-    """serial_reduction.py imports only numpy / stdlib: no pkm_pin, no pinocchio."""
-    tree = ast.parse(Path(sr.__file__).read_text())
-    names = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            assert node.level == 0
-            names.append(node.module)
-    allowed = {"__future__", "typing", "numpy", "dataclasses"}
-    assert all(n.split(".")[0] in allowed for n in names), names
-
-
 @pytest.mark.parametrize("kinds", ["RRPRRR", "PRPRPR", "RPP"])
 def test_reduction_matches_central_differences_along_a_trajectory(kinds):
     """Poles, points, w, eps match central differences along q0 + qd t + qdd t^2/2."""

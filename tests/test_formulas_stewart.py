@@ -27,19 +27,6 @@ def _paper_quaternion(R):
                      (R[1, 0] - R[0, 1]) / (4 * d0)])
 
 
-def test_module_is_independent_of_pkm_pin_and_pinocchio():
-    """stewart.py imports only numpy / stdlib: no pkm_pin, no pinocchio, no relative import."""
-    tree = ast.parse(Path(stewart.__file__).read_text())
-    names = []
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            names += [a.name for a in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            assert node.level == 0
-            names.append(node.module)
-    assert all(n.split(".")[0] in {"__future__", "typing", "numpy"} for n in names), names
-
-
 def test_seed003_twist_solves_the_printed_system():
     """dl1 = dl4 = 0.1 gives (0.05, 0.05, 0 | 0.1, 0, 0.05): y0 = 0, not the printed 0.1."""
     phi = stewart.screw_step(stewart.SEED003_LINES, stewart.SEED003_DL)
