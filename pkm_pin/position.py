@@ -1,8 +1,605 @@
 """Position problems (seed 003): forward kinematics by screw continuation, assembly
-modes, iterative inverse kinematics (work in progress: see issue 4)."""
+modes, iterative inverse kinematics of a serial chain.
+
+Forward position problem (:meth:`PositionMixin.forward_kinematics`)
+--------------------------------------------------------------------
+Seed 003's continuation: from a known assembly the actuated coordinates go to the
+target in ``N`` equal increments ``Δq``. At each step the screw analysis of the current
+assembly (:class:`~pkm_pin.analysis.Analysis`) gives the small platform twist ``t``
+solving ``A Δ t = B Δq`` on the platform twist system (the "equilibrium of velocities";
+for the 6-SPS body its rows are the Plücker coordinates of the leg lines,
+``E_i ∘ t = Δl_i``); the platform moves by ``screws.exp(t) * pose`` and the legs are
+re-solved at the new pose (warm start, loose tolerance). That is the Euler polyline of
+the paper: its error falls like ``1/N``. For lower-mobility mechanisms whose motion is
+curved (3-RPS), ``exp(t)`` leaves the constraint manifold by ``O(|t|²)``; the step is
+then projected back by the Newton correction below aimed at the intermediate target.
+
+The final correction is Newton's method on the closure equations of every leg and the
+actuated coordinates, unknowns the platform twist ``t`` and the joint increments
+``Δq_i``::
+
+    J_i Δq_i − t = e_i            (e_i: world twist from leg i's tip to pose * anchor_i)
+    Δq_a = q_target − q_a
+
+Multiplying leg ``i``'s rows by its actuation wrench ``ζ`` (reciprocal to its passive
+joint twists) and by its constraint wrenches ``W`` removes the passive increments and
+leaves seed 003's system, completed by the constraint error:
+``A Δ t = B Δq_a − ζᵀ Δ e`` and ``W Δ t = −W Δ e`` (the ``[A; C]`` system); solving the
+full system by least squares is the same Newton step, with the leg increments as a
+by-product.
+
+"Motion by inertia": when the type II closeness index falls below ``inertia_tol`` the
+platform keeps moving along the last twist (legs re-solved, actuated coordinates left
+free) until the index rises above it again; the remaining increments are then re-aimed
+at the target from the reached actuated coordinates.
+"""
 
 from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from itertools import product
+
+import numpy as np
+import pinocchio as pin
+
+from . import screws
+from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
+
+#: Largest increment of one continuation step: fraction of the characteristic length
+#: for prismatic coordinates, radians for revolute ones.
+STEP = 0.05
+#: Loose closure tolerance of the legs during the continuation.
+CONTINUATION_TOL = 1e-6
+#: Type II closeness index below which the continuation moves "by inertia".
+INERTIA_TOL = 1e-2
+
+
+# ============================================================ seed 003: one screw step
+def screw_step(lines, dl) -> np.ndarray:
+    """Small platform twist from seed 003's system ``E_i ∘ Φ = dl_i``.
+
+    Args:
+        lines: (6, 6) axis-first Plücker coordinates of the leg lines ``E_i = (e_i;
+            b_i × e_i)`` (rows).
+        dl: (6,) leg-length increments [m].
+
+    Returns:
+        ``Φ = (ω; v_O)`` axis-first about the world origin: small rotation [rad] and
+        displacement of the body point at the origin [m].
+
+    Raises:
+        InputError: wrong shapes or non-finite values.
+        SingularityError: the six lines are linearly dependent.
+    """
+    E = screws.as_screws(lines, "lines")
+    d = np.asarray(dl, dtype=float)
+    if E.shape != (6, 6):
+        raise InputError(f"lines must be 6×6 (six Plücker rows), got shape {E.shape}")
+    if d.shape != (6,) or not np.all(np.isfinite(d)):
+        raise InputError(f"dl must be 6 finite numbers, got {d!r}")
+    M = E @ screws.DELTA
+    sv = np.linalg.svd(M, compute_uv=False)
+    if sv[-1] <= 1e-12 * sv[0]:
+        raise SingularityError(
+            f"the six leg lines are linearly dependent (singular values {sv})", "forward",
+            float(sv[-1] / sv[0]))
+    return np.linalg.solve(M, d)
+
+
+# ======================================================================= helpers
+def _actuated_scales(mech) -> np.ndarray:
+    """Unit of each actuated coordinate: the characteristic length for a prismatic
+    joint, 1 rad for a revolute one."""
+    out = []
+    L = mech.characteristic_length
+    for leg in mech.legs:
+        kinds = {}
+        for j in range(1, leg.model.njoints):
+            jm = leg.model.joints[j]
+            if jm.nq == 1:
+                kinds[jm.idx_q] = "P" in jm.shortname().replace("Mimic", "")
+        for iq in np.atleast_1d(leg.actuated_q):
+            out.append(L if kinds.get(int(iq), False) else 1.0)
+    return np.array(out, dtype=float)
+
+
+def _weights(L: float) -> np.ndarray:
+    """Row weights of an axis-first closure error (ω; v_O): moments divided by L."""
+    return np.r_[np.ones(3), np.full(3, 1.0 / L)]
+
+
+def _leg_residual(leg, q, target: pin.SE3) -> float:
+    """Relative closure error of one leg, as :meth:`Leg.solve` measures it."""
+    tip = leg.tip_placement(q)
+    err = pin.log6(tip.actInv(target)).vector
+    return float(np.linalg.norm(np.r_[err[:3] / leg.characteristic_length, err[3:]]))
+
+
+@dataclass
+class _State:
+    pose: pin.SE3
+    leg_q: list
+    closure: float = np.inf  # largest relative closure error of the legs
+    actuated: float = np.inf  # largest scaled |q_a − target|
+    iterations: int = 0
 
 
 class PositionMixin:
     """Forward and inverse position problems of a :class:`~pkm_pin.Mechanism`."""
+
+    # ------------------------------------------------------------------ Newton
+    def _q_actuated_of(self, leg_q) -> np.ndarray:
+        return np.concatenate([q[leg.actuated_q] for leg, q in zip(self.legs, leg_q)])
+
+    def _closure_newton(self, pose, leg_q, target=None, *, tol, max_iter,
+                        move_pose=True, damping=0.0) -> _State:
+        """Newton (Gauss–Newton, optional Levenberg damping) on the closure equations of
+        every leg, plus ``q_a = target`` when ``target`` is given; the platform moves
+        only with ``move_pose``. Joint updates are projected onto the limits."""
+        L = self.characteristic_length
+        w = _weights(L)
+        scales = _actuated_scales(self) if target is not None else None
+        leg_q = [np.array(q, dtype=float) for q in leg_q]
+        nvs = [leg.nv for leg in self.legs]
+        offs = np.r_[0, np.cumsum(nvs)]
+        ncol = int(offs[-1]) + (6 if move_pose else 0)
+        state = _State(pose, leg_q)
+        for it in range(max_iter + 1):
+            rows, rhs, closure = [], [], 0.0
+            for i, (leg, anchor, q) in enumerate(zip(self.legs, self.anchors, leg_q)):
+                want = pose * anchor
+                tip, J = leg.kinematics(q)
+                e = screws.log(want * tip.inverse())
+                err = pin.log6(tip.actInv(want)).vector
+                closure = max(closure, float(np.linalg.norm(
+                    np.r_[err[:3] / leg.characteristic_length, err[3:]])))
+                block = np.zeros((6, ncol))
+                block[:, offs[i]:offs[i + 1]] = w[:, None] * J
+                if move_pose:
+                    block[:, offs[-1]:] = -np.diag(w)
+                rows.append(block)
+                rhs.append(w * e)
+            act = 0.0
+            if target is not None:
+                qa = self._q_actuated_of(leg_q)
+                da = (target - qa) / scales
+                act = float(np.max(np.abs(da))) if da.size else 0.0
+                block = np.zeros((len(da), ncol))
+                k = 0
+                for i, leg in enumerate(self.legs):
+                    for iv in np.atleast_1d(leg.actuated_v):
+                        block[k, offs[i] + int(iv)] = 1.0 / scales[k]
+                        k += 1
+                rows.append(block)
+                rhs.append(da)
+            state = _State(pose, leg_q, closure, act, it)
+            if closure <= tol and act <= tol:
+                return state
+            if it == max_iter:
+                break
+            H, r = np.vstack(rows), np.concatenate(rhs)
+            if damping > 0:
+                x = np.linalg.solve(H.T @ H + damping * np.eye(ncol), H.T @ r)
+            else:
+                x, *_ = np.linalg.lstsq(H, r, rcond=1e-12)
+            if not np.all(np.isfinite(x)):
+                break
+            leg_q = [leg.clip(pin.integrate(leg.model, q, x[offs[i]:offs[i + 1]]))
+                     for i, (leg, q) in enumerate(zip(self.legs, leg_q))]
+            if move_pose:
+                pose = screws.exp(x[offs[-1]:]) * pose
+        return state
+
+    def _assembly_of(self, state: _State):
+        from .mechanism import Assembly
+
+        return Assembly(self, state.pose, [q.copy() for q in state.leg_q], state.closure)
+
+    # ------------------------------------------------------------ forward problem
+    def forward_kinematics(self, q_actuated, guess=None, *, steps: int | None = None,
+                           tol: float = 1e-12, inertia_tol: float = INERTIA_TOL,
+                           max_newton: int = 50, max_inertia: int = 200):
+        """Platform pose (an :class:`~pkm_pin.mechanism.Assembly`) for the actuated
+        coordinates ``q_actuated``, by seed 003's continuation from ``guess``.
+
+        Args:
+            q_actuated: Target actuated coordinates (see :attr:`Mechanism.actuated_names`).
+            guess: The :class:`Assembly` to start from (default: home), or a pose that
+                assembles; its assembly mode is followed.
+            steps: Number of continuation steps (default: each step moves every actuated
+                coordinate by at most :data:`STEP` of the characteristic length or
+                :data:`STEP` rad). Steps that fail to re-assemble are halved.
+            tol: Final tolerance on ``|q_a − target|`` (relative to the characteristic
+                length for prismatic coordinates, radians otherwise) and on the closure.
+            inertia_tol: Type II closeness index below which the platform moves "by
+                inertia" along the last twist.
+            max_newton: Newton iterations of the final correction.
+            max_inertia: Inertia moves allowed in a row.
+
+        Returns:
+            The assembly; its ``info`` holds ``steps`` (accepted continuation steps),
+            ``halvings``, ``newton_iterations``, ``residual`` (final scaled actuated
+            error), ``continuation_error`` (largest scaled actuated error after the
+            continuation, before Newton: the Euler polyline's error), ``inertia``
+            (whether motion by inertia was used) and ``inertia_steps``.
+
+        Raises:
+            InputError: wrong length or non-finite values, a bad guess.
+            ForwardKinematicsError: the continuation or the Newton correction failed
+                (target out of reach, joint limits, singularity); ``reached`` holds the
+                last assembly reached.
+        """
+        from .analysis import Analysis
+        from .mechanism import Assembly
+
+        target = self.check_actuated(q_actuated)
+        if steps is not None and (not isinstance(steps, (int, np.integer)) or steps < 1):
+            raise InputError(f"steps must be a positive integer, got {steps!r}")
+        if guess is None:
+            start = self.home_assembly
+        elif isinstance(guess, Assembly):
+            start = guess
+        else:
+            start = self.assemble(guess)
+        scales = _actuated_scales(self)
+        self._check_limits(target)
+
+        state = _State(start.pose, [q.copy() for q in start.leg_q], start.residual, np.inf)
+        q0 = start.q_actuated
+        if steps is None:
+            steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
+        n_total, lam, h = steps, 0.0, 1.0 / steps
+        accepted = halvings = inertia_steps = 0
+        last_twist = None
+        while lam < 1.0 - 1e-15:
+            current = self._assembly_of(state)
+            an = Analysis(current)
+            index = an.indices["type_II"]
+            if index < inertia_tol:
+                if last_twist is None:
+                    raise ForwardKinematicsError(
+                        f"the start assembly is at or near a type II singularity (index "
+                        f"{index:.3g} < {inertia_tol:g}): no twist to move by inertia",
+                        current)
+                moves = 0
+                while index < inertia_tol:
+                    if moves >= max_inertia:
+                        raise ForwardKinematicsError(
+                            f"motion by inertia did not leave the type II singularity after "
+                            f"{moves} moves (index {index:.3g})", self._assembly_of(state))
+                    pose = screws.exp(last_twist) * state.pose
+                    legs = self._predict_legs(state.leg_q, last_twist)
+                    new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL, max_iter=10,
+                                               move_pose=False)
+                    if new.closure > CONTINUATION_TOL:
+                        new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL,
+                                                   max_iter=10, move_pose=True)
+                    if new.closure > CONTINUATION_TOL:
+                        raise ForwardKinematicsError(
+                            "motion by inertia left the workspace (the legs no longer "
+                            f"assemble: closure error {new.closure:.3g})",
+                            self._assembly_of(state))
+                    state = new
+                    moves += 1
+                    index = Analysis(self._assembly_of(state)).indices["type_II"]
+                inertia_steps += moves
+                # re-aim from the actuated coordinates reached
+                q0 = self._q_actuated_of(state.leg_q)
+                remaining = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
+                lam, h = 0.0, 1.0 / remaining
+                continue
+            lam_new = min(1.0, lam + h)
+            q_step = q0 + lam_new * (target - q0)
+            dq = (lam_new - lam) * (target - q0)
+            try:
+                t = an.forward_velocity(dq)
+            except SingularityError as e:  # pragma: no cover - guarded by inertia_tol
+                raise ForwardKinematicsError(str(e), current) from e
+            pose = screws.exp(t) * state.pose
+            legs = self._predict_legs(state.leg_q, t, an)
+            new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL, max_iter=10,
+                                       move_pose=False)
+            if new.closure > CONTINUATION_TOL:
+                # off the constraint manifold (curved motion): project back, aiming at q_step
+                new = self._closure_newton(pose, legs, q_step, tol=CONTINUATION_TOL,
+                                           max_iter=10, move_pose=True)
+            if new.closure > CONTINUATION_TOL or not self._in_limits(new.leg_q):
+                if halvings >= 30:
+                    raise ForwardKinematicsError(
+                        f"continuation stalled at λ = {lam:.4g} (the legs do not re-assemble "
+                        f"at the predicted pose: closure error {new.closure:.3g}); the target "
+                        "may be out of reach", self._assembly_of(state))
+                h *= 0.5
+                halvings += 1
+                continue
+            state = new
+            last_twist = t
+            lam = lam_new
+            accepted += 1
+        qa = self._q_actuated_of(state.leg_q)
+        cont_err = float(np.max(np.abs(qa - target) / scales))
+        final = self._closure_newton(state.pose, state.leg_q, target, tol=tol,
+                                     max_iter=max_newton, move_pose=True)
+        if final.closure > max(tol, 1e-10) or final.actuated > tol:
+            raise ForwardKinematicsError(
+                f"Newton correction did not converge after {final.iterations} iterations: "
+                f"actuated error {final.actuated:.3g}, closure error {final.closure:.3g} "
+                f"(tol {tol:g}); the target may be out of reach or singular",
+                self._assembly_of(final))
+        try:
+            result = self.assemble(final.pose, final.leg_q, tol=max(tol, 1e-12))
+        except AssemblyError as e:
+            raise ForwardKinematicsError(f"the final pose does not assemble: {e}",
+                                         self._assembly_of(final)) from e
+        err = float(np.max(np.abs(result.q_actuated - target) / scales))
+        if err > max(tol, 1e-10) or not self._in_limits(result.leg_q):
+            raise ForwardKinematicsError(
+                f"the final assembly misses the target by {err:.3g} (joint limits?)", result)
+        result.info.update(steps=accepted, halvings=halvings, newton_iterations=final.iterations,
+                           residual=err, continuation_error=cont_err,
+                           inertia=inertia_steps > 0, inertia_steps=inertia_steps,
+                           requested_steps=n_total)
+        return result
+
+    def _predict_legs(self, leg_q, t, an=None) -> list:
+        """Leg configurations moved by the joint rates of the platform twist ``t``."""
+        out = []
+        for k, (leg, q) in enumerate(zip(self.legs, leg_q)):
+            J = an.legs[k].jacobian if an is not None else leg.jacobian(q)
+            dq, *_ = np.linalg.lstsq(J, t, rcond=1e-10)
+            out.append(leg.clip(pin.integrate(leg.model, q, dq)))
+        return out
+
+    def _in_limits(self, leg_q) -> bool:
+        return all(leg.within_limits(q) for leg, q in zip(self.legs, leg_q))
+
+    def _check_limits(self, target: np.ndarray) -> None:
+        k = 0
+        names = self.actuated_names
+        for leg in self.legs:
+            lo, up = leg._bounds
+            for iq in np.atleast_1d(leg.actuated_q):
+                if not (lo[iq] - 1e-12 <= target[k] <= up[iq] + 1e-12):
+                    raise ForwardKinematicsError(
+                        f"{names[k]} = {target[k]:.6g} is outside its joint limits "
+                        f"[{lo[iq]:.6g}, {up[iq]:.6g}]: unreachable")
+                k += 1
+
+    # ---------------------------------------------------------- assembly modes
+    def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
+                               tol: float = 1e-12, max_iter: int = 100) -> list:
+        """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
+
+        The continuation from home comes first (when it succeeds); then Newton (damped
+        Gauss–Newton on the closure and actuated equations, the unknowns being the pose
+        and every leg configuration) from ``starts`` deterministic starts: the home pose
+        moved by a random twist (rotations up to π, translations up to the
+        characteristic length) with random leg configurations inside the limits. Each
+        result is re-assembled and checked (closure, actuated coordinates, limits).
+
+        Returns:
+            A list of :class:`Assembly`, continuation result first, the others in the
+            order found.
+        """
+        target = self.check_actuated(q_actuated)
+        self._check_limits(target)
+        if not isinstance(starts, (int, np.integer)) or starts < 0:
+            raise InputError(f"starts must be a non-negative integer, got {starts!r}")
+        found = []
+        try:
+            found.append(self.forward_kinematics(target, tol=tol))
+        except ForwardKinematicsError:
+            pass
+        rng = np.random.default_rng(seed)
+        L = self.characteristic_length
+        home = self.home_assembly
+        for _ in range(starts):
+            tw = np.r_[rng.uniform(-1, 1, 3) * np.pi / math.sqrt(3), rng.uniform(-L, L, 3)]
+            pose = screws.exp(tw) * home.pose
+            legs = [leg.random_configuration(rng) for leg in self.legs]
+            st = self._closure_newton(pose, legs, target, tol=1e-8, max_iter=max_iter,
+                                      damping=1e-6)
+            if st.closure > 1e-8 or st.actuated > 1e-8:
+                continue
+            st = self._closure_newton(st.pose, st.leg_q, target, tol=tol, max_iter=20)
+            try:
+                a = self.assemble(st.pose, st.leg_q, tol=max(tol, 1e-12))
+            except AssemblyError:
+                continue
+            scales = _actuated_scales(self)
+            if (np.max(np.abs(a.q_actuated - target) / scales) > max(tol, 1e-10)
+                    or not self._in_limits(a.leg_q)):
+                continue
+            if any(_pose_distance(a.pose, b.pose, L) < 1e-6 for b in found):
+                continue
+            a.info.update(newton_iterations=st.iterations)
+            found.append(a)
+        return found
+
+    # ------------------------------------------------------------ inverse problem
+    def inverse_kinematics(self, pose, guess=None) -> np.ndarray:
+        """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
+        default home).
+
+        Raises:
+            InputError: a malformed pose.
+            AssemblyError: a leg cannot reach the pose within its limits.
+        """
+        return self.assemble(pose, guess).q_actuated
+
+    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0,
+                               max_modes: int = 4096) -> list:
+        """Every working mode at ``pose``: the distinct actuated-coordinate vectors.
+
+        Each leg is solved from deterministic starts (its home configuration, neutral,
+        the middle of the limits and ``starts`` random configurations drawn with
+        ``seed``); converged solutions inside the limits are deduplicated (revolute
+        differences taken modulo 2π) and combined across the legs.
+
+        Returns:
+            A list of :class:`Assembly` (``.q_actuated`` gives the vector), one per
+            distinct actuated-coordinate vector; the home working mode first when it
+            reaches ``pose``.
+
+        Raises:
+            AssemblyError: some leg reaches the pose in no configuration.
+        """
+        from .mechanism import Assembly, as_pose
+
+        pose = as_pose(pose)
+        rng = np.random.default_rng(seed)
+        per_leg = []
+        home_q = self._guess_q(None)
+        for leg, anchor, qh in zip(self.legs, self.anchors, home_q):
+            want = pose * anchor
+            lo, up = leg._bounds
+            middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
+            tries = ([qh] if qh is not None else []) + [leg.neutral(), middle]
+            tries += [leg.random_configuration(rng) for _ in range(starts)]
+            sols, worst = [], np.inf
+            for q0 in tries:
+                sol = leg.solve(want, q0, restarts=0)
+                worst = min(worst, sol.residual)
+                if not sol.converged or not leg.within_limits(sol.q):
+                    continue
+                if not any(_same_q(leg, sol.q, s) for s, _ in sols):
+                    sols.append((sol.q, sol.residual))
+            if not sols:
+                raise AssemblyError(leg.name, worst)
+            per_leg.append(sols)
+        out, seen = [], []
+        for combo in product(*per_leg):
+            if len(out) >= max_modes:
+                break
+            leg_q = [q for q, _ in combo]
+            a = Assembly(self, pose, leg_q, max(r for _, r in combo))
+            qa = a.q_actuated
+            if any(np.allclose(qa, s, atol=1e-9, rtol=0) for s in seen):
+                continue
+            seen.append(qa)
+            out.append(a)
+        return out
+
+
+def _same_q(leg, a, b, tol: float = 1e-7) -> bool:
+    d = pin.difference(leg.model, a, b)
+    # revolute joints: compare modulo 2π
+    d = np.where(np.abs(d) > np.pi, (d + np.pi) % (2 * np.pi) - np.pi, d)
+    return bool(np.max(np.abs(d)) < tol * max(1.0, leg.characteristic_length))
+
+
+def _pose_distance(a: pin.SE3, b: pin.SE3, L: float) -> float:
+    e = pin.log6(a.actInv(b)).vector
+    return float(np.linalg.norm(np.r_[e[:3] / L, e[3:]]))
+
+
+# ====================================================== serial chain: iterative IK
+@dataclass
+class IterativeIKResult:
+    """Result of :func:`iterative_ik`.
+
+    Attributes:
+        q: Final joint configuration (after the Newton correction).
+        q_steps: Configuration after the steps, before the correction.
+        angle: Rotation angle [rad] from the start to the target tip orientation.
+        axis: Its unit axis (world); zeros when the angle is 0.
+        translation: Tip translation from start to target (world) [m].
+        steps: Number of steps.
+        error_after_steps: (position error [m], orientation error [rad]) after the steps.
+        error_after_correction: The same after the Newton correction.
+        converged: Whether the correction reached ``tol``.
+        path: Joint configurations after each step (start included).
+    """
+
+    q: np.ndarray
+    q_steps: np.ndarray
+    angle: float
+    axis: np.ndarray
+    translation: np.ndarray
+    steps: int
+    error_after_steps: tuple
+    error_after_correction: tuple
+    converged: bool
+    path: list = field(default_factory=list)
+
+
+def _axis_angle(R: np.ndarray) -> tuple[np.ndarray, float]:
+    """Unit axis and angle of a rotation matrix from its quaternion (pin.Quaternion)."""
+    quat = pin.Quaternion(R)
+    quat.normalize()
+    v = np.array([quat.x, quat.y, quat.z])
+    w = quat.w
+    if w < 0:
+        v, w = -v, -w
+    s = float(np.linalg.norm(v))
+    angle = 2.0 * math.atan2(s, w)
+    return (v / s if s > 0 else np.zeros(3)), angle
+
+
+def _tip_error(tip: pin.SE3, target: pin.SE3) -> tuple[float, float]:
+    axis, angle = _axis_angle(target.rotation @ tip.rotation.T)
+    return float(np.linalg.norm(target.translation - tip.translation)), float(angle)
+
+
+def iterative_ik(leg, target, q0, *, max_angle_step: float, max_translation_step: float,
+                 tol: float = 1e-10, reaim: bool = False, max_iter: int = 100,
+                 rcond: float = 1e-6) -> IterativeIKResult:
+    """Seed 003's iterative inverse position problem of a serial chain.
+
+    The translation ``r`` of the tip point and the rotation (unit axis ``L``, angle
+    ``Ψ``, from the quaternion of ``R_target R_startᵀ``) are split into ``N`` equal
+    steps, ``N`` the smallest number keeping every step within ``max_angle_step`` and
+    ``max_translation_step``. At each step the joint increments solve the inverse
+    velocity problem ``J Δq = (Ψ/N L; r/N + p × Ψ/N L)`` (twist about the world origin,
+    ``p`` the tip point) in the least-squares sense (near a singular position: the
+    admissible twist closest to the wanted one). With ``reaim`` the remaining
+    translation and rotation are recomputed from the reached pose before each step
+    (removing the accumulated drift); without it (the paper's worked example) the
+    steps follow the first plan and the drift is left to the final Newton correction
+    (:meth:`Leg.solve` warm-started from the reached configuration).
+
+    Args:
+        leg: The chain (:class:`~pkm_pin.Leg`).
+        target: Target tip placement (``pin.SE3``, 4×4 or 6 numbers) in the world.
+        q0: Start configuration.
+        max_angle_step: Largest rotation per step [rad].
+        max_translation_step: Largest tip translation per step [m].
+        tol: Relative tolerance of the final correction.
+        reaim: Re-aim at the target at every step.
+
+    Raises:
+        InputError: bad arguments.
+    """
+    from .mechanism import as_pose
+
+    target = as_pose(target)
+    q = leg.check_q(q0, "q0").copy()
+    for name, v in (("max_angle_step", max_angle_step),
+                    ("max_translation_step", max_translation_step)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise InputError(f"{name} must be a positive number, got {v!r}")
+    start = leg.tip_placement(q)
+    r = target.translation - start.translation
+    axis, angle = _axis_angle(target.rotation @ start.rotation.T)
+    n = max(1, math.ceil(max(np.linalg.norm(r) / max_translation_step,
+                             angle / max_angle_step) - 1e-12))
+    path = [q.copy()]
+    step_r, step_w = r / n, axis * angle / n
+    for k in range(n):
+        tip, J = leg.kinematics(q)
+        if reaim:
+            rr = target.translation - tip.translation
+            ax, an = _axis_angle(target.rotation @ tip.rotation.T)
+            step_r, step_w = rr / (n - k), ax * an / (n - k)
+        p = tip.translation
+        twist = np.r_[step_w, step_r + np.cross(p, step_w)]
+        dq, *_ = np.linalg.lstsq(J, twist, rcond=rcond)
+        q = pin.integrate(leg.model, q, dq)
+        path.append(q.copy())
+    q_steps = q.copy()
+    err_steps = _tip_error(leg.tip_placement(q_steps), target)
+    sol = leg.solve(target, q_steps, tol=tol, max_iter=max_iter, restarts=0)
+    err_final = _tip_error(leg.tip_placement(sol.q), target)
+    return IterativeIKResult(sol.q, q_steps, float(angle), axis, r, n, err_steps, err_final,
+                             sol.converged, path)
