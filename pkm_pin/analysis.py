@@ -72,8 +72,7 @@ class Analysis:
         self.legs = [self._leg_screws(leg, q) for leg, q in zip(self.mechanism.legs, assembly.leg_q)]
 
     def _leg_screws(self, leg, q) -> LegScrews:
-        _, J = leg.kinematics(q)
-        T = leg.motion_twists(q, J)
+        J, T = leg.screws(q)
         return LegScrews(J, T, screws.reciprocal(T, self.length, self.rtol))
 
     # ------------------------------------------------------------------ mobility

@@ -331,23 +331,38 @@ class Leg(SerialChainMixin):
                 j += 1
         return groups
 
-    def motion_twists(self, q, J: np.ndarray | None = None) -> np.ndarray:
+    def motion_twists(self, q) -> np.ndarray:
         """Joint twists (nv × 6) with spherical groups replaced by 3 orthogonal lines.
 
         Same span as :meth:`joint_twists` away from the gimbal lock of the spherical
         groups; at the gimbal lock the true (3-dimensional) span of the spherical joint.
-        ``J`` may pass the Jacobian already computed at ``q`` to save a pass.
         """
-        if J is None:
-            _, J = self.kinematics(q)
+        return self.screws(q)[1]
+
+    def screws(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Jacobian (6 × nv) and motion twists (nv × 6, see :meth:`motion_twists`) at
+        ``q`` from a single Pinocchio pass."""
+        _, J = self.kinematics(q)  # also updates data.oMi
         T = J.T.copy()
-        if self.spherical_groups:
-            pin.forwardKinematics(self.model, self.data, self.check_q(q))
-        for group in self.spherical_groups:
-            j = _joint_of_v(self.model, group[0])
+        for group, j in zip(self.spherical_groups, self._group_joints):
             centre = (self.base * self.data.oMi[j]).translation
             T[list(group)] = np.hstack([np.eye(3), np.cross(centre, np.eye(3))])
-        return T
+        return J, T
+
+    @cached_property
+    def _group_joints(self) -> list[int]:
+        return [_joint_of_v(self.model, group[0]) for group in self.spherical_groups]
+
+    # -------------------------------------------------------------------- pickle
+    def __getstate__(self) -> dict:
+        state = {k: v for k, v in self.__dict__.items()
+                 if k not in ("data",) and not isinstance(getattr(type(self), k, None),
+                                                         cached_property)}
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self.data = self.model.createData()
 
     # ----------------------------------------------------------------------- IK
     def solve(

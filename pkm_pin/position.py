@@ -263,6 +263,10 @@ class PositionMixin:
                         f"{index:.3g} < {inertia_tol:g}): no twist to move by inertia",
                         current)
                 moves = 0
+                L = self.characteristic_length
+                size = max(float(np.linalg.norm(last_twist[:3])),
+                           float(np.linalg.norm(last_twist[3:])) / L)
+                last_twist = last_twist * (STEP / size)  # inertia moves of bounded size
                 while index < inertia_tol:
                     if moves >= max_inertia:
                         raise ForwardKinematicsError(
@@ -305,7 +309,7 @@ class PositionMixin:
                 new = self._closure_newton(pose, legs, q_step, tol=CONTINUATION_TOL,
                                            max_iter=10, move_pose=True)
             if new.closure > CONTINUATION_TOL or not self._in_limits(new.leg_q):
-                if halvings >= 30:
+                if h < 1e-6:
                     raise ForwardKinematicsError(
                         f"continuation stalled at λ = {lam:.4g} (the legs do not re-assemble "
                         f"at the predicted pose: closure error {new.closure:.3g}); the target "
@@ -371,12 +375,13 @@ class PositionMixin:
                                tol: float = 1e-12, max_iter: int = 100) -> list:
         """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
 
-        The continuation from home comes first (when it succeeds); then Newton (damped
-        Gauss–Newton on the closure and actuated equations, the unknowns being the pose
-        and every leg configuration) from ``starts`` deterministic starts: the home pose
-        moved by a random twist (rotations up to π, translations up to the
-        characteristic length) with random leg configurations inside the limits. Each
-        result is re-assembled and checked (closure, actuated coordinates, limits).
+        The continuation from home comes first (when it succeeds); then the continuation
+        (:meth:`forward_kinematics`) from ``starts`` deterministic start assemblies drawn
+        with ``seed`` (seed 003: "several start positions give several solutions"):
+        alternately the home pose moved by a random twist of the platform twist system
+        (homogenised size 0.2–1.5) and the assembly reached from random actuated
+        coordinates (home ± 0.4 units). Each result is checked (closure, actuated
+        coordinates, joint limits) by :meth:`forward_kinematics`.
 
         Returns:
             A list of :class:`Assembly`, continuation result first, the others in the
@@ -394,26 +399,33 @@ class PositionMixin:
         rng = np.random.default_rng(seed)
         L = self.characteristic_length
         home = self.home_assembly
-        for _ in range(starts):
-            tw = np.r_[rng.uniform(-1, 1, 3) * np.pi / math.sqrt(3), rng.uniform(-L, L, 3)]
-            pose = screws.exp(tw) * home.pose
-            legs = [leg.random_configuration(rng) for leg in self.legs]
-            st = self._closure_newton(pose, legs, target, tol=1e-8, max_iter=max_iter,
-                                      damping=1e-6)
-            if st.closure > 1e-8 or st.actuated > 1e-8:
-                continue
-            st = self._closure_newton(st.pose, st.leg_q, target, tol=tol, max_iter=20)
+        P = self.analyze(home).platform_twists
+        scales = _actuated_scales(self)
+        lo = np.concatenate([leg._bounds[0][leg.actuated_q] for leg in self.legs])
+        up = np.concatenate([leg._bounds[1][leg.actuated_q] for leg in self.legs])
+        for k in range(starts):
+            start = None
+            if k % 2 == 0:  # a random pose reached by a twist of the platform twist system
+                c = rng.normal(size=P.shape[0]) @ P
+                size = max(float(np.linalg.norm(c[:3])), float(np.linalg.norm(c[3:])) / L)
+                pose = screws.exp(c * rng.uniform(0.2, 1.5) / size) * home.pose
+                try:
+                    start = self.assemble(pose, home)
+                except AssemblyError:
+                    start = None
+            if start is None:  # the continuation to random actuated coordinates
+                qa = np.clip(home.q_actuated + rng.uniform(-0.4, 0.4, len(scales)) * scales,
+                             lo, up)
+                try:
+                    start = self.forward_kinematics(qa, tol=1e-9)
+                except ForwardKinematicsError:
+                    continue
             try:
-                a = self.assemble(st.pose, st.leg_q, tol=max(tol, 1e-12))
-            except AssemblyError:
-                continue
-            scales = _actuated_scales(self)
-            if (np.max(np.abs(a.q_actuated - target) / scales) > max(tol, 1e-10)
-                    or not self._in_limits(a.leg_q)):
+                a = self.forward_kinematics(target, start, tol=tol)
+            except ForwardKinematicsError:
                 continue
             if any(_pose_distance(a.pose, b.pose, L) < 1e-6 for b in found):
                 continue
-            a.info.update(newton_iterations=st.iterations)
             found.append(a)
         return found
 

@@ -383,15 +383,16 @@ def test_ups_joint_origins_are_the_joint_centres():
                                atol=1e-13)
 
 
-def test_motion_twists_accepts_precomputed_jacobian():
-    """motion_twists(q, J) with J = jacobian(q) equals motion_twists(q), even after
-    another configuration was evaluated in between."""
+def test_screws_gives_jacobian_and_motion_twists_of_the_same_q():
+    """screws(q) returns jacobian(q) and motion_twists(q), whatever was evaluated before."""
     leg = ups_leg(BASE)
     rng = np.random.default_rng(16)
     q, other = random_q(leg, rng), random_q(leg, rng)
-    J = leg.jacobian(q)
+    expected_J, expected_T = leg.jacobian(q), leg.motion_twists(q)
     leg.tip_placement(other)
-    np.testing.assert_allclose(leg.motion_twists(q, J), leg.motion_twists(q), atol=1e-14)
+    J, T = leg.screws(q)
+    np.testing.assert_allclose(J, expected_J, atol=1e-14)
+    np.testing.assert_allclose(T, expected_T, atol=1e-14)
 
 
 # -------------------------------------------------------- parallelogram (mimic)
