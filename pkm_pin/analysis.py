@@ -30,7 +30,7 @@ from functools import cached_property
 
 import numpy as np
 
-from . import screws
+from . import batch, screws
 from .errors import InputError, SingularityError
 
 #: Dimensionless threshold below which a closeness index counts as singular.
@@ -52,8 +52,17 @@ class LegScrews:
     constraint_wrenches: np.ndarray
 
 
+def _rows(masked: np.ndarray, length: float) -> np.ndarray:
+    """The non-zero rows of a masked homogenised basis, back in world units."""
+    keep = np.any(masked != 0.0, axis=1)
+    return batch.dehomogenise(masked[keep], length)
+
+
 class Analysis:
     """Mobility, Jacobians and singularity classes of a mechanism at an assembly.
+
+    The screw algebra is :func:`pkm_pin.batch.analyse` for one pose (the same code that
+    :meth:`Mechanism.sweep` runs over many poses).
 
     Args:
         assembly: The assembled configuration (see :meth:`Mechanism.assemble`).
@@ -69,11 +78,12 @@ class Analysis:
         self.rtol = rtol
         self.singular_tol = singular_tol
         self.length = self.mechanism.characteristic_length
-        self.legs = [self._leg_screws(leg, q) for leg, q in zip(self.mechanism.legs, assembly.leg_q)]
-
-    def _leg_screws(self, leg, q) -> LegScrews:
-        J, T = leg.screws(q)
-        return LegScrews(J, T, screws.reciprocal(T, self.length, self.rtol))
+        legs = self.mechanism.legs
+        pairs = [leg.screws(q) for leg, q in zip(legs, assembly.leg_q)]
+        self._batch = batch.analyse([J[None] for J, _ in pairs], [T[None] for _, T in pairs],
+                                    [leg.actuated_v for leg in legs], self.length, rtol)
+        self.legs = [LegScrews(J, T, _rows(W[0], self.length))
+                     for (J, T), W in zip(pairs, self._batch.leg_constraints)]
 
     # ------------------------------------------------------------------ mobility
     @property
@@ -84,27 +94,24 @@ class Analysis:
     @cached_property
     def constraint_wrenches(self) -> np.ndarray:
         """Basis of the mechanism's constraint wrench system (union over the legs, eq. 37)."""
-        return screws.union(*self.leg_constraint_wrenches, np.zeros((0, 6)),
-                            length=self.length, rtol=self.rtol)
+        return _rows(self._batch.constraints[0], self.length)
 
     @cached_property
     def platform_twists(self) -> np.ndarray:
-        """Basis (dof × 6) of the platform's twist system: reciprocal of the constraints."""
-        return screws.reciprocal(self.constraint_wrenches, self.length, self.rtol)
+        """Basis (dof × 6) of the platform's twist system: reciprocal of the constraints.
+
+        Orthonormal once the linear parts are divided by the characteristic length."""
+        return _rows(self._batch.platform[0], self.length)
 
     @property
     def dof(self) -> int:
         """Instantaneous degree of freedom of the platform."""
-        return int(self.platform_twists.shape[0])
+        return int(self._batch.dof[0])
 
-    @cached_property
+    @property
     def translations(self) -> int:
         """Dimension of the pure translations (couples) in the platform twist system."""
-        if not self.dof:
-            return 0
-        # rows of P are orthonormal in homogenised coordinates: |ω| <= 1 row-wise
-        sv = np.linalg.svd(self.platform_twists[:, :3], compute_uv=False)
-        return self.dof - int(np.sum(sv > 1e-7))
+        return int(self._batch.translations[0])
 
     @property
     def motion_type(self) -> str:
@@ -117,71 +124,39 @@ class Analysis:
         """Grübler–Kutzbach count of the mechanism (see :attr:`Mechanism.grubler`)."""
         return self.mechanism.grubler
 
-    @cached_property
+    @property
     def redundant_constraints(self) -> int:
         """Σ rank(leg constraints) − rank(union): the constraints counted more than once.
 
         ``dof = grubler + redundant_constraints`` when no leg has an idle motion.
         """
-        return int(sum(w.shape[0] for w in self.leg_constraint_wrenches)
-                   - self.constraint_wrenches.shape[0])
+        return int(self._batch.redundant[0])
 
     # ----------------------------------------------------------------- actuation
-    @cached_property
-    def _actuation(self) -> tuple[np.ndarray, np.ndarray]:
-        rows, b = [], []
-        P = self.platform_twists
-        for leg, ls in zip(self.mechanism.legs, self.legs):
-            for k in leg.actuated_v:
-                others = np.delete(ls.twists, k, axis=0)
-                R = screws.reciprocal(others, self.length, self.rtol)
-                zeta = self._working_wrench(R, P)
-                bk = screws.reciprocal_product(zeta, ls.jacobian[:, k])
-                if bk < 0 or (bk == 0 and zeta[np.argmax(np.abs(zeta))] < 0):
-                    zeta, bk = -zeta, -bk
-                rows.append(zeta)
-                b.append(bk)
-        return np.array(rows).reshape(-1, 6), np.array(b)
-
-    def _working_wrench(self, R: np.ndarray, P: np.ndarray) -> np.ndarray:
-        """The member of span(R) that does the most work on the platform twists.
-
-        In homogenised coordinates: the top right singular vector of ``P Δ Rᵀ``; it is
-        orthogonal to the leg's constraint wrenches (which do no work on ``P``), also at
-        a type I singularity where the actuated twist falls into the passive ones.
-        """
-        L = self.length
-        Rh, Ph = R.copy(), P.copy()
-        Rh[:, 3:] /= L
-        Ph[:, 3:] /= L
-        if Rh.shape[0] == 0 or Ph.shape[0] == 0:
-            return np.zeros(6)
-        _, _, Vt = np.linalg.svd(Ph @ screws.DELTA @ Rh.T)
-        w = Vt[0] @ Rh
-        w[3:] *= L
-        f, m = np.linalg.norm(w[:3]), np.linalg.norm(w[3:])
-        return w / (f if f * L > self.rtol * m else m)
-
     @property
     def actuation_wrenches(self) -> np.ndarray:
-        """Actuation wrenches (n × 6), one per actuated joint, in actuated-coordinate order."""
-        return self._actuation[0]
+        """Actuation wrenches (n × 6), one per actuated joint, in actuated-coordinate order.
+
+        For each actuated joint: the member of the reciprocal of the other joint twists
+        of its leg that does the most work on the platform twists (orthogonal to the
+        leg's constraint wrenches, also at a type I singularity); a unit force, or a
+        unit moment when it is a couple; signed so that ``B_ii >= 0``."""
+        return self._batch.A[0]
 
     @property
     def A(self) -> np.ndarray:
         """Parallel Jacobian (n × 6): rows are the actuation wrenches; ``A Δ t = B q̇_a``."""
-        return self._actuation[0]
+        return self._batch.A[0]
 
     @property
     def B(self) -> np.ndarray:
         """Serial Jacobian (n × n, diagonal): ``B_ii = ζ_i ∘ $_a,i``."""
-        return np.diag(self._actuation[1])
+        return np.diag(self._batch.B[0])
 
-    @cached_property
+    @property
     def actuated_twists(self) -> np.ndarray:
         """Twists (n × 6) of the actuated joints, in actuated-coordinate order."""
-        return np.array([ls.jacobian[:, k] for leg, ls in zip(self.mechanism.legs, self.legs)
-                         for k in leg.actuated_v]).reshape(-1, 6)
+        return self._batch.actuated_twists[0]
 
     @property
     def full_jacobian(self) -> np.ndarray:
@@ -189,48 +164,24 @@ class Analysis:
         return np.vstack([self.A, self.constraint_wrenches])
 
     # ------------------------------------------------------------- singularities
-    def _homogenised_unit(self, S: np.ndarray) -> np.ndarray:
-        H = S.copy()
-        H[:, 3:] /= self.length
-        n = np.linalg.norm(H, axis=1, keepdims=True)
-        return H / np.where(n > 0, n, 1.0)
-
-    @cached_property
-    def _M(self) -> np.ndarray:
-        """``A Δ Pᵀ`` in homogenised unit coordinates (n × dof)."""
-        Ah = self._homogenised_unit(self.A)
-        Ph = self.platform_twists.copy()
-        Ph[:, 3:] /= self.length  # orthonormal rows already in homogenised coordinates
-        return Ah @ screws.DELTA @ Ph.T
-
     @cached_property
     def indices(self) -> dict[str, float]:
         """Dimensionless closeness indices (0 at the singularity, unit-invariant).
 
         * ``type_II``: smallest singular value of ``A Δ`` on the platform twist system
-          (rows unit-homogenised, platform basis orthonormal); 0 when the platform has
-          more degrees of freedom than actuators.
+          (rows of A unit-homogenised, platform basis orthonormal); 0 when the platform
+          has more degrees of freedom than actuators.
         * ``type_I``: smallest ``|ζ_i ∘ $_a,i|`` of unit-homogenised screws.
         * ``condition_A``: condition number of that ``A Δ`` (inf when singular).
         """
-        M = self._M
-        sv = np.linalg.svd(M, compute_uv=False) if M.size else np.zeros(1)
-        ii = 0.0 if M.shape[0] < M.shape[1] or not M.size else float(sv[min(M.shape) - 1])
-        cond = float(sv[0] / ii) if ii > 0 else np.inf
-        i1 = np.inf
-        if self.A.shape[0]:
-            Th = self._homogenised_unit(self.actuated_twists)
-            Ah = self._homogenised_unit(self.A)
-            i1 = float(np.min(np.abs(screws.reciprocal_product(Ah, Th))))
-        return {"type_I": i1, "type_II": ii, "condition_A": cond}
+        b = self._batch
+        return {"type_I": float(b.type_I[0]), "type_II": float(b.type_II[0]),
+                "condition_A": float(b.condition[0])}
 
     @property
     def singularity(self) -> str:
         """``"none"``, ``"I"`` (B singular), ``"II"`` (A Δ singular), or ``"III"`` (both)."""
-        one = self.indices["type_I"] < self.singular_tol
-        two = self.indices["type_II"] < self.singular_tol
-        return {(False, False): "none", (True, False): "I",
-                (False, True): "II", (True, True): "III"}[(one, two)]
+        return classify(self.indices["type_I"], self.indices["type_II"], self.singular_tol)
 
     @cached_property
     def constraint_singular(self) -> bool:
@@ -243,15 +194,13 @@ class Analysis:
     @cached_property
     def uncontrolled_twist(self) -> np.ndarray | None:
         """At a type II/III singularity, the platform twist the locked actuators allow
-        (unit-homogenised, axis-first); ``None`` elsewhere."""
-        if self.indices["type_II"] >= self.singular_tol:
+        (unit once homogenised, axis-first); ``None`` elsewhere."""
+        if self.indices["type_II"] >= self.singular_tol or self.dof == 0:
             return None
-        M = self._M
-        if M.shape[1] == 0:
-            return None
+        P = batch.homogenise(self.platform_twists, self.length)
+        M = batch.unit_rows(batch.homogenise(self.A, self.length)) @ screws.DELTA @ P.T
         _, _, Vt = np.linalg.svd(M, full_matrices=True)
-        return self._homogenised_unit((Vt[-1] @ self.platform_twists)[None])[0] * np.r_[
-            np.ones(3), np.full(3, self.length)]
+        return batch.dehomogenise(Vt[-1] @ P, self.length)
 
     @cached_property
     def unresisted_wrench(self) -> np.ndarray | None:
@@ -259,20 +208,17 @@ class Analysis:
         actuation and constraint wrenches balances; ``None`` elsewhere."""
         if self.indices["type_II"] >= self.singular_tol:
             return None
-        H = self._homogenised_unit(self.full_jacobian)
-        _, sv, Vt = np.linalg.svd(H, full_matrices=True)
-        w = Vt[-1].copy()
-        w[3:] *= self.length
-        return w
+        H = batch.unit_rows(batch.homogenise(self.full_jacobian, self.length))
+        _, _, Vt = np.linalg.svd(H, full_matrices=True)
+        return batch.dehomogenise(Vt[-1], self.length)
 
     @cached_property
     def lost_actuated_rates(self) -> np.ndarray | None:
         """At a type I/III singularity, actuated rates that move no platform twist."""
         if self.indices["type_I"] >= self.singular_tol:
             return None
-        b = np.abs(np.diag(self.B))
-        e = np.zeros(len(b))
-        e[int(np.argmin(b))] = 1.0
+        e = np.zeros(self.mechanism.n_actuated)
+        e[int(np.argmin(np.abs(np.diag(self.B))))] = 1.0
         return e
 
     # ---------------------------------------------------------------- velocities
@@ -336,3 +282,13 @@ class Analysis:
             qd, *_ = np.linalg.lstsq(ls.jacobian, t, rcond=None)
             out.append(qd)
         return out
+
+
+def classify(type_I, type_II, tol: float = SINGULAR_TOL):
+    """Singularity class(es) from closeness indices: ``"none"``, ``"I"``, ``"II"``, ``"III"``.
+
+    Works on scalars (returns a str) and on arrays (returns an array of str)."""
+    one = np.asarray(type_I) < tol
+    two = np.asarray(type_II) < tol
+    out = np.where(one & two, "III", np.where(one, "I", np.where(two, "II", "none")))
+    return str(out) if out.ndim == 0 else out
