@@ -417,12 +417,18 @@ class Leg(SerialChainMixin):
 
         q = q.copy()
         iMd, err = error(q)
-        it = 0
-        while it < max_iter and np.linalg.norm(err) > tol:
+        eye = np.eye(self.nv)
+        it, best, slow = 0, np.inf, 0
+        while it < max_iter and (r := np.linalg.norm(err)) > tol:
             it += 1
+            # a least-squares minimum (unreachable target) stops improving: leave early
+            slow = slow + 1 if r > (1 - 1e-3) * best else 0
+            best = min(best, r)
+            if slow >= 10:
+                break
             J = pin.computeFrameJacobian(model, data, q, self.tip_id, pin.LOCAL).reshape(6, -1)
             J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J)
-            dq = np.linalg.solve(J.T @ J + 1e-10 * np.eye(self.nv), J.T @ err)
+            dq = np.linalg.solve(J.T @ J + 1e-10 * eye, J.T @ err)
             q_new = self.clip(pin.integrate(model, q, dq))
             if np.linalg.norm(q_new - q) < 1e-15 * (1 + np.linalg.norm(q)):
                 break  # stalled (at a limit or a local minimum)

@@ -47,6 +47,7 @@ from .errors import (
 )
 from .leg import Leg
 from .position import PositionMixin
+from .sweep import SweepMixin
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -113,7 +114,7 @@ class Assembly:
         ) if self.leg_q else np.zeros(0)
 
 
-class Mechanism(PositionMixin):
+class Mechanism(PositionMixin, SweepMixin):
     """A parallel mechanism: legs whose tips are fixed to one platform.
 
     Args:
@@ -162,6 +163,10 @@ class Mechanism(PositionMixin):
                       for leg, q in zip(self.legs, home_q)]
         self.home_q = home_q
 
+    def __getstate__(self) -> dict:
+        """Pickle without the cached home analysis (it is recomputed on demand)."""
+        return {k: v for k, v in self.__dict__.items() if k != "home_analysis"}
+
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, legs={[leg.name for leg in self.legs]})"
 
@@ -200,7 +205,7 @@ class Mechanism(PositionMixin):
         for constraint singularities: the home pose is taken as a generic pose)."""
         return self.analyze(self.home_assembly)
 
-    def assemble(self, pose, guess=None, *, tol: float = 1e-12) -> Assembly:
+    def assemble(self, pose, guess=None, *, tol: float = 1e-12, restarts: int = 24) -> Assembly:
         """Solve every leg so that its tip coincides with ``pose * anchor``.
 
         Args:
@@ -208,6 +213,7 @@ class Mechanism(PositionMixin):
             guess: An :class:`Assembly` or a list of leg configurations to warm-start
                 from (default: the home assembly), which keeps the legs on its branch.
             tol: Relative closure tolerance of each leg.
+            restarts: Restarts of a leg solver that stalls (see :meth:`Leg.solve`).
 
         Raises:
             AssemblyError: a leg cannot reach the pose within its joint limits.
@@ -216,7 +222,7 @@ class Mechanism(PositionMixin):
         starts = self._guess_q(guess)
         leg_q, worst = [], 0.0
         for leg, anchor, q0 in zip(self.legs, self.anchors, starts):
-            sol = leg.solve(pose * anchor, q0, tol=tol)
+            sol = leg.solve(pose * anchor, q0, tol=tol, restarts=restarts)
             if not sol.converged:
                 raise AssemblyError(leg.name, sol.residual)
             leg_q.append(sol.q)

@@ -1,0 +1,212 @@
+"""Maps of a workspace slice drawn with matplotlib (Agg backend: files only, no window).
+
+The data are grids over a plane of the platform pose (two coordinates varied, the others
+fixed), shaped ``(n_v, n_u)``: row ``j``, column ``i`` is the pose at ``(u[i], v[j])``.
+They come from :meth:`Mechanism.sweep <pkm_pin.sweep>` through ``pkm-pin map``, whose
+``.npz`` file holds the same keys as the mapping given to :func:`save_maps`:
+
+* ``u``, ``v``: the coordinates of the columns and rows; ``labels``: their names.
+* ``ok``: whether the mechanism assembles at the pose.
+* ``det``: signed ``det(A Δ Pᵀ)`` (NaN where not square or not assembled).
+* ``type_I``, ``type_II``: the dimensionless closeness indices (0 at the singularity).
+* ``singularity``: ``"none"``, ``"I"``, ``"II"``, ``"III"`` (``""`` where not assembled).
+* ``condition``: condition number of ``A Δ`` on the platform twists (inf when singular).
+
+Type II loci are the zero level of ``det`` (where its sign changes); type I loci, where
+``det`` does not change sign, are drawn as the level ``type_I_level`` of the type I
+index (an iso-line near the locus) and as markers on the grid points classified I/III.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib import colormaps
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.colors import ListedColormap
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from .errors import InputError
+
+#: Default level of the type I closeness index drawn as the "near type I" iso-line.
+TYPE_I_LEVEL = 0.02
+
+_NOT_ASSEMBLED = "0.82"  # grey
+
+
+def _grids(u, v, **arrays) -> tuple[np.ndarray, np.ndarray, dict]:
+    """Check shapes: ``u`` (n_u,), ``v`` (n_v,), each array (n_v, n_u)."""
+    u = np.asarray(u, dtype=float).ravel()
+    v = np.asarray(v, dtype=float).ravel()
+    if u.size < 1 or v.size < 1:
+        raise InputError("a map needs at least one value of u and of v")
+    out = {}
+    for name, a in arrays.items():
+        if a is None:
+            out[name] = None
+            continue
+        a = np.asarray(a)
+        if a.shape != (v.size, u.size):
+            raise InputError(f"{name} must have shape (len(v), len(u)) = {(v.size, u.size)}, "
+                             f"got {a.shape}")
+        out[name] = a
+    return u, v, out
+
+
+def _figure(title: str, labels: Sequence[str]):
+    fig = Figure(figsize=(7.0, 5.6), dpi=110, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_facecolor(_NOT_ASSEMBLED)
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
+    if title:
+        ax.set_title(title)
+    return fig, ax
+
+
+def _contour(ax, u, v, Z, level: float, **style) -> bool:
+    """Draw the iso-line ``Z = level`` where Z is finite; whether anything was drawn."""
+    Z = np.ma.masked_invalid(np.asarray(Z, dtype=float))
+    if min(Z.shape) < 2 or Z.count() < 4 or not (Z.min() < level < Z.max()):
+        return False
+    ax.contour(u, v, Z, levels=[level], **style)
+    return True
+
+
+def singularity_map(u, v, det, ok, *, type_I=None, singularity=None,
+                    labels: Sequence[str] = ("u", "v"), title: str = "",
+                    type_I_level: float = TYPE_I_LEVEL, path: str | Path | None = None) -> Figure:
+    """Sign of ``det(A Δ Pᵀ)`` over the slice with the type I and type II loci.
+
+    Args:
+        u, v: Coordinates of the columns (n_u,) and rows (n_v,).
+        det: Signed determinant (n_v, n_u); NaN where undefined.
+        ok: Whether the mechanism assembles (n_v, n_u); grey where it does not.
+        type_I: Type I closeness index (n_v, n_u), for the near-type-I iso-line.
+        singularity: Class strings (n_v, n_u), for markers on singular grid points.
+        labels: Axis labels.
+        title: Figure title.
+        type_I_level: Level of the type I iso-line.
+        path: Write the figure there (PNG by the suffix) when given.
+
+    Returns:
+        The matplotlib figure.
+    """
+    u, v, g = _grids(u, v, det=det, ok=ok, type_I=type_I, singularity=singularity)
+    ok = g["ok"].astype(bool)
+    d = np.asarray(g["det"], dtype=float)
+    codes = np.full(d.shape, np.nan)
+    codes[ok & (d > 0)] = 2.0
+    codes[ok & (d < 0)] = 0.0
+    codes[ok & ~np.isfinite(d)] = 1.0
+    codes[ok & (d == 0)] = 1.0
+    fig, ax = _figure(title or "singularity map: sign of det(A Δ)", labels)
+    cmap = ListedColormap(["#f4a582", "#ffffff", "#92c5de"])
+    ax.pcolormesh(u, v, np.ma.masked_invalid(codes), cmap=cmap, vmin=-0.5, vmax=2.5,
+                  shading="nearest")
+    handles = [Patch(color="#92c5de", label="det > 0"), Patch(color="#f4a582", label="det < 0"),
+               Patch(color=_NOT_ASSEMBLED, label="does not assemble")]
+    if np.any(ok & ~np.isfinite(d)):
+        handles.append(Patch(facecolor="#ffffff", edgecolor="0.5", label="det undefined"))
+    if _contour(ax, u, v, np.where(ok, d, np.nan), 0.0, colors="k", linewidths=1.6):
+        handles.append(Line2D([], [], color="k", lw=1.6, label="type II locus (det = 0)"))
+    if g["type_I"] is not None and _contour(ax, u, v, np.where(ok, g["type_I"], np.nan),
+                                            type_I_level, colors="#b2182b", linewidths=1.2,
+                                            linestyles="--"):
+        handles.append(Line2D([], [], color="#b2182b", lw=1.2, ls="--",
+                              label=f"type I index = {type_I_level:g}"))
+    if g["singularity"] is not None:
+        s = np.asarray(g["singularity"]).astype(str)
+        V, U = np.meshgrid(v, u, indexing="ij")
+        for cls, marker, colour, label in ((("I", "III"), "x", "#b2182b", "type I point"),
+                                           (("II", "III"), "+", "k", "type II point")):
+            hit = np.isin(s, cls)
+            if np.any(hit):
+                ax.plot(U[hit], V[hit], marker, color=colour, ms=5, ls="none")
+                handles.append(Line2D([], [], marker=marker, color=colour, ls="none",
+                                      label=label))
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
+    ax.set_aspect("equal", adjustable="box")
+    if path is not None:
+        fig.savefig(path)
+    return fig
+
+
+def conditioning_map(u, v, condition, ok, *, det=None, labels: Sequence[str] = ("u", "v"),
+                     title: str = "", path: str | Path | None = None) -> Figure:
+    """``log10`` of the condition number of ``A Δ`` over the slice.
+
+    Args:
+        u, v: Coordinates of the columns (n_u,) and rows (n_v,).
+        condition: Condition numbers (n_v, n_u), inf where singular (drawn in the
+            colour map's "over" colour).
+        ok: Whether the mechanism assembles (n_v, n_u); grey where it does not.
+        det: Signed determinant, to draw the type II locus (det = 0) when given.
+        labels: Axis labels.
+        title: Figure title.
+        path: Write the figure there when given.
+
+    Returns:
+        The matplotlib figure.
+    """
+    u, v, g = _grids(u, v, condition=condition, ok=ok, det=det)
+    ok = g["ok"].astype(bool)
+    c = np.asarray(g["condition"], dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        logc = np.log10(np.where(ok, c, np.nan))
+    finite = logc[np.isfinite(logc)]
+    top = float(min(max(finite.max(), 1.0), 8.0)) if finite.size else 1.0
+    logc = np.where(np.isposinf(logc), top + 1.0, logc)
+    fig, ax = _figure(title or "conditioning map: log10 cond(A Δ)", labels)
+    cmap = colormaps["viridis"].copy()
+    cmap.set_over("#d7191c")
+    mesh = ax.pcolormesh(u, v, np.ma.masked_invalid(logc), cmap=cmap, vmin=0.0, vmax=top,
+                         shading="nearest")
+    fig.colorbar(mesh, ax=ax, extend="max", label="log10 condition number")
+    handles = [Patch(color=_NOT_ASSEMBLED, label="does not assemble")]
+    if np.any(np.isposinf(np.where(ok, c, 0.0))):
+        handles.append(Patch(color="#d7191c", label="singular (inf)"))
+    if g["det"] is not None and _contour(ax, u, v, np.where(ok, g["det"], np.nan), 0.0,
+                                         colors="w", linewidths=1.4):
+        handles.append(Line2D([], [], color="w", lw=1.4, label="type II locus (det = 0)"))
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85,
+              facecolor="0.6")
+    ax.set_aspect("equal", adjustable="box")
+    if path is not None:
+        fig.savefig(path)
+    return fig
+
+
+def save_maps(data: Mapping, prefix: str | Path, title: str = "") -> list[Path]:
+    """Write ``PREFIX_singularity.png`` and ``PREFIX_conditioning.png`` from map data.
+
+    Args:
+        data: A mapping with the keys of this module's docstring (e.g. ``np.load`` of
+            the ``.npz`` written by ``pkm-pin map``).
+        prefix: Path prefix of the files.
+        title: Prefix of the figure titles (e.g. the mechanism name).
+
+    Returns:
+        The two paths written.
+    """
+    missing = [k for k in ("u", "v", "ok", "det", "condition") if k not in data]
+    if missing:
+        raise InputError(f"map data lacks the keys {missing}")
+    labels = [str(x) for x in data["labels"]] if "labels" in data else ["u", "v"]
+    prefix = Path(prefix)
+    sing = prefix.with_name(prefix.name + "_singularity.png")
+    cond = prefix.with_name(prefix.name + "_conditioning.png")
+    head = f"{title}: " if title else ""
+    singularity_map(data["u"], data["v"], data["det"], data["ok"],
+                    type_I=data["type_I"] if "type_I" in data else None,
+                    singularity=data["singularity"] if "singularity" in data else None,
+                    labels=labels, title=f"{head}sign of det(A Δ), singularity loci",
+                    path=sing)
+    conditioning_map(data["u"], data["v"], data["condition"], data["ok"], det=data["det"],
+                     labels=labels, title=f"{head}log10 cond(A Δ)", path=cond)
+    return [sing, cond]

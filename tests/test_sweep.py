@@ -1,0 +1,137 @@
+"""Batched sweeps over many poses, serial and on executors (threads, Dask)."""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from pkm_pin import InputError, screws
+from pkm_pin.builders import MECHANISMS
+from pkm_pin.builders.planar import rpr3_type2_pose
+from pkm_pin.sweep import pose_array, serpentine_order
+
+_CACHE: dict = {}
+
+
+def mechanism(name):
+    """Built mechanism, cached for the module."""
+    if name not in _CACHE:
+        _CACHE[name] = MECHANISMS[name]().build()
+    return _CACHE[name]
+
+
+def grid_around_home(mech, n=4, size=0.04):
+    """(n², 6) poses: home moved in x and in the rotation about the platform's free axis."""
+    an = mech.analyze()
+    out = []
+    for a in np.linspace(-size, size, n):
+        for b in np.linspace(-size, size, n):
+            t = a * an.platform_twists[0] + b * an.platform_twists[-1]
+            out.append(pose_array([screws.exp(t) * mech.home])[0])
+    return np.array(out)
+
+
+@pytest.mark.parametrize("name", ["rpr3", "rrr3", "stewart", "delta", "upu3"])
+def test_sweep_equals_per_pose_analysis(name):
+    """Every array of the sweep equals what analyze() gives pose by pose."""
+    mech = mechanism(name)
+    X = grid_around_home(mech)
+    res = mech.sweep(X)
+    assert res.ok.all() and not res.failures
+    for i, x in enumerate(X):
+        an = mech.analyze(mech.assemble(x))
+        assert res.dof[i] == an.dof
+        assert res.singularity[i] == an.singularity
+        assert res.type_I[i] == pytest.approx(an.indices["type_I"], rel=1e-9, abs=1e-12)
+        assert res.type_II[i] == pytest.approx(an.indices["type_II"], rel=1e-9, abs=1e-12)
+        np.testing.assert_allclose(res.q_actuated[i], an.assembly.q_actuated, atol=1e-9)
+
+
+def test_unreachable_poses_are_recorded_not_raised():
+    """Poses out of reach are listed in failures with the leg named; their arrays are empty."""
+    mech = mechanism("rpr3")
+    X = np.array([pose_array([mech.home])[0], [0.8, 0, 40.0, 0, 0.6, 0], [-30, 0, 0.6, 0, 0.6, 0]])
+    res = mech.sweep(X)
+    assert res.ok.tolist() == [True, False, False]
+    assert [i for i, _ in res.failures] == [1, 2]
+    assert all("cannot reach" in reason for _, reason in res.failures)
+    assert np.isnan(res.type_II[1:]).all() and np.isnan(res.q_actuated[1:]).all()
+    assert res.dof[1:].tolist() == [-1, -1] and res.singularity[1:].tolist() == ["", ""]
+
+
+def test_order_of_the_poses_does_not_matter():
+    """Shuffling the poses shuffles the results and nothing else."""
+    mech = mechanism("rrr3")
+    X = grid_around_home(mech, n=5)
+    perm = np.random.default_rng(0).permutation(len(X))
+    a, b = mech.sweep(X), mech.sweep(X[perm])
+    np.testing.assert_allclose(b.type_II, a.type_II[perm], rtol=1e-10)
+    np.testing.assert_allclose(b.q_actuated, a.q_actuated[perm], atol=1e-10)
+
+
+def test_serpentine_order_visits_grid_neighbours():
+    """On a grid, consecutive poses of the serpentine order are one grid step apart."""
+    xs, ys = np.meshgrid(np.arange(7.0), np.arange(5.0), indexing="ij")
+    X = np.zeros((xs.size, 6))
+    X[:, 0], X[:, 1] = xs.ravel(), ys.ravel()
+    order = serpentine_order(X)
+    assert sorted(order) == list(range(len(X)))
+    steps = np.abs(np.diff(X[order, :2], axis=0)).sum(axis=1)
+    assert np.all(steps == 1.0)
+
+
+def test_det_changes_sign_across_the_type_II_pose():
+    """Along x through the 3-RPR type II pose the carried det(A Δ) changes sign once."""
+    mech = mechanism("rpr3")
+    x2 = rpr3_type2_pose().translation[0]
+    X0 = pose_array([mech.home])[0]
+    X = np.repeat(X0[None], 21, axis=0)
+    X[:, 0] = np.linspace(x2 - 0.1, x2 + 0.1, 21)
+    res = mech.sweep(X)
+    assert res.ok.all()
+    assert np.sum(np.diff(np.sign(res.det)) != 0) == 1
+    k = int(np.argmin(res.type_II))
+    assert abs(X[k, 0] - x2) <= 0.01 + 1e-12
+
+
+def test_thread_executor_gives_the_serial_results():
+    """A ThreadPoolExecutor with small chunks reproduces the serial sweep."""
+    mech = mechanism("stewart")
+    X = grid_around_home(mech, n=4)
+    serial = mech.sweep(X)
+    with ThreadPoolExecutor(2) as ex:
+        threaded = mech.sweep(X, executor=ex, chunk_size=5)
+    np.testing.assert_allclose(threaded.type_II, serial.type_II, rtol=1e-9)
+    np.testing.assert_allclose(threaded.q_actuated, serial.q_actuated, atol=1e-9)
+
+
+def test_dask_local_cluster_gives_the_serial_results():
+    """A Dask LocalCluster (2 worker processes) through its executor reproduces the sweep."""
+    import distributed  # part of the test extra: dask[distributed]
+
+    mech = mechanism("rpr3")
+    X = grid_around_home(mech, n=6)
+    serial = mech.sweep(X)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        result = mech.sweep(X, executor=client.get_executor(), chunk_size=12)
+    np.testing.assert_allclose(result.type_II, serial.type_II, rtol=1e-9)
+    np.testing.assert_allclose(result.q_actuated, serial.q_actuated, atol=1e-9)
+    assert (result.singularity == serial.singularity).all()
+
+
+def test_bad_sweep_input_is_refused():
+    """Wrong shapes, NaN and a zero chunk size give specific InputErrors."""
+    mech = mechanism("rpr3")
+    with pytest.raises(InputError, match=r"\(N, 6\)"):
+        mech.sweep(np.zeros((3, 5)))
+    with pytest.raises(InputError, match="finite"):
+        mech.sweep(np.full((2, 6), np.nan))
+    with pytest.raises(InputError, match="chunk_size"):
+        mech.sweep([mech.home], chunk_size=0)
+    res = mech.sweep([mech.home, pin.SE3(mech.home)])
+    assert res.ok.all()
