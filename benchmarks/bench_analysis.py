@@ -1,0 +1,115 @@
+"""Per-pose analysis cost: pkm_pin against hand-written numpy and the Pinocchio-call floor.
+
+For the 6-UPS and the 3-RPR, on the same path of poses around home, it times
+  * framework, per pose: assemble (warm-started from the previous pose) + analyze
+    (wrenches, A, B, class) in a Python loop;
+  * framework, batched: Mechanism.sweep over the same poses (per pose);
+  * reference (a): a hand-written per-pose numpy loop of the closed forms
+    (pkm_pin.formulas: inverse position, A, B, singular values);
+  * reference (b): the floor of the Pinocchio calls the legs need at a known solution
+    (per leg and pose: forward kinematics + one frame Jacobian),
+and prints each figure with its ratio to the references. Targets (issue 8): per-pose
+analysis within 3x the Pinocchio floor and at least as fast as the hand-written loop.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pinocchio as pin
+
+from pkm_pin import formulas, screws
+from pkm_pin.builders import MECHANISMS
+from pkm_pin.sweep import pose_array
+
+
+def path(mech, n: int, size: float = 0.05, seed: int = 0) -> list[pin.SE3]:
+    """n poses on a smooth closed path around home inside the platform motions."""
+    an = mech.analyze()
+    rng = np.random.default_rng(seed)
+    a, b = rng.normal(size=(2, an.dof))
+    s = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return [screws.exp(size * (np.cos(u) * a + np.sin(u) * b) @ an.platform_twists) * mech.home
+            for u in s]
+
+
+def best_of(fn, repeat: int = 3) -> float:
+    """Smallest wall time of ``repeat`` runs [s]."""
+    times = []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t)
+    return min(times)
+
+
+def framework_loop(mech, poses):
+    prev = mech.home_assembly
+    for pose in poses:
+        asm = mech.assemble(pose, prev)
+        an = mech.analyze(asm)
+        an.A, an.B, an.singularity  # noqa: B018 - the work being timed
+        prev = asm
+
+
+def pinocchio_floor(mech, solutions):
+    for leg_q in solutions:
+        for leg, q in zip(mech.legs, leg_q):
+            pin.framesForwardKinematics(leg.model, leg.data, q)
+            pin.computeFrameJacobian(leg.model, leg.data, q, leg.tip_id, pin.WORLD)
+
+
+def handwritten_rpr3(mech, poses):
+    xs = [leg.base.translation[0] for leg in mech.legs]
+    L3, L6 = xs[1] - xs[0], xs[2] - xs[1]
+    pts = np.array([a.translation for a in mech.anchors])
+    for pose in poses:
+        theta = pin.rpy.matrixToRpy(pose.rotation)[1]
+        angles, lengths = formulas.rpr3.inverse_position(
+            L3, L6, (theta, pose.translation[0], pose.translation[2]), pts)
+        a3, b3 = formulas.rpr3.velocity_equation(L3, L6, angles, lengths)
+        np.linalg.svd(a3, compute_uv=False)
+        np.linalg.det(b3)
+
+
+def handwritten_stewart(mech, poses):
+    base = np.array([leg.base.translation for leg in mech.legs])
+    local = np.array([a.translation for a in mech.anchors])
+    for pose in poses:
+        tips = local @ pose.rotation.T + pose.translation
+        lines = formulas.stewart.leg_lines(base, tips)
+        np.linalg.norm(tips - base, axis=1)
+        np.linalg.svd(lines @ screws.DELTA, compute_uv=False)
+
+
+HANDWRITTEN = {"rpr3": handwritten_rpr3, "stewart": handwritten_stewart}
+
+
+def main(n: int = 300) -> dict:
+    rows = {}
+    for name in ("stewart", "rpr3"):
+        mech = MECHANISMS[name]().build()
+        poses = path(mech, n)
+        X = pose_array(poses)
+        solutions, prev = [], mech.home_assembly
+        for pose in poses:
+            prev = mech.assemble(pose, prev)
+            solutions.append(prev.leg_q)
+        t_loop = best_of(lambda: framework_loop(mech, poses)) / n
+        t_sweep = best_of(lambda: mech.sweep(X)) / n
+        t_hand = best_of(lambda: HANDWRITTEN[name](mech, poses)) / n
+        t_floor = best_of(lambda: pinocchio_floor(mech, solutions)) / n
+        rows[name] = (t_loop, t_sweep, t_hand, t_floor)
+        print(f"\n{mech.name}: {n} poses, time per pose [µs]")
+        print(f"  framework, per-pose loop   {1e6 * t_loop:9.1f}   "
+              f"x{t_loop / t_floor:6.1f} floor   x{t_loop / t_hand:6.2f} hand-written")
+        print(f"  framework, batched sweep   {1e6 * t_sweep:9.1f}   "
+              f"x{t_sweep / t_floor:6.1f} floor   x{t_sweep / t_hand:6.2f} hand-written")
+        print(f"  (a) hand-written numpy     {1e6 * t_hand:9.1f}")
+        print(f"  (b) Pinocchio-call floor   {1e6 * t_floor:9.1f}")
+    return rows
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,100 @@
+"""Sweep throughput (poses per second) and Dask scaling efficiency per worker.
+
+* a 100×100 slice of the 3-RPR workspace (x, z at the home orientation);
+* a 6-D grid (4 values per coordinate, 4096 poses) around the 6-UPS home;
+* the same 6-D grid on a Dask ``distributed`` LocalCluster with 1 and 2 worker
+  processes (chunks of ``chunk`` poses); scaling efficiency = speed-up / workers.
+
+The reference of each ratio is measured in the same run: the serial sweep, and the
+per-pose loop ``analyze(assemble(pose, previous))`` on the first 300 poses.
+"""
+
+from __future__ import annotations
+
+import itertools
+import sys
+import time
+
+import numpy as np
+
+from pkm_pin.builders import MECHANISMS
+from pkm_pin.sweep import pose_array
+
+
+def per_pose_rate(mech, X: np.ndarray) -> float:
+    """Poses per second of the plain per-pose loop on X."""
+    t = time.perf_counter()
+    prev = mech.home_assembly
+    for x in X:
+        try:
+            prev = mech.assemble(x, prev)
+        except Exception:  # noqa: BLE001 - unreachable poses of the slice
+            continue
+        mech.analyze(prev).singularity  # noqa: B018 - the work being timed
+    return len(X) / (time.perf_counter() - t)
+
+
+def sweep_rate(mech, X: np.ndarray, **kw) -> tuple[float, object]:
+    t = time.perf_counter()
+    res = mech.sweep(X, **kw)
+    return len(X) / (time.perf_counter() - t), res
+
+
+def slice_3rpr(n: int = 100) -> tuple[object, np.ndarray]:
+    mech = MECHANISMS["rpr3"]().build()
+    h = pose_array([mech.home])[0]
+    xs = np.linspace(h[0] - 0.6, h[0] + 0.6, n)
+    zs = np.linspace(h[2] - 0.4, h[2] + 0.4, n)
+    X = np.repeat(h[None], n * n, axis=0)
+    X[:, 0] = np.repeat(xs, n)
+    X[:, 2] = np.tile(zs, n)
+    return mech, X
+
+
+def grid_stewart(k: int = 4) -> tuple[object, np.ndarray]:
+    mech = MECHANISMS["stewart"]().build()
+    h = pose_array([mech.home])[0]
+    steps = [np.linspace(-0.05, 0.05, k)] * 3 + [np.linspace(-0.08, 0.08, k)] * 3
+    X = np.array([h + np.array(d) for d in itertools.product(*steps)])
+    return mech, X
+
+
+def dask_scaling(mech, X: np.ndarray, chunk: int) -> list[tuple[int, float]]:
+    import distributed
+
+    out = []
+    for workers in (1, 2):
+        with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                      dashboard_address=None) as cluster, \
+                distributed.Client(cluster) as client:
+            ex = client.get_executor()
+            mech.sweep(X[:chunk], executor=ex, chunk_size=chunk)  # warm the workers
+            rate, _ = sweep_rate(mech, X, executor=ex, chunk_size=chunk)
+        out.append((workers, rate))
+    return out
+
+
+def main(small: bool = False) -> None:
+    n, k = (30, 3) if small else (100, 4)
+    mech, X = slice_3rpr(n)
+    loop = per_pose_rate(mech, X[:300])
+    rate, res = sweep_rate(mech, X, progress=False)
+    print(f"3-RPR {n}x{n} slice: {rate:8.0f} poses/s (sweep), {loop:8.0f} poses/s "
+          f"(per-pose loop): x{rate / loop:.2f}; {res.ok.sum()} assembled, "
+          f"{len(res.failures)} out of reach")
+    mech, X = grid_stewart(k)
+    loop = per_pose_rate(mech, X[:300])
+    rate, res = sweep_rate(mech, X)
+    print(f"6-UPS 6-D grid ({len(X)} poses): {rate:8.0f} poses/s (sweep), {loop:8.0f} "
+          f"poses/s (per-pose loop): x{rate / loop:.2f}; {res.ok.sum()} assembled")
+    chunk = max(64, len(X) // 8)
+    scaling = dask_scaling(mech, X, chunk)
+    base = scaling[0][1]
+    for workers, r in scaling:
+        print(f"  Dask LocalCluster, {workers} worker(s), chunks of {chunk}: {r:8.0f} poses/s, "
+              f"speed-up x{r / base:.2f}, efficiency {r / base / workers:.0%} "
+              f"(serial sweep: {rate:.0f} poses/s)")
+
+
+if __name__ == "__main__":
+    main(small="--small" in sys.argv)
