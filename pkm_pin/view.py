@@ -2,18 +2,21 @@
 
 :func:`view` draws, in one meshcat scene:
 
-* every leg: its URDF visuals through Pinocchio's ``MeshcatVisualizer`` (legs whose
-  URDF has no visual get a sphere at each joint), plus thin cylinders from joint to joint
-  (the kinematic skeleton, which also shows prismatic joints);
+* every leg: its URDF visuals through Pinocchio's ``MeshcatVisualizer``, meshes
+  included (a leg whose URDF has no visual, or whose meshes cannot be found, gets a
+  sphere at each joint instead, with a warning in the second case), plus thin cylinders
+  from joint to joint (the kinematic skeleton, which also shows prismatic joints);
 * the platform: a translucent polygon (or convex hull) through the anchors, with a
   sphere at each anchor;
 * the joint screw axes (columns of each leg's Jacobian) as thin lines centred at the
   point of the axis nearest to the joint; a prismatic joint (a couple, infinite pitch)
   is drawn along its direction through the joint;
-* the actuation wrenches (rows of :attr:`Analysis.A`) and the constraint wrenches as
-  arrows of fixed length along the wrench axis, starting at the point of the axis nearest
-  to the platform origin; a pure couple is a double-headed arrow through the platform
-  origin. Only the axis is drawn: arrow lengths are not magnitudes, pitches are not shown;
+* the actuation wrenches (rows of :attr:`Analysis.A`) and the constraint wrenches (a
+  basis of :attr:`Analysis.constraint_wrenches` with the couples split off, see
+  :func:`_readable_basis`) as arrows of fixed length along the wrench axis, starting at
+  the point of the axis nearest to the platform origin; a pure couple is a double-headed
+  arrow through the platform origin. Only the axis is drawn: arrow lengths are not
+  magnitudes, pitches are not shown;
 * at a type II or III singularity, an animation that moves the platform back and forth
   along :attr:`Analysis.uncontrolled_twist` (the legs follow by re-assembly).
 
@@ -27,6 +30,7 @@ well.
 Scene layout (meshcat paths under ``/meshcat``; ``<m>`` is :func:`node_name` of the
 mechanism name)::
 
+    pkm/<m>                               world frame, shifted (see below)
     pkm/<m>/legs/<leg>                    leg root, placed at leg.base
     pkm/<m>/legs/<leg>/visuals/<geom>     URDF visuals (Pinocchio's MeshcatVisualizer)
     pkm/<m>/legs/<leg>/links/<k>          skeleton cylinders
@@ -37,18 +41,21 @@ mechanism name)::
     pkm/<m>/wrenches/actuation/<leg>.<joint>
     pkm/<m>/wrenches/constraint/<k>
 
-Sizes are fractions of :attr:`Mechanism.characteristic_length`, so a mechanism in
-millimetres looks the same as in metres.
+meshcat's camera orbits about the viewer's origin, so ``pkm/<m>`` is translated to bring
+the centre of the mechanism there; meshcat's grid and axes get the same translation, so
+they still mark the mechanism's world origin. Sizes are fractions of
+:attr:`Mechanism.characteristic_length`, so a mechanism in millimetres looks the same as
+in metres.
 """
 
 from __future__ import annotations
 
 import base64
 import html as html_lib
-import json
 import os
 import re
 import tempfile
+import warnings
 import webbrowser
 from pathlib import Path
 
@@ -84,7 +91,9 @@ _E_Y = np.array([0.0, 1.0, 0.0])
 def _meshcat():
     """The meshcat modules, or a :class:`PkmError` that says how to install them."""
     try:
-        import meshcat
+        with warnings.catch_warnings():  # meshcat imports pyzmq's deprecated ioloop
+            warnings.simplefilter("ignore", DeprecationWarning)
+            import meshcat
         import meshcat.animation
         import meshcat.geometry
         import umsgpack
@@ -403,23 +412,28 @@ class _Painter:
 
     # ------------------------------------------------------------- view settings
     def settings(self) -> None:
-        """Light grey background and a camera that frames the mechanism."""
+        """Light grey background, and the view centred on the mechanism.
+
+        meshcat's camera always looks at the viewer's origin, so the mechanism's subtree
+        is shifted to put its centre there; the grid and axes are shifted with it (they
+        stay at the mechanism's world origin).
+        """
         vis = self.vis
         vis["/Background"].set_property("top_color", [0.97, 0.97, 0.97])
         vis["/Background"].set_property("bottom_color", [0.80, 0.80, 0.82])
-        points = [self.mech_points()]
-        P = np.vstack(points)
+        P = self.mech_points()
         centre = 0.5 * (P.min(axis=0) + P.max(axis=0))
         radius = max(float(np.max(np.linalg.norm(P - centre, axis=1))), 0.5 * self.L)
+        for path in (self.root, "/Grid", "/Axes"):
+            vis[path].set_transform(_translation(-centre))
         direction = np.array([1.0, -1.4, 0.9])
         _, sv, Vt = np.linalg.svd(P - P.mean(axis=0))
         if sv[0] > 0 and sv[-1] < 0.15 * sv[0]:  # nearly planar: look along the normal
             normal = Vt[-1] if Vt[-1] @ direction > 0 else -Vt[-1]
             direction = normal + 0.45 * direction / np.linalg.norm(direction)
-        offset = 2.3 * radius * direction / np.linalg.norm(direction)
+        offset = 2.7 * radius * direction / np.linalg.norm(direction)
         camera = self.g.PerspectiveCamera(fov=50, aspect=1, near=0.01 * radius,
                                           far=200 * radius)
-        vis["/Cameras/default"].set_transform(_translation(centre))
         vis["/Cameras/default/rotated"].set_object(camera)
         # the camera node is rotated so that its y axis (three.js "up") is the world z
         vis["/Cameras/default/rotated/<object>"].set_property(
@@ -456,21 +470,25 @@ class _Painter:
             self.pose_leg(self.vis, drawn, q)
 
     def leg_visuals(self, leg, path: str, colour: int):
-        """Pinocchio's MeshcatVisualizer of the leg's URDF visuals (None when it has none)."""
+        """Pinocchio's MeshcatVisualizer of the leg's URDF visuals; None when it has none
+        or they cannot be loaded (a warning says why; the leg then gets spheres).
+
+        Mesh paths (``package://…`` or relative) are searched in the URDF's folder and
+        every folder above it (and in ``ROS_PACKAGE_PATH``, as Pinocchio does).
+        """
         if not leg.xml or "<visual" not in leg.xml:
             return None
         from pinocchio.visualize import MeshcatVisualizer
 
-        dirs = []
         src = Path(leg.source)
-        if src.is_file():
-            dirs = [str(src.parent), str(src.parent.parent), str(src.parent.parent.parent)]
+        dirs = [str(d) for d in [src.parent, *src.parent.parents]] if src.is_file() else []
         try:
             geom = pin.buildGeomFromUrdfString(leg.model, leg.xml, pin.GeometryType.VISUAL,
                                                package_dirs=dirs)
         except (RuntimeError, ValueError) as e:
-            raise PkmError(f"leg {leg.name!r}: cannot load the URDF visuals of "
-                           f"{leg.source}: {e}") from e
+            warnings.warn(f"leg {leg.name!r}: the URDF visuals of {leg.source} cannot be "
+                          f"loaded ({e}); drawing spheres and links instead", stacklevel=4)
+            return None
         if geom.ngeoms == 0:
             return None
         viz = MeshcatVisualizer(leg.model, None, geom)
@@ -503,14 +521,13 @@ class _Painter:
         animated = target is not self.vis
         for k in drawn["links"]:
             a, b = points[k], points[k + 1]
-            T = _segment_matrix(a, b)
             node = target[f"{drawn['path']}/links/{k}"]
-            if animated:  # frames keep position and rotation only: scale on its own
-                node.set_transform(_segment_matrix(a, b) @ np.diag(
-                    [1.0, 1.0 / max(np.linalg.norm(b - a), 1e-12 * self.L), 1.0, 1.0]))
-                node.set_property("scale", "vector3", [1.0, float(np.linalg.norm(b - a)), 1.0])
+            if animated:  # animation frames keep position and rotation: scale on its own
+                n = float(np.linalg.norm(b - a))
+                node.set_transform(_segment_matrix(a, b) @ np.diag([1.0, 1.0 / n, 1.0, 1.0]))
+                node.set_property("scale", "vector3", [1.0, n, 1.0])
             else:
-                node.set_transform(T)
+                node.set_transform(_segment_matrix(a, b))
         if drawn["spheres"]:
             for k, p in enumerate(points):
                 target[f"{drawn['path']}/joints/{k}"].set_transform(_translation(p))
@@ -564,7 +581,8 @@ class _Painter:
         for name, w in zip(self.mech.actuated_names, analysis.A):
             self.arrow(f"actuation/{node_name(name.replace('/', '.'))}", w,
                        ACTUATION_WRENCH_COLOUR)
-        for k, w in enumerate(analysis.constraint_wrenches):
+        centre = self.scene.assembly.pose.translation
+        for k, w in enumerate(_readable_basis(analysis.constraint_wrenches, centre, self.L)):
             self.arrow(f"constraint/{k}", w, CONSTRAINT_WRENCH_COLOUR)
 
     def arrow(self, name: str, wrench: np.ndarray, colour: int) -> None:
@@ -626,6 +644,29 @@ class _Painter:
                     for leg, q, qd in zip(self.mech.legs, self.scene.assembly.leg_q, rates)]
 
 
+def _readable_basis(W: np.ndarray, centre: np.ndarray, length: float) -> np.ndarray:
+    """Another basis of the wrench system spanned by the rows of ``W``, easier to read:
+    pure couples first split off, then forces whose moment about ``centre`` has no
+    component that the couples could supply (a planar mechanism's constraint force
+    along the normal then passes through ``centre``). Same span as ``W``."""
+    if W.shape[0] == 0:
+        return W
+    F = W[:, :3]
+    M = W[:, 3:] - np.cross(centre, F)  # moments about the centre
+    U, sv, _ = np.linalg.svd(F)
+    scale = max(float(np.max(np.linalg.norm(F, axis=1))) * length,
+                float(np.max(np.linalg.norm(M, axis=1))))
+    r = int(np.sum(sv * length > 1e-9 * scale))
+    F, M = U.T @ F, U.T @ M
+    forces, couples = slice(0, r), slice(r, W.shape[0])
+    if W.shape[0] > r:
+        Q, _ = np.linalg.qr(M[couples].T)  # the moments the couples span
+        M[forces] -= (M[forces] @ Q) @ Q.T
+        F[couples] = 0.0
+    out = np.hstack([F, M + np.cross(centre, F)])
+    return np.vstack([out[couples], out[forces]])
+
+
 def _velocity_names(model: pin.Model) -> list[str]:
     """One name per velocity coordinate: the joint's, suffixed for multi-DOF joints."""
     names = []
@@ -662,42 +703,3 @@ def _polygon_faces(pts: np.ndarray, tol: float) -> np.ndarray | None:
     ring = ConvexHull(xy).vertices if len(pts) > 3 else np.arange(3)
     return np.array([[ring[0], ring[i], ring[i + 1]] for i in range(1, len(ring) - 1)],
                     dtype=np.uint32)
-
-
-# -------------------------------------------------------------------------- CLI
-def add_view_command(subparsers) -> None:
-    """Add ``pkm-pin view`` to the CLI's subparsers (see :mod:`pkm_pin.cli`)."""
-    p = subparsers.add_parser(
-        "view", help="draw a mechanism in the browser (meshcat)",
-        description="Draw a mechanism at a pose (default: its home pose): legs, platform, "
-        "joint screw axes, actuation and constraint wrenches, and at a type II "
-        "singularity an animation along the uncontrolled twist. With no file: the "
-        "built-in 3-RPR of seed 000.")
-    p.add_argument("mechanism", nargs="?", help="mechanism file (.toml)")
-    p.add_argument("--pose", nargs=6, type=float, metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-                   help="platform pose [m, rad] (default: the home pose)")
-    p.add_argument("--html", metavar="FILE",
-                   help="write a self-contained HTML page (opens with no server)")
-    p.add_argument("--open", action="store_true", help="open the page in a web browser")
-    p.add_argument("--no-screws", action="store_true", help="do not draw the joint screws")
-    p.add_argument("--no-wrenches", action="store_true", help="do not draw the wrenches")
-    p.add_argument("--no-animation", action="store_true",
-                   help="no animation at a singularity")
-    p.set_defaults(func=cmd_view)
-
-
-def cmd_view(args) -> int:
-    """``pkm-pin view``: write and/or open the page; prints what it wrote."""
-    from .cli import _load
-
-    if args.html is None and not args.open:
-        raise InputError("say where the page goes: --html FILE, --open, or both")
-    mech = _load(args.mechanism)
-    scene = view(mech, None if args.pose is None else args.pose, html=args.html,
-                 open=args.open, show_screws=not args.no_screws,
-                 show_wrenches=not args.no_wrenches, animate_singular=not args.no_animation)
-    if args.html is not None:
-        summary = {"html": str(args.html), "mechanism": mech.name,
-                   "singularity": scene.analysis.singularity, "animated": scene.animated}
-        print(json.dumps(summary))
-    return 0
