@@ -109,13 +109,6 @@ def _weights(L: float) -> np.ndarray:
     return np.r_[np.ones(3), np.full(3, 1.0 / L)]
 
 
-def _leg_residual(leg, q, target: pin.SE3) -> float:
-    """Relative closure error of one leg, as :meth:`Leg.solve` measures it."""
-    tip = leg.tip_placement(q)
-    err = pin.log6(tip.actInv(target)).vector
-    return float(np.linalg.norm(np.r_[err[:3] / leg.characteristic_length, err[3:]]))
-
-
 @dataclass
 class _State:
     pose: pin.SE3
@@ -252,7 +245,14 @@ class PositionMixin:
         n_total, lam, h = steps, 0.0, 1.0 / steps
         accepted = halvings = inertia_steps = 0
         last_twist = None
+        budget = 20 * n_total + 200  # continuation steps, halvings and re-aims in all
         while lam < 1.0 - 1e-15:
+            budget -= 1
+            if budget < 0:
+                raise ForwardKinematicsError(
+                    f"continuation did not reach the target (λ = {lam:.4g} after "
+                    f"{accepted} steps, {halvings} halvings, {inertia_steps} inertia moves)",
+                    self._assembly_of(state))
             current = self._assembly_of(state)
             an = Analysis(current)
             index = an.indices["type_II"]
@@ -268,7 +268,7 @@ class PositionMixin:
                            float(np.linalg.norm(last_twist[3:])) / L)
                 last_twist = last_twist * (STEP / size)  # inertia moves of bounded size
                 while index < inertia_tol:
-                    if moves >= max_inertia:
+                    if moves >= max_inertia or budget < 0:
                         raise ForwardKinematicsError(
                             f"motion by inertia did not leave the type II singularity after "
                             f"{moves} moves (index {index:.3g})", self._assembly_of(state))
@@ -280,18 +280,25 @@ class PositionMixin:
                         new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL,
                                                    max_iter=10, move_pose=True)
                     if new.closure > CONTINUATION_TOL:
-                        raise ForwardKinematicsError(
-                            "motion by inertia left the workspace (the legs no longer "
-                            f"assemble: closure error {new.closure:.3g})",
-                            self._assembly_of(state))
+                        last_twist = 0.5 * last_twist  # a shorter inertia move
+                        if np.linalg.norm(last_twist[:3]) + np.linalg.norm(last_twist[3:]) / L \
+                                < 1e-6 * STEP:
+                            raise ForwardKinematicsError(
+                                "motion by inertia left the workspace (the legs no longer "
+                                f"assemble: closure error {new.closure:.3g})",
+                                self._assembly_of(state))
+                        budget -= 1
+                        continue
                     state = new
                     moves += 1
+                    budget -= 1
                     index = Analysis(self._assembly_of(state)).indices["type_II"]
                 inertia_steps += moves
                 # re-aim from the actuated coordinates reached
                 q0 = self._q_actuated_of(state.leg_q)
                 remaining = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
                 lam, h = 0.0, 1.0 / remaining
+                n_total = remaining
                 continue
             lam_new = min(1.0, lam + h)
             q_step = q0 + lam_new * (target - q0)
@@ -317,6 +324,7 @@ class PositionMixin:
                 h *= 0.5
                 halvings += 1
                 continue
+            h = min(2 * h, 1.0 / n_total)
             state = new
             last_twist = t
             lam = lam_new
