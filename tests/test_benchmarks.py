@@ -8,6 +8,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import bench_analysis  # noqa: E402
+import bench_fk  # noqa: E402
 
 
 def test_bench_analysis_runs_and_reports_every_figure(capsys):
@@ -18,3 +19,10 @@ def test_bench_analysis_runs_and_reports_every_figure(capsys):
         assert len(figures) == 4 and all(t > 0 for t in figures)
     out = capsys.readouterr().out
     assert "Pinocchio-call floor" in out and "hand-written" in out
+
+
+def test_bench_fk_solves_to_the_same_poses(capsys):
+    """bench_fk.main times both solvers; both reach the targets (printed errors)."""
+    ours, ref = bench_fk.main(n=3)
+    assert ours > 0 and ref > 0
+    assert "max pose error" in capsys.readouterr().out
