@@ -45,7 +45,7 @@ def scipy_fk(base, local, lengths, guess: pin.SE3) -> pin.SE3:
     return pin.SE3(formulas.stewart.rodrigues(sol.x[3:]) @ guess.rotation, sol.x[:3])
 
 
-def main(n: int = 20) -> tuple[float, float]:
+def main(n: int = 20) -> tuple[float, float, float, float]:
     mech = MECHANISMS["stewart"]().build()
     base = np.array([leg.base.translation for leg in mech.legs])
     local = np.array([a.translation for a in mech.anchors])
@@ -65,7 +65,7 @@ def main(n: int = 20) -> tuple[float, float]:
     print(f"  scipy.optimize.root (hybr)   {1e3 * t_ref:8.2f} ms/solve   "
           f"max pose error {err_ref:.1e}")
     print(f"  ratio pkm_pin / scipy: x{t_ours / t_ref:.2f}")
-    return t_ours, t_ref
+    return t_ours, t_ref, err_ours, err_ref
 
 
 if __name__ == "__main__":

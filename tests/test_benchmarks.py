@@ -23,6 +23,7 @@ def test_bench_analysis_runs_and_reports_every_figure(capsys):
 
 def test_bench_fk_solves_to_the_same_poses(capsys):
     """bench_fk.main times both solvers; both reach the targets (printed errors)."""
-    ours, ref = bench_fk.main(n=3)
+    ours, ref, err_ours, err_ref = bench_fk.main(n=3)
     assert ours > 0 and ref > 0
-    assert "max pose error" in capsys.readouterr().out
+    assert err_ours < 1e-9 and err_ref < 1e-9
+    assert "ratio pkm_pin / scipy" in capsys.readouterr().out
