@@ -109,8 +109,9 @@ def singularity_map(u, v, det, ok, *, type_I=None, singularity=None,
     cmap = ListedColormap(["#f4a582", "#ffffff", "#92c5de"])
     ax.pcolormesh(u, v, np.ma.masked_invalid(codes), cmap=cmap, vmin=-0.5, vmax=2.5,
                   shading="nearest")
-    handles = [Patch(color="#92c5de", label="det > 0"), Patch(color="#f4a582", label="det < 0"),
-               Patch(color=_NOT_ASSEMBLED, label="does not assemble")]
+    handles = [Patch(color=colour, label=label) for code, colour, label in
+               ((2.0, "#92c5de", "det > 0"), (0.0, "#f4a582", "det < 0")) if np.any(codes == code)]
+    handles.append(Patch(color=_NOT_ASSEMBLED, label="does not assemble"))
     if np.any(ok & ~np.isfinite(d)):
         handles.append(Patch(facecolor="#ffffff", edgecolor="0.5", label="det undefined"))
     if _contour(ax, u, v, np.where(ok, d, np.nan), 0.0, colors="k", linewidths=1.6):
@@ -163,8 +164,7 @@ def conditioning_map(u, v, condition, ok, *, det=None, labels: Sequence[str] = (
     top = float(min(max(finite.max(), 1.0), 8.0)) if finite.size else 1.0
     logc = np.where(np.isposinf(logc), top + 1.0, logc)
     fig, ax = _figure(title or "conditioning map: log10 cond(A Δ)", labels)
-    cmap = colormaps["viridis"].copy()
-    cmap.set_over("#d7191c")
+    cmap = colormaps["viridis"].with_extremes(over="#d7191c")
     mesh = ax.pcolormesh(u, v, np.ma.masked_invalid(logc), cmap=cmap, vmin=0.0, vmax=top,
                          shading="nearest")
     fig.colorbar(mesh, ax=ax, extend="max", label="log10 condition number")

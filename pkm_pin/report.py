@@ -271,8 +271,7 @@ def _matrix_table(M, rows: Sequence[str], columns: Sequence[str]) -> list[str]:
 def text(r: dict) -> str:
     """Plain-text report (the output of ``pkm-pin analyze``) from :func:`report_data`."""
     out = [f"mechanism          {r['mechanism']}",
-           f"pose               xyz {np.round(r['pose']['xyz'], 6).tolist()}  "
-           f"rpy {np.round(r['pose']['rpy'], 6).tolist()}",
+           f"pose               xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
            f"DOF                {r['dof']}  ({r['motion_type']})",
            f"Grübler count      {r['grubler']}  (redundant constraints: "
            f"{r['redundant_constraints']})",
@@ -310,6 +309,10 @@ def _num(x: float) -> str:
 
 def _vec(v) -> str:
     return "(" + ", ".join(_num(x) for x in np.asarray(v, dtype=float)) + ")"
+
+
+def _list(v) -> str:
+    return str((np.round(np.asarray(v, dtype=float), 6) + 0.0).tolist())
 
 
 def _row(v) -> str:

@@ -1,13 +1,16 @@
-"""The command-line interface: `pkm-pin analyze`."""
+"""The command-line interface `pkm-pin`: every sub-command, its errors and its help."""
 
 from __future__ import annotations
 
 import json
 import subprocess
 import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
 
+from pkm_pin.builders import DESCRIPTIONS
 from pkm_pin.cli import main
 
 
@@ -54,3 +57,202 @@ def test_user_mistakes_give_one_line_and_status_2(tmp_path):
     assert proc.stderr.startswith("pkm-pin: error:")
     assert "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
+
+
+# ----------------------------------------------------------------------- helpers
+def _one_error_line(capsys) -> str:
+    """The stderr of the last command, checked to be one 'pkm-pin: error:' line."""
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("pkm-pin: error:")
+    return lines[0]
+
+
+RPR3_TOML = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "rpr3.toml"
+
+
+# --------------------------------------------------------------------------- help
+@pytest.mark.parametrize("command", ["list", "analyze", "check", "fk", "ik", "map", "view"])
+def test_every_command_has_help(command, capsys):
+    """'pkm-pin COMMAND --help' prints a usage and exits with 0."""
+    assert main([command, "--help"]) == 0
+    assert capsys.readouterr().out.startswith(f"usage: pkm-pin {command}")
+
+
+def test_usage_errors_are_one_line(capsys):
+    """A wrong number of --pose values is one error line naming --help, status 2."""
+    assert main(["analyze", "--pose", "1", "2"]) == 2
+    assert "--help" in _one_error_line(capsys)
+
+
+def test_no_command_is_a_usage_error(capsys):
+    """pkm-pin without a command is one error line, status 2."""
+    assert main([]) == 2
+    _one_error_line(capsys)
+
+
+# --------------------------------------------------------------------------- list
+def test_list_names_every_shipped_model_with_its_description(capsys):
+    """list prints every builder name and every models/mechanisms file with a description."""
+    assert main(["list"]) == 0
+    out = capsys.readouterr().out
+    for name, description in DESCRIPTIONS.items():
+        assert any(line.split()[0] == name and description in line for line in out.splitlines())
+    for path in RPR3_TOML.parent.glob("*.toml"):
+        assert path.stem in out
+
+
+# ------------------------------------------------------------------------ analyze
+def test_analyze_accepts_a_shipped_model_name(capsys):
+    """'analyze stewart' builds the shipped Gough–Stewart: 6 DOF, 3T3R, words for the twists."""
+    assert main(["analyze", "stewart", "--json"]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert report["dof"] == 6 and report["motion_type"] == "3T3R"
+    assert report["motion_basis"][0]["words"] == "pure translation along (1, 0, 0)"
+
+
+def test_analyze_accepts_a_file_path(capsys):
+    """A mechanism file path gives the same report as the shipped name."""
+    assert main(["analyze", str(RPR3_TOML), "--json"]) == 0
+    by_path = json.loads(capsys.readouterr().out)
+    assert main(["analyze", "rpr3", "--json"]) == 0
+    by_name = json.loads(capsys.readouterr().out)
+    assert np.allclose(by_path["A"], by_name["A"])
+
+
+def test_analyze_writes_markdown(tmp_path, capsys):
+    """--markdown FILE writes the Markdown report and --plots links the images in it."""
+    md = tmp_path / "r.md"
+    assert main(["analyze", "--markdown", str(md), "--plots", "m_singularity.png"]) == 0
+    text = md.read_text()
+    assert text.startswith("# 3-RPR") and "## Cross-check" in text
+    assert "![m_singularity](m_singularity.png)" in text
+    assert str(md) in capsys.readouterr().out
+
+
+def test_unknown_model_lists_the_shipped_ones(capsys):
+    """An unknown name is one line that lists the shipped models."""
+    assert main(["analyze", "no_such_model"]) == 2
+    line = _one_error_line(capsys)
+    assert "stewart" in line and "pkm-pin list" in line
+
+
+def test_nan_pose_is_refused(capsys):
+    """--pose with NaN is one line saying the pose must be finite."""
+    assert main(["analyze", "--pose", "nan", "0", "0", "0", "0", "0"]) == 2
+    assert "finite" in _one_error_line(capsys)
+
+
+# -------------------------------------------------------------------------- check
+def test_check_a_shipped_file_is_fine(capsys):
+    """check on a shipped file reports load, assembly, analysis and exits with 0."""
+    assert main(["check", str(RPR3_TOML)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("ok    ") >= 3 and out.strip().endswith("fine")
+
+
+def test_check_reports_a_broken_file_in_one_line(tmp_path, capsys):
+    """A wrong key of a leg is one error line naming the file and the key, status 2."""
+    text = RPR3_TOML.read_text().replace('tip = "tip"', 'tip = "no_such_link"', 1)
+    text = text.replace('"../urdf/', f'"{RPR3_TOML.parent.parent}/urdf/')
+    path = tmp_path / "broken.toml"
+    path.write_text(text)
+    assert main(["check", str(path)]) == 2
+    line = _one_error_line(capsys)
+    assert str(path) in line and "tip" in line and "no_such_link" in line
+
+
+def test_check_warns_about_missing_actuators(tmp_path, capsys):
+    """A leg without actuator leaves 2 actuators for 3 DOF: a warning and status 1."""
+    text = RPR3_TOML.read_text().replace('actuated = ["A1"]', "actuated = []")
+    text = text.replace('name = "3-RPR (seed 000)"', 'name = "under-actuated RPR"')
+    text = text.replace('"../urdf/', f'"{RPR3_TOML.parent.parent}/urdf/')
+    path = tmp_path / "under.toml"
+    path.write_text(text)
+    assert main(["check", str(path)]) == 1
+    out = capsys.readouterr().out
+    assert "warn  2 actuated joints for 3 DOF" in out
+
+
+# --------------------------------------------------------------------- fk and ik
+def test_ik_then_fk_round_trip(capsys):
+    """ik at a pose then fk of those coordinates gives the pose back."""
+    pose = ["0.85", "0", "0.62", "0", "0.55", "0"]
+    assert main(["ik", "rpr3", "--pose", *pose, "--json"]) == 0
+    q = json.loads(capsys.readouterr().out)["q_actuated"]
+    assert len(q) == 3
+    assert main(["fk", "rpr3", *map(str, q), "--json"]) == 0
+    found = json.loads(capsys.readouterr().out)
+    assert found["pose"]["xyz"] == pytest.approx([0.85, 0.0, 0.62], abs=1e-9)
+    assert found["pose"]["rpy"] == pytest.approx([0.0, 0.55, 0.0], abs=1e-9)
+
+
+def test_ik_all_lists_the_home_working_mode_first(capsys):
+    """ik --all at home lists every working mode, the home one first."""
+    assert main(["ik", "rrr3", "--all", "--json"]) == 0
+    modes = json.loads(capsys.readouterr().out)["q_actuated"]
+    assert main(["ik", "rrr3", "--json"]) == 0
+    home = json.loads(capsys.readouterr().out)["q_actuated"]
+    assert len(modes) >= 2 and modes[0] == pytest.approx(home)
+
+
+def test_fk_all_prints_modes(capsys):
+    """fk --all prints one line per assembly mode found, the continuation first."""
+    assert main(["fk", "stewart", *["1.2"] * 6, "--all", "--starts", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "mode 1     xyz [0, 0, 1.0276" in out
+
+
+def test_fk_wrong_count_names_the_actuated_joints(capsys):
+    """fk with too few coordinates is one line naming the actuated joints."""
+    assert main(["fk", "rpr3", "0.7", "-1.5"]) == 2
+    assert "A/A1, B/B0, C/C1" in _one_error_line(capsys)
+
+
+# ---------------------------------------------------------------------------- map
+def test_map_writes_npz_and_pngs_with_a_progress_bar(tmp_path, capsys):
+    """map writes PREFIX.npz with every sweep array on the grid and the two PNG maps."""
+    prefix = tmp_path / "m"
+    assert main(["map", "rpr3", "--plane", "xz", "--range", "0.6", "1.0", "0.4", "0.8",
+                 "--n", "5", "--fixed", "pitch=0.55", "--out", str(prefix)]) == 0
+    captured = capsys.readouterr()
+    assert "sweep" in captured.err and "/25" in captured.err  # the progress bar
+    data = np.load(tmp_path / "m.npz")
+    for key in ("ok", "dof", "singularity", "type_I", "type_II", "condition", "det",
+                "q_actuated", "poses", "u", "v", "labels"):
+        assert key in data
+    assert data["ok"].shape == (5, 5) and data["q_actuated"].shape == (5, 5, 3)
+    assert data["ok"].all() and np.all(data["poses"][..., 4] == 0.55)
+    assert data["u"] == pytest.approx(np.linspace(0.6, 1.0, 5))
+    assert (tmp_path / "m_singularity.png").is_file()
+    assert (tmp_path / "m_conditioning.png").is_file()
+
+
+def test_map_refuses_a_fixed_varied_coordinate(capsys):
+    """--fixed of a coordinate of the plane is one error line."""
+    assert main(["map", "rpr3", "--plane", "xz", "--fixed", "x=1", "--quiet"]) == 2
+    assert "varied" in _one_error_line(capsys)
+
+
+# --------------------------------------------------------------------------- view
+def test_view_writes_a_self_contained_page(tmp_path, capsys):
+    """view --html writes the meshcat page of the mechanism and opens no browser."""
+    page = tmp_path / "v.html"
+    assert main(["view", "rpr3", "--html", str(page)]) == 0
+    assert page.stat().st_size > 10_000 and "MeshCat" in page.read_text()
+
+
+def test_a_urdf_refused_by_urdfdom_is_still_one_line(tmp_path):
+    """A leg URDF whose <limit> lacks velocity gives one stderr line (fails until
+    pkm_pin/urdf.py build_model() silences urdfdom's C++ 'Error: ...' lines on fd 2)."""
+    root = RPR3_TOML.parents[1]
+    urdf = (root / "urdf" / "rpr_leg_a.urdf").read_text()
+    (tmp_path / "a.urdf").write_text(urdf.replace('velocity="10.0" lower="0.2"', 'lower="0.2"'))
+    text = RPR3_TOML.read_text().replace('"../urdf/rpr_leg_a.urdf"', f'"{tmp_path / "a.urdf"}"')
+    (tmp_path / "m.toml").write_text(text.replace('"../urdf/', f'"{root / "urdf"}/'))
+    proc = subprocess.run([sys.executable, "-m", "pkm_pin.cli", "check", str(tmp_path / "m.toml")],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert proc.stderr.startswith("pkm-pin: error:")
+    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
