@@ -23,7 +23,8 @@ if __name__ == "__main__":
     rho = mech.inverse_kinematics(pin.SE3(np.eye(3), p))
     print("rho (Pinocchio) =", rho, " eq. (3):", og.inverse_kinematics(p, params))
     a = mech.forward_kinematics(rho)
-    print("FK (Pinocchio)  =", a.pose.translation, " both roots:", og.forward_kinematics_both(rho, params))
+    both = og.forward_kinematics_both(rho, params)
+    print("FK (Pinocchio)  =", a.pose.translation, " both roots:", both)
 
     # Sensitivity to the paper's parameters vs A^-1 B_L, -A^-1 B_phi, A^-1 B_d (eq. 16)
     S = og.sensitivities(p, rho, params)

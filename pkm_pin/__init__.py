@@ -5,7 +5,7 @@ wrenches ``(f; m_O)`` about the world origin (see :mod:`pkm_pin.screws`, the one
 that converts to and from Pinocchio's linear-first order).
 """
 
-from . import screws
+from . import position, screws
 from .errors import (
     AssemblyError,
     ForwardKinematicsError,
@@ -18,8 +18,12 @@ from .errors import (
     UrdfError,
 )
 from .analysis import Analysis
+from .calibration import CalibrationResult, calibrate
 from .leg import Leg, LegSolution
 from .mechanism import Assembly, Mechanism, load_mechanism
+from .sensitivity import Sensitivity
+from .sweep import SweepResult
+from .view import view
 
 __version__ = "0.1.0"
 
@@ -27,6 +31,7 @@ __all__ = [
     "Analysis",
     "Assembly",
     "AssemblyError",
+    "CalibrationResult",
     "ForwardKinematicsError",
     "FrameNotFound",
     "InputError",
@@ -36,9 +41,14 @@ __all__ = [
     "Mechanism",
     "MechanismFileError",
     "PkmError",
+    "Sensitivity",
     "SingularityError",
+    "SweepResult",
     "UrdfError",
     "__version__",
+    "calibrate",
     "load_mechanism",
+    "position",
     "screws",
+    "view",
 ]

@@ -67,13 +67,31 @@ def _span_error(S: np.ndarray, F: np.ndarray, length: float) -> float:
     return float(np.max(np.abs(Fh.T - Q @ (Q.T @ Fh.T)))) if S.size else float(np.abs(Fh).max())
 
 
-#: mechanism-name prefix -> check
-CHECKS = {"3-RPR": rpr3, "6-UPS": stewart, "6-SPS": stewart}
+def _is_rpr3(mech) -> bool:
+    """Three R-P-R legs actuated as in seed 000 (P of A, R at B0, P of C)."""
+    kinds = [[leg.model.joints[leg.model.getJointId(n)].shortname() for n in leg.joint_names]
+             for leg in mech.legs]
+    return (len(mech.legs) == 3
+            and all(len(k) == 3 and k[0].startswith("JointModelR") and k[1].startswith(
+                "JointModelP") and k[2].startswith("JointModelR") for k in kinds)
+            and [list(leg.actuated_v) for leg in mech.legs] == [[1], [0], [1]])
+
+
+def _is_stewart(mech) -> bool:
+    """Legs with one actuated prismatic joint each, as many legs as actuators (6)."""
+    return len(mech.legs) == 6 and all(
+        len(leg.actuated) == 1 and leg.model.joints[leg.model.getJointId(leg.actuated[0])]
+        .shortname().startswith("JointModelP") for leg in mech.legs)
+
+
+#: mechanism-name prefix -> (structure test, check)
+CHECKS = {"3-RPR": (_is_rpr3, rpr3), "6-UPS": (_is_stewart, stewart),
+          "6-SPS": (_is_stewart, stewart)}
 
 
 def crosscheck(analysis: Analysis) -> dict[str, float] | None:
-    """The check that fits the mechanism (by name), or ``None`` when there is none."""
-    for prefix, check in CHECKS.items():
-        if analysis.mechanism.name.startswith(prefix):
+    """The check that fits the mechanism (by name and structure), or ``None``."""
+    for prefix, (fits, check) in CHECKS.items():
+        if analysis.mechanism.name.startswith(prefix) and fits(analysis.mechanism):
             return check(analysis)
     return None

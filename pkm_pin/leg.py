@@ -254,7 +254,7 @@ class Leg(SerialChainMixin):
 
     def check_q(self, q, name: str = "q") -> np.ndarray:
         """``q`` as a finite float array of shape (nq,), or a specific :class:`InputError`."""
-        a = np.asarray(q, dtype=float)
+        a = screws.as_float_array(q, f"{name} of leg {self.name!r}")
         if a.shape != (self.nq,):
             raise InputError(
                 f"{name} of leg {self.name!r} must have {self.nq} values "
@@ -385,6 +385,10 @@ class Leg(SerialChainMixin):
         and returns the best result found. It never raises for an unreachable target:
         check :attr:`LegSolution.converged`.
         """
+        if not isinstance(target, pin.SE3):
+            raise InputError(f"the target of leg {self.name!r} must be a pinocchio.SE3")
+        if not (np.all(np.isfinite(target.translation)) and np.all(np.isfinite(target.rotation))):
+            raise InputError(f"the target of leg {self.name!r} must be finite, got\n{target}")
         target_local = self.base.actInv(target)
         starts = [self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))]
         best = self._newton(target_local, starts[0], tol, max_iter)
@@ -428,7 +432,12 @@ class Leg(SerialChainMixin):
                 break
             J = pin.computeFrameJacobian(model, data, q, self.tip_id, pin.LOCAL).reshape(6, -1)
             J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J)
-            dq = np.linalg.solve(J.T @ J + 1e-10 * eye, J.T @ err)
+            try:
+                dq = np.linalg.solve(J.T @ J + 1e-10 * eye, J.T @ err)
+            except np.linalg.LinAlgError:
+                break  # numerically singular normal equations (e.g. a target at 1e12 m)
+            if not np.all(np.isfinite(dq)):
+                break
             q_new = self.clip(pin.integrate(model, q, dq))
             if np.linalg.norm(q_new - q) < 1e-15 * (1 + np.linalg.norm(q)):
                 break  # stalled (at a limit or a local minimum)

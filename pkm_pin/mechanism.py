@@ -46,7 +46,9 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
+from .screws import as_float_array
 from .position import PositionMixin
+from .sensitivity import SensitivityMixin
 from .sweep import SweepMixin
 
 if sys.version_info >= (3, 11):
@@ -57,8 +59,8 @@ else:  # pragma: no cover
 
 def placement(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> pin.SE3:
     """``pin.SE3`` from a translation [m] and URDF roll-pitch-yaw angles [rad]."""
-    xyz = np.asarray(xyz, dtype=float)
-    rpy = np.asarray(rpy, dtype=float)
+    xyz = as_float_array(xyz, "xyz")
+    rpy = as_float_array(rpy, "rpy")
     if xyz.shape != (3,) or rpy.shape != (3,):
         raise InputError(f"xyz and rpy must have 3 values each, got {xyz.shape} and {rpy.shape}")
     if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
@@ -72,7 +74,7 @@ def as_pose(pose) -> pin.SE3:
         if not (np.all(np.isfinite(pose.translation)) and np.all(np.isfinite(pose.rotation))):
             raise InputError("the pose must be finite")
         return pose
-    a = np.asarray(pose, dtype=float)
+    a = as_float_array(pose, "pose")
     if a.shape == (6,):
         return placement(a[:3], a[3:])
     if a.shape == (4, 4):
@@ -114,7 +116,7 @@ class Assembly:
         ) if self.leg_q else np.zeros(0)
 
 
-class Mechanism(PositionMixin, SweepMixin):
+class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
     """A parallel mechanism: legs whose tips are fixed to one platform.
 
     Args:
@@ -243,7 +245,7 @@ class Mechanism(PositionMixin, SweepMixin):
 
     def check_actuated(self, q_actuated, name: str = "q_actuated") -> np.ndarray:
         """``q_actuated`` as a finite array of the right length, or a specific error."""
-        a = np.asarray(q_actuated, dtype=float)
+        a = as_float_array(q_actuated, name)
         if a.shape != (self.n_actuated,):
             raise InputError(
                 f"{name} must have {self.n_actuated} values ({', '.join(self.actuated_names)}), "
@@ -283,7 +285,11 @@ def load_mechanism(path: str | os.PathLike) -> Mechanism:
     """
     path = Path(path)
     label = str(path)
-    if not path.is_file():
+    try:
+        exists = path.is_file()
+    except OSError as e:  # e.g. a name too long for the file system
+        raise MechanismFileError(label[:80], "", f"not a usable file name: {e.strerror}") from e
+    if not exists:
         raise MechanismFileError(label, "", "no such file")
     try:
         with path.open("rb") as f:

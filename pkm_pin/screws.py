@@ -46,9 +46,17 @@ _SWAP = np.r_[3:6, 0:3]
 
 
 # --------------------------------------------------------------------------- checks
+def as_float_array(x, name: str = "value") -> np.ndarray:
+    """``x`` as a float array, or an :class:`InputError` saying it is not numeric."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as e:
+        raise InputError(f"{name} must be numbers, got {type(x).__name__} {x!r:.60}") from e
+
+
 def as_vector3(x, name: str = "vector") -> np.ndarray:
     """Return ``x`` as a finite float array of shape (3,), or raise :class:`InputError`."""
-    a = np.asarray(x, dtype=float)
+    a = as_float_array(x, name)
     if a.shape != (3,):
         raise InputError(f"{name} must have 3 components, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
@@ -58,11 +66,9 @@ def as_vector3(x, name: str = "vector") -> np.ndarray:
 
 def as_screws(S, name: str = "screws") -> np.ndarray:
     """Return ``S`` as a finite float array of shape (k, 6); accepts (6,) or (k, 6)."""
-    a = np.asarray(S, dtype=float)
+    a = as_float_array(S, name)
     if a.ndim == 1 and a.shape[0] == 6:
         a = a[None, :]
-    if a.ndim == 2 and a.shape[0] == 0:
-        return a.reshape(0, 6)
     if a.ndim != 2 or a.shape[1] != 6:
         raise InputError(
             f"{name} must have shape (6,) or (k, 6) (one screw per row), got {a.shape}"
@@ -118,10 +124,12 @@ def reciprocal_product(a, b) -> np.ndarray | float:
 
     For a twist and a wrench it is the instantaneous power of the wrench on the twist.
     """
-    a = np.asarray(a, dtype=float)
-    b = np.asarray(b, dtype=float)
-    if a.shape[-1] != 6 or b.shape[-1] != 6:
+    a = as_float_array(a, "a")
+    b = as_float_array(b, "b")
+    if a.ndim == 0 or b.ndim == 0 or a.shape[-1] != 6 or b.shape[-1] != 6:
         raise InputError(f"screws must have 6 coordinates, got shapes {a.shape} and {b.shape}")
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+        raise InputError("screws must be finite (found NaN or inf)")
     out = np.sum(a[..., :3] * b[..., 3:] + a[..., 3:] * b[..., :3], axis=-1)
     return float(out) if np.ndim(out) == 0 else out
 
@@ -306,7 +314,7 @@ def adjoint(placement: pin.SE3) -> np.ndarray:
 
 def transform(S, placement: pin.SE3) -> np.ndarray:
     """Coordinates of screws ``S`` (given in frame b) in frame a, ``placement = aMb``."""
-    arr = np.asarray(S, dtype=float)
+    arr = as_float_array(S, "screws")
     out = as_screws(S) @ adjoint(placement).T
     return out[0] if arr.ndim == 1 else out
 
@@ -323,7 +331,7 @@ def from_pinocchio(x) -> np.ndarray:
         return x.vector.copy()
     if isinstance(x, pin.Motion):
         x = x.vector
-    a = np.asarray(x, dtype=float)
+    a = as_float_array(x, "x")
     if a.shape[0] != 6:
         raise InputError(f"expected 6 rows in Pinocchio order (v; w), got shape {a.shape}")
     return a[_SWAP].copy()
@@ -332,7 +340,7 @@ def from_pinocchio(x) -> np.ndarray:
 def to_pinocchio(x) -> np.ndarray:
     """Axis-first twist ``(ω; v)`` → Pinocchio motion coordinates ``(v; ω)`` (vector or
     6×n). Wrenches need no conversion: ``pin.Force(wrench[:3], wrench[3:])``."""
-    a = np.asarray(x, dtype=float)
+    a = as_float_array(x, "x")
     if a.shape[0] != 6:
         raise InputError(f"expected 6 rows in axis-first order (w; v), got shape {a.shape}")
     return a[_SWAP].copy()
@@ -344,7 +352,10 @@ def exp(twist) -> pin.SE3:
     The result is the world-frame displacement ``D`` such that a body at ``M`` moves to
     ``D * M`` (a spatial twist about the world origin).
     """
-    t = as_screws(twist, "twist")[0]
+    t = as_screws(twist, "twist")
+    if t.shape[0] != 1:
+        raise InputError(f"exp takes one twist of shape (6,), got {np.shape(twist)}")
+    t = t[0]
     return pin.exp6(pin.Motion(to_pinocchio(t)))
 
 

@@ -19,6 +19,7 @@ import pinocchio as pin
 from . import batch
 from .analysis import SINGULAR_TOL, classify
 from .errors import AssemblyError, InputError
+from .screws import as_float_array
 
 
 @dataclass
@@ -58,12 +59,15 @@ def pose_array(poses) -> np.ndarray:
     """(N, 6) x, y, z, roll, pitch, yaw from a sequence of ``pin.SE3`` or an (N, 6) array."""
     if isinstance(poses, np.ndarray) and poses.ndim == 2 and poses.shape[1] == 6:
         X = poses.astype(float)
+    elif isinstance(poses, pin.SE3) or np.ndim(poses) == 0:
+        raise InputError(f"poses must be a sequence of poses, got a single value of shape "
+                         f"{np.shape(poses)} (wrap a single pose in a list)")
     else:
         poses = list(poses)
         if poses and all(isinstance(p, pin.SE3) for p in poses):
             X = np.array([np.r_[p.translation, pin.rpy.matrixToRpy(p.rotation)] for p in poses])
         else:
-            X = np.asarray(poses, dtype=float)
+            X = as_float_array(poses, "poses")
     if X.ndim != 2 or X.shape[1] != 6:
         raise InputError(
             "poses must be a sequence of pinocchio.SE3 or an (N, 6) array of "
@@ -141,6 +145,13 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
     return out
 
 
+def _evaluate_copy(mech, *args) -> dict:
+    """:func:`evaluate_chunk` on a private deep copy of the mechanism."""
+    import copy
+
+    return evaluate_chunk(copy.deepcopy(mech), *args)
+
+
 def _carried_det(b: batch.BatchScrews, reference: np.ndarray) -> np.ndarray:
     """det(A_h Δ P_locᵀ), P_loc = the home platform basis projected on each pose's."""
     n = b.A.shape[1]
@@ -189,7 +200,9 @@ class SweepMixin:
             parts = [evaluate_chunk(self, X[c], reference, rtol, singular_tol, tick)
                      for c in chunks]
         else:
-            futures = [executor.submit(evaluate_chunk, self, X[c], reference, rtol, singular_tol)
+            # each task gets its own copy: Pinocchio Data buffers are not shareable
+            # between threads (process and Dask executors copy by pickling anyway)
+            futures = [executor.submit(_evaluate_copy, self, X[c], reference, rtol, singular_tol)
                        for c in chunks]
             parts = []
             for c, fut in zip(chunks, futures):

@@ -10,9 +10,11 @@ mimicking revolute with multiplier −1). Every failure is a :class:`~pkm_pin.Ur
 
 from __future__ import annotations
 
+import contextlib
 import io
 import logging
 import os
+import sys
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
@@ -61,7 +63,12 @@ def read(source: str | os.PathLike) -> UrdfSource:
         isinstance(source, str) and _looks_like_xml(source)
     ):
         path = Path(source)
-        if not path.is_file():
+        try:
+            exists = path.is_file()
+        except OSError as e:  # e.g. a name too long: neither XML nor a usable path
+            raise UrdfError(str(path)[:80] + "…", f"neither URDF text nor a usable path "
+                            f"({e.strerror})", "give a file path or XML starting with '<'") from e
+        if not exists:
             hint = "check the path" + (
                 f" (relative paths are taken from {Path.cwd()})" if not path.is_absolute() else ""
             )
@@ -191,6 +198,10 @@ def _check_joint(j: ET.Element, link_set: set, parent_of: dict, label: str) -> N
             raise UrdfError(label, f"{where} has a non-numeric limit") from e
         if not (np.isfinite(lo) and np.isfinite(up)) or lo > up:
             raise UrdfError(label, f"{where} has limits lower={lo} > upper={up}")
+        for key in ("effort", "velocity"):
+            if lim.get(key) is None:
+                raise UrdfError(label, f"{where} <limit> has no {key} attribute",
+                                "URDF requires effort and velocity on every <limit>")
 
 
 def _load_yourdfpy(xml: str, label: str) -> yourdfpy.Robot:
@@ -209,11 +220,45 @@ def _load_yourdfpy(xml: str, label: str) -> yourdfpy.Robot:
 
 
 def build_model(src: UrdfSource) -> pin.Model:
-    """Pinocchio model of a validated URDF, with mimic joints honoured."""
+    """Pinocchio model of a validated URDF, with mimic joints honoured.
+
+    What urdfdom prints on the C-level stderr while parsing is captured and, on
+    failure, put into the :class:`UrdfError` message (never printed)."""
+    with _captured_stderr() as captured:
+        try:
+            model = pin.buildModelFromXML(src.xml, mimic=True)
+            error = None
+        except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
+            model, error = None, e
+    if error is not None:
+        detail = " ".join(line.strip() for line in captured() if line.strip())
+        raise UrdfError(src.label, f"Pinocchio cannot build a model: {error}"
+                        + (f" (urdfdom: {detail[:300]})" if detail else "")) from error
+    return model
+
+
+@contextlib.contextmanager
+def _captured_stderr():
+    """Redirect file descriptor 2 (C-level stderr) to a temporary file; yields a
+    function returning the captured lines."""
+    import tempfile
+
+    lines: list[str] = []
     try:
-        return pin.buildModelFromXML(src.xml, mimic=True)
-    except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
-        raise UrdfError(src.label, f"Pinocchio cannot build a model: {e}") from e
+        fd = sys.stderr.fileno()
+    except (AttributeError, OSError, ValueError):  # stderr replaced (e.g. by pytest)
+        fd = 2
+    sys.stderr.flush()
+    saved = os.dup(fd)
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), fd)
+        try:
+            yield lambda: lines
+        finally:
+            os.dup2(saved, fd)
+            os.close(saved)
+            tmp.seek(0)
+            lines.extend(tmp.read().decode(errors="replace").splitlines())
 
 
 def example_robot_data_dir() -> Path:

@@ -6,6 +6,7 @@ Regenerate the committed models with ``python -m pkm_pin.builders``.
 """
 
 from .design import LegDesign, MechanismDesign
+from .orthoglide import orthoglide, orthoglide_quasi
 from .planar import (
     rpr3,
     rpr3_type2_pose,
@@ -33,6 +34,8 @@ MECHANISMS = {
     "delta": delta,
     "upu3": upu3,
     "rps3": rps3,
+    "orthoglide": orthoglide,
+    "orthoglide_quasi": orthoglide_quasi,
 }
 
 #: One line per registry entry.
@@ -43,6 +46,8 @@ DESCRIPTIONS = {
     "delta": "Delta robot, parallelograms as mimic joints, 3T with 3 redundant constraints",
     "upu3": "3-UPU translational mechanism (Tsai), prismatic actuators, 3T",
     "rps3": "3-RPS mechanism, prismatic actuators, 1T2R",
+    "orthoglide": "Orthoglide of seed 001, 3 P-R-Pa-R legs on orthogonal prismatic actuators, 3T",
+    "orthoglide_quasi": "Orthoglide with tilted/offset actuator axes, unequal legs (seed 001), 3T",
 }
 
 __all__ = [
@@ -54,6 +59,8 @@ __all__ = [
     "chain_robot",
     "chain_urdf",
     "delta",
+    "orthoglide",
+    "orthoglide_quasi",
     "robot_to_xml",
     "rpr3",
     "rpr3_type2_pose",

@@ -91,3 +91,9 @@ __all__ = [
     "velocity_equation",
     "velocity_equation_paper",
 ]
+
+# Seed 001 — quasi-orthogonal Orthoglide (module docstring: pkm_pin.formulas.orthoglide).
+from . import orthoglide  # noqa: E402
+from .orthoglide import OrthoglideParameters  # noqa: E402
+
+__all__ += ["OrthoglideParameters", "orthoglide"]
