@@ -12,6 +12,7 @@ mimicking revolute) therefore contributes one column: the combined twist of the 
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -280,8 +281,17 @@ class Leg(SerialChainMixin):
         q = self.check_q(q)
         self._update(q)
         J = pin.getFrameJacobian(self.model, self.data, self.tip_id, pin.WORLD).reshape(6, -1)
-        J = screws.adjoint(self.base) @ screws.from_pinocchio(J)
-        return self.base * self.data.oMf[self.tip_id], J
+        return self.base * self.data.oMf[self.tip_id], self._world_map() @ J
+
+    def _world_map(self) -> np.ndarray:
+        """6×6 map from Pinocchio's WORLD Jacobian of the URDF root frame to axis-first
+        twists about the world origin (base placement included), cached per base."""
+        cached = self.__dict__.get("_world_map_cache")
+        if cached is None or cached[0] is not self.base:
+            matrix = screws.adjoint(self.base) @ screws.from_pinocchio(np.eye(6))
+            cached = (self.base, matrix)
+            self.__dict__["_world_map_cache"] = cached
+        return cached[1]
 
     def jacobian(self, q) -> np.ndarray:
         """Spatial Jacobian, 6×nv, axis-first: column k is the twist (ω; v_O) of joint k."""
@@ -345,8 +355,9 @@ class Leg(SerialChainMixin):
         _, J = self.kinematics(q)  # also updates data.oMi
         T = J.T.copy()
         for group, j in zip(self.spherical_groups, self._group_joints):
-            centre = (self.base * self.data.oMi[j]).translation
-            T[list(group)] = np.hstack([np.eye(3), np.cross(centre, np.eye(3))])
+            centre = self.base.act(self.data.oMi[j].translation)
+            # rows (e_k; centre × e_k): lines through the centre along the world axes
+            T[list(group)] = np.hstack([np.eye(3), -pin.skew(centre)])
         return J, T
 
     @cached_property
@@ -356,8 +367,8 @@ class Leg(SerialChainMixin):
     # -------------------------------------------------------------------- pickle
     def __getstate__(self) -> dict:
         state = {k: v for k, v in self.__dict__.items()
-                 if k not in ("data",) and not isinstance(getattr(type(self), k, None),
-                                                         cached_property)}
+                 if k not in ("data", "_world_map_cache")
+                 and not isinstance(getattr(type(self), k, None), cached_property)}
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -377,8 +388,9 @@ class Leg(SerialChainMixin):
     ) -> LegSolution:
         """Joint configuration placing the tip at ``target`` (world), inside the limits.
 
-        Damped Newton on the SE(3) error ``log6(tip⁻¹ target)`` (linear part divided by
-        the characteristic length), each step projected onto the joint limits, warm
+        Damped (Levenberg–Marquardt) Newton on the SE(3) error ``log6(tip⁻¹ target)``
+        (linear part divided by the characteristic length; damping ``1e-2 r²`` with
+        ``r`` the error norm), each step projected onto the joint limits, warm
         started from ``q0`` (default: neutral). If it stalls above ``tol`` (a local
         minimum, a limit), it restarts deterministically from the neutral configuration,
         the middle of the limits and ``restarts`` configurations drawn with ``seed``,
@@ -410,41 +422,55 @@ class Leg(SerialChainMixin):
         return best
 
     def _newton(self, target_local: pin.SE3, q: np.ndarray, tol: float, max_iter: int):
-        model, data = self.model, self.data
-        w = np.r_[np.full(3, 1.0 / self.characteristic_length), np.ones(3)]
+        model, data, tip = self.model, self.data, self.tip_id
+        w = self._error_weights
+        eye = self._identity
 
-        def error(q):
-            pin.forwardKinematics(model, data, q)
-            pin.updateFramePlacement(model, data, self.tip_id)
-            iMd = data.oMf[self.tip_id].actInv(target_local)
+        def state(q):
+            # one pass: joint placements and Jacobians, then the tip frame
+            pin.computeJointJacobians(model, data, q)
+            pin.updateFramePlacement(model, data, tip)
+            iMd = data.oMf[tip].actInv(target_local)
             return iMd, w * pin.log6(iMd).vector
 
         q = q.copy()
-        iMd, err = error(q)
-        eye = np.eye(self.nv)
+        iMd, err = state(q)
         it, best, slow = 0, np.inf, 0
-        while it < max_iter and (r := np.linalg.norm(err)) > tol:
+        while it < max_iter and (r := math.sqrt(err @ err)) > tol:
             it += 1
             # a least-squares minimum (unreachable target) stops improving: leave early
             slow = slow + 1 if r > (1 - 1e-3) * best else 0
             best = min(best, r)
             if slow >= 10:
                 break
-            J = pin.computeFrameJacobian(model, data, q, self.tip_id, pin.LOCAL).reshape(6, -1)
+            J = pin.getFrameJacobian(model, data, tip, pin.LOCAL).reshape(6, -1)
             J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J)
             try:
-                dq = np.linalg.solve(J.T @ J + 1e-10 * eye, J.T @ err)
+                # Levenberg–Marquardt: damping 1e-2 r² grows with the error and
+                # vanishes at the solution (quadratic convergence kept); it tames
+                # singular starts (UR5 from neutral: 48/60 first-try vs 5/60 undamped)
+                dq = np.linalg.solve(J.T @ J + (1e-10 + 1e-2 * r * r) * eye, J.T @ err)
             except np.linalg.LinAlgError:
                 break  # numerically singular normal equations (e.g. a target at 1e12 m)
             if not np.all(np.isfinite(dq)):
                 break
-            q_new = self.clip(pin.integrate(model, q, dq))
-            if np.linalg.norm(q_new - q) < 1e-15 * (1 + np.linalg.norm(q)):
+            q_new = np.clip(pin.integrate(model, q, dq), *self._bounds)
+            step = q_new - q
+            if step @ step < 1e-30 * (1 + q @ q):
                 break  # stalled (at a limit or a local minimum)
             q = q_new
-            iMd, err = error(q)
-        residual = float(np.linalg.norm(err))
+            iMd, err = state(q)
+        residual = math.sqrt(err @ err)
         return LegSolution(q, residual, it, residual <= tol)
+
+    @cached_property
+    def _error_weights(self) -> np.ndarray:
+        """Weights of the (v; ω) pose error: linear part divided by the length."""
+        return np.r_[np.full(3, 1.0 / self.characteristic_length), np.ones(3)]
+
+    @cached_property
+    def _identity(self) -> np.ndarray:
+        return np.eye(self.nv)
 
 
 # ---------------------------------------------------------------------- helpers
