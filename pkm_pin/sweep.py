@@ -108,12 +108,17 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
     ok = np.zeros(N, bool)
     q_act = np.full((N, n), np.nan)
     failures, solved = [], []
-    previous = mech.home_assembly
+    previous, before = mech.home_assembly, None  # the last two solutions (for extrapolation)
     for i, x in enumerate(X):
         pose = pin.SE3(pin.rpy.rpyToMatrix(*x[3:]), x[:3])
+        guess = previous
+        if before is not None and np.allclose(x - X[i - 1], X[i - 1] - X[i - 2], rtol=1e-6,
+                                              atol=1e-12):
+            # equal consecutive steps (a grid line): extrapolate the leg configurations
+            guess = [2 * a - b for a, b in zip(previous.leg_q, before.leg_q)]
         try:
             try:
-                asm = mech.assemble(pose, previous, restarts=0)
+                asm = mech.assemble(pose, guess, restarts=0)
             except AssemblyError:
                 asm = mech.assemble(pose, mech.home_assembly, restarts=restarts)
         except AssemblyError as e:
@@ -122,6 +127,7 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
             ok[i] = True
             q_act[i] = asm.q_actuated
             solved.append(asm)
+            before = previous if i > 0 and ok[i - 1] else None
             previous = asm
         if progress is not None:
             progress(1)
