@@ -255,15 +255,8 @@ class Leg(SerialChainMixin):
 
     def check_q(self, q, name: str = "q") -> np.ndarray:
         """``q`` as a finite float array of shape (nq,), or a specific :class:`InputError`."""
-        a = screws.as_float_array(q, f"{name} of leg {self.name!r}")
-        if a.shape != (self.nq,):
-            raise InputError(
-                f"{name} of leg {self.name!r} must have {self.nq} values "
-                f"(joints {self.joint_names}), got shape {a.shape}"
-            )
-        if not np.all(np.isfinite(a)):
-            raise InputError(f"{name} of leg {self.name!r} must be finite, got {a}")
-        return a
+        return screws.as_vector(q, self.nq, f"{name} of leg {self.name!r}",
+                                f"joints {self.joint_names}")
 
     # ---------------------------------------------------------------- kinematics
     def _update(self, q: np.ndarray) -> None:
@@ -474,6 +467,13 @@ class Leg(SerialChainMixin):
 
 
 # ---------------------------------------------------------------------- helpers
+def pose_error(current: pin.SE3, target: pin.SE3, length: float) -> float:
+    """Relative distance between two placements: the norm of ``log6(current⁻¹ target)``
+    with the linear part divided by ``length`` [m] (the residual of :meth:`Leg.solve`)."""
+    e = pin.log6(current.actInv(target)).vector  # Pinocchio order (v; ω): a norm only
+    return float(np.linalg.norm(np.r_[e[:3] / length, e[3:]]))
+
+
 def _frame_names(model: pin.Model) -> list[str]:
     return [f.name for f in model.frames if f.type != pin.FrameType.JOINT and f.name != "universe"]
 

@@ -46,7 +46,7 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
-from .screws import as_float_array
+from .screws import as_float_array, as_vector
 from .position import PositionMixin
 from .sensitivity import SensitivityMixin
 from .sweep import SweepMixin
@@ -245,15 +245,7 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
 
     def check_actuated(self, q_actuated, name: str = "q_actuated") -> np.ndarray:
         """``q_actuated`` as a finite array of the right length, or a specific error."""
-        a = as_float_array(q_actuated, name)
-        if a.shape != (self.n_actuated,):
-            raise InputError(
-                f"{name} must have {self.n_actuated} values ({', '.join(self.actuated_names)}), "
-                f"got shape {a.shape}"
-            )
-        if not np.all(np.isfinite(a)):
-            raise InputError(f"{name} must be finite, got {a}")
-        return a
+        return as_vector(q_actuated, self.n_actuated, name, ", ".join(self.actuated_names))
 
     # ----------------------------------------------------------------- analysis
     def analyze(self, pose_or_assembly=None, **options):

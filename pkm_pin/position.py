@@ -45,6 +45,7 @@ import pinocchio as pin
 
 from . import screws
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
+from .leg import pose_error
 
 #: Largest increment of one continuation step: fraction of the characteristic length
 #: for prismatic coordinates, radians for revolute ones.
@@ -144,9 +145,7 @@ class PositionMixin:
                 want = pose * anchor
                 tip, J = leg.kinematics(q)
                 e = screws.log(want * tip.inverse())
-                err = pin.log6(tip.actInv(want)).vector
-                closure = max(closure, float(np.linalg.norm(
-                    np.r_[err[:3] / leg.characteristic_length, err[3:]])))
+                closure = max(closure, pose_error(tip, want, leg.characteristic_length))
                 block = np.zeros((6, ncol))
                 block[:, offs[i]:offs[i + 1]] = w[:, None] * J
                 if move_pose:
@@ -432,7 +431,7 @@ class PositionMixin:
                 a = self.forward_kinematics(target, start, tol=tol)
             except ForwardKinematicsError:
                 continue
-            if any(_pose_distance(a.pose, b.pose, L) < 1e-6 for b in found):
+            if any(pose_error(a.pose, b.pose, L) < 1e-6 for b in found):
                 continue
             found.append(a)
         return found
@@ -507,11 +506,6 @@ def _same_q(leg, a, b, tol: float = 1e-7) -> bool:
     # revolute joints: compare modulo 2π
     d = np.where(np.abs(d) > np.pi, (d + np.pi) % (2 * np.pi) - np.pi, d)
     return bool(np.max(np.abs(d)) < tol * max(1.0, leg.characteristic_length))
-
-
-def _pose_distance(a: pin.SE3, b: pin.SE3, L: float) -> float:
-    e = pin.log6(a.actInv(b)).vector
-    return float(np.linalg.norm(np.r_[e[:3] / L, e[3:]]))
 
 
 # ====================================================== serial chain: iterative IK

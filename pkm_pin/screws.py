@@ -54,14 +54,22 @@ def as_float_array(x, name: str = "value") -> np.ndarray:
         raise InputError(f"{name} must be numbers, got {type(x).__name__} {x!r:.60}") from e
 
 
-def as_vector3(x, name: str = "vector") -> np.ndarray:
-    """Return ``x`` as a finite float array of shape (3,), or raise :class:`InputError`."""
+def as_vector(x, n: int, name: str = "vector", what: str = "", noun: str = "values"
+              ) -> np.ndarray:
+    """``x`` as a finite float array of shape (n,), or an :class:`InputError` naming
+    ``name`` (and ``what`` the n values are, when given)."""
     a = as_float_array(x, name)
-    if a.shape != (3,):
-        raise InputError(f"{name} must have 3 components, got shape {a.shape}")
+    if a.shape != (n,):
+        detail = f" ({what})" if what else ""
+        raise InputError(f"{name} must have {n} {noun}{detail}, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise InputError(f"{name} must be finite, got {a}")
     return a
+
+
+def as_vector3(x, name: str = "vector") -> np.ndarray:
+    """Return ``x`` as a finite float array of shape (3,), or raise :class:`InputError`."""
+    return as_vector(x, 3, name, noun="components")
 
 
 def as_screws(S, name: str = "screws") -> np.ndarray:

@@ -216,14 +216,22 @@ def _link_placement(leg, link: str) -> pin.SE3:
 def virtual_twist(mech, assembly, name: str) -> np.ndarray:
     """World twist (axis-first) of the leg's tip per unit error of parameter ``name``
     at fixed joint values (anchor parameters: minus the platform twist they require)."""
+    i = _split(mech, name)[0]
+    leg = mech.legs[i]
+    pin.framesForwardKinematics(leg.model, leg.data, leg.check_q(assembly.leg_q[i]))
+    return _virtual_twist_placed(mech, assembly, name)
+
+
+def _virtual_twist_placed(mech, assembly, name: str) -> np.ndarray:
+    """:func:`virtual_twist` with the leg's frame placements already at its assembly
+    configuration (one Pinocchio pass per leg serves all of its parameters)."""
     i, where, kind, comp = _split(mech, name)
-    leg, q = mech.legs[i], assembly.leg_q[i]
+    leg = mech.legs[i]
     if where == "base":
         return _placement_twist(leg.base.translation, _rpy(leg.base), comp)
     if where == "anchor":
         A = mech.anchors[i]
         return -screws.transform(_placement_twist(A.translation, _rpy(A), comp), assembly.pose)
-    pin.framesForwardKinematics(leg.model, leg.data, leg.check_q(q))
     j = {jj.name: jj for jj in urdf_chain(leg)}[where]
     F = _link_placement(leg, j.parent)
     if kind == "origin":
@@ -281,13 +289,13 @@ class Sensitivity:
         return out
 
 
-def _leg_wrench_rows(mech, assembly, L: float) -> list[np.ndarray]:
-    """Per leg, the wrenches reciprocal to its passive joint twists (k_i × 6)."""
-    rows = []
-    for leg, q in zip(mech.legs, assembly.leg_q):
-        T = leg.motion_twists(q)
-        rows.append(screws.reciprocal(T[leg.passive_v], L))
-    return rows
+def _leg_wrench_rows(mech, assembly) -> list[np.ndarray]:
+    """Per leg, its actuation and constraint wrenches from the analysis (together they
+    span the wrenches reciprocal to the leg's passive joint twists)."""
+    an = mech.analyze(assembly)
+    ends = np.cumsum([0] + [len(leg.actuated) for leg in mech.legs])
+    return [np.vstack([an.A[a:b], w])
+            for a, b, w in zip(ends[:-1], ends[1:], an.leg_constraint_wrenches)]
 
 
 def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
@@ -306,7 +314,7 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
         assembly = mech.home_assembly
     names = select_parameters(mech, parameters)
     L = mech.characteristic_length
-    W = _leg_wrench_rows(mech, assembly, L)
+    W = _leg_wrench_rows(mech, assembly)
     offs = np.r_[0, np.cumsum([w.shape[0] for w in W])]
     M = np.vstack([w @ screws.DELTA for w in W])  # ζ ∘ t = (ζᵀ Δ) t
     D = np.r_[np.ones(3), np.full(3, L)]          # t = D t_h (homogenised unknown)
@@ -323,10 +331,15 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
     leg_of = {leg.name: i for i, leg in enumerate(mech.legs)}
     xi = np.zeros((6, len(names)))
     R = np.zeros((M.shape[0], len(names)))
+    columns = {}
     for k, name in enumerate(names):
-        i = leg_of[name.split("/")[0]]
-        xi[:, k] = virtual_twist(mech, assembly, name)
-        R[offs[i]:offs[i + 1], k] = W[i] @ screws.DELTA @ xi[:, k]
+        columns.setdefault(leg_of[name.split("/")[0]], []).append(k)
+    for i, ks in columns.items():
+        leg = mech.legs[i]
+        pin.framesForwardKinematics(leg.model, leg.data, assembly.leg_q[i])
+        for k in ks:
+            xi[:, k] = _virtual_twist_placed(mech, assembly, names[k])
+            R[offs[i]:offs[i + 1], k] = W[i] @ screws.DELTA @ xi[:, k]
     Rh = R / scale[:, None]
     X = Vt.T @ ((U.T @ Rh) / sv[:, None])
     resid = np.linalg.norm(Mh @ X - Rh, axis=0)
