@@ -471,7 +471,8 @@ def pose_error(current: pin.SE3, target: pin.SE3, length: float) -> float:
     """Relative distance between two placements: the norm of ``log6(current⁻¹ target)``
     with the linear part divided by ``length`` [m] (the residual of :meth:`Leg.solve`)."""
     e = pin.log6(current.actInv(target)).vector  # Pinocchio order (v; ω): a norm only
-    return float(np.linalg.norm(np.r_[e[:3] / length, e[3:]]))
+    v, w = e[:3], e[3:]
+    return math.sqrt(float(v @ v) / (length * length) + float(w @ w))
 
 
 def _frame_names(model: pin.Model) -> list[str]:

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from itertools import product
 
 import numpy as np
@@ -54,6 +55,10 @@ STEP = 0.05
 CONTINUATION_TOL = 1e-6
 #: Type II closeness index below which the continuation moves "by inertia".
 INERTIA_TOL = 1e-2
+#: Largest step of the compiled predictor–corrector (same units as :data:`STEP`): its
+#: steps are corrected to their intermediate targets and accepted only while Newton's
+#: corrections contract, so they may be longer than the Euler steps.
+COMPILED_STEP = 0.2
 
 
 # ============================================================ seed 003: one screw step
@@ -91,7 +96,14 @@ def screw_step(lines, dl) -> np.ndarray:
 # ======================================================================= helpers
 def _actuated_scales(mech) -> np.ndarray:
     """Unit of each actuated coordinate: the characteristic length for a prismatic
-    joint, 1 rad for a revolute one."""
+    joint, 1 rad for a revolute one (cached on the mechanism)."""
+    cached = mech.__dict__.get("_actuated_scales_cache")
+    if cached is None:
+        cached = mech.__dict__["_actuated_scales_cache"] = _scales_of(mech)
+    return cached.copy()
+
+
+def _scales_of(mech) -> np.ndarray:
     out = []
     L = mech.characteristic_length
     for leg in mech.legs:
@@ -191,9 +203,28 @@ class PositionMixin:
     # ------------------------------------------------------------ forward problem
     def forward_kinematics(self, q_actuated, guess=None, *, steps: int | None = None,
                            tol: float = 1e-12, inertia_tol: float = INERTIA_TOL,
-                           max_newton: int = 50, max_inertia: int = 200):
+                           max_newton: int = 50, max_inertia: int = 200,
+                           method: str = "auto"):
         """Platform pose (an :class:`~pkm_pin.mechanism.Assembly`) for the actuated
-        coordinates ``q_actuated``, by seed 003's continuation from ``guess``.
+        coordinates ``q_actuated``, by continuation from ``guess``.
+
+        Two continuations share the same predictor (seed 003's ``A Δ t = B Δq``, which
+        is the first Newton step of the closure system from an assembled state):
+
+        * ``method="euler"``: seed 003's algorithm as printed: Euler steps whose legs
+          are re-closed at the predicted pose, "motion by inertia" near type II
+          singularities, then Newton's method on all closures and actuated coordinates.
+          ``info["continuation_error"]`` is the Euler polyline's error.
+        * ``method="compiled"``: the same homotopy as a predictor–corrector in compiled
+          code (:mod:`pkm_pin.kernels`): each step is corrected by Newton's method on
+          the whole closure system to its intermediate actuated coordinates and is
+          accepted only in Newton's contracting regime (each correction at most half the
+          previous, so no jump to another assembly mode); steps are halved otherwise.
+          It stops (``ForwardKinematicsError``) where the closeness of the 6×6 Schur
+          complement of the system falls below ``inertia_tol`` (a type II or constraint
+          singularity ahead). The result is checked by Pinocchio like the other's.
+        * ``method="auto"`` (default): ``"compiled"`` when every leg has a kernel,
+          ``"euler"`` (with motion by inertia) where it stops or fails.
 
         Args:
             q_actuated: Target actuated coordinates (see :attr:`Mechanism.actuated_names`).
@@ -214,7 +245,7 @@ class PositionMixin:
             ``halvings``, ``newton_iterations``, ``residual`` (final scaled actuated
             error), ``continuation_error`` (largest scaled actuated error after the
             continuation, before Newton: the Euler polyline's error), ``inertia``
-            (whether motion by inertia was used) and ``inertia_steps``.
+            (whether motion by inertia was used) and ``inertia_steps``, and ``method`` ("compiled" or "euler").
 
         Raises:
             InputError: wrong length or non-finite values, a bad guess.
@@ -236,6 +267,17 @@ class PositionMixin:
             start = self.assemble(guess)
         scales = _actuated_scales(self)
         self._check_limits(target)
+        if method not in ("auto", "compiled", "euler"):
+            raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")
+        if method != "euler":
+            kernel = self._kernel if method == "auto" else self._require_kernel()
+            if kernel is not None:
+                try:
+                    return self._forward_compiled(kernel, target, start, steps, tol,
+                                                  inertia_tol, max_newton)
+                except ForwardKinematicsError:
+                    if method == "compiled":
+                        raise
 
         state = _State(start.pose, [q.copy() for q in start.leg_q], start.residual, np.inf)
         q0 = start.q_actuated
@@ -350,8 +392,88 @@ class PositionMixin:
         result.info.update(steps=accepted, halvings=halvings, newton_iterations=final.iterations,
                            residual=err, continuation_error=cont_err,
                            inertia=inertia_steps > 0, inertia_steps=inertia_steps,
-                           requested_steps=n_total)
+                           requested_steps=n_total, method="euler")
         return result
+
+    # -------------------------------------------------- compiled continuation
+    @cached_property
+    def _kernel(self):
+        """The mechanism's compiled kinematics (:mod:`pkm_pin.kernels`), or ``None``."""
+        from .kernels import mechanism_kernel
+
+        return mechanism_kernel(self, _actuated_scales(self))
+
+    def _require_kernel(self):
+        if self._kernel is None:
+            raise InputError(
+                f"{self.name}: a leg has a joint the compiled kinematics do not represent "
+                "(continuous, multi-DOF or helical joints); use method='euler'")
+        return self._kernel
+
+    def _forward_compiled(self, kernel, target, start, steps, tol, inertia_tol, max_newton):
+        """Predictor–corrector continuation in compiled code (see forward_kinematics)."""
+        from .kernels import system_newton
+
+        args = kernel.args()
+        scales = kernel.scales
+        pose = start.pose.homogeneous.copy()
+        Q = np.concatenate(start.leg_q).astype(float)
+        q0 = Q[kernel.actuated].copy()
+        if steps is None:
+            steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales,
+                                                  initial=0.0)) / COMPILED_STEP))
+        lam, h = 0.0, 1.0 / steps
+        accepted = halvings = iterations = 0
+        out = np.zeros(5)
+        while lam < 1.0 - 1e-15:
+            lam_new = min(1.0, lam + h)
+            P, Qn = pose.copy(), Q.copy()
+            system_newton(*args, P, Qn, q0 + lam_new * (target - q0), CONTINUATION_TOL, 10, out)
+            iterations += int(out[2])
+            if not (out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1):
+                if h < 1e-6:
+                    raise ForwardKinematicsError(
+                        f"compiled continuation stalled at λ = {lam:.4g}", self._state_of(P, Qn))
+                h *= 0.5
+                halvings += 1
+                continue
+            if math.sqrt(out[3]) < inertia_tol:
+                raise ForwardKinematicsError(
+                    f"compiled continuation stopped near a singularity at λ = {lam_new:.4g} "
+                    f"(Schur closeness {math.sqrt(out[3]):.3g} < {inertia_tol:g})",
+                    self._state_of(P, Qn))
+            pose, Q, lam = P, Qn, lam_new
+            h = min(2 * h, 1.0 / steps)
+            accepted += 1
+        cont_err = float(np.max(np.abs(Q[kernel.actuated] - target) / scales, initial=0.0))
+        system_newton(*args, pose, Q, target, 0.1 * min(tol, 1e-12), max_newton, out)
+        iterations += int(out[2])
+        final = self._state_of(pose, Q)
+        err = float(np.max(np.abs(final.q_actuated - target) / scales, initial=0.0))
+        inside = bool(np.all(Q >= kernel.lower - 1e-9) and np.all(Q <= kernel.upper + 1e-9))
+        if final.residual > max(tol, 1e-12) or err > max(tol, 1e-10) or not inside:
+            raise ForwardKinematicsError(
+                f"compiled Newton correction did not converge: actuated error {err:.3g}, "
+                f"closure error {final.residual:.3g} (tol {tol:g})", final)
+        final.info.update(steps=accepted, halvings=halvings, newton_iterations=iterations,
+                          residual=err, continuation_error=cont_err, inertia=False,
+                          inertia_steps=0, requested_steps=steps, method="compiled")
+        return final
+
+    def _state_of(self, pose: np.ndarray, Q: np.ndarray):
+        """Assembly at a 4×4 pose and concatenated leg configurations; its residual is
+        the largest closure error evaluated by Pinocchio."""
+        from .mechanism import Assembly
+
+        offs = self._kernel.coords
+        leg_q = [Q[offs[i]:offs[i + 1]].copy() for i in range(len(self.legs))]
+        M = pin.SE3(pose)
+        residual = 0.0
+        for leg, q, a in zip(self.legs, leg_q, self.anchors):
+            pin.framesForwardKinematics(leg.model, leg.data, q)
+            tip = leg.base * leg.data.oMf[leg.tip_id]
+            residual = max(residual, pose_error(tip, M * a, leg.characteristic_length))
+        return Assembly(self, M, leg_q, residual)
 
     def _predict_legs(self, leg_q, t, an=None) -> list:
         """Leg configurations moved by the joint rates of the platform twist ``t``."""

@@ -196,12 +196,13 @@ def test_sps6_seed003_body(sps6):
 
 
 def test_sps6_seed003_residual_falls_with_steps(sps6):
-    """One Euler step leaves a leg-length error of a few % of the step; it falls ~1/N."""
+    """One Euler step (seed 003 as printed) leaves a leg-length error of a few % of the
+    step; it falls ~1/N."""
     target = sps6.home_assembly.q_actuated + SEED003_DL
     L = sps6.characteristic_length
     errors = []
     for n in (1, 2, 4, 8):
-        a = sps6.forward_kinematics(target, steps=n)
+        a = sps6.forward_kinematics(target, steps=n, method="euler")
         assert a.info["steps"] == n
         np.testing.assert_allclose(a.q_actuated, target, atol=1e-12)
         errors.append(a.info["continuation_error"] * L)

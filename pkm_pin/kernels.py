@@ -1,0 +1,689 @@
+"""Compiled kinematics of a leg for the inner loops of sweeps and forward kinematics.
+
+Why this module exists: a Newton iteration of a leg costs about 1 µs of Pinocchio work
+but 20–30 µs of Python around it (binding calls, small numpy arrays). For loops over
+thousands of poses the leg's kinematics are therefore evaluated here, in numba-compiled
+code, as a product of exponentials whose every constant is read from the leg's Pinocchio
+model (joint placements, joint motion axes measured through Pinocchio's own forward
+kinematics, mimic ratios and offsets, tip frame, limits). The kernel is an accelerator,
+not a second source of truth: it is tested against Pinocchio to round-off, and every
+configuration it returns to the user is evaluated again by Pinocchio (whose tip
+placement gives the reported residual and whose Jacobian gives the joint twists).
+
+Conventions: twists axis-first ``(ω; v_O)`` about the world origin, base placement
+included (like :meth:`pkm_pin.Leg.jacobian`); SI units, radians.
+
+Chains the kernel cannot represent (joints with more than one coordinate such as
+continuous or free-flyer joints, branches, helical joints) get no kernel:
+:func:`chain_kernel` returns ``None`` and callers use the Pinocchio path.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from numba import njit
+
+REVOLUTE, PRISMATIC = 0, 1
+
+
+@dataclass(frozen=True)
+class ChainKernel:
+    """Constants of a serial chain, as arrays for the compiled functions.
+
+    Joint ``j`` moves its frame by ``parent_j · exp(S_j q[iq_j]) · post_j`` where
+    ``S_j`` is a rotation about ``axis_j`` at rate ``rate_j`` (revolute) or a translation
+    ``rate_j · axis_j`` (prismatic); mimic joints read the coordinate of their primary
+    joint, their ratio is in ``rate_j`` and their offset in ``post_j``; ``iv_j`` is the
+    Jacobian column the joint contributes to.
+    """
+
+    parent: np.ndarray  # (nj, 4, 4) joint placements in the parent joint frame
+    post: np.ndarray  # (nj, 4, 4) constant factor after the motion (mimic offset)
+    kind: np.ndarray  # (nj,) REVOLUTE / PRISMATIC
+    axis: np.ndarray  # (nj, 3) unit axis in the joint frame
+    rate: np.ndarray  # (nj,) rad or m per unit of the coordinate
+    iq: np.ndarray  # (nj,) configuration index driving the joint
+    iv: np.ndarray  # (nj,) Jacobian column
+    tip: np.ndarray  # (4, 4) tip frame in the last joint frame
+    base: np.ndarray  # (4, 4) root placement in the world
+    lower: np.ndarray  # (nq,)
+    upper: np.ndarray  # (nq,)
+    length: float  # characteristic length of the leg [m]
+    nv: int
+
+    def args(self) -> tuple:
+        """The arrays in the order the compiled functions take them."""
+        return (self.parent, self.post, self.kind, self.axis, self.rate, self.iq, self.iv,
+                self.tip, self.base, self.nv)
+
+    def kinematics(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """Tip placement (4×4, world) and 6×nv axis-first world Jacobian at ``q``."""
+        T = np.empty((4, 4))
+        J = np.empty((6, self.nv))
+        fk_jacobian(*self.args(), np.asarray(q, dtype=float), T, J)
+        return T, J
+
+    def solve(self, target: np.ndarray, q0, tol: float = 1e-12, max_iter: int = 50):
+        """Damped Newton for the tip at ``target`` (4×4, world) from ``q0``:
+        ``(q, residual, iterations)``."""
+        q = np.array(q0, dtype=float)
+        res, it = newton(*self.args(), self.lower, self.upper, self.length,
+                         np.ascontiguousarray(target, dtype=float), q, tol, max_iter)
+        return q, res, it
+
+
+def chain_kernel(leg) -> ChainKernel | None:
+    """The kernel of a :class:`~pkm_pin.Leg`, or ``None`` if its chain has a joint the
+    kernel does not represent (nq ≠ nv, multi-DOF, helical) or is not a single chain."""
+    m = leg.model
+    if m.nq != m.nv:
+        return None
+    data = m.createData()
+    nj = m.njoints - 1
+    if m.frames[leg.tip_id].parentJoint != nj:
+        return None
+    parent = np.empty((nj, 4, 4))
+    post = np.empty((nj, 4, 4))
+    kind = np.empty(nj, np.int64)
+    axis = np.empty((nj, 3))
+    rate = np.empty(nj)
+    iq = np.empty(nj, np.int64)
+    iv = np.empty(nj, np.int64)
+    probe = 0.1
+    for j in range(1, nj + 1):
+        jm = m.joints[j]
+        mimic = jm.nq == 0 and jm.nv == 0 and "Mimic" in jm.shortname()
+        if m.parents[j] != j - 1 or not (mimic or (jm.nq == 1 and jm.nv == 1)):
+            return None
+        k = j - 1
+        parent[k] = m.jointPlacements[j].homogeneous
+        iq[k], iv[k] = jm.idx_q, jm.idx_v
+        # the joint's own motion, measured through Pinocchio's forward kinematics
+        q = np.zeros(m.nq)
+        pin.forwardKinematics(m, data, q)
+        M0 = m.jointPlacements[j].actInv(data.liMi[j])
+        q[jm.idx_q] = probe
+        pin.forwardKinematics(m, data, q)
+        M1 = m.jointPlacements[j].actInv(data.liMi[j])
+        S = pin.log6(M1 * M0.inverse()).vector / probe  # (v; ω) per unit coordinate
+        v, w = S[:3], S[3:]
+        nw, nvv = np.linalg.norm(w), np.linalg.norm(v)
+        if nw > 1e-12 and nvv <= 1e-12 * max(1.0, nw):
+            kind[k], axis[k], rate[k] = REVOLUTE, w / nw, nw
+        elif nw <= 1e-12 and nvv > 0:
+            kind[k], axis[k], rate[k] = PRISMATIC, v / nvv, nvv
+        else:
+            return None  # helical or a joint that does not move
+        post[k] = M0.homogeneous
+    lo, up = leg._bounds
+    return ChainKernel(parent, post, kind, axis, rate, iq, iv,
+                       m.frames[leg.tip_id].placement.homogeneous, leg.base.homogeneous,
+                       lo.copy(), up.copy(), float(leg.characteristic_length), int(m.nv))
+
+
+# =============================================================== compiled functions
+@njit(cache=True, nogil=True)
+def _motion(kind, axis, angle, out):
+    """4×4 homogeneous transform of a revolute (angle [rad]) or prismatic motion."""
+    for a in range(4):
+        for b in range(4):
+            out[a, b] = 1.0 if a == b else 0.0
+    if kind == PRISMATIC:
+        out[0, 3] = axis[0] * angle
+        out[1, 3] = axis[1] * angle
+        out[2, 3] = axis[2] * angle
+        return
+    x, y, z = axis[0], axis[1], axis[2]
+    s, c = math.sin(angle), math.cos(angle)
+    t = 1.0 - c
+    out[0, 0] = c + t * x * x
+    out[0, 1] = t * x * y - s * z
+    out[0, 2] = t * x * z + s * y
+    out[1, 0] = t * x * y + s * z
+    out[1, 1] = c + t * y * y
+    out[1, 2] = t * y * z - s * x
+    out[2, 0] = t * x * z - s * y
+    out[2, 1] = t * y * z + s * x
+    out[2, 2] = c + t * z * z
+
+
+@njit(cache=True, nogil=True)
+def _compose(A, B, out):
+    """out = A · B for 4×4 homogeneous transforms (out may not alias A or B)."""
+    for a in range(3):
+        for b in range(4):
+            s = A[a, 0] * B[0, b] + A[a, 1] * B[1, b] + A[a, 2] * B[2, b]
+            if b == 3:
+                s += A[a, 3]
+            out[a, b] = s
+    out[3, 0] = 0.0
+    out[3, 1] = 0.0
+    out[3, 2] = 0.0
+    out[3, 3] = 1.0
+
+
+@njit(cache=True, nogil=True)
+def fk_jacobian(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
+    """Tip placement ``T_out`` (4×4, world) and axis-first world Jacobian ``J_out``
+    (6×nv, columns ``(ω; v_O)``; a mimic joint adds its twist to its primary's column)."""
+    _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out,
+        np.empty((3, 4, 4)))
+
+
+@njit(cache=True, nogil=True)
+def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out, work):
+    """:func:`fk_jacobian` with caller-provided work space (3, 4, 4)."""
+    T, tmp, mot = work[0], work[1], work[2]
+    T[:, :] = base
+    for c in range(nv):
+        for r in range(6):
+            J_out[r, c] = 0.0
+    for k in range(kind.shape[0]):
+        _compose(T, parent[k], tmp)
+        # twist of the joint, from the frame before its motion
+        a0 = tmp[0, 0] * axis[k, 0] + tmp[0, 1] * axis[k, 1] + tmp[0, 2] * axis[k, 2]
+        a1 = tmp[1, 0] * axis[k, 0] + tmp[1, 1] * axis[k, 1] + tmp[1, 2] * axis[k, 2]
+        a2 = tmp[2, 0] * axis[k, 0] + tmp[2, 1] * axis[k, 1] + tmp[2, 2] * axis[k, 2]
+        col, g = iv[k], rate[k]
+        if kind[k] == REVOLUTE:
+            px, py, pz = tmp[0, 3], tmp[1, 3], tmp[2, 3]
+            J_out[0, col] += g * a0
+            J_out[1, col] += g * a1
+            J_out[2, col] += g * a2
+            J_out[3, col] += g * (py * a2 - pz * a1)
+            J_out[4, col] += g * (pz * a0 - px * a2)
+            J_out[5, col] += g * (px * a1 - py * a0)
+        else:
+            J_out[3, col] += g * a0
+            J_out[4, col] += g * a1
+            J_out[5, col] += g * a2
+        _motion(kind[k], axis[k], g * q[iq[k]], mot)
+        _compose(tmp, mot, T)
+        _compose(T, post[k], tmp)
+        T[:, :] = tmp
+    _compose(T, tip, T_out)
+
+
+@njit(cache=True, nogil=True)
+def log3(R, out):
+    """Rotation vector of a rotation matrix (robust near 0 and π)."""
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    c = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
+    x = R[2, 1] - R[1, 2]
+    y = R[0, 2] - R[2, 0]
+    z = R[1, 0] - R[0, 1]
+    theta = math.acos(c)
+    if theta < 1e-4:
+        f = 0.5 * (1.0 + theta * theta / 6.0)
+        out[0], out[1], out[2] = f * x, f * y, f * z
+        return
+    if theta < math.pi - 1e-4:
+        f = 0.5 * theta / math.sin(theta)
+        out[0], out[1], out[2] = f * x, f * y, f * z
+        return
+    # near π: axis from the symmetric part, sign from the skew part
+    d = np.array([R[0, 0], R[1, 1], R[2, 2]])
+    i = int(np.argmax(d))
+    u = np.empty(3)
+    for k in range(3):
+        u[k] = 0.5 * (R[k, i] + R[i, k])
+    u[i] = math.sqrt(max(0.0, 0.5 * (1.0 + R[i, i] - (tr - R[i, i]))))
+    n = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
+    for k in range(3):
+        u[k] /= n
+    if u[0] * x + u[1] * y + u[2] * z < 0.0:
+        for k in range(3):
+            u[k] = -u[k]
+    out[0], out[1], out[2] = theta * u[0], theta * u[1], theta * u[2]
+
+
+@njit(cache=True, nogil=True)
+def pose_error(T, target, length, e):
+    """Error ``e`` (6) from ``T`` to ``target``: world rotation vector of
+    ``R_target R_Tᵀ`` and tip displacement divided by ``length``; returns its norm."""
+    Rd = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            Rd[a, b] = (target[a, 0] * T[b, 0] + target[a, 1] * T[b, 1]
+                        + target[a, 2] * T[b, 2])
+    w = np.empty(3)
+    log3(Rd, w)
+    s = 0.0
+    for a in range(3):
+        e[a] = w[a]
+        e[3 + a] = (target[a, 3] - T[a, 3]) / length
+        s += e[a] * e[a] + e[3 + a] * e[3 + a]
+    return math.sqrt(s)
+
+
+@njit(cache=True, nogil=True)
+def _solve_spd(A, b, x):
+    """x = A⁻¹ b for a symmetric positive definite A (Cholesky, A overwritten)."""
+    n = A.shape[0]
+    for j in range(n):
+        s = A[j, j]
+        for k in range(j):
+            s -= A[j, k] * A[j, k]
+        if s <= 0.0:
+            return False
+        A[j, j] = math.sqrt(s)
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for k in range(j):
+                s -= A[i, k] * A[j, k]
+            A[i, j] = s / A[j, j]
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= A[i, k] * x[k]
+        x[i] = s / A[i, i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= A[k, i] * x[k]
+        x[i] = s / A[i, i]
+    return True
+
+
+@njit(cache=True, nogil=True)
+def newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
+           target, q, tol, max_iter):
+    """Levenberg–Marquardt Newton of the leg (in place on ``q``), steps projected on
+    the limits; the error is :func:`pose_error` (rotation, tip displacement / length),
+    damping ``1e-10 + 1e-2 r²`` as :meth:`pkm_pin.Leg.solve`. Returns
+    ``(residual, iterations)``."""
+    T = np.empty((4, 4))
+    J = np.empty((6, nv))
+    H = np.empty((6, nv))
+    work = np.empty((3, 4, 4))
+    e = np.empty(6)
+    N = np.empty((nv, nv))
+    g = np.empty(nv)
+    dq = np.empty(nv)
+    it = 0
+    best = np.inf
+    slow = 0
+    while True:
+        _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J, work)
+        r = pose_error(T, target, length, e)
+        if r <= tol or it >= max_iter:
+            return r, it
+        slow = slow + 1 if r > (1.0 - 1e-3) * best else 0
+        best = min(best, r)
+        if slow >= 10:
+            return r, it
+        it += 1
+        px, py, pz = T[0, 3], T[1, 3], T[2, 3]
+        for c in range(nv):  # rows: ω, and the velocity of the tip point / length
+            wx, wy, wz = J[0, c], J[1, c], J[2, c]
+            H[0, c], H[1, c], H[2, c] = wx, wy, wz
+            H[3, c] = (J[3, c] + wy * pz - wz * py) / length
+            H[4, c] = (J[4, c] + wz * px - wx * pz) / length
+            H[5, c] = (J[5, c] + wx * py - wy * px) / length
+        lam = 1e-10 + 1e-2 * r * r
+        for a in range(nv):
+            s = 0.0
+            for k in range(6):
+                s += H[k, a] * e[k]
+            g[a] = s
+            for b in range(a + 1):
+                s = 0.0
+                for k in range(6):
+                    s += H[k, a] * H[k, b]
+                N[a, b] = s
+                N[b, a] = s
+            N[a, a] += lam
+        if not _solve_spd(N, g, dq):
+            return r, it
+        step = 0.0
+        size = 0.0
+        for a in range(nv):
+            new = min(upper[a], max(lower[a], q[a] + dq[a]))
+            step += (new - q[a]) ** 2
+            size += q[a] * q[a]
+            q[a] = new
+        if not math.isfinite(step) or step < 1e-30 * (1.0 + size):
+            fk_jacobian(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
+            return pose_error(T, target, length, e), it
+
+
+@njit(cache=True, nogil=True)
+def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
+          targets, q_start, extrapolate, tol, max_iter, Q, residual):
+    """Solve the leg at each target of an ordered path (N, 4, 4), warm-started from the
+    previous solution (extrapolated linearly where ``extrapolate[i]``, i.e. along grid
+    lines of equal steps). Fills ``Q`` (N, nq) and ``residual`` (N,); a target that does
+    not converge leaves the warm start unchanged for the next one."""
+    q_prev = q_start.copy()
+    q_before = q_start.copy()
+    have_before = False
+    q = np.empty_like(q_start)
+    for i in range(targets.shape[0]):
+        if extrapolate[i] and have_before:
+            for a in range(q.shape[0]):
+                q[a] = min(upper[a], max(lower[a], 2.0 * q_prev[a] - q_before[a]))
+        else:
+            q[:] = q_prev
+        r, _ = newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
+                      length, targets[i], q, tol, max_iter)
+        residual[i] = r
+        Q[i] = q
+        if r <= tol:
+            q_before[:] = q_prev
+            q_prev[:] = q
+            have_before = True
+        else:
+            have_before = False
+
+
+# ============================================================== a whole mechanism
+@dataclass(frozen=True)
+class MechanismKernel:
+    """The legs' kernels flattened into single arrays (numba takes no lists of arrays).
+
+    Leg ``i`` owns joints ``joints[i]:joints[i+1]`` and coordinates
+    ``coords[i]:coords[i+1]`` of the concatenated configuration ``Q``.
+    """
+
+    legs: tuple
+    joints: np.ndarray
+    coords: np.ndarray
+    parent: np.ndarray
+    post: np.ndarray
+    kind: np.ndarray
+    axis: np.ndarray
+    rate: np.ndarray
+    iq: np.ndarray
+    iv: np.ndarray
+    tips: np.ndarray
+    bases: np.ndarray
+    anchors: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    actuated: np.ndarray  # global indices of the actuated coordinates in Q
+    scales: np.ndarray  # unit of each actuated coordinate
+    length: float
+
+    def args(self) -> tuple:
+        return (self.joints, self.coords, self.parent, self.post, self.kind, self.axis,
+                self.rate, self.iq, self.iv, self.tips, self.bases, self.anchors, self.lower,
+                self.upper, self.actuated, self.scales, self.length)
+
+
+def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
+    """Kernel of every leg of ``mech`` (``None`` if one leg has none)."""
+    legs = [chain_kernel(leg) for leg in mech.legs]
+    if any(k is None for k in legs):
+        return None
+    joints = np.r_[0, np.cumsum([len(k.kind) for k in legs])].astype(np.int64)
+    coords = np.r_[0, np.cumsum([k.nv for k in legs])].astype(np.int64)
+    actuated = np.concatenate([coords[i] + np.atleast_1d(leg.actuated_q)
+                               for i, leg in enumerate(mech.legs)]).astype(np.int64)
+    cat = np.concatenate
+    return MechanismKernel(
+        tuple(legs), joints, coords, cat([k.parent for k in legs]), cat([k.post for k in legs]),
+        cat([k.kind for k in legs]), cat([k.axis for k in legs]), cat([k.rate for k in legs]),
+        cat([k.iq for k in legs]), cat([k.iv for k in legs]),
+        np.stack([k.tip for k in legs]), np.stack([k.base for k in legs]),
+        np.stack([a.homogeneous for a in mech.anchors]),
+        cat([k.lower for k in legs]), cat([k.upper for k in legs]), actuated,
+        np.asarray(scales, dtype=float), float(mech.characteristic_length))
+
+
+@njit(cache=True, nogil=True)
+def twist_exp(xi, out):
+    """4×4 world displacement ``exp`` of an axis-first twist ``(ω; v_O)``."""
+    wx, wy, wz = xi[0], xi[1], xi[2]
+    th2 = wx * wx + wy * wy + wz * wz
+    th = math.sqrt(th2)
+    if th < 1e-6:
+        a, b, c = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0, 1.0 / 6.0 - th2 / 120.0
+    else:
+        a, b, c = math.sin(th) / th, (1.0 - math.cos(th)) / th2, (th - math.sin(th)) / (th2 * th)
+    W = np.array([[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]])
+    W2 = W @ W
+    for i in range(3):
+        for j in range(3):
+            d = 1.0 if i == j else 0.0
+            out[i, j] = d + a * W[i, j] + b * W2[i, j]
+    for i in range(3):
+        s = 0.0
+        for j in range(3):
+            d = 1.0 if i == j else 0.0
+            s += (d + b * W[i, j] + c * W2[i, j]) * xi[3 + j]
+        out[i, 3] = s
+    out[3, 0] = 0.0
+    out[3, 1] = 0.0
+    out[3, 2] = 0.0
+    out[3, 3] = 1.0
+
+
+@njit(cache=True, nogil=True)
+def _cholesky_solve(A, B):
+    """Solve A X = B (A symmetric positive definite n×n, B n×m) in place on B; A is
+    overwritten by its Cholesky factor. Returns False if A is not positive definite."""
+    n = A.shape[0]
+    for j in range(n):
+        s = A[j, j]
+        for k in range(j):
+            s -= A[j, k] * A[j, k]
+        if s <= 0.0 or not math.isfinite(s):
+            return False
+        A[j, j] = math.sqrt(s)
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for k in range(j):
+                s -= A[i, k] * A[j, k]
+            A[i, j] = s / A[j, j]
+    for c in range(B.shape[1]):
+        for i in range(n):
+            s = B[i, c]
+            for k in range(i):
+                s -= A[i, k] * B[k, c]
+            B[i, c] = s / A[i, i]
+        for i in range(n - 1, -1, -1):
+            s = B[i, c]
+            for k in range(i + 1, n):
+                s -= A[k, i] * B[k, c]
+            B[i, c] = s / A[i, i]
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _min_eig_ratio(S):
+    """λ_min / λ_max of a symmetric positive semi-definite 6×6 matrix (Jacobi)."""
+    A = S.copy()
+    n = A.shape[0]
+    for _ in range(50):
+        off = 0.0
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                off += A[p, q] * A[p, q]
+        if off <= 1e-30 * (A[0, 0] ** 2 + 1e-300):
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                if A[p, q] == 0.0:
+                    continue
+                theta = 0.5 * (A[q, q] - A[p, p]) / A[p, q]
+                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(n):
+                    akp, akq = A[k, p], A[k, q]
+                    A[k, p] = c * akp - s * akq
+                    A[k, q] = s * akp + c * akq
+                for k in range(n):
+                    apk, aqk = A[p, k], A[q, k]
+                    A[p, k] = c * apk - s * aqk
+                    A[q, k] = s * apk + c * aqk
+    lo, hi = np.inf, 0.0
+    for i in range(n):
+        lo = min(lo, A[i, i])
+        hi = max(hi, A[i, i])
+    return max(lo, 0.0) / hi if hi > 0 else 0.0
+
+
+@njit(cache=True, nogil=True)
+def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases,
+                  anchors, lower, upper, actuated, scales, length, pose, Q, target, tol,
+                  max_iter, out):
+    """Newton's method on the closures of every leg plus ``Q[actuated] = target``.
+
+    Unknowns: every leg's joint increments and the platform twist ξ (world,
+    axis-first; the platform moves by ``exp(ξ) · pose``). Leg ``i``'s rows are
+    ``H_i Δq_i − X_i ξ = e_i`` (rotation error and displacement of its tip point / L),
+    the actuated rows ``Δq_a / s = (target − q_a) / s``. The least-squares step is
+    solved by eliminating each leg's increments (its normal-equation block) and then
+    the 6×6 Schur complement in ξ. ``pose`` and ``Q`` are updated in place.
+
+    ``out`` receives (closure, actuated error, iterations, λ_min/λ_max of the Schur
+    complement at the last step, contracted) where "contracted" is 1 when every step
+    after the first was at most half the previous one (Newton's quadratic regime).
+    """
+    n_legs = joints.shape[0] - 1
+    n_a = actuated.shape[0]
+    mv = 0
+    for i in range(n_legs):
+        mv = max(mv, coords[i + 1] - coords[i])
+    T = np.empty((4, 4))
+    Wt = np.empty((4, 4))
+    E = np.empty((4, 4))
+    tmp = np.empty((4, 4))
+    J = np.empty((6, mv))
+    H = np.empty((n_legs, 6, mv))
+    X = np.empty((n_legs, 6, 6))
+    e = np.empty((n_legs, 6))
+    N = np.empty((mv, mv))
+    B = np.empty((n_legs, mv, 7))
+    S = np.empty((6, 6))
+    S_last = np.zeros((6, 6))
+    r = np.empty((6, 1))
+    xi = np.empty(6)
+    work = np.empty((3, 4, 4))
+    prev_step = np.inf
+    contracted = 1.0
+    ratio = 0.0
+    it = 0
+    while True:
+        closure = 0.0
+        for i in range(n_legs):
+            _compose(pose, anchors[i], Wt)
+            j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
+            nv = c1 - c0
+            _fk(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
+                iq[j0:j1], iv[j0:j1], tips[i], bases[i], nv, Q[c0:c1], T, J, work)
+            closure = max(closure, pose_error(T, Wt, length, e[i]))
+            px, py, pz = T[0, 3], T[1, 3], T[2, 3]
+            for c in range(nv):
+                wx, wy, wz = J[0, c], J[1, c], J[2, c]
+                H[i, 0, c], H[i, 1, c], H[i, 2, c] = wx, wy, wz
+                H[i, 3, c] = (J[3, c] + wy * pz - wz * py) / length
+                H[i, 4, c] = (J[4, c] + wz * px - wx * pz) / length
+                H[i, 5, c] = (J[5, c] + wx * py - wy * px) / length
+            # ξ = (ω; v_O) ↦ (ω; (v_O + ω × p_W) / L)
+            qx, qy, qz = Wt[0, 3] / length, Wt[1, 3] / length, Wt[2, 3] / length
+            for a in range(6):
+                for b in range(6):
+                    X[i, a, b] = 0.0
+            for k in range(3):
+                X[i, k, k] = 1.0
+                X[i, 3 + k, 3 + k] = 1.0 / length
+            X[i, 3, 1], X[i, 3, 2] = qz, -qy
+            X[i, 4, 0], X[i, 4, 2] = -qz, qx
+            X[i, 5, 0], X[i, 5, 1] = qy, -qx
+        act = 0.0
+        for a in range(n_a):
+            act = max(act, abs(target[a] - Q[actuated[a]]) / scales[a])
+        if (closure <= tol and act <= tol) or it >= max_iter:
+            break
+        it += 1
+        # ---- normal equations with each leg's increments eliminated
+        for a in range(6):
+            r[a, 0] = 0.0
+            for b in range(6):
+                S[a, b] = 0.0
+        for i in range(n_legs):
+            c0, c1 = coords[i], coords[i + 1]
+            nv = c1 - c0
+            for a in range(nv):
+                for b in range(a + 1):
+                    s = 0.0
+                    for k in range(6):
+                        s += H[i, k, a] * H[i, k, b]
+                    N[a, b] = s
+                    N[b, a] = s
+                for b in range(6):  # −(Hᵀ X)
+                    s = 0.0
+                    for k in range(6):
+                        s += H[i, k, a] * X[i, k, b]
+                    B[i, a, b] = -s
+                s = 0.0
+                for k in range(6):
+                    s += H[i, k, a] * e[i, k]
+                B[i, a, 6] = s
+            for a in range(n_a):
+                g = actuated[a] - c0
+                if 0 <= g < nv:
+                    w = 1.0 / (scales[a] * scales[a])
+                    N[g, g] += w
+                    B[i, g, 6] += w * (target[a] - Q[actuated[a]])
+            for a in range(nv):
+                N[a, a] += 1e-14 * (1.0 + N[a, a])
+            # S += XᵀX − (HᵀX)ᵀ N⁻¹ (HᵀX);  r += −Xᵀe + (HᵀX)ᵀ N⁻¹ Hᵀe ... via G = N⁻¹ B
+            G = B[i, :nv, :].copy()
+            if not _cholesky_solve(N[:nv, :nv], G):
+                out[0], out[1], out[2], out[3], out[4] = closure, act, it, 0.0, 0.0
+                return
+            for a in range(6):
+                s = 0.0
+                for k in range(6):
+                    s += X[i, k, a] * e[i, k]
+                for k in range(nv):
+                    s += B[i, k, a] * G[k, 6]
+                r[a, 0] -= s
+                for b in range(6):
+                    s = 0.0
+                    for k in range(6):
+                        s += X[i, k, a] * X[i, k, b]
+                    for k in range(nv):
+                        s -= B[i, k, a] * G[k, b]
+                    S[a, b] += s
+            B[i, :nv, :] = G
+        for k in range(6):
+            S[k, k] += 1e-14 * (1.0 + S[k, k])
+        S_last[:, :] = S
+        if not _cholesky_solve(S, r):
+            out[0], out[1], out[2], out[3], out[4] = closure, act, it, 0.0, 0.0
+            return
+        for k in range(6):
+            xi[k] = r[k, 0]
+        size = 0.0
+        for k in range(3):
+            size += xi[k] * xi[k] + (xi[3 + k] / length) ** 2
+        for i in range(n_legs):
+            c0, c1 = coords[i], coords[i + 1]
+            for k in range(c1 - c0):
+                d = B[i, k, 6]
+                for b in range(6):
+                    d -= B[i, k, b] * xi[b]
+                new = min(upper[c0 + k], max(lower[c0 + k], Q[c0 + k] + d))
+                size += ((new - Q[c0 + k]) / length) ** 2
+                Q[c0 + k] = new
+        size = math.sqrt(size)
+        if not math.isfinite(size):
+            break
+        if it > 1 and size > 0.5 * prev_step:
+            contracted = 0.0
+        prev_step = size
+        twist_exp(xi, E)
+        _compose(E, pose, tmp)
+        pose[:, :] = tmp
+    if it > 0:
+        ratio = _min_eig_ratio(S_last)
+    out[0], out[1], out[2], out[3], out[4] = closure, act, it, ratio, contracted
