@@ -29,6 +29,10 @@ import pinocchio as pin
 from numba import njit
 
 REVOLUTE, PRISMATIC = 0, 1
+#: Added to ``kind`` when the joint has a constant factor after its motion (mimic offset).
+HAS_POST = 2
+#: Added to ``kind`` when the joint's placement in its parent frame is the identity.
+AT_PARENT = 4
 
 
 @dataclass(frozen=True)
@@ -44,7 +48,7 @@ class ChainKernel:
 
     parent: np.ndarray  # (nj, 4, 4) joint placements in the parent joint frame
     post: np.ndarray  # (nj, 4, 4) constant factor after the motion (mimic offset)
-    kind: np.ndarray  # (nj,) REVOLUTE / PRISMATIC
+    kind: np.ndarray  # (nj,) REVOLUTE / PRISMATIC, + HAS_POST, + AT_PARENT
     axis: np.ndarray  # (nj, 3) unit axis in the joint frame
     rate: np.ndarray  # (nj,) rad or m per unit of the coordinate
     iq: np.ndarray  # (nj,) configuration index driving the joint
@@ -120,6 +124,10 @@ def chain_kernel(leg) -> ChainKernel | None:
         else:
             return None  # helical or a joint that does not move
         post[k] = M0.homogeneous
+        if not np.allclose(post[k], np.eye(4), rtol=0.0, atol=1e-15):
+            kind[k] += HAS_POST
+        if np.array_equal(parent[k], np.eye(4)):
+            kind[k] += AT_PARENT
     lo, up = leg._bounds
     return ChainKernel(parent, post, kind, axis, rate, iq, iv,
                        m.frames[leg.tip_id].placement.homogeneous, leg.base.homogeneous,
@@ -172,25 +180,30 @@ def fk_jacobian(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out,
     """Tip placement ``T_out`` (4×4, world) and axis-first world Jacobian ``J_out``
     (6×nv, columns ``(ω; v_O)``; a mimic joint adds its twist to its primary's column)."""
     _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out,
-        np.empty((3, 4, 4)))
+        np.empty((2, 4, 4)))
 
 
 @njit(cache=True, nogil=True)
 def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out, work):
-    """:func:`fk_jacobian` with caller-provided work space (3, 4, 4)."""
-    T, tmp, mot = work[0], work[1], work[2]
+    """:func:`fk_jacobian` with caller-provided work space (2, 4, 4)."""
+    T, tmp = work[0], work[1]
     T[:, :] = base
     for c in range(nv):
         for r in range(6):
             J_out[r, c] = 0.0
     for k in range(kind.shape[0]):
-        _compose(T, parent[k], tmp)
+        if kind[k] & AT_PARENT:
+            tmp[:3, :] = T[:3, :]
+        else:
+            _compose(T, parent[k], tmp)
         # twist of the joint, from the frame before its motion
-        a0 = tmp[0, 0] * axis[k, 0] + tmp[0, 1] * axis[k, 1] + tmp[0, 2] * axis[k, 2]
-        a1 = tmp[1, 0] * axis[k, 0] + tmp[1, 1] * axis[k, 1] + tmp[1, 2] * axis[k, 2]
-        a2 = tmp[2, 0] * axis[k, 0] + tmp[2, 1] * axis[k, 1] + tmp[2, 2] * axis[k, 2]
+        x, y, z = axis[k, 0], axis[k, 1], axis[k, 2]
+        a0 = tmp[0, 0] * x + tmp[0, 1] * y + tmp[0, 2] * z
+        a1 = tmp[1, 0] * x + tmp[1, 1] * y + tmp[1, 2] * z
+        a2 = tmp[2, 0] * x + tmp[2, 1] * y + tmp[2, 2] * z
         col, g = iv[k], rate[k]
-        if kind[k] == REVOLUTE:
+        angle = g * q[iq[k]]
+        if kind[k] & 1 == REVOLUTE:
             px, py, pz = tmp[0, 3], tmp[1, 3], tmp[2, 3]
             J_out[0, col] += g * a0
             J_out[1, col] += g * a1
@@ -198,14 +211,30 @@ def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out, 
             J_out[3, col] += g * (py * a2 - pz * a1)
             J_out[4, col] += g * (pz * a0 - px * a2)
             J_out[5, col] += g * (px * a1 - py * a0)
+            # T = tmp · Rot(axis, angle) (Rodrigues), origin unchanged
+            s, c = math.sin(angle), math.cos(angle)
+            t = 1.0 - c
+            r00, r01, r02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
+            r10, r11, r12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
+            r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+            for a in range(3):
+                u, v, w = tmp[a, 0], tmp[a, 1], tmp[a, 2]
+                T[a, 0] = u * r00 + v * r10 + w * r20
+                T[a, 1] = u * r01 + v * r11 + w * r21
+                T[a, 2] = u * r02 + v * r12 + w * r22
+                T[a, 3] = tmp[a, 3]
         else:
             J_out[3, col] += g * a0
             J_out[4, col] += g * a1
             J_out[5, col] += g * a2
-        _motion(kind[k], axis[k], g * q[iq[k]], mot)
-        _compose(tmp, mot, T)
-        _compose(T, post[k], tmp)
-        T[:, :] = tmp
+            for a in range(3):
+                T[a, 0], T[a, 1], T[a, 2] = tmp[a, 0], tmp[a, 1], tmp[a, 2]
+            T[0, 3] = tmp[0, 3] + a0 * angle
+            T[1, 3] = tmp[1, 3] + a1 * angle
+            T[2, 3] = tmp[2, 3] + a2 * angle
+        if kind[k] & HAS_POST:
+            _compose(T, post[k], tmp)
+            T[:3, :] = tmp[:3, :]
     _compose(T, tip, T_out)
 
 
@@ -246,16 +275,25 @@ def log3(R, out):
 def pose_error(T, target, length, e):
     """Error ``e`` (6) from ``T`` to ``target``: world rotation vector of
     ``R_target R_Tᵀ`` and tip displacement divided by ``length``; returns its norm."""
-    Rd = np.empty((3, 3))
-    for a in range(3):
-        for b in range(3):
-            Rd[a, b] = (target[a, 0] * T[b, 0] + target[a, 1] * T[b, 1]
-                        + target[a, 2] * T[b, 2])
-    w = np.empty(3)
-    log3(Rd, w)
+    d00 = target[0, 0] * T[0, 0] + target[0, 1] * T[0, 1] + target[0, 2] * T[0, 2]
+    d11 = target[1, 0] * T[1, 0] + target[1, 1] * T[1, 1] + target[1, 2] * T[1, 2]
+    d22 = target[2, 0] * T[2, 0] + target[2, 1] * T[2, 1] + target[2, 2] * T[2, 2]
+    d01 = target[0, 0] * T[1, 0] + target[0, 1] * T[1, 1] + target[0, 2] * T[1, 2]
+    d10 = target[1, 0] * T[0, 0] + target[1, 1] * T[0, 1] + target[1, 2] * T[0, 2]
+    d02 = target[0, 0] * T[2, 0] + target[0, 1] * T[2, 1] + target[0, 2] * T[2, 2]
+    d20 = target[2, 0] * T[0, 0] + target[2, 1] * T[0, 1] + target[2, 2] * T[0, 2]
+    d12 = target[1, 0] * T[2, 0] + target[1, 1] * T[2, 1] + target[1, 2] * T[2, 2]
+    d21 = target[2, 0] * T[1, 0] + target[2, 1] * T[1, 1] + target[2, 2] * T[1, 2]
+    x, y, z = d21 - d12, d02 - d20, d10 - d01
+    if x * x + y * y + z * z < 1e-4 and d00 + d11 + d22 > 0.0:
+        # small rotation: θu from the skew part 2 sin θ u, to O(θ⁴) relative
+        f = 0.5 * (1.0 + (x * x + y * y + z * z) / 24.0)
+        e[0], e[1], e[2] = f * x, f * y, f * z
+    else:
+        Rd = np.array([[d00, d01, d02], [d10, d11, d12], [d20, d21, d22]])
+        log3(Rd, e[:3])
     s = 0.0
     for a in range(3):
-        e[a] = w[a]
         e[3 + a] = (target[a, 3] - T[a, 3]) / length
         s += e[a] * e[a] + e[3 + a] * e[3 + a]
     return math.sqrt(s)
@@ -291,20 +329,29 @@ def _solve_spd(A, b, x):
 
 
 @njit(cache=True, nogil=True)
+def _workspace(nv):
+    return (np.empty((4, 4)), np.empty((6, nv)), np.empty((6, nv)), np.empty((2, 4, 4)),
+            np.empty(6), np.empty((nv, nv)), np.empty(nv), np.empty(nv))
+
+
+@njit(cache=True, nogil=True)
 def newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
            target, q, tol, max_iter):
     """Levenberg–Marquardt Newton of the leg (in place on ``q``), steps projected on
     the limits; the error is :func:`pose_error` (rotation, tip displacement / length),
     damping ``1e-10 + 1e-2 r²`` as :meth:`pkm_pin.Leg.solve`. Returns
-    ``(residual, iterations)``."""
-    T = np.empty((4, 4))
-    J = np.empty((6, nv))
-    H = np.empty((6, nv))
-    work = np.empty((3, 4, 4))
-    e = np.empty(6)
-    N = np.empty((nv, nv))
-    g = np.empty(nv)
-    dq = np.empty(nv)
+    ``(residual, iterations)``; the residual is evaluated at the returned ``q``."""
+    return _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
+                   length, target, q, tol, max_iter, 0.0, _workspace(nv))
+
+
+@njit(cache=True, nogil=True)
+def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
+            target, q, tol, max_iter, trust, ws):
+    """:func:`newton`; with ``trust > 0`` a step taken from a residual ``r ≤ trust``
+    (Newton's quadratic regime: the next residual is ~r²) ends the iteration without
+    evaluating the result, and the residual returned is −r (the caller verifies)."""
+    T, J, H, work, e, N, g, dq = ws
     it = 0
     best = np.inf
     slow = 0
@@ -342,43 +389,55 @@ def newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, 
             return r, it
         step = 0.0
         size = 0.0
+        clipped = False
         for a in range(nv):
             new = min(upper[a], max(lower[a], q[a] + dq[a]))
+            clipped = clipped or new != q[a] + dq[a]
             step += (new - q[a]) ** 2
             size += q[a] * q[a]
             q[a] = new
         if not math.isfinite(step) or step < 1e-30 * (1.0 + size):
-            fk_jacobian(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
+            _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J, work)
             return pose_error(T, target, length, e), it
+        if r <= trust and not clipped:
+            return -r, it
 
 
 @njit(cache=True, nogil=True)
 def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-          targets, q_start, extrapolate, tol, max_iter, Q, residual):
+          targets, q_start, extrapolate, tol, max_iter, trust, Q, residual):
     """Solve the leg at each target of an ordered path (N, 4, 4), warm-started from the
-    previous solution (extrapolated linearly where ``extrapolate[i]``, i.e. along grid
-    lines of equal steps). Fills ``Q`` (N, nq) and ``residual`` (N,); a target that does
-    not converge leaves the warm start unchanged for the next one."""
-    q_prev = q_start.copy()
-    q_before = q_start.copy()
-    have_before = False
+    previous solution (extrapolated from the previous ones where ``extrapolate[i]``:
+    linearly from two, quadratically from three where the path was smooth before too). Fills ``Q`` (N, nq) and ``residual``
+    (N,): the residual reached, or −r when the last Newton step was taken from a
+    residual ``r ≤ trust`` and not evaluated (see :func:`_newton`; the caller verifies).
+    A target that does not converge leaves the warm start unchanged for the next one."""
+    ws = _workspace(nv)
+    q1 = q_start.copy()  # the last three solutions, newest first
+    q2 = q_start.copy()
+    q3 = q_start.copy()
+    known = 1  # how many of them are consecutive solutions of this path
     q = np.empty_like(q_start)
     for i in range(targets.shape[0]):
-        if extrapolate[i] and have_before:
+        if extrapolate[i] and i >= 1 and extrapolate[i - 1] and known >= 3:
+            for a in range(q.shape[0]):  # quadratic through the last three
+                q[a] = min(upper[a], max(lower[a], 3.0 * (q1[a] - q2[a]) + q3[a]))
+        elif extrapolate[i] and known >= 2:
             for a in range(q.shape[0]):
-                q[a] = min(upper[a], max(lower[a], 2.0 * q_prev[a] - q_before[a]))
+                q[a] = min(upper[a], max(lower[a], 2.0 * q1[a] - q2[a]))
         else:
-            q[:] = q_prev
-        r, _ = newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
-                      length, targets[i], q, tol, max_iter)
+            q[:] = q1
+        r, _ = _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
+                       length, targets[i], q, tol, max_iter, trust, ws)
         residual[i] = r
         Q[i] = q
         if r <= tol:
-            q_before[:] = q_prev
-            q_prev[:] = q
-            have_before = True
+            q3[:] = q2
+            q2[:] = q1
+            q1[:] = q
+            known = known + 1 if i > 0 else 1
         else:
-            have_before = False
+            known = 0
 
 
 # ============================================================== a whole mechanism
@@ -565,7 +624,7 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
     S_last = np.zeros((6, 6))
     r = np.empty((6, 1))
     xi = np.empty(6)
-    work = np.empty((3, 4, 4))
+    work = np.empty((2, 4, 4))
     prev_step = np.inf
     contracted = 1.0
     ratio = 0.0

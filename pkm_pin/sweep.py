@@ -3,9 +3,21 @@ and any ``concurrent.futures.Executor`` (a Dask ``distributed`` client's executo
 
 Poses are processed in chunks. Inside a chunk they are visited in a serpentine order of
 their coordinates so that each assembly is warm-started from a neighbour (which keeps
-the legs on the working mode of the home assembly); the Pinocchio calls are one leg
-solve and one Jacobian per leg and pose; the screw algebra of the whole chunk is one
-call of :func:`pkm_pin.batch.analyse`. Results come back in the caller's pose order.
+the legs on the working mode of the home assembly). Results come back in the caller's
+pose order.
+
+Per chunk (when every leg has a compiled kernel, :mod:`pkm_pin.kernels`):
+
+1. each leg follows the ordered poses in compiled code (damped Newton warm-started from
+   the previous pose, extrapolated along grid lines); a pose a leg misses is assembled
+   again by :meth:`Mechanism.assemble` from home, with restarts;
+2. one Pinocchio pass per leg and pose at the solution (joint Jacobians and tip frame):
+   Pinocchio's tip placement verifies the closure, its Jacobian gives the joint twists;
+3. the screw algebra of every pose in compiled code (:mod:`pkm_pin.fast_analysis`),
+   near-singular poses by :func:`pkm_pin.batch.analyse` (stacked numpy SVDs).
+
+Without kernels (a leg with a continuous or multi-DOF joint) the legs are solved by
+:meth:`Leg.solve` and the algebra is :func:`pkm_pin.batch.analyse`.
 """
 
 from __future__ import annotations
@@ -99,11 +111,213 @@ def serpentine_order(X: np.ndarray) -> np.ndarray:
     return np.lexsort(keys.T)
 
 
+def pose_matrices(X: np.ndarray) -> np.ndarray:
+    """(N, 4, 4) homogeneous placements from rows x, y, z, roll, pitch, yaw
+    (``R = Rz(yaw) Ry(pitch) Rx(roll)``, as ``pinocchio.rpy.rpyToMatrix``)."""
+    cr, sr = np.cos(X[:, 3]), np.sin(X[:, 3])
+    cp, sp = np.cos(X[:, 4]), np.sin(X[:, 4])
+    cy, sy = np.cos(X[:, 5]), np.sin(X[:, 5])
+    H = np.zeros((len(X), 4, 4))
+    H[:, 0, 0], H[:, 0, 1], H[:, 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    H[:, 1, 0], H[:, 1, 1], H[:, 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    H[:, 2, 0], H[:, 2, 1], H[:, 2, 2] = -sp, cp * sr, cp * cr
+    H[:, :3, 3] = X[:, :3]
+    H[:, 3, 3] = 1.0
+    return H
+
+
+def smooth_steps(X: np.ndarray, length: float) -> np.ndarray:
+    """(N,) whether pose i continues the path smoothly: the step from i−1 differs from
+    the step before by less than a tenth of its size (a grid line, a smooth path), so
+    that extrapolating the two previous solutions is a better warm start than the last.
+    Translations are divided by ``length``."""
+    out = np.zeros(len(X), bool)
+    if len(X) > 2:
+        Y = X * np.r_[np.full(3, 1.0 / length), np.ones(3)]
+        d1, d2 = Y[2:] - Y[1:-1], Y[1:-1] - Y[:-2]
+        out[2:] = np.linalg.norm(d1 - d2, axis=1) <= 0.1 * np.linalg.norm(d1, axis=1)
+    return out
+
+
+def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
+    """The order of the poses for warm starts: the caller's own order when it is already
+    a path (not longer than the serpentine order), else :func:`serpentine_order`.
+    Path length: sum of the steps, translations divided by ``length``."""
+    serp = serpentine_order(X)
+    scale = np.r_[np.full(3, 1.0 / length), np.ones(3)]
+
+    def travel(Y):
+        return float(np.sum(np.linalg.norm(np.diff(Y, axis=0) * scale, axis=1)))
+
+    return np.arange(len(X)) if travel(X) <= travel(X[serp]) else serp
+
+
 def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
                    singular_tol: float, progress=None, restarts: int = 4) -> dict:
     """Assemble and analyse the poses of one chunk (rows of X, already ordered).
 
     Module-level so that process-based executors can pickle it."""
+    kernel = mech._kernel
+    if kernel is None:
+        return _evaluate_chunk_pinocchio(mech, X, reference, rtol, singular_tol, progress,
+                                         restarts)
+    return _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restarts)
+
+
+#: Closure tolerance of the legs in a sweep (relative, as :meth:`Mechanism.assemble`).
+SWEEP_TOL = 1e-12
+#: A leg's last Newton step taken from a residual below this is not re-evaluated by the
+#: compiled solver: Newton's next residual is ~TRUST² ≪ SWEEP_TOL, and Pinocchio's
+#: closure check of every pose verifies it (a miss goes through Leg.solve).
+TRUST = 1e-7
+
+
+def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restarts) -> dict:
+    from .batch import ROTATION_TOL
+    from .fast_analysis import analyse_poses
+    from .kernels import track
+
+    N, n, legs = len(X), mech.n_actuated, mech.legs
+    poses = pose_matrices(X)
+    along = smooth_steps(X, mech.characteristic_length)
+    home = mech.home_assembly
+    # 1. legs along the path, compiled
+    Qs, miss = [], np.zeros(N, bool)
+    for leg, lk, anchor, q_home in zip(legs, kernel.legs, mech.anchors, home.leg_q):
+        targets = poses @ anchor.homogeneous
+        Q = np.empty((N, leg.nq))
+        res = np.empty(N)
+        # a last Newton step taken from a residual below TRUST is checked by Pinocchio
+        track(*lk.args(), lk.lower, lk.upper, lk.length, targets, q_home.astype(float), along,
+              SWEEP_TOL, 50, TRUST, Q, res)
+        miss |= ~(np.abs(res) <= SWEEP_TOL) & ~((res < 0) & (-res <= TRUST))
+        Qs.append(Q)
+    failures = []
+    ok = np.ones(N, bool)
+    for i in np.flatnonzero(miss):  # again, from home with restarts (Leg.solve)
+        _assemble_again(mech, poses[i], home, restarts, Qs, i, ok, failures)
+    # 2. one Pinocchio pass per leg and pose: closure check and joint twists
+    idx = np.flatnonzero(ok)
+    Js, bad = _pinocchio_pass(mech, Qs, poses, idx)
+    if bad.any():  # a closure Pinocchio does not confirm: Leg.solve from there
+        for i in idx[bad]:
+            _assemble_again(mech, poses[i], [Q[i] for Q in Qs], 0, Qs, i, ok, failures)
+        again = idx[bad & ok[idx]]
+        J2, bad2 = _pinocchio_pass(mech, Qs, poses, again)
+        for i in again[bad2]:
+            failures.append((int(i), "the closure found is not confirmed by Pinocchio"))
+            ok[i] = False
+        Js[np.flatnonzero(bad)[ok[idx[bad]]]] = J2
+    if progress is not None:
+        progress(N)
+    out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
+           "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
+           "condition": np.full(N, np.nan), "det": np.full(N, np.nan), "reference_path": 0}
+    J = np.ascontiguousarray(Js[ok[idx]])
+    idx = idx[ok[idx]]
+    if not len(idx):
+        return out
+    out["q_actuated"][idx] = np.concatenate(
+        [Q[idx][:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
+    # 3. screw algebra, compiled; flagged (near-singular) poses by batch.analyse
+    coords = kernel.coords
+    groups = np.array([coords[k] + np.array(g) for k, leg in enumerate(legs)
+                       for g in leg.spherical_groups], dtype=np.int64).reshape(-1, 3)
+    act_col = np.concatenate([coords[k] + leg.actuated_v for k, leg in enumerate(legs)])
+    act_leg = np.concatenate([np.full(len(leg.actuated_v), k) for k, leg in enumerate(legs)])
+    M = len(idx)
+    dof, trans, red = (np.zeros(M, np.int64) for _ in range(3))
+    t1, t2, cond, det = (np.zeros(M) for _ in range(4))
+    flag = np.zeros(M, np.int64)
+    analyse_poses(J, coords, groups, act_col.astype(np.int64), act_leg.astype(np.int64),
+                  float(mech.characteristic_length), float(rtol), ROTATION_TOL,
+                  np.ascontiguousarray(reference, dtype=float), dof, trans, red, t1, t2, cond,
+                  det, flag)
+    slow = np.flatnonzero(flag)
+    if len(slow):
+        Jl, Tl = [], []
+        for leg, Q in zip(legs, Qs):
+            pairs = [leg.screws(Q[idx[j]]) for j in slow]
+            Jl.append(np.stack([a for a, _ in pairs]))
+            Tl.append(np.stack([b for _, b in pairs]))
+        b = batch.analyse(Jl, Tl, [leg.actuated_v for leg in legs],
+                          mech.characteristic_length, rtol)
+        dof[slow], t1[slow], t2[slow] = b.dof, b.type_I, b.type_II
+        cond[slow], det[slow] = b.condition, _carried_det(b, reference)
+    out["dof"][idx] = dof
+    out["type_I"][idx] = t1
+    out["type_II"][idx] = t2
+    out["condition"][idx] = cond
+    out["det"][idx] = det
+    out["reference_path"] = len(slow)
+    return out
+
+
+def _pinocchio_pass(mech, Qs, poses, idx):
+    """One Pinocchio pass per leg at the poses ``idx``: the (M, 6, nv) axis-first world
+    Jacobians of the legs side by side, and (M,) whether a leg's closure error (from
+    Pinocchio's tip placement) exceeds :data:`SWEEP_TOL`."""
+    from .fast_analysis import leg_outputs
+
+    offs = mech._kernel.coords
+    J = np.empty((len(idx), 6, int(offs[-1])))
+    bad = np.zeros(len(idx), bool)
+    if not len(idx):
+        return J, bad
+    for k, (leg, Q, anchor) in enumerate(zip(mech.legs, Qs, mech.anchors)):
+        model, data, tip = leg.model, leg.data, leg.tip_id
+        jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
+        Jl, Hl = [], []
+        if model.nvExtended == model.nv:
+            # the joint Jacobians returned by computeJointJacobians are the tip frame's
+            # WORLD Jacobian: every joint of a kernel's chain supports the tip
+            for q in Q[idx]:
+                Jl.append(jacobians(model, data, q))
+                Hl.append(place(model, data, tip).homogeneous)
+        else:  # mimic joints have their own columns in data.J: ask for the frame's
+            frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
+            for q in Q[idx]:
+                jacobians(model, data, q)
+                Hl.append(place(model, data, tip).homogeneous)
+                Jl.append(frame_jacobian(model, data, tip, world))
+        Jp = np.array(Jl)
+        if Jp.shape != (len(idx), 6, leg.nv):  # leg_outputs writes without bounds checks
+            raise RuntimeError(f"leg {leg.name!r}: Pinocchio Jacobians of shape {Jp.shape}")
+        err = leg_outputs(np.array(Hl), Jp,
+                          leg.base.homogeneous, leg._world_map(), poses, idx,
+                          anchor.homogeneous, float(leg.characteristic_length), J, int(offs[k]))
+        bad |= ~(err <= SWEEP_TOL)
+    return J, bad
+
+
+def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:
+    """:meth:`Mechanism.assemble` of pose i (4×4) from ``guess``: fills ``Qs``, or
+    records the failure and clears ``ok[i]``."""
+    try:
+        asm = mech.assemble(pin.SE3(pose), guess, restarts=restarts)
+    except AssemblyError as e:
+        failures.append((int(i), str(e)))
+        ok[i] = False
+        return
+    for Q, q in zip(Qs, asm.leg_q):
+        Q[i] = q
+
+
+def _closure_errors(tips: np.ndarray, targets: np.ndarray, length: float) -> np.ndarray:
+    """(N,) relative closure errors of 4×4 placements: sin of the rotation angle (with
+    the angle itself beyond 90°) and distance / length, combined in quadrature."""
+    R = np.swapaxes(tips[:, :3, :3], 1, 2) @ targets[:, :3, :3]
+    skew = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]],
+                    axis=1)
+    angle = 0.5 * np.linalg.norm(skew, axis=1)
+    angle = np.where(np.trace(R, axis1=1, axis2=2) < 1.0, np.pi, angle)
+    dist = np.linalg.norm(tips[:, :3, 3] - targets[:, :3, 3], axis=1) / length
+    return np.hypot(angle, dist)
+
+
+def _evaluate_chunk_pinocchio(mech, X, reference, rtol, singular_tol, progress,
+                              restarts) -> dict:
+    """:func:`evaluate_chunk` for legs without a compiled kernel."""
     N, n = len(X), mech.n_actuated
     ok = np.zeros(N, bool)
     q_act = np.full((N, n), np.nan)
@@ -197,7 +411,7 @@ class SweepMixin:
         if int(chunk_size) < 1:
             raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
         rtol = RTOL if rtol is None else rtol
-        order = serpentine_order(X)
+        order = visiting_order(X, self.characteristic_length)
         reference = batch.homogenise(self.home_analysis.platform_twists, self.characteristic_length)
         chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
         bar = _progress_bar(len(X)) if progress else None

@@ -1,0 +1,511 @@
+"""The screw analysis of :mod:`pkm_pin.batch` for many poses, in compiled code.
+
+Same quantities, same conventions and the same decisions as :func:`pkm_pin.batch.analyse`
+(axis-first screws about the world origin; moments divided by the characteristic length
+``L``; rows normalised; rank decisions ``σ > rtol · σ_max``), computed pose by pose in
+numba with cheaper factorisations:
+
+* each leg's twist system by one Householder QR with column pivoting of ``(T_h Δ)ᵀ``:
+  its rank, an orthonormal basis of its reciprocal (the leg's constraint wrenches) and,
+  when the leg's twists are independent, the actuation wrench of an actuated joint as
+  the minimum-norm solution of ``T_h Δ w = e_k`` (reciprocal to the leg's other joints,
+  orthogonal to its constraints: the member of that reciprocal system doing the most
+  work on the platform twists, which is how :mod:`pkm_pin.batch` defines it);
+* the union of the constraints and the platform twists by the same QR;
+* the singular values of ``A_h Δ Pᵀ`` (type II index, condition) by one-sided Jacobi.
+
+QR with column pivoting reveals the rank only up to a bounded factor, so a decision is
+taken here only when every pivot ratio is at least 10⁴ away from the threshold; a pose
+with a ratio inside that window (a near-singular pose), or with an actuated leg whose
+joint twists are dependent, is flagged and the caller evaluates it with
+:func:`pkm_pin.batch.analyse`. Tests check the two paths give the same results.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: A rank decision is taken by QR only if every pivot ratio is this factor away from
+#: its threshold (QR with column pivoting brackets the singular values within 2^6·√6).
+WINDOW = 1e4
+
+
+@njit(cache=True, nogil=True)
+def _qrcp(A, Q, perm, ncol):
+    """Householder QR with column pivoting of the 6 × ncol matrix ``A`` (in place: R in
+    its upper triangle), ``Q`` (6×6 orthogonal) and the column order ``perm``."""
+    for a in range(6):
+        for b in range(6):
+            Q[a, b] = 1.0 if a == b else 0.0
+    for c in range(ncol):
+        perm[c] = c
+    v = np.empty(6)
+    for j in range(min(6, ncol)):
+        best, p = -1.0, j
+        for c in range(j, ncol):
+            s = 0.0
+            for r in range(j, 6):
+                s += A[r, c] * A[r, c]
+            if s > best:
+                best, p = s, c
+        if p != j:
+            for r in range(6):
+                A[r, j], A[r, p] = A[r, p], A[r, j]
+            perm[j], perm[p] = perm[p], perm[j]
+        norm = math.sqrt(best)
+        if norm == 0.0:
+            continue
+        alpha = -norm if A[j, j] >= 0 else norm
+        beta = 0.0
+        for r in range(j, 6):
+            v[r] = A[r, j]
+        v[j] -= alpha
+        for r in range(j, 6):
+            beta += v[r] * v[r]
+        if beta == 0.0:
+            continue
+        for c in range(j, ncol):
+            s = 0.0
+            for r in range(j, 6):
+                s += v[r] * A[r, c]
+            s *= 2.0 / beta
+            for r in range(j, 6):
+                A[r, c] -= s * v[r]
+        for r in range(6):
+            s = 0.0
+            for k in range(j, 6):
+                s += Q[r, k] * v[k]
+            s *= 2.0 / beta
+            for k in range(j, 6):
+                Q[r, k] -= s * v[k]
+        A[j, j] = alpha
+        for r in range(j + 1, 6):
+            A[r, j] = 0.0
+
+
+@njit(cache=True, nogil=True)
+def _rank(R, n, rtol, absolute):
+    """Rank from the diagonal of R (first n pivots): ``|R_jj| > rtol · |R_00|`` (or
+    ``> rtol`` when ``absolute``); -1 when a ratio lies inside the ambiguity window."""
+    if n == 0:
+        return 0
+    top = abs(R[0, 0])
+    if top == 0.0:
+        return 0
+    scale = 1.0 if absolute else top
+    rank = 0
+    for j in range(n):
+        ratio = abs(R[j, j]) / scale
+        if rtol / WINDOW < ratio < rtol * WINDOW:
+            return -1
+        if ratio > rtol:
+            rank += 1
+    return rank
+
+
+@njit(cache=True, nogil=True)
+def _jacobi_sv(M, m, n, sv, V, W):
+    """Singular values (descending) of the m × n matrix M (m ≥ n) by one-sided Jacobi
+    on ``M V``: ``V`` (n × n orthogonal, in/out) is the previous pose's right singular
+    basis, a warm start that leaves few rotations to do along a sweep. ``W``: work
+    space of at least m × n."""
+    for a in range(m):
+        for b in range(n):
+            s = 0.0
+            for k in range(n):
+                s += M[a, k] * V[k, b]
+            W[a, b] = s
+    for _ in range(60):
+        rotated = False
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                a = 0.0
+                b = 0.0
+                c = 0.0
+                for k in range(m):
+                    a += W[k, p] * W[k, p]
+                    b += W[k, q] * W[k, q]
+                    c += W[k, p] * W[k, q]
+                if c == 0.0 or abs(c) <= 1e-15 * math.sqrt(a * b):
+                    continue
+                rotated = True
+                zeta = (b - a) / (2.0 * c)
+                t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                cs = 1.0 / math.sqrt(1.0 + t * t)
+                sn = cs * t
+                for k in range(m):
+                    x, y = W[k, p], W[k, q]
+                    W[k, p] = cs * x - sn * y
+                    W[k, q] = sn * x + cs * y
+                for k in range(n):
+                    x, y = V[k, p], V[k, q]
+                    V[k, p] = cs * x - sn * y
+                    V[k, q] = sn * x + cs * y
+        if not rotated:
+            break
+    for j in range(n):
+        s = 0.0
+        for k in range(m):
+            s += W[k, j] * W[k, j]
+        sv[j] = math.sqrt(s)
+    # descending (insertion sort; a tiny array)
+    for j in range(1, n):
+        x = sv[j]
+        k = j - 1
+        while k >= 0 and sv[k] < x:
+            sv[k + 1] = sv[k]
+            k -= 1
+        sv[k + 1] = x
+    return n
+
+
+@njit(cache=True, nogil=True)
+def _det(M, n):
+    """Determinant of the leading n × n block (Gaussian elimination, partial pivoting)."""
+    A = M[:n, :n].copy()
+    d = 1.0
+    for j in range(n):
+        p = j
+        for r in range(j + 1, n):
+            if abs(A[r, j]) > abs(A[p, j]):
+                p = r
+        if A[p, j] == 0.0:
+            return 0.0
+        if p != j:
+            for c in range(n):
+                A[j, c], A[p, c] = A[p, c], A[j, c]
+            d = -d
+        d *= A[j, j]
+        for r in range(j + 1, n):
+            f = A[r, j] / A[j, j]
+            for c in range(j, n):
+                A[r, c] -= f * A[j, c]
+    return d
+
+
+@njit(cache=True, nogil=True)
+def _solve3(G, b, x):
+    """x = G⁻¹ b for a symmetric 3×3 matrix (adjugate)."""
+    c00 = G[1, 1] * G[2, 2] - G[1, 2] * G[2, 1]
+    c01 = G[1, 2] * G[2, 0] - G[1, 0] * G[2, 2]
+    c02 = G[1, 0] * G[2, 1] - G[1, 1] * G[2, 0]
+    c11 = G[0, 0] * G[2, 2] - G[0, 2] * G[2, 0]
+    c12 = G[0, 1] * G[2, 0] - G[0, 0] * G[2, 1]
+    c22 = G[0, 0] * G[1, 1] - G[0, 1] * G[1, 0]
+    d = G[0, 0] * c00 + G[0, 1] * c01 + G[0, 2] * c02
+    x[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / d
+    x[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / d
+    x[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / d
+
+
+@njit(cache=True, nogil=True)
+def _homogeneous_unit(x, L, out):
+    """(x[:3]; x[3:] / L) scaled to unit norm (zero stays zero)."""
+    s = 0.0
+    for k in range(6):
+        out[k] = x[k] if k < 3 else x[k] / L
+        s += out[k] * out[k]
+    s = math.sqrt(s)
+    if s > 0:
+        for k in range(6):
+            out[k] /= s
+
+
+@njit(cache=True, nogil=True)
+def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, reference,
+                  dof, translations, redundant, type_I, type_II, condition, det, flag):
+    """Screw analysis of N assemblies (see the module docstring).
+
+    Args:
+        J: (N, 6, nv) axis-first world Jacobians of the legs side by side.
+        coords: (legs + 1,) column offsets of the legs in J.
+        groups: (G, 3) columns of spherical groups (replaced by three lines).
+        act_col, act_leg: column and leg of each actuated joint.
+        L, rtol, rot_tol: characteristic length, rank tolerance, rotation tolerance.
+        reference: (n_ref, 6) homogenised home platform basis (for the carried det).
+
+    Outputs (N,) arrays; ``flag[i]`` is 1 where pose i must be analysed by
+    :func:`pkm_pin.batch.analyse` (a rank decision inside the ambiguity window, or an
+    actuated leg with dependent joint twists).
+    """
+    N = J.shape[0]
+    n_legs = coords.shape[0] - 1
+    n = act_col.shape[0]
+    nv = J.shape[2]
+    T = np.empty((nv, 6))  # motion twists (rows), homogenised and unit
+    X = np.empty((6, nv))
+    Q = np.empty((6, 6))
+    perm = np.empty(max(6 * n_legs, nv, 6), np.int64)
+    C = np.empty((6, 6 * n_legs))  # constraint wrenches (columns)
+    Ah = np.empty((max(n, 1), 6))  # homogenised unit actuation wrenches
+    A = np.empty(6)
+    a_h = np.empty(6)
+    y = np.empty(6)
+    P = np.empty((6, 6))  # platform twists (rows), homogenised orthonormal
+    M = np.empty((max(n, 1), 6))
+    sv = np.empty(6)
+    Pw = np.empty((6, 6))
+    G = np.empty((3, 3))
+    gb = np.empty(3)
+    ctr = np.empty(3)
+    Ploc = np.empty((max(reference.shape[0], 1), 6))
+    V = np.eye(6)  # right singular basis of M, carried from pose to pose
+    Wk = np.empty((max(n, 6), 6))
+    d_prev = -1
+    n_ref = reference.shape[0]
+    for i in range(N):
+        flag[i] = 0
+        # ---- motion twists: J columns, spherical groups as three lines through centre
+        for c in range(nv):
+            for k in range(6):
+                T[c, k] = J[i, k, c]
+        for g in range(groups.shape[0]):
+            # centre c of the three concurrent axes: Σ(|ω|²I − ωωᵀ) c = Σ ω × v
+            G[:, :] = 0.0
+            gb[:] = 0.0
+            for t in range(3):
+                col = groups[g, t]
+                w0, w1, w2 = J[i, 0, col], J[i, 1, col], J[i, 2, col]
+                v0, v1, v2 = J[i, 3, col], J[i, 4, col], J[i, 5, col]
+                ww = w0 * w0 + w1 * w1 + w2 * w2
+                G[0, 0] += ww - w0 * w0
+                G[1, 1] += ww - w1 * w1
+                G[2, 2] += ww - w2 * w2
+                G[0, 1] -= w0 * w1
+                G[0, 2] -= w0 * w2
+                G[1, 2] -= w1 * w2
+                gb[0] += w1 * v2 - w2 * v1
+                gb[1] += w2 * v0 - w0 * v2
+                gb[2] += w0 * v1 - w1 * v0
+            G[1, 0], G[2, 0], G[2, 1] = G[0, 1], G[0, 2], G[1, 2]
+            _solve3(G, gb, ctr)
+            for t in range(3):  # the line through the centre along e_t: (e_t; c × e_t)
+                row = groups[g, t]
+                for k in range(6):
+                    T[row, k] = 0.0
+                T[row, t] = 1.0
+                T[row, 3 + (t + 2) % 3] = -ctr[(t + 1) % 3]
+                T[row, 3 + (t + 1) % 3] = ctr[(t + 2) % 3]
+        for c in range(nv):  # homogenise and normalise the rows
+            s = 0.0
+            for k in range(6):
+                if k >= 3:
+                    T[c, k] /= L
+                s += T[c, k] * T[c, k]
+            s = math.sqrt(s)
+            if s > 0:
+                for k in range(6):
+                    T[c, k] /= s
+        # ---- per leg: constraints, and actuation wrenches of its actuated joints
+        m_c = 0
+        leg_dims = 0
+        bad = False
+        for l in range(n_legs):
+            c0, c1 = coords[l], coords[l + 1]
+            k = c1 - c0
+            for c in range(k):  # columns of (T_h Δ)ᵀ: (v; ω) of each twist
+                for r in range(3):
+                    X[r, c] = T[c0 + c, 3 + r]
+                    X[3 + r, c] = T[c0 + c, r]
+            _qrcp(X, Q, perm, k)
+            r = _rank(X, min(6, k), rtol, False)
+            if r < 0:
+                bad = True
+                break
+            leg_dims += 6 - r
+            for j in range(r, 6):
+                for a in range(6):
+                    C[a, m_c] = Q[a, j]
+                m_c += 1
+            for a_i in range(n):
+                if act_leg[a_i] != l:
+                    continue
+                if r < k:  # dependent joint twists in an actuated leg
+                    bad = True
+                    break
+                # row k_a of X: the actuated joint; minimum-norm w with (T_h Δ) w = e_k
+                ka = act_col[a_i] - c0
+                jp = 0
+                for j in range(k):
+                    if perm[j] == ka:
+                        jp = j
+                for j in range(k):  # Rᵀ y = e_jp (forward substitution)
+                    s = 1.0 if j == jp else 0.0
+                    for t in range(j):
+                        s -= X[t, j] * y[t]
+                    y[j] = s / X[j, j]
+                for a in range(6):
+                    s = 0.0
+                    for j in range(k):
+                        s += Q[a, j] * y[j]
+                    Ah[a_i, a] = s
+            if bad:
+                break
+        if bad:
+            flag[i] = 1
+            continue
+        # ---- union of the constraints, platform twists
+        if m_c > 0:
+            _qrcp(C, Q, perm, m_c)
+            rank_c = _rank(C, min(6, m_c), rtol, False)
+            if rank_c < 0:
+                flag[i] = 1
+                continue
+        else:
+            rank_c = 0
+            for a in range(6):
+                for b in range(6):
+                    Q[a, b] = 1.0 if a == b else 0.0
+        d = 6 - rank_c
+        for j in range(d):  # t_h = Δ n for n ⟂ the constraints
+            for a in range(3):
+                P[j, a] = Q[3 + a, rank_c + j]
+                P[j, 3 + a] = Q[a, rank_c + j]
+        dof[i] = d
+        redundant[i] = leg_dims - rank_c
+        # rotations among the platform twists: rank of their ω parts
+        for j in range(d):
+            for a in range(3):
+                Pw[a, j] = P[j, a]
+            for a in range(3, 6):
+                Pw[a, j] = 0.0
+        _qrcp(Pw, Q, perm, d)
+        rot = _rank(Pw, min(3, d), rot_tol, True)
+        if rot < 0:
+            flag[i] = 1
+            continue
+        translations[i] = d - rot
+        # ---- actuation wrenches: world units, unit force (or moment), B ≥ 0
+        ti = np.inf
+        for a_i in range(n):
+            col = act_col[a_i]
+            for a in range(3):
+                A[a] = Ah[a_i, a]
+                A[3 + a] = Ah[a_i, 3 + a] * L
+            f = math.sqrt(A[0] ** 2 + A[1] ** 2 + A[2] ** 2)
+            mm = math.sqrt(A[3] ** 2 + A[4] ** 2 + A[5] ** 2)
+            s = f if f * L > rtol * mm else (mm if mm > 0 else 1.0)
+            B = 0.0
+            big = 0.0
+            for a in range(6):
+                A[a] /= s
+                if abs(A[a]) > abs(big):
+                    big = A[a]
+            for a in range(3):
+                B += A[a] * J[i, 3 + a, col] + A[3 + a] * J[i, a, col]
+            if B < 0 or (B == 0 and big < 0):
+                for a in range(6):
+                    A[a] = -A[a]
+            _homogeneous_unit(A, L, Ah[a_i])
+            for a in range(6):
+                y[a] = J[i, a, col]
+            _homogeneous_unit(y, L, a_h)
+            s = 0.0
+            for a in range(3):
+                s += Ah[a_i, a] * a_h[3 + a] + Ah[a_i, 3 + a] * a_h[a]
+            ti = min(ti, abs(s))
+        type_I[i] = ti
+        # ---- M = A_h Δ Pᵀ: type II index and condition
+        for a_i in range(n):
+            for j in range(d):
+                s = 0.0
+                for a in range(3):
+                    s += Ah[a_i, a] * P[j, 3 + a] + Ah[a_i, 3 + a] * P[j, a]
+                M[a_i, j] = s
+        if n > 0 and d > 0:
+            if d != d_prev:  # a new platform dimension: start from the identity
+                V[:, :] = 0.0
+                for a in range(6):
+                    V[a, a] = 1.0
+                d_prev = d
+            if n >= d:
+                _jacobi_sv(M, n, d, sv, V, Wk)
+            else:
+                Mt = M[:n, :d].T.copy()
+                _jacobi_sv(Mt, d, n, sv, np.eye(n), Wk)
+            t2 = sv[d - 1] if d <= n else 0.0
+            type_II[i] = t2
+            condition[i] = sv[0] / t2 if t2 > 0 else np.inf
+        else:
+            type_II[i] = 0.0
+            condition[i] = np.inf
+        # ---- det(A_h Δ P_locᵀ), P_loc: the home basis projected on the platform twists
+        if n == n_ref and n > 0:
+            for j in range(n_ref):  # P_loc = reference Pᵀ P
+                for a in range(6):
+                    Ploc[j, a] = 0.0
+                for jj in range(d):
+                    proj = 0.0
+                    for a in range(6):
+                        proj += reference[j, a] * P[jj, a]
+                    for a in range(6):
+                        Ploc[j, a] += proj * P[jj, a]
+            for a_i in range(n):
+                for j in range(n_ref):
+                    s = 0.0
+                    for a in range(3):
+                        s += Ah[a_i, a] * Ploc[j, 3 + a] + Ah[a_i, 3 + a] * Ploc[j, a]
+                    M[a_i, j] = s
+            det[i] = _det(M, n)
+        else:
+            det[i] = np.nan
+
+
+@njit(cache=True, nogil=True)
+def leg_outputs(H, Jp, base, world_map, poses, idx, anchor, length, J_out, c0):
+    """Post-process one leg's Pinocchio pass over poses ``idx``.
+
+    Args:
+        H: (M, 4, 4) tip placements from Pinocchio (URDF root frame).
+        Jp: (M, 6, nv) Pinocchio WORLD frame Jacobians (linear-first, root frame).
+        base, world_map: root placement (4×4) and the 6×6 map of :meth:`Leg._world_map`
+            (Pinocchio's (v; ω) in the root frame → axis-first about the world origin).
+        poses, anchor: platform placements (N, 4, 4) and the leg's anchor (4×4).
+        J_out: (M, 6, nv_total) receives the axis-first twists in columns c0:c0+nv.
+
+    Returns:
+        (M,) closure errors: sin of the rotation angle between tip and target (π beyond
+        90°) and their distance / length, in quadrature.
+    """
+    M = H.shape[0]
+    nv = Jp.shape[2]
+    err = np.empty(M)
+    tip = np.empty((3, 4))
+    tgt = np.empty((3, 4))
+    R = np.empty((3, 3))
+    for j in range(M):
+        P = poses[idx[j]]
+        # tip in the world: base · H; target: pose · anchor
+        for a in range(3):
+            for b in range(4):
+                s = base[a, 3] if b == 3 else 0.0
+                u = P[a, 3] if b == 3 else 0.0
+                for k in range(3):
+                    s += base[a, k] * H[j, k, b]
+                    u += P[a, k] * anchor[k, b]
+                tip[a, b] = s
+                tgt[a, b] = u
+        # R = tipᵀ tgt: skew part and trace
+        tr = 0.0
+        for a in range(3):
+            for b in range(3):
+                R[a, b] = tip[0, a] * tgt[0, b] + tip[1, a] * tgt[1, b] + tip[2, a] * tgt[2, b]
+            tr += R[a, a]
+        x = R[2, 1] - R[1, 2]
+        y = R[0, 2] - R[2, 0]
+        z = R[1, 0] - R[0, 1]
+        angle = 0.5 * math.sqrt(x * x + y * y + z * z) if tr >= 1.0 else math.pi
+        dx = (tip[0, 3] - tgt[0, 3]) / length
+        dy = (tip[1, 3] - tgt[1, 3]) / length
+        dz = (tip[2, 3] - tgt[2, 3]) / length
+        err[j] = math.sqrt(angle * angle + dx * dx + dy * dy + dz * dz)
+        for c in range(nv):
+            for a in range(6):
+                s = 0.0
+                for k in range(6):
+                    s += world_map[a, k] * Jp[j, k, c]
+                J_out[j, a, c0 + c] = s
+    return err
