@@ -240,35 +240,34 @@ def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out, 
 
 @njit(cache=True, nogil=True)
 def log3(R, out):
-    """Rotation vector of a rotation matrix (robust near 0 and π)."""
-    tr = R[0, 0] + R[1, 1] + R[2, 2]
-    c = min(1.0, max(-1.0, 0.5 * (tr - 1.0)))
+    """Rotation vector of a rotation matrix, accurate at every angle: θ from
+    ``atan2(sin θ, cos θ)``; the axis from the skew part below 90° and from the
+    symmetric part ``(R + Rᵀ)/2 − cos θ I = (1 − cos θ) u uᵀ`` above (the skew part
+    vanishes at a half turn), its sign from the skew part."""
     x = R[2, 1] - R[1, 2]
     y = R[0, 2] - R[2, 0]
     z = R[1, 0] - R[0, 1]
-    theta = math.acos(c)
-    if theta < 1e-4:
-        f = 0.5 * (1.0 + theta * theta / 6.0)
+    s2 = math.sqrt(x * x + y * y + z * z)  # 2 sin θ
+    c = 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)
+    theta = math.atan2(0.5 * s2, c)
+    if c >= 0.0:
+        if s2 < 1e-300:
+            out[0], out[1], out[2] = 0.0, 0.0, 0.0
+            return
+        f = theta / s2
         out[0], out[1], out[2] = f * x, f * y, f * z
         return
-    if theta < math.pi - 1e-4:
-        f = 0.5 * theta / math.sin(theta)
-        out[0], out[1], out[2] = f * x, f * y, f * z
-        return
-    # near π: axis from the symmetric part, sign from the skew part
-    d = np.array([R[0, 0], R[1, 1], R[2, 2]])
-    i = int(np.argmax(d))
-    u = np.empty(3)
-    for k in range(3):
-        u[k] = 0.5 * (R[k, i] + R[i, k])
-    u[i] = math.sqrt(max(0.0, 0.5 * (1.0 + R[i, i] - (tr - R[i, i]))))
-    n = math.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2])
-    for k in range(3):
-        u[k] /= n
-    if u[0] * x + u[1] * y + u[2] * z < 0.0:
-        for k in range(3):
-            u[k] = -u[k]
-    out[0], out[1], out[2] = theta * u[0], theta * u[1], theta * u[2]
+    i = 0
+    for k in range(1, 3):
+        if R[k, k] > R[i, i]:
+            i = k
+    u0 = 0.5 * (R[0, i] + R[i, 0]) - (c if i == 0 else 0.0)
+    u1 = 0.5 * (R[1, i] + R[i, 1]) - (c if i == 1 else 0.0)
+    u2 = 0.5 * (R[2, i] + R[i, 2]) - (c if i == 2 else 0.0)
+    n = math.sqrt(u0 * u0 + u1 * u1 + u2 * u2)
+    if u0 * x + u1 * y + u2 * z < 0.0:
+        n = -n
+    out[0], out[1], out[2] = theta * u0 / n, theta * u1 / n, theta * u2 / n
 
 
 @njit(cache=True, nogil=True)
@@ -501,9 +500,14 @@ def twist_exp(xi, out):
     th2 = wx * wx + wy * wy + wz * wz
     th = math.sqrt(th2)
     if th < 1e-6:
-        a, b, c = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0, 1.0 / 6.0 - th2 / 120.0
+        a, b = 1.0 - th2 / 6.0, 0.5 - th2 / 24.0
+    else:  # (1 − cos θ)/θ² as 2 sin²(θ/2)/θ²: no cancellation
+        h = math.sin(0.5 * th)
+        a, b = math.sin(th) / th, 2.0 * h * h / th2
+    if th < 1e-2:  # (θ − sin θ)/θ³ by its series (the difference cancels)
+        c = 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
     else:
-        a, b, c = math.sin(th) / th, (1.0 - math.cos(th)) / th2, (th - math.sin(th)) / (th2 * th)
+        c = (th - math.sin(th)) / (th2 * th)
     W = np.array([[0.0, -wz, wy], [wz, 0.0, -wx], [-wy, wx, 0.0]])
     W2 = W @ W
     for i in range(3):

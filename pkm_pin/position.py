@@ -501,7 +501,8 @@ class PositionMixin:
 
     # ---------------------------------------------------------- assembly modes
     def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
-                               tol: float = 1e-12, max_iter: int = 100) -> list:
+                               tol: float = 1e-12, max_iter: int = 100,
+                               method: str = "auto") -> list:
         """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
 
         The continuation from home comes first (when it succeeds); then the continuation
@@ -510,7 +511,9 @@ class PositionMixin:
         alternately the home pose moved by a random twist of the platform twist system
         (homogenised size 0.2–1.5) and the assembly reached from random actuated
         coordinates (home ± 0.4 units). Each result is checked (closure, actuated
-        coordinates, joint limits) by :meth:`forward_kinematics`.
+        coordinates, joint limits) by :meth:`forward_kinematics`, which uses ``method``
+        (see there: ``"compiled"`` is much faster and may find fewer modes than
+        ``"auto"``, which falls back to the Euler continuation where it stops).
 
         Returns:
             A list of :class:`Assembly`, continuation result first, the others in the
@@ -522,7 +525,7 @@ class PositionMixin:
             raise InputError(f"starts must be a non-negative integer, got {starts!r}")
         found = []
         try:
-            found.append(self.forward_kinematics(target, tol=tol))
+            found.append(self.forward_kinematics(target, tol=tol, method=method))
         except ForwardKinematicsError:
             pass
         rng = np.random.default_rng(seed)
@@ -546,11 +549,11 @@ class PositionMixin:
                 qa = np.clip(home.q_actuated + rng.uniform(-0.4, 0.4, len(scales)) * scales,
                              lo, up)
                 try:
-                    start = self.forward_kinematics(qa, tol=1e-9)
+                    start = self.forward_kinematics(qa, tol=1e-9, method=method)
                 except ForwardKinematicsError:
                     continue
             try:
-                a = self.forward_kinematics(target, start, tol=tol)
+                a = self.forward_kinematics(target, start, tol=tol, method=method)
             except ForwardKinematicsError:
                 continue
             if any(pose_error(a.pose, b.pose, L) < 1e-6 for b in found):

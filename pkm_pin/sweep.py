@@ -268,22 +268,23 @@ def _pinocchio_pass(mech, Qs, poses, idx):
         model, data, tip = leg.model, leg.data, leg.tip_id
         jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
         Jl, Hl = [], []
+        add_J, add_H = Jl.append, Hl.append
         if model.nvExtended == model.nv:
             # the joint Jacobians returned by computeJointJacobians are the tip frame's
             # WORLD Jacobian: every joint of a kernel's chain supports the tip
             for q in Q[idx]:
-                Jl.append(jacobians(model, data, q))
-                Hl.append(place(model, data, tip).homogeneous)
+                add_J(jacobians(model, data, q))
+                add_H(place(model, data, tip).homogeneous)
         else:  # mimic joints have their own columns in data.J: ask for the frame's
             frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
             for q in Q[idx]:
                 jacobians(model, data, q)
-                Hl.append(place(model, data, tip).homogeneous)
-                Jl.append(frame_jacobian(model, data, tip, world))
-        Jp = np.array(Jl)
-        if Jp.shape != (len(idx), 6, leg.nv):  # leg_outputs writes without bounds checks
+                add_H(place(model, data, tip).homogeneous)
+                add_J(frame_jacobian(model, data, tip, world))
+        Jp = np.concatenate(Jl).reshape(len(idx), 6, -1)
+        if Jp.shape[2] != leg.nv:  # leg_outputs writes without bounds checks
             raise RuntimeError(f"leg {leg.name!r}: Pinocchio Jacobians of shape {Jp.shape}")
-        err = leg_outputs(np.array(Hl), Jp,
+        err = leg_outputs(np.concatenate(Hl).reshape(len(idx), 4, 4), Jp,
                           leg.base.homogeneous, leg._world_map(), poses, idx,
                           anchor.homogeneous, float(leg.characteristic_length), J, int(offs[k]))
         bad |= ~(err <= SWEEP_TOL)

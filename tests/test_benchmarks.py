@@ -13,7 +13,7 @@ import bench_fk  # noqa: E402
 
 def test_bench_analysis_runs_and_reports_every_figure(capsys):
     """bench_analysis.main times the four figures for both mechanisms."""
-    rows = bench_analysis.main(n=20)
+    rows = bench_analysis.main(n=20, n_loop=5)
     assert set(rows) == {"stewart", "rpr3"}
     for figures in rows.values():
         assert len(figures) == 4 and all(t > 0 for t in figures)

@@ -1,0 +1,182 @@
+"""The compiled sweep path (pkm_pin.fast_analysis) against the numpy reference path.
+
+The sweep's compiled analysis must take the decisions and give the numbers of
+``batch.analyse`` (the algorithm of ``Analysis``); near-singular poses are flagged and
+handed to the reference. Also its building blocks (QR with column pivoting, Jacobi
+singular values, determinant) against numpy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from pkm_pin import screws
+from pkm_pin.analysis import SINGULAR_TOL
+from pkm_pin.batch import homogenise
+from pkm_pin.builders import MECHANISMS
+from pkm_pin.builders.planar import rpr3_type2_pose
+from pkm_pin.builders.spatial import upu3_constraint_singular_pose
+from pkm_pin.fast_analysis import WINDOW, _det, _jacobi_sv, _qrcp, _rank
+from pkm_pin.screws import RTOL
+from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
+
+_CACHE: dict = {}
+
+
+def mechanism(name: str, scale: float = 1.0):
+    key = (name, scale)
+    if key not in _CACHE:
+        _CACHE[key] = MECHANISMS[name](scale=scale).build()
+    return _CACHE[key]
+
+
+def path(mech, n=40, size=0.25):
+    """Poses along a line of the platform twist system through home (both ways)."""
+    an = mech.home_analysis
+    L = mech.characteristic_length
+    c = np.array([1.0, 0.5, -0.3, 0.2, 0.1, 0.4])[: an.dof] @ an.platform_twists
+    c /= max(np.linalg.norm(c[:3]), np.linalg.norm(c[3:]) / L)
+    return pose_array([screws.exp(s * size * c) * mech.home for s in np.linspace(-1, 1, n)])
+
+
+def both_paths(mech, X):
+    ref = homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+    fast = evaluate_chunk(mech, X, ref, RTOL, SINGULAR_TOL)
+    slow = _evaluate_chunk_pinocchio(mech, X, ref, RTOL, SINGULAR_TOL, None, 4)
+    return fast, slow
+
+
+def assert_same(fast, slow):
+    np.testing.assert_array_equal(fast["ok"], slow["ok"])
+    ok = fast["ok"]
+    np.testing.assert_array_equal(fast["dof"][ok], slow["dof"][ok])
+    for key in ("type_I", "type_II", "det"):
+        a, b = fast[key][ok], slow[key][ok]
+        np.testing.assert_allclose(a, b, rtol=1e-8, atol=1e-11, err_msg=key)
+    # condition = σ_max / σ_min: σ_min / σ_max is known to an absolute round-off
+    np.testing.assert_allclose(1 / fast["condition"][ok], 1 / slow["condition"][ok],
+                               rtol=1e-8, atol=1e-14)
+    np.testing.assert_allclose(fast["q_actuated"][ok], slow["q_actuated"][ok], atol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["rpr3", "rrr3", "stewart", "delta", "upu3", "orthoglide",
+                                  "orthoglide_quasi"])
+def test_compiled_sweep_equals_reference_path(name):
+    """Same assemblies, DOF, indices and carried det as the numpy path, pose by pose."""
+    mech = mechanism(name)
+    fast, slow = both_paths(mech, path(mech))
+    assert fast["ok"].sum() >= 30
+    assert fast["reference_path"] == 0  # no pose near a rank threshold on this path
+    assert_same(fast, slow)
+
+
+def test_millimetres_give_the_same_sweep():
+    """The Stewart platform in millimetres: same DOF, indices, det (unit-invariant)."""
+    m, mm = mechanism("stewart"), mechanism("stewart", 1000.0)
+    X = path(m, n=12)
+    Xmm = X.copy()
+    Xmm[:, :3] *= 1000.0
+    a, b = m.sweep(X), mm.sweep(Xmm)
+    np.testing.assert_array_equal(a.dof, b.dof)
+    np.testing.assert_array_equal(a.singularity, b.singularity)
+    for key in ("type_I", "type_II", "condition", "det"):
+        np.testing.assert_allclose(getattr(a, key), getattr(b, key), rtol=1e-7, err_msg=key)
+
+
+def test_near_constraint_singular_poses_go_to_the_reference_path():
+    """3-UPU lowered towards its constraint-singular pose: heights giving constraint
+    singular values inside the QR ambiguity window are flagged and analysed by
+    batch.analyse; the exactly singular pose (4 DOF) is decided by QR. Every pose
+    equals the per-pose Analysis."""
+    mech = mechanism("upu3")
+    L = mech.characteristic_length
+    base = upu3_constraint_singular_pose()
+    heights = np.array([0.0, 1e-12, 1e-9, 1e-7, 1e-5, 1e-3, 3e-2]) * L
+    X = pose_array([pin.SE3(base.rotation, base.translation + [0, 0, h]) for h in heights])
+    fast, slow = both_paths(mech, X)
+    assert fast["ok"].all()
+    assert 1 <= fast["reference_path"] < len(X)  # the window is used, and only there
+    assert_same(fast, slow)
+    res = mech.sweep(X)
+    for i, x in enumerate(X):
+        an = mech.analyze(mech.assemble(x))
+        assert res.dof[i] == an.dof
+        assert res.singularity[i] == an.singularity
+        assert res.type_II[i] == pytest.approx(an.indices["type_II"], rel=1e-8, abs=1e-12)
+    assert res.dof[0] == 4 and res.dof[-1] == 3
+
+
+def test_type_II_pose_of_the_rpr3_in_a_sweep():
+    """At the 3-RPR type II pose the compiled type II index vanishes (to round-off) and
+    the carried det changes sign across it, as in the reference path."""
+    mech = mechanism("rpr3")
+    P2 = rpr3_type2_pose()
+    X = pose_array([pin.SE3(P2.rotation, P2.translation + [dx, 0, 0])
+                    for dx in (-0.02, -0.01, 0.0, 0.01, 0.02)])
+    fast, slow = both_paths(mech, X)
+    ok = fast["ok"]
+    assert ok[2]
+    assert fast["type_II"][2] < 1e-9
+    assert_same(fast, slow)
+    d = fast["det"][ok]
+    assert d[0] * d[-1] < 0
+
+
+# ------------------------------------------------------------------ building blocks
+def test_qr_with_column_pivoting_factorises():
+    """A P = Q R with Q orthogonal, R upper triangular, |R_jj| non-increasing."""
+    rng = np.random.default_rng(0)
+    for ncol in (1, 3, 6, 9, 18):
+        A = rng.normal(size=(6, ncol))
+        R = A.copy()
+        Q = np.empty((6, 6))
+        perm = np.empty(ncol, np.int64)
+        _qrcp(R, Q, perm, ncol)
+        np.testing.assert_allclose(Q @ Q.T, np.eye(6), atol=1e-14)
+        np.testing.assert_allclose(np.tril(R, -1), 0.0, atol=0.0)
+        np.testing.assert_allclose(Q @ R, A[:, perm], atol=1e-13)
+        d = np.abs(np.diag(R[:, :min(6, ncol)]))
+        assert np.all(d[:-1] >= d[1:] - 1e-14)
+
+
+def test_rank_decision_and_its_ambiguity_window():
+    """Rank of matrices with chosen singular values; −1 inside the window."""
+    rng = np.random.default_rng(1)
+    U, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    V, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    for small, expected in ((0.0, 5), (1e-16, 5), (1e-9, -1), (1e-2, 6)):
+        A = U @ np.diag([3, 2, 1, 0.5, 0.2, small]) @ V.T
+        R = A.copy()
+        Q = np.empty((6, 6))
+        perm = np.empty(6, np.int64)
+        _qrcp(R, Q, perm, 6)
+        assert _rank(R, 6, RTOL, False) == expected
+        if expected == 5:  # the last column of Q spans the left null space
+            np.testing.assert_allclose(Q[:, 5] @ A, 0.0, atol=1e-13)
+    assert WINDOW >= 1e3
+
+
+def test_jacobi_singular_values_and_det():
+    """One-sided Jacobi (warm-started or not) and elimination match numpy."""
+    rng = np.random.default_rng(2)
+    V = np.eye(6)
+    W = np.empty((6, 6))
+    for m, n in ((6, 6), (6, 3), (3, 3), (5, 2)):
+        A = rng.normal(size=(m, n))
+        sv = np.empty(6)
+        k = _jacobi_sv(A, m, n, sv, np.eye(n), W)
+        np.testing.assert_allclose(sv[:k], np.linalg.svd(A, compute_uv=False), rtol=1e-13)
+    # warm start from a previous basis: same values, V stays orthogonal
+    A = rng.normal(size=(6, 6))
+    sv = np.empty(6)
+    _jacobi_sv(A, 6, 6, sv, V, W)
+    B = A + 1e-3 * rng.normal(size=(6, 6))
+    _jacobi_sv(B, 6, 6, sv, V, W)
+    np.testing.assert_allclose(sv, np.linalg.svd(B, compute_uv=False), rtol=1e-13)
+    np.testing.assert_allclose(V.T @ V, np.eye(6), atol=1e-13)
+    for n in (1, 3, 6):
+        A = rng.normal(size=(n, n))
+        assert _det(A, n) == pytest.approx(np.linalg.det(A), rel=1e-12)
+    assert _det(np.zeros((3, 3)), 3) == 0.0
