@@ -141,10 +141,13 @@ def smooth_steps(X: np.ndarray, length: float) -> np.ndarray:
 
 def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
     """The order of the poses for warm starts: the caller's own order when it is already
-    a path (not longer than the serpentine order), else :func:`serpentine_order`.
-    Path length: sum of the steps, translations divided by ``length``."""
-    serp = serpentine_order(X)
+    a path (no step over 3× the median step, or not longer than the serpentine order),
+    else :func:`serpentine_order`. Steps: translations divided by ``length``."""
     scale = np.r_[np.full(3, 1.0 / length), np.ones(3)]
+    steps = np.linalg.norm(np.diff(X, axis=0) * scale, axis=1)
+    if len(steps) and steps.max() <= 3.0 * np.median(steps):
+        return np.arange(len(X))  # already a path without jumps
+    serp = serpentine_order(X)
 
     def travel(Y):
         return float(np.sum(np.linalg.norm(np.diff(Y, axis=0) * scale, axis=1)))
