@@ -60,6 +60,12 @@ def grid_stewart(k: int = 4) -> tuple[object, np.ndarray]:
     return mech, X
 
 
+def _warm_worker() -> None:
+    """Import pkm_pin and load the compiled kernels in this process (a tiny sweep)."""
+    mech = MECHANISMS["stewart"]().build()
+    mech.sweep(pose_array([mech.home, mech.home]))
+
+
 def dask_scaling(mech, X: np.ndarray, chunk: int) -> list[tuple[int, float]]:
     import distributed
 
@@ -68,8 +74,8 @@ def dask_scaling(mech, X: np.ndarray, chunk: int) -> list[tuple[int, float]]:
         with distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                       dashboard_address=None) as cluster, \
                 distributed.Client(cluster) as client:
+            client.run(_warm_worker)  # every worker: imports, numba kernels loaded
             ex = client.get_executor()
-            mech.sweep(X[:chunk], executor=ex, chunk_size=chunk)  # warm the workers
             rate, _ = sweep_rate(mech, X, executor=ex, chunk_size=chunk)
         out.append((workers, rate))
     return out
