@@ -34,56 +34,81 @@ WINDOW = 1e4
 
 
 @njit(cache=True, nogil=True)
-def _qrcp(A, Q, perm, ncol):
-    """Householder QR with column pivoting of the 6 × ncol matrix ``A`` (in place: R in
-    its upper triangle), ``Q`` (6×6 orthogonal) and the column order ``perm``."""
-    for a in range(6):
-        for b in range(6):
-            Q[a, b] = 1.0 if a == b else 0.0
+def _qr_core(A, nrow, ncol, perm, V, betas):
+    """Householder QR with column pivoting of the leading nrow × ncol block of ``A`` (in
+    place: R in its upper triangle); the reflectors ``I − (2/β_j) v_j v_jᵀ`` are kept in
+    the columns of ``V`` and ``betas`` (β = 0: none); the column order in ``perm``.
+    Returns the number of reflectors."""
     for c in range(ncol):
         perm[c] = c
-    v = np.empty(6)
-    for j in range(min(6, ncol)):
+    m = min(nrow, ncol)
+    for j in range(m):
         best, p = -1.0, j
         for c in range(j, ncol):
             s = 0.0
-            for r in range(j, 6):
+            for r in range(j, nrow):
                 s += A[r, c] * A[r, c]
             if s > best:
                 best, p = s, c
         if p != j:
-            for r in range(6):
+            for r in range(nrow):
                 A[r, j], A[r, p] = A[r, p], A[r, j]
             perm[j], perm[p] = perm[p], perm[j]
+        betas[j] = 0.0
         norm = math.sqrt(best)
         if norm == 0.0:
             continue
         alpha = -norm if A[j, j] >= 0 else norm
         beta = 0.0
-        for r in range(j, 6):
-            v[r] = A[r, j]
-        v[j] -= alpha
-        for r in range(j, 6):
-            beta += v[r] * v[r]
+        for r in range(j, nrow):
+            V[r, j] = A[r, j]
+        V[j, j] -= alpha
+        for r in range(j, nrow):
+            beta += V[r, j] * V[r, j]
         if beta == 0.0:
             continue
-        for c in range(j, ncol):
+        betas[j] = beta
+        for c in range(j + 1, ncol):
             s = 0.0
-            for r in range(j, 6):
-                s += v[r] * A[r, c]
+            for r in range(j, nrow):
+                s += V[r, j] * A[r, c]
             s *= 2.0 / beta
-            for r in range(j, 6):
-                A[r, c] -= s * v[r]
-        for r in range(6):
-            s = 0.0
-            for k in range(j, 6):
-                s += Q[r, k] * v[k]
-            s *= 2.0 / beta
-            for k in range(j, 6):
-                Q[r, k] -= s * v[k]
+            for r in range(j, nrow):
+                A[r, c] -= s * V[r, j]
         A[j, j] = alpha
-        for r in range(j + 1, 6):
+        for r in range(j + 1, nrow):
             A[r, j] = 0.0
+    return m
+
+
+@njit(cache=True, nogil=True)
+def _apply_q(V, betas, m, nrow, x):
+    """x ← Q x with Q = H_0 ⋯ H_{m−1} from :func:`_qr_core`."""
+    for j in range(m - 1, -1, -1):
+        if betas[j] == 0.0:
+            continue
+        s = 0.0
+        for r in range(j, nrow):
+            s += V[r, j] * x[r]
+        s *= 2.0 / betas[j]
+        for r in range(j, nrow):
+            x[r] -= s * V[r, j]
+
+
+@njit(cache=True, nogil=True)
+def _qrcp(A, Q, perm, ncol):
+    """Householder QR with column pivoting of the 6 × ncol matrix ``A`` (in place: R in
+    its upper triangle), ``Q`` (6×6 orthogonal) and the column order ``perm``."""
+    V = np.empty((6, 6))
+    betas = np.empty(6)
+    m = _qr_core(A, 6, ncol, perm, V, betas)
+    x = np.empty(6)
+    for c in range(6):
+        for r in range(6):
+            x[r] = 1.0 if r == c else 0.0
+        _apply_q(V, betas, m, 6, x)
+        for r in range(6):
+            Q[r, c] = x[r]
 
 
 @njit(cache=True, nogil=True)
@@ -252,6 +277,9 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
     gb = np.empty(3)
     ctr = np.empty(3)
     Ploc = np.empty((max(reference.shape[0], 1), 6))
+    Vh = np.empty((6, 6))  # Householder vectors
+    betas = np.empty(6)
+    x6 = np.empty(6)
     V = np.eye(6)  # right singular basis of M, carried from pose to pose
     Wk = np.empty((max(n, 6), 6))
     d_prev = -1
@@ -310,15 +338,18 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                 for r in range(3):
                     X[r, c] = T[c0 + c, 3 + r]
                     X[3 + r, c] = T[c0 + c, r]
-            _qrcp(X, Q, perm, k)
+            nref = _qr_core(X, 6, k, perm, Vh, betas)
             r = _rank(X, min(6, k), rtol, False)
             if r < 0:
                 bad = True
                 break
             leg_dims += 6 - r
-            for j in range(r, 6):
+            for j in range(r, 6):  # the leg's constraints: Q e_j, j ≥ rank
                 for a in range(6):
-                    C[a, m_c] = Q[a, j]
+                    x6[a] = 1.0 if a == j else 0.0
+                _apply_q(Vh, betas, nref, 6, x6)
+                for a in range(6):
+                    C[a, m_c] = x6[a]
                 m_c += 1
             for a_i in range(n):
                 if act_leg[a_i] != l:
@@ -337,11 +368,11 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                     for t in range(j):
                         s -= X[t, j] * y[t]
                     y[j] = s / X[j, j]
+                for j in range(k, 6):
+                    y[j] = 0.0
+                _apply_q(Vh, betas, nref, 6, y)  # w = Q₁ y
                 for a in range(6):
-                    s = 0.0
-                    for j in range(k):
-                        s += Q[a, j] * y[j]
-                    Ah[a_i, a] = s
+                    Ah[a_i, a] = y[a]
             if bad:
                 break
         if bad:
@@ -372,7 +403,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                 Pw[a, j] = P[j, a]
             for a in range(3, 6):
                 Pw[a, j] = 0.0
-        _qrcp(Pw, Q, perm, d)
+        _qr_core(Pw, 3, d, perm, Vh, betas)
         rot = _rank(Pw, min(3, d), rot_tol, True)
         if rot < 0:
             flag[i] = 1
@@ -433,7 +464,16 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
             type_II[i] = 0.0
             condition[i] = np.inf
         # ---- det(A_h Δ P_locᵀ), P_loc: the home basis projected on the platform twists
-        if n == n_ref and n > 0:
+        if n == n_ref and n > 0 and d == 6:  # P spans every twist: P_loc = reference
+            for a_i in range(n):
+                for j in range(n_ref):
+                    s = 0.0
+                    for a in range(3):
+                        s += (Ah[a_i, a] * reference[j, 3 + a]
+                              + Ah[a_i, 3 + a] * reference[j, a])
+                    M[a_i, j] = s
+            det[i] = _det(M, n)
+        elif n == n_ref and n > 0:
             for j in range(n_ref):  # P_loc = reference Pᵀ P
                 for a in range(6):
                     Ploc[j, a] = 0.0
