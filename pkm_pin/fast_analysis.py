@@ -28,6 +28,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .kernels import jacobi_sv
+
 #: A rank decision is taken by QR only if every pivot ratio is this factor away from
 #: its threshold (QR with column pivoting brackets the singular values within 2^6·√6).
 WINDOW = 1e4
@@ -132,62 +134,6 @@ def _rank(R, n, rtol, absolute):
 
 
 @njit(cache=True, nogil=True)
-def _jacobi_sv(M, m, n, sv, V, W):
-    """Singular values (descending) of the m × n matrix M (m ≥ n) by one-sided Jacobi
-    on ``M V``: ``V`` (n × n orthogonal, in/out) is the previous pose's right singular
-    basis, a warm start that leaves few rotations to do along a sweep. ``W``: work
-    space of at least m × n."""
-    for a in range(m):
-        for b in range(n):
-            s = 0.0
-            for k in range(n):
-                s += M[a, k] * V[k, b]
-            W[a, b] = s
-    for _ in range(60):
-        rotated = False
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                a = 0.0
-                b = 0.0
-                c = 0.0
-                for k in range(m):
-                    a += W[k, p] * W[k, p]
-                    b += W[k, q] * W[k, q]
-                    c += W[k, p] * W[k, q]
-                if c == 0.0 or abs(c) <= 1e-15 * math.sqrt(a * b):
-                    continue
-                rotated = True
-                zeta = (b - a) / (2.0 * c)
-                t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
-                cs = 1.0 / math.sqrt(1.0 + t * t)
-                sn = cs * t
-                for k in range(m):
-                    x, y = W[k, p], W[k, q]
-                    W[k, p] = cs * x - sn * y
-                    W[k, q] = sn * x + cs * y
-                for k in range(n):
-                    x, y = V[k, p], V[k, q]
-                    V[k, p] = cs * x - sn * y
-                    V[k, q] = sn * x + cs * y
-        if not rotated:
-            break
-    for j in range(n):
-        s = 0.0
-        for k in range(m):
-            s += W[k, j] * W[k, j]
-        sv[j] = math.sqrt(s)
-    # descending (insertion sort; a tiny array)
-    for j in range(1, n):
-        x = sv[j]
-        k = j - 1
-        while k >= 0 and sv[k] < x:
-            sv[k + 1] = sv[k]
-            k -= 1
-        sv[k + 1] = x
-    return n
-
-
-@njit(cache=True, nogil=True)
 def _det(M, n):
     """Determinant of the leading n × n block (Gaussian elimination, partial pivoting)."""
     A = M[:n, :n].copy()
@@ -224,6 +170,17 @@ def _solve3(G, b, x):
     x[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / d
     x[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / d
     x[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / d
+
+
+@njit(cache=True, nogil=True)
+def _reciprocal_products(W, n, T, m, out):
+    """out[a, j] = W_a Δ T_j (wrench rows W[:n], twist rows T[:m], axis-first)."""
+    for a in range(n):
+        for j in range(m):
+            s = 0.0
+            for k in range(3):
+                s += W[a, k] * T[j, 3 + k] + W[a, 3 + k] * T[j, k]
+            out[a, j] = s
 
 
 @njit(cache=True, nogil=True)
@@ -440,12 +397,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
             ti = min(ti, abs(s))
         type_I[i] = ti
         # ---- M = A_h Δ Pᵀ: type II index and condition
-        for a_i in range(n):
-            for j in range(d):
-                s = 0.0
-                for a in range(3):
-                    s += Ah[a_i, a] * P[j, 3 + a] + Ah[a_i, 3 + a] * P[j, a]
-                M[a_i, j] = s
+        _reciprocal_products(Ah, n, P, d, M)
         if n > 0 and d > 0:
             if d != d_prev:  # a new platform dimension: start from the identity
                 V[:, :] = 0.0
@@ -453,10 +405,10 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                     V[a, a] = 1.0
                 d_prev = d
             if n >= d:
-                _jacobi_sv(M, n, d, sv, V, Wk)
+                jacobi_sv(M, n, d, sv, V, Wk)
             else:
                 Mt = M[:n, :d].T.copy()
-                _jacobi_sv(Mt, d, n, sv, np.eye(n), Wk)
+                jacobi_sv(Mt, d, n, sv, np.eye(n), Wk)
             t2 = sv[d - 1] if d <= n else 0.0
             type_II[i] = t2
             condition[i] = sv[0] / t2 if t2 > 0 else np.inf
@@ -465,13 +417,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
             condition[i] = np.inf
         # ---- det(A_h Δ P_locᵀ), P_loc: the home basis projected on the platform twists
         if n == n_ref and n > 0 and d == 6:  # P spans every twist: P_loc = reference
-            for a_i in range(n):
-                for j in range(n_ref):
-                    s = 0.0
-                    for a in range(3):
-                        s += (Ah[a_i, a] * reference[j, 3 + a]
-                              + Ah[a_i, 3 + a] * reference[j, a])
-                    M[a_i, j] = s
+            _reciprocal_products(Ah, n, reference, n_ref, M)
             det[i] = _det(M, n)
         elif n == n_ref and n > 0:
             for j in range(n_ref):  # P_loc = reference Pᵀ P
@@ -483,12 +429,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                         proj += reference[j, a] * P[jj, a]
                     for a in range(6):
                         Ploc[j, a] += proj * P[jj, a]
-            for a_i in range(n):
-                for j in range(n_ref):
-                    s = 0.0
-                    for a in range(3):
-                        s += Ah[a_i, a] * Ploc[j, 3 + a] + Ah[a_i, 3 + a] * Ploc[j, a]
-                    M[a_i, j] = s
+            _reciprocal_products(Ah, n, Ploc, n_ref, M)
             det[i] = _det(M, n)
         else:
             det[i] = np.nan

@@ -301,30 +301,8 @@ def pose_error(T, target, length, e):
 @njit(cache=True, nogil=True)
 def _solve_spd(A, b, x):
     """x = A⁻¹ b for a symmetric positive definite A (Cholesky, A overwritten)."""
-    n = A.shape[0]
-    for j in range(n):
-        s = A[j, j]
-        for k in range(j):
-            s -= A[j, k] * A[j, k]
-        if s <= 0.0:
-            return False
-        A[j, j] = math.sqrt(s)
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= A[i, k] * A[j, k]
-            A[i, j] = s / A[j, j]
-    for i in range(n):
-        s = b[i]
-        for k in range(i):
-            s -= A[i, k] * x[k]
-        x[i] = s / A[i, i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for k in range(i + 1, n):
-            s -= A[k, i] * x[k]
-        x[i] = s / A[i, i]
-    return True
+    x[:] = b
+    return _cholesky_solve(A, x.reshape((x.shape[0], 1)))
 
 
 @njit(cache=True, nogil=True)
@@ -437,6 +415,62 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
             known = known + 1 if i > 0 else 1
         else:
             known = 0
+
+
+@njit(cache=True, nogil=True)
+def jacobi_sv(M, m, n, sv, V, W):
+    """Singular values (descending) of the m × n matrix M (m ≥ n) by one-sided Jacobi
+    on ``M V``: ``V`` (n × n orthogonal, in/out) is the previous pose's right singular
+    basis, a warm start that leaves few rotations to do along a sweep. ``W``: work
+    space of at least m × n."""
+    for a in range(m):
+        for b in range(n):
+            s = 0.0
+            for k in range(n):
+                s += M[a, k] * V[k, b]
+            W[a, b] = s
+    for _ in range(60):
+        rotated = False
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                a = 0.0
+                b = 0.0
+                c = 0.0
+                for k in range(m):
+                    a += W[k, p] * W[k, p]
+                    b += W[k, q] * W[k, q]
+                    c += W[k, p] * W[k, q]
+                if c == 0.0 or abs(c) <= 1e-15 * math.sqrt(a * b):
+                    continue
+                rotated = True
+                zeta = (b - a) / (2.0 * c)
+                t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                cs = 1.0 / math.sqrt(1.0 + t * t)
+                sn = cs * t
+                for k in range(m):
+                    x, y = W[k, p], W[k, q]
+                    W[k, p] = cs * x - sn * y
+                    W[k, q] = sn * x + cs * y
+                for k in range(n):
+                    x, y = V[k, p], V[k, q]
+                    V[k, p] = cs * x - sn * y
+                    V[k, q] = sn * x + cs * y
+        if not rotated:
+            break
+    for j in range(n):
+        s = 0.0
+        for k in range(m):
+            s += W[k, j] * W[k, j]
+        sv[j] = math.sqrt(s)
+    # descending (insertion sort; a tiny array)
+    for j in range(1, n):
+        x = sv[j]
+        k = j - 1
+        while k >= 0 and sv[k] < x:
+            sv[k + 1] = sv[k]
+            k -= 1
+        sv[k + 1] = x
+    return n
 
 
 # ============================================================== a whole mechanism
@@ -555,41 +589,6 @@ def _cholesky_solve(A, B):
                 s -= A[k, i] * B[k, c]
             B[i, c] = s / A[i, i]
     return True
-
-
-@njit(cache=True, nogil=True)
-def _min_eig_ratio(S):
-    """λ_min / λ_max of a symmetric positive semi-definite 6×6 matrix (Jacobi)."""
-    A = S.copy()
-    n = A.shape[0]
-    for _ in range(50):
-        off = 0.0
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                off += A[p, q] * A[p, q]
-        if off <= 1e-30 * (A[0, 0] ** 2 + 1e-300):
-            break
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                if A[p, q] == 0.0:
-                    continue
-                theta = 0.5 * (A[q, q] - A[p, p]) / A[p, q]
-                t = (1.0 if theta >= 0 else -1.0) / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                for k in range(n):
-                    akp, akq = A[k, p], A[k, q]
-                    A[k, p] = c * akp - s * akq
-                    A[k, q] = s * akp + c * akq
-                for k in range(n):
-                    apk, aqk = A[p, k], A[q, k]
-                    A[p, k] = c * apk - s * aqk
-                    A[q, k] = s * apk + c * aqk
-    lo, hi = np.inf, 0.0
-    for i in range(n):
-        lo = min(lo, A[i, i])
-        hi = max(hi, A[i, i])
-    return max(lo, 0.0) / hi if hi > 0 else 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -747,6 +746,8 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
         twist_exp(xi, E)
         _compose(E, pose, tmp)
         pose[:, :] = tmp
-    if it > 0:
-        ratio = _min_eig_ratio(S_last)
+    if it > 0:  # λ_min / λ_max of the symmetric positive definite S: its singular values
+        sv = np.empty(6)
+        jacobi_sv(S_last, 6, 6, sv, np.eye(6), np.empty((6, 6)))
+        ratio = sv[5] / sv[0] if sv[0] > 0 else 0.0
     out[0], out[1], out[2], out[3], out[4] = closure, act, it, ratio, contracted

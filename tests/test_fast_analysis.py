@@ -18,7 +18,8 @@ from pkm_pin.batch import homogenise
 from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
-from pkm_pin.fast_analysis import WINDOW, _det, _jacobi_sv, _qrcp, _rank
+from pkm_pin.fast_analysis import WINDOW, _det, _qrcp, _rank
+from pkm_pin.kernels import jacobi_sv
 from pkm_pin.screws import RTOL
 from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
 
@@ -166,14 +167,14 @@ def test_jacobi_singular_values_and_det():
     for m, n in ((6, 6), (6, 3), (3, 3), (5, 2)):
         A = rng.normal(size=(m, n))
         sv = np.empty(6)
-        k = _jacobi_sv(A, m, n, sv, np.eye(n), W)
+        k = jacobi_sv(A, m, n, sv, np.eye(n), W)
         np.testing.assert_allclose(sv[:k], np.linalg.svd(A, compute_uv=False), rtol=1e-13)
     # warm start from a previous basis: same values, V stays orthogonal
     A = rng.normal(size=(6, 6))
     sv = np.empty(6)
-    _jacobi_sv(A, 6, 6, sv, V, W)
+    jacobi_sv(A, 6, 6, sv, V, W)
     B = A + 1e-3 * rng.normal(size=(6, 6))
-    _jacobi_sv(B, 6, 6, sv, V, W)
+    jacobi_sv(B, 6, 6, sv, V, W)
     np.testing.assert_allclose(sv, np.linalg.svd(B, compute_uv=False), rtol=1e-13)
     np.testing.assert_allclose(V.T @ V, np.eye(6), atol=1e-13)
     for n in (1, 3, 6):
