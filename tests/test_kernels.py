@@ -253,6 +253,24 @@ def test_mechanism_without_kernel_falls_back_to_euler():
     np.testing.assert_allclose(b.pose.homogeneous, pose.homogeneous, rtol=0, atol=1e-10)
 
 
+def test_sweep_without_kernel_equals_the_compiled_sweep():
+    """The sweep of the continuous-joint 3-RPR (no kernel: Leg.solve + batch.analyse)
+    gives the DOF, indices and actuated coordinates of the compiled sweep of the
+    ordinary 3-RPR at the same poses."""
+    m, ref = _continuous_rpr3(), mech("rpr3")
+    assert m._kernel is None and ref._kernel is not None
+    home = ref.home_assembly.pose
+    poses = [screws.exp(np.array([0.0, a, 0.0, x, 0.0, z])) * home
+             for a in (-0.03, 0.0, 0.03) for x in (-0.02, 0.02) for z in (-0.01, 0.01)]
+    a, b = m.sweep(poses), ref.sweep(poses)
+    assert a.ok.all() and b.ok.all()
+    np.testing.assert_array_equal(a.dof, b.dof)
+    np.testing.assert_array_equal(a.singularity, b.singularity)
+    for key in ("type_I", "type_II", "condition", "det"):
+        np.testing.assert_allclose(getattr(a, key), getattr(b, key), rtol=1e-8, err_msg=key)
+    np.testing.assert_allclose(a.q_actuated, b.q_actuated, atol=1e-9)
+
+
 # ------------------------------------------------------------------ log3
 def _random_axis(rng) -> np.ndarray:
     u = rng.normal(size=3)
