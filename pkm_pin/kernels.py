@@ -695,8 +695,11 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
                     w = 1.0 / (scales[a] * scales[a])
                     N[g, g] += w
                     B[i, g, 6] += w * (target[a] - Q[actuated[a]])
+            # Levenberg damping as in Leg.solve: keeps a leg with self-motion (joint
+            # twists dependent) from taking arbitrary steps; vanishes at the solution
+            lam = 1e-10 + 1e-2 * closure * closure
             for a in range(nv):
-                N[a, a] += 1e-14 * (1.0 + N[a, a])
+                N[a, a] += lam
             # S += XᵀX − (HᵀX)ᵀ N⁻¹ (HᵀX);  r += −Xᵀe + (HᵀX)ᵀ N⁻¹ Hᵀe ... via G = N⁻¹ B
             G = B[i, :nv, :].copy()
             if not _cholesky_solve(N[:nv, :nv], G):
