@@ -754,3 +754,24 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
         jacobi_sv(S_last, 6, 6, sv, np.eye(6), np.empty((6, 6)))
         ratio = sv[5] / sv[0] if sv[0] > 0 else 0.0
     out[0], out[1], out[2], out[3], out[4] = closure, act, it, ratio, contracted
+
+
+@njit(cache=True, nogil=True)
+def solve_from(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
+               targets, starts, tol, max_iter, Q, residual):
+    """Solve the leg at each target (M, 4, 4) from each of ``starts`` (S, nq) in turn
+    until one converges (``Leg.solve``'s restarts); fills ``Q`` (M, nq) and ``residual``
+    (M,) with the best attempt."""
+    ws = _workspace(nv)
+    q = np.empty(starts.shape[1])
+    for i in range(targets.shape[0]):
+        residual[i] = np.inf
+        for s in range(starts.shape[0]):
+            q[:] = starts[s]
+            r, _ = _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
+                           length, targets[i], q, tol, max_iter, 0.0, ws)
+            if r < residual[i]:
+                residual[i] = r
+                Q[i] = q
+            if r <= tol:
+                break

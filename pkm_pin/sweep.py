@@ -9,8 +9,9 @@ pose order.
 Per chunk (when every leg has a compiled kernel, :mod:`pkm_pin.kernels`):
 
 1. each leg follows the ordered poses in compiled code (damped Newton warm-started from
-   the previous pose, extrapolated along grid lines); a pose a leg misses is assembled
-   again by :meth:`Mechanism.assemble` from home, with restarts;
+   the previous poses, extrapolated along smooth paths); a pose a leg misses is solved
+   again in compiled code from home, neutral, mid-limits and random starts (the
+   restarts of :meth:`Leg.solve`), and is recorded as a failure if none converges;
 2. one Pinocchio pass per leg and pose at the solution (joint Jacobians and tip frame):
    Pinocchio's tip placement verifies the closure, its Jacobian gives the joint twists;
 3. the screw algebra of every pose in compiled code (:mod:`pkm_pin.fast_analysis`),
@@ -178,14 +179,16 @@ TRUST = 1e-7
 def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restarts) -> dict:
     from .batch import ROTATION_TOL
     from .fast_analysis import analyse_poses
-    from .kernels import track
+    from .kernels import solve_from, track
 
     N, n, legs = len(X), mech.n_actuated, mech.legs
     poses = pose_matrices(X)
     along = smooth_steps(X, mech.characteristic_length)
     home = mech.home_assembly
-    # 1. legs along the path, compiled
-    Qs, miss = [], np.zeros(N, bool)
+    # 1. legs along the path, compiled; a target a leg misses is solved again from
+    #    home, neutral, mid-limits and random starts (Leg.solve's restarts)
+    Qs, failures = [], []
+    ok = np.ones(N, bool)
     for leg, lk, anchor, q_home in zip(legs, kernel.legs, mech.anchors, home.leg_q):
         targets = poses @ anchor.homogeneous
         Q = np.empty((N, leg.nq))
@@ -193,12 +196,19 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
         track(*lk.args(), lk.lower, lk.upper, lk.length, targets, q_home.astype(float), along,
               SWEEP_TOL, 50, TRUST, Q, res)
-        miss |= ~(np.abs(res) <= SWEEP_TOL) & ~((res < 0) & (-res <= TRUST))
+        miss = np.flatnonzero(~(np.abs(res) <= SWEEP_TOL) & ~((res < 0) & (-res <= TRUST))
+                              & ok)
+        if len(miss):
+            Qm, rm = np.empty((len(miss), leg.nq)), np.empty(len(miss))
+            solve_from(*lk.args(), lk.lower, lk.upper, lk.length,
+                       np.ascontiguousarray(targets[miss]), _restart_configurations(leg, q_home,
+                                                                                    restarts),
+                       SWEEP_TOL, 100, Qm, rm)
+            Q[miss] = Qm
+            for i, r in zip(miss[rm > SWEEP_TOL], rm[rm > SWEEP_TOL]):
+                failures.append((int(i), str(AssemblyError(leg.name, r))))
+                ok[i] = False
         Qs.append(Q)
-    failures = []
-    ok = np.ones(N, bool)
-    for i in np.flatnonzero(miss):  # again, from home with restarts (Leg.solve)
-        _assemble_again(mech, poses[i], home, restarts, Qs, i, ok, failures)
     # 2. one Pinocchio pass per leg and pose: closure check and joint twists
     idx = np.flatnonzero(ok)
     Js, bad = _pinocchio_pass(mech, Qs, poses, idx)
@@ -292,6 +302,17 @@ def _pinocchio_pass(mech, Qs, poses, idx):
                           anchor.homogeneous, float(leg.characteristic_length), J, int(offs[k]))
         bad |= ~(err <= SWEEP_TOL)
     return J, bad
+
+
+def _restart_configurations(leg, q_home, restarts: int) -> np.ndarray:
+    """Starts of :meth:`Leg.solve`'s restarts: home, neutral, mid-limits, ``restarts``
+    random configurations (seed 0)."""
+    lo, up = leg._bounds
+    middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
+    rng = np.random.default_rng(0)
+    starts = [q_home, leg.neutral(), middle] + [leg.random_configuration(rng)
+                                                for _ in range(restarts)]
+    return np.ascontiguousarray(starts, dtype=float)
 
 
 def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:
