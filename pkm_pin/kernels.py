@@ -390,17 +390,22 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
     residual ``r ≤ trust`` and not evaluated (see :func:`_newton`; the caller verifies).
     A target that does not converge leaves the warm start unchanged for the next one."""
     ws = _workspace(nv)
-    q1 = q_start.copy()  # the last three solutions, newest first
-    q2 = q_start.copy()
-    q3 = q_start.copy()
+    nq = q_start.shape[0]
+    hist = np.empty((3, nq))  # the last three solutions, newest at row `head`
+    for k in range(3):
+        hist[k] = q_start
+    head = 0
     known = 1  # how many of them are consecutive solutions of this path
-    q = np.empty_like(q_start)
+    q = np.empty(nq)
     for i in range(targets.shape[0]):
+        q1 = hist[head]
         if extrapolate[i] and i >= 1 and extrapolate[i - 1] and known >= 3:
-            for a in range(q.shape[0]):  # quadratic through the last three
+            q2, q3 = hist[(head + 2) % 3], hist[(head + 1) % 3]
+            for a in range(nq):  # quadratic through the last three
                 q[a] = min(upper[a], max(lower[a], 3.0 * (q1[a] - q2[a]) + q3[a]))
         elif extrapolate[i] and known >= 2:
-            for a in range(q.shape[0]):
+            q2 = hist[(head + 2) % 3]
+            for a in range(nq):
                 q[a] = min(upper[a], max(lower[a], 2.0 * q1[a] - q2[a]))
         else:
             q[:] = q1
@@ -409,9 +414,8 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
         residual[i] = r
         Q[i] = q
         if r <= tol:
-            q3[:] = q2
-            q2[:] = q1
-            q1[:] = q
+            head = (head + 1) % 3
+            hist[head] = q
             known = known + 1 if i > 0 else 1
         else:
             known = 0

@@ -190,7 +190,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     Qs, failures = [], []
     ok = np.ones(N, bool)
     for leg, lk, anchor, q_home in zip(legs, kernel.legs, mech.anchors, home.leg_q):
-        targets = poses @ anchor.homogeneous
+        targets = (poses.reshape(-1, 4) @ anchor.homogeneous).reshape(N, 4, 4)  # one GEMM
         Q = np.empty((N, leg.nq))
         res = np.empty(N)
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
