@@ -15,22 +15,14 @@ import pytest
 from pkm_pin import screws
 from pkm_pin.analysis import SINGULAR_TOL
 from pkm_pin.batch import homogenise
-from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
 from pkm_pin.fast_analysis import WINDOW, _det, _qrcp, _rank
 from pkm_pin.kernels import jacobi_sv
 from pkm_pin.screws import RTOL
 from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
+from test_analysis import mechanism  # built mechanisms, cached per (name, scale)
 
-_CACHE: dict = {}
-
-
-def mechanism(name: str, scale: float = 1.0):
-    key = (name, scale)
-    if key not in _CACHE:
-        _CACHE[key] = MECHANISMS[name](scale=scale).build()
-    return _CACHE[key]
 
 
 def path(mech, n=40, size=0.25):
