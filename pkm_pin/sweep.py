@@ -214,13 +214,13 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     Js, bad = _pinocchio_pass(mech, Qs, poses, idx)
     if bad.any():  # a closure Pinocchio does not confirm: Leg.solve from there
         for i in idx[bad]:
-            _assemble_again(mech, poses[i], [Q[i] for Q in Qs], 0, Qs, i, ok, failures)
-        again = idx[bad & ok[idx]]
-        J2, bad2 = _pinocchio_pass(mech, Qs, poses, again)
-        for i in again[bad2]:
+            _assemble_again(mech, poses[i], [Q[i] for Q in Qs], restarts, Qs, i, ok,
+                            failures)
+        rows = np.flatnonzero(bad & ok[idx])  # positions in idx of the poses redone
+        Js[rows], bad2 = _pinocchio_pass(mech, Qs, poses, idx[rows])
+        for i in idx[rows][bad2]:
             failures.append((int(i), "the closure found is not confirmed by Pinocchio"))
             ok[i] = False
-        Js[np.flatnonzero(bad)[ok[idx[bad]]]] = J2
     if progress is not None:
         progress(N)
     out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,

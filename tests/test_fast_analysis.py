@@ -173,3 +173,26 @@ def test_jacobi_singular_values_and_det():
         A = rng.normal(size=(n, n))
         assert _det(A, n) == pytest.approx(np.linalg.det(A), rel=1e-12)
     assert _det(np.zeros((3, 3)), 3) == 0.0
+
+
+def test_closures_pinocchio_does_not_confirm_are_solved_again(monkeypatch):
+    """With the kernel allowed to stop after a step from a large residual (TRUST = 1e-2),
+    Pinocchio's closure check rejects those poses and Mechanism.assemble solves them
+    again: the sweep still equals the reference path."""
+    import pkm_pin.sweep as sweep_module
+
+    mech = mechanism("stewart")
+    X = path(mech, n=8, size=0.6)  # big steps: large predictor residuals
+    monkeypatch.setattr(sweep_module, "TRUST", 1e-2)
+    redone = []
+    original = sweep_module._assemble_again
+
+    def spy(*args, **kwargs):
+        redone.append(args[5])
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(sweep_module, "_assemble_again", spy)
+    fast, slow = both_paths(mech, X)
+    assert len(redone) >= 1  # the safety net was used
+    assert fast["ok"].all()
+    assert_same(fast, slow)
