@@ -25,7 +25,6 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
-
 from numba import njit
 
 REVOLUTE, PRISMATIC = 0, 1
@@ -385,9 +384,10 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
           targets, q_start, extrapolate, tol, max_iter, trust, Q, residual):
     """Solve the leg at each target of an ordered path (N, 4, 4), warm-started from the
     previous solution (extrapolated from the previous ones where ``extrapolate[i]``:
-    linearly from two, quadratically from three where the path was smooth before too). Fills ``Q`` (N, nq) and ``residual``
-    (N,): the residual reached, or −r when the last Newton step was taken from a
-    residual ``r ≤ trust`` and not evaluated (see :func:`_newton`; the caller verifies).
+    linearly from two, quadratically from three where the path was smooth before too).
+    Fills ``Q`` (N, nq) and ``residual`` (N,): the residual reached, or −r when the
+    last Newton step was taken from a residual ``r ≤ trust`` and not evaluated (see
+    :func:`_newton`; the caller verifies).
     A target that does not converge leaves the warm start unchanged for the next one."""
     ws = _workspace(nv)
     nq = q_start.shape[0]
@@ -704,7 +704,7 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
             lam = 1e-10 + 1e-2 * closure * closure
             for a in range(nv):
                 N[a, a] += lam
-            # S += XᵀX − (HᵀX)ᵀ N⁻¹ (HᵀX);  r += −Xᵀe + (HᵀX)ᵀ N⁻¹ Hᵀe ... via G = N⁻¹ B
+            # S += XᵀX − (HᵀX)ᵀ N⁻¹ (HᵀX);  r += −Xᵀe + (HᵀX)ᵀ N⁻¹ Hᵀe, via G = N⁻¹ B
             G = B[i, :nv, :].copy()
             if not _cholesky_solve(N[:nv, :nv], G):
                 out[0], out[1], out[2], out[3], out[4] = closure, act, it, 0.0, 0.0

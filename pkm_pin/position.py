@@ -245,7 +245,8 @@ class PositionMixin:
             ``halvings``, ``newton_iterations``, ``residual`` (final scaled actuated
             error), ``continuation_error`` (largest scaled actuated error after the
             continuation, before Newton: the Euler polyline's error), ``inertia``
-            (whether motion by inertia was used) and ``inertia_steps``, and ``method`` ("compiled" or "euler").
+            (whether motion by inertia was used), ``inertia_steps``, and ``method``
+            ("compiled" or "euler").
 
         Raises:
             InputError: wrong length or non-finite values, a bad guess.

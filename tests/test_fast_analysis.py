@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from test_analysis import mechanism  # built mechanisms, cached per (name, scale)
 
 from pkm_pin import screws
 from pkm_pin.analysis import SINGULAR_TOL
@@ -21,8 +22,6 @@ from pkm_pin.fast_analysis import WINDOW, _det, _qrcp, _rank
 from pkm_pin.kernels import jacobi_sv
 from pkm_pin.screws import RTOL
 from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
-from test_analysis import mechanism  # built mechanisms, cached per (name, scale)
-
 
 
 def path(mech, n=40, size=0.25):
