@@ -125,14 +125,16 @@ def main(n: int = 1000, n_loop: int = 200) -> dict:
         mech.sweep(X[:10])  # compile / load the kernels
         m = min(n, n_loop)
         t_loop = best_of(lambda: framework_loop(mech, poses[:m])) / m
-        t_sweep = best_of(lambda: mech.sweep(X), repeat=5) / n
-        t_hand = best_of(lambda: HANDWRITTEN[name](mech, poses)) / n
-        t_floor = min(best_of(lambda: pinocchio_floor_frames(mech, solutions), repeat=5),
-                      best_of(lambda: pinocchio_floor_joints(mech, solutions), repeat=5)) / n
+        # best of many short runs: the minimum is what a quiet machine gives
+        t_sweep = best_of(lambda: mech.sweep(X), repeat=15) / n
+        t_hand = best_of(lambda: HANDWRITTEN[name](mech, poses), repeat=5) / n
+        t_floor = min(best_of(lambda: pinocchio_floor_frames(mech, solutions), repeat=15),
+                      best_of(lambda: pinocchio_floor_joints(mech, solutions), repeat=15)) / n
         # a Pinocchio-only warm-started assembly also evaluates every leg at its warm
         # start (the previous pose's solution) before the Newton step
         warm = [mech.home_assembly.leg_q] + solutions[:-1]
-        t_floor2 = best_of(lambda: pinocchio_floor_joints(mech, warm + solutions), repeat=5) / n
+        t_floor2 = best_of(lambda: pinocchio_floor_joints(mech, warm + solutions),
+                           repeat=15) / n
         rows[name] = (t_loop, t_sweep, t_hand, t_floor)
         print(f"\n{mech.name}: {n} poses, time per pose [µs]")
         print(f"  framework, per-pose loop   {1e6 * t_loop:9.1f}   "

@@ -134,9 +134,14 @@ def _rank(R, n, rtol, absolute):
 
 
 @njit(cache=True, nogil=True)
-def _det(M, n):
-    """Determinant of the leading n × n block (Gaussian elimination, partial pivoting)."""
-    A = M[:n, :n].copy()
+def _det(M, n, A=None):
+    """Determinant of the leading n × n block (Gaussian elimination, partial pivoting;
+    ``A``: optional n × n work space)."""
+    if A is None:
+        A = np.empty((n, n))
+    for r in range(n):
+        for c in range(n):
+            A[r, c] = M[r, c]
     d = 1.0
     for j in range(n):
         p = j
@@ -234,6 +239,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
     gb = np.empty(3)
     ctr = np.empty(3)
     Ploc = np.empty((max(reference.shape[0], 1), 6))
+    Wd = np.empty((max(n, 1), max(n, 1)))  # work space of the determinant
     Vh = np.empty((6, 6))  # Householder vectors
     betas = np.empty(6)
     x6 = np.empty(6)
@@ -336,22 +342,22 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
             flag[i] = 1
             continue
         # ---- union of the constraints, platform twists
+        nref = 0
+        rank_c = 0
         if m_c > 0:
-            _qrcp(C, Q, perm, m_c)
+            nref = _qr_core(C, 6, m_c, perm, Vh, betas)
             rank_c = _rank(C, min(6, m_c), rtol, False)
             if rank_c < 0:
                 flag[i] = 1
                 continue
-        else:
-            rank_c = 0
-            for a in range(6):
-                for b in range(6):
-                    Q[a, b] = 1.0 if a == b else 0.0
         d = 6 - rank_c
-        for j in range(d):  # t_h = Δ n for n ⟂ the constraints
+        for j in range(d):  # t_h = Δ n for n = Q e_(rank+j) ⟂ the constraints
+            for a in range(6):
+                x6[a] = 1.0 if a == rank_c + j else 0.0
+            _apply_q(Vh, betas, nref, 6, x6)
             for a in range(3):
-                P[j, a] = Q[3 + a, rank_c + j]
-                P[j, 3 + a] = Q[a, rank_c + j]
+                P[j, a] = x6[3 + a]
+                P[j, 3 + a] = x6[a]
         dof[i] = d
         redundant[i] = leg_dims - rank_c
         # rotations among the platform twists: rank of their ω parts
@@ -418,7 +424,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
         # ---- det(A_h Δ P_locᵀ), P_loc: the home basis projected on the platform twists
         if n == n_ref and n > 0 and d == 6:  # P spans every twist: P_loc = reference
             _reciprocal_products(Ah, n, reference, n_ref, M)
-            det[i] = _det(M, n)
+            det[i] = _det(M, n, Wd)
         elif n == n_ref and n > 0:
             for j in range(n_ref):  # P_loc = reference Pᵀ P
                 for a in range(6):
@@ -430,7 +436,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                     for a in range(6):
                         Ploc[j, a] += proj * P[jj, a]
             _reciprocal_products(Ah, n, Ploc, n_ref, M)
-            det[i] = _det(M, n)
+            det[i] = _det(M, n, Wd)
         else:
             det[i] = np.nan
 

@@ -168,6 +168,13 @@ def test_jacobi_singular_values_and_det():
     jacobi_sv(B, 6, 6, sv, V, W)
     np.testing.assert_allclose(sv, np.linalg.svd(B, compute_uv=False), rtol=1e-13)
     np.testing.assert_allclose(V.T @ V, np.eye(6), atol=1e-13)
+    # clustered and tiny singular values: round-off accuracy relative to the largest
+    U, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    Vr, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    chosen = np.array([1.0, 1.0 + 2e-9, 1.0 + 1e-9, 0.5 + 1e-12, 0.5, 1e-6])
+    sv = np.empty(6)
+    jacobi_sv(U @ np.diag(chosen) @ Vr.T, 6, 6, sv, np.eye(6), W)
+    np.testing.assert_allclose(sv, np.sort(chosen)[::-1], rtol=0, atol=1e-14)
     for n in (1, 3, 6):
         A = rng.normal(size=(n, n))
         assert _det(A, n) == pytest.approx(np.linalg.det(A), rel=1e-12)
