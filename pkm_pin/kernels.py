@@ -602,11 +602,13 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
     """Newton's method on the closures of every leg plus ``Q[actuated] = target``.
 
     Unknowns: every leg's joint increments and the platform twist ξ (world,
-    axis-first; the platform moves by ``exp(ξ) · pose``). Leg ``i``'s rows are
+    axis-first; the platform moves by ``exp(ξ) · pose``), all made dimensionless (the
+    prismatic increments and the linear part of ξ divided by L). Leg ``i``'s rows are
     ``H_i Δq_i − X_i ξ = e_i`` (rotation error and displacement of its tip point / L),
     the actuated rows ``Δq_a / s = (target − q_a) / s``. The least-squares step is
     solved by eliminating each leg's increments (its normal-equation block) and then
-    the 6×6 Schur complement in ξ. ``pose`` and ``Q`` are updated in place.
+    the 6×6 Schur complement in ξ. ``pose`` and ``Q`` are updated in place; the same
+    mechanism in millimetres takes the same steps.
 
     ``out`` receives (closure, actuated error, iterations, λ_min/λ_max of the Schur
     complement at the last step, contracted) where "contracted" is 1 when every step
@@ -632,6 +634,11 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
     r = np.empty((6, 1))
     xi = np.empty(6)
     work = np.empty((2, 4, 4))
+    cs = np.ones(coords[-1])  # unit of each coordinate: L (prismatic) or 1 rad
+    for i in range(n_legs):
+        for j in range(joints[i], joints[i + 1]):
+            if kind[j] & 1 == PRISMATIC:
+                cs[coords[i] + iv[j]] = length
     prev_step = np.inf
     contracted = 1.0
     ratio = 0.0
@@ -647,19 +654,19 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
             closure = max(closure, pose_error(T, Wt, length, e[i]))
             px, py, pz = T[0, 3], T[1, 3], T[2, 3]
             for c in range(nv):
-                wx, wy, wz = J[0, c], J[1, c], J[2, c]
+                g = cs[c0 + c]
+                wx, wy, wz = g * J[0, c], g * J[1, c], g * J[2, c]
                 H[i, 0, c], H[i, 1, c], H[i, 2, c] = wx, wy, wz
-                H[i, 3, c] = (J[3, c] + wy * pz - wz * py) / length
-                H[i, 4, c] = (J[4, c] + wz * px - wx * pz) / length
-                H[i, 5, c] = (J[5, c] + wx * py - wy * px) / length
-            # ξ = (ω; v_O) ↦ (ω; (v_O + ω × p_W) / L)
+                H[i, 3, c] = (g * J[3, c] + wy * pz - wz * py) / length
+                H[i, 4, c] = (g * J[4, c] + wz * px - wx * pz) / length
+                H[i, 5, c] = (g * J[5, c] + wx * py - wy * px) / length
+            # ξ = (ω; L u) ↦ (ω; u + ω × p_W / L)
             qx, qy, qz = Wt[0, 3] / length, Wt[1, 3] / length, Wt[2, 3] / length
             for a in range(6):
                 for b in range(6):
                     X[i, a, b] = 0.0
-            for k in range(3):
+            for k in range(6):
                 X[i, k, k] = 1.0
-                X[i, 3 + k, 3 + k] = 1.0 / length
             X[i, 3, 1], X[i, 3, 2] = qz, -qy
             X[i, 4, 0], X[i, 4, 2] = -qz, qx
             X[i, 5, 0], X[i, 5, 1] = qy, -qx
@@ -693,12 +700,12 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
                 for k in range(6):
                     s += H[i, k, a] * e[i, k]
                 B[i, a, 6] = s
-            for a in range(n_a):
+            for a in range(n_a):  # rows (cs / s) Δq'_a = (target − q_a) / s
                 g = actuated[a] - c0
                 if 0 <= g < nv:
-                    w = 1.0 / (scales[a] * scales[a])
-                    N[g, g] += w
-                    B[i, g, 6] += w * (target[a] - Q[actuated[a]])
+                    w = cs[actuated[a]] / scales[a]
+                    N[g, g] += w * w
+                    B[i, g, 6] += w * (target[a] - Q[actuated[a]]) / scales[a]
             # Levenberg damping as in Leg.solve: keeps a leg with self-motion (joint
             # twists dependent) from taking arbitrary steps; vanishes at the solution
             lam = 1e-10 + 1e-2 * closure * closure
@@ -730,20 +737,21 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
         if not _cholesky_solve(S, r):
             out[0], out[1], out[2], out[3], out[4] = closure, act, it, 0.0, 0.0
             return
+        size = 0.0
         for k in range(6):
             xi[k] = r[k, 0]
-        size = 0.0
-        for k in range(3):
-            size += xi[k] * xi[k] + (xi[3 + k] / length) ** 2
+            size += xi[k] * xi[k]
         for i in range(n_legs):
             c0, c1 = coords[i], coords[i + 1]
             for k in range(c1 - c0):
                 d = B[i, k, 6]
                 for b in range(6):
                     d -= B[i, k, b] * xi[b]
-                new = min(upper[c0 + k], max(lower[c0 + k], Q[c0 + k] + d))
-                size += ((new - Q[c0 + k]) / length) ** 2
+                new = min(upper[c0 + k], max(lower[c0 + k], Q[c0 + k] + cs[c0 + k] * d))
+                size += ((new - Q[c0 + k]) / cs[c0 + k]) ** 2
                 Q[c0 + k] = new
+        for k in range(3, 6):
+            xi[k] *= length
         size = math.sqrt(size)
         if not math.isfinite(size):
             break

@@ -65,6 +65,43 @@ def test_fk_of_ik_is_identity(name):
         assert a.info["inertia"] is False
 
 
+@pytest.mark.parametrize("name", ["stewart", "rpr3", "delta", "rps3", "orthoglide_quasi"])
+def test_compiled_and_euler_continuations_agree(name):
+    """Both continuations reach the same assembly (pose and legs) from home; the
+    compiled one reports its method, and in millimetres it gives the same pose × 1000."""
+    m = mech(name)
+    L = m.characteristic_length
+    rng = np.random.default_rng(7)
+    qa = m.home_assembly.q_actuated + rng.uniform(-0.03, 0.03, m.n_actuated) * L
+    a = m.forward_kinematics(qa, method="compiled")
+    b = m.forward_kinematics(qa, method="euler")
+    assert a.info["method"] == "compiled" and b.info["method"] == "euler"
+    assert pose_error(a.pose, b.pose, L) < 1e-10
+    for qa_leg, qb_leg in zip(a.leg_q, b.leg_q):
+        np.testing.assert_allclose(qa_leg, qb_leg, atol=1e-9)
+    np.testing.assert_allclose(a.q_actuated, qa, atol=1e-12 * max(1.0, L))
+    mm = MECHANISMS[name](scale=1000.0).build()
+    scales = np.where([s > 1.0 for s in mm._kernel.scales], 1000.0, 1.0)  # prismatic: mm
+    c = mm.forward_kinematics(qa * scales, method="compiled")
+    np.testing.assert_allclose(c.pose.translation, 1000.0 * a.pose.translation, atol=1e-7)
+    np.testing.assert_allclose(c.pose.rotation, a.pose.rotation, atol=1e-10)
+
+
+def test_compiled_continuation_steps_guess_and_bad_method():
+    """Explicit steps are taken as asked (no halving needed for a small move), a pose
+    guess is accepted, and an unknown method is refused."""
+    m = mech("stewart")
+    home = m.home_assembly
+    target = m.assemble(screws.exp(np.array([0.01, 0.0, 0.02, 0.01, -0.02, 0.0])) * home.pose)
+    a = m.forward_kinematics(target.q_actuated, steps=3, method="compiled")
+    assert a.info["steps"] == 3 and a.info["halvings"] == 0
+    assert pose_error(a.pose, target.pose, m.characteristic_length) < 1e-10
+    b = m.forward_kinematics(target.q_actuated, home.pose, method="compiled")
+    assert pose_error(b.pose, target.pose, m.characteristic_length) < 1e-10
+    with pytest.raises(InputError, match="method"):
+        m.forward_kinematics(target.q_actuated, method="newton")
+
+
 def test_continuation_near_rpr3_type2_pose():
     """The continuation follows the home mode up to 5 cm short of the type II pose."""
     m = mech("rpr3")
