@@ -305,9 +305,15 @@ def _solve_spd(A, b, x):
 
 
 @njit(cache=True, nogil=True)
-def _workspace(nv):
+def _workspace(nv, kind, iv, length):
+    """Work arrays of :func:`_newton`, and the unit of each coordinate (``length`` for a
+    prismatic one, 1 rad otherwise: the Newton unknowns are dimensionless)."""
+    cs = np.ones(nv)
+    for j in range(kind.shape[0]):
+        if kind[j] & 1 == PRISMATIC:
+            cs[iv[j]] = length
     return (np.empty((4, 4)), np.empty((6, nv)), np.empty((6, nv)), np.empty((2, 4, 4)),
-            np.empty(6), np.empty((nv, nv)), np.empty(nv), np.empty(nv))
+            np.empty(6), np.empty((nv, nv)), np.empty(nv), np.empty(nv), cs)
 
 
 @njit(cache=True, nogil=True)
@@ -318,7 +324,7 @@ def newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, 
     damping ``1e-10 + 1e-2 r²`` as :meth:`pkm_pin.Leg.solve`. Returns
     ``(residual, iterations)``; the residual is evaluated at the returned ``q``."""
     return _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
-                   length, target, q, tol, max_iter, 0.0, _workspace(nv))
+                   length, target, q, tol, max_iter, 0.0, _workspace(nv, kind, iv, length))
 
 
 @njit(cache=True, nogil=True)
@@ -327,7 +333,7 @@ def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
     """:func:`newton`; with ``trust > 0`` a step taken from a residual ``r ≤ trust``
     (Newton's quadratic regime: the next residual is ~r²) ends the iteration without
     evaluating the result, and the residual returned is −r (the caller verifies)."""
-    T, J, H, work, e, N, g, dq = ws
+    T, J, H, work, e, N, g, dq, cs = ws
     it = 0
     best = np.inf
     slow = 0
@@ -343,11 +349,12 @@ def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
         it += 1
         px, py, pz = T[0, 3], T[1, 3], T[2, 3]
         for c in range(nv):  # rows: ω, and the velocity of the tip point / length
-            wx, wy, wz = J[0, c], J[1, c], J[2, c]
+            u = cs[c]  # per unit of the dimensionless unknown
+            wx, wy, wz = u * J[0, c], u * J[1, c], u * J[2, c]
             H[0, c], H[1, c], H[2, c] = wx, wy, wz
-            H[3, c] = (J[3, c] + wy * pz - wz * py) / length
-            H[4, c] = (J[4, c] + wz * px - wx * pz) / length
-            H[5, c] = (J[5, c] + wx * py - wy * px) / length
+            H[3, c] = (u * J[3, c] + wy * pz - wz * py) / length
+            H[4, c] = (u * J[4, c] + wz * px - wx * pz) / length
+            H[5, c] = (u * J[5, c] + wx * py - wy * px) / length
         lam = 1e-10 + 1e-2 * r * r
         for a in range(nv):
             s = 0.0
@@ -367,10 +374,11 @@ def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
         size = 0.0
         clipped = False
         for a in range(nv):
-            new = min(upper[a], max(lower[a], q[a] + dq[a]))
-            clipped = clipped or new != q[a] + dq[a]
-            step += (new - q[a]) ** 2
-            size += q[a] * q[a]
+            want = q[a] + cs[a] * dq[a]
+            new = min(upper[a], max(lower[a], want))
+            clipped = clipped or new != want
+            step += ((new - q[a]) / cs[a]) ** 2
+            size += (q[a] / cs[a]) ** 2
             q[a] = new
         if not math.isfinite(step) or step < 1e-30 * (1.0 + size):
             _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J, work)
@@ -389,7 +397,7 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
     last Newton step was taken from a residual ``r ≤ trust`` and not evaluated (see
     :func:`_newton`; the caller verifies).
     A target that does not converge leaves the warm start unchanged for the next one."""
-    ws = _workspace(nv)
+    ws = _workspace(nv, kind, iv, length)
     nq = q_start.shape[0]
     hist = np.empty((3, nq))  # the last three solutions, newest at row `head`
     for k in range(3):
@@ -774,7 +782,7 @@ def solve_from(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upp
     """Solve the leg at each target (M, 4, 4) from each of ``starts`` (S, nq) in turn
     until one converges (``Leg.solve``'s restarts); fills ``Q`` (M, nq) and ``residual``
     (M,) with the best attempt."""
-    ws = _workspace(nv)
+    ws = _workspace(nv, kind, iv, length)
     q = np.empty(starts.shape[1])
     for i in range(targets.shape[0]):
         residual[i] = np.inf
