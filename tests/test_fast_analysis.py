@@ -64,13 +64,19 @@ def test_compiled_sweep_equals_reference_path(name):
     assert_same(fast, slow)
 
 
-def test_millimetres_give_the_same_sweep():
-    """The Stewart platform in millimetres: same DOF, indices, det (unit-invariant)."""
+def test_millimetres_give_the_same_sweep(monkeypatch):
+    """The Stewart platform in millimetres: same DOF, indices, det (unit-invariant), and
+    the compiled legs converge as in metres (no pose falls back to Mechanism.assemble)."""
+    import pkm_pin.sweep as sweep_module
+
     m, mm = mechanism("stewart"), mechanism("stewart", 1000.0)
     X = path(m, n=12)
     Xmm = X.copy()
     Xmm[:, :3] *= 1000.0
+    redone = []
+    monkeypatch.setattr(sweep_module, "_assemble_again", lambda *a, **k: redone.append(a))
     a, b = m.sweep(X), mm.sweep(Xmm)
+    assert not redone
     np.testing.assert_array_equal(a.dof, b.dof)
     np.testing.assert_array_equal(a.singularity, b.singularity)
     for key in ("type_I", "type_II", "condition", "det"):
