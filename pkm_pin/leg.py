@@ -417,6 +417,7 @@ class Leg(SerialChainMixin):
     def _newton(self, target_local: pin.SE3, q: np.ndarray, tol: float, max_iter: int):
         model, data, tip = self.model, self.data, self.tip_id
         w = self._error_weights
+        units = self._velocity_units
         eye = self._identity
 
         def state(q):
@@ -437,7 +438,8 @@ class Leg(SerialChainMixin):
             if slow >= 10:
                 break
             J = pin.getFrameJacobian(model, data, tip, pin.LOCAL).reshape(6, -1)
-            J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J)
+            # dimensionless unknowns (prismatic increments / L): the same steps in mm
+            J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J) * units
             try:
                 # Levenberg–Marquardt: damping 1e-2 r² grows with the error and
                 # vanishes at the solution (quadratic convergence kept); it tames
@@ -445,6 +447,7 @@ class Leg(SerialChainMixin):
                 dq = np.linalg.solve(J.T @ J + (1e-10 + 1e-2 * r * r) * eye, J.T @ err)
             except np.linalg.LinAlgError:
                 break  # numerically singular normal equations (e.g. a target at 1e12 m)
+            dq *= units
             if not np.all(np.isfinite(dq)):
                 break
             q_new = np.clip(pin.integrate(model, q, dq), *self._bounds)
@@ -460,6 +463,17 @@ class Leg(SerialChainMixin):
     def _error_weights(self) -> np.ndarray:
         """Weights of the (v; ω) pose error: linear part divided by the length."""
         return np.r_[np.full(3, 1.0 / self.characteristic_length), np.ones(3)]
+
+    @cached_property
+    def _velocity_units(self) -> np.ndarray:
+        """Unit of each velocity coordinate: the characteristic length for a prismatic
+        joint, 1 rad otherwise."""
+        units = np.ones(self.nv)
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            if jm.nv == 1 and "P" in jm.shortname().replace("Mimic", ""):
+                units[jm.idx_v] = self.characteristic_length
+        return units
 
     @cached_property
     def _identity(self) -> np.ndarray:

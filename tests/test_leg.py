@@ -624,3 +624,24 @@ def test_configuration_may_be_a_list(ur5):
     """A plain list is accepted as a configuration."""
     q = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6]
     assert ur5.tip_placement(q).isApprox(ur5.tip_placement(np.array(q)), 0.0)
+
+
+def test_solve_takes_the_same_steps_in_millimetres():
+    """Leg.solve's unknowns are dimensionless (prismatic increments / L): a U-P-S leg in
+    millimetres converges in the same number of iterations to the same configuration
+    (lengths × 1000) as in metres (before: ~40× more iterations in mm)."""
+    from pkm_pin.builders import MECHANISMS
+
+    m, mm = MECHANISMS["stewart"]().build(), MECHANISMS["stewart"](scale=1000.0).build()
+    leg, leg_mm = m.legs[0], mm.legs[0]
+    units = np.where(leg._velocity_units > 1.0, 1000.0, 1.0)
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        t = np.r_[rng.normal(size=3) * 0.1, rng.normal(size=3) * 0.05]
+        target = screws.exp(t) * m.home * m.anchors[0]
+        target_mm = pin.SE3(target.rotation, 1000.0 * target.translation)
+        a = leg.solve(target, m.home_assembly.leg_q[0])
+        b = leg_mm.solve(target_mm, mm.home_assembly.leg_q[0])
+        assert a.converged and b.converged
+        assert a.iterations == b.iterations
+        np.testing.assert_allclose(b.q, a.q * units, rtol=1e-9, atol=1e-9)
