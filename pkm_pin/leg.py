@@ -378,6 +378,7 @@ class Leg(SerialChainMixin):
         max_iter: int = 100,
         restarts: int = 24,
         seed: int = 0,
+        compiled: bool | None = None,
     ) -> LegSolution:
         """Joint configuration placing the tip at ``target`` (world), inside the limits.
 
@@ -389,6 +390,13 @@ class Leg(SerialChainMixin):
         the middle of the limits and ``restarts`` configurations drawn with ``seed``,
         and returns the best result found. It never raises for an unreachable target:
         check :attr:`LegSolution.converged`.
+
+        ``compiled``: run the first attempt with the compiled kernel
+        (:mod:`pkm_pin.kernels`, same damping, world-frame error), its result checked
+        (and polished if needed) by the Pinocchio iteration; the restarts always run
+        with Pinocchio. Default (None): compiled for a warm start (``q0`` given) when
+        the chain has a kernel. Searches that explore basins of attraction from
+        arbitrary starts (``inverse_kinematics_all``) ask for ``compiled=False``.
         """
         if not isinstance(target, pin.SE3):
             raise InputError(f"the target of leg {self.name!r} must be a pinocchio.SE3")
@@ -396,7 +404,12 @@ class Leg(SerialChainMixin):
             raise InputError(f"the target of leg {self.name!r} must be finite, got\n{target}")
         target_local = self.base.actInv(target)
         starts = [self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))]
-        best = self._newton(target_local, starts[0], tol, max_iter)
+        if compiled is None:
+            compiled = q0 is not None
+        if compiled and self._kernel is not None:
+            best = self._newton_compiled(target, target_local, starts[0], tol, max_iter)
+        else:
+            best = self._newton(target_local, starts[0], tol, max_iter)
         if best.converged:
             return best
         rng = np.random.default_rng(seed)
@@ -413,6 +426,27 @@ class Leg(SerialChainMixin):
                 break
         best.iterations = iterations
         return best
+
+    @cached_property
+    def _kernel(self):
+        """Compiled kinematics of the chain (:mod:`pkm_pin.kernels`), or None."""
+        from .kernels import chain_kernel
+
+        return chain_kernel(self)
+
+    def _newton_compiled(self, target: pin.SE3, target_local: pin.SE3, q: np.ndarray,
+                         tol: float, max_iter: int):
+        """The compiled damped Newton, then the Pinocchio iteration from its result: its
+        error decides convergence (and it polishes a near miss)."""
+        from .kernels import newton
+
+        k = self._kernel
+        q = np.array(q, dtype=float)
+        _, it = newton(*k.args(), k.lower, k.upper, k.length, target.homogeneous, q, tol,
+                       max_iter)
+        sol = self._newton(target_local, q, tol, max(0, max_iter - it))
+        sol.iterations += it
+        return sol
 
     def _newton(self, target_local: pin.SE3, q: np.ndarray, tol: float, max_iter: int):
         model, data, tip = self.model, self.data, self.tip_id

@@ -604,7 +604,7 @@ class PositionMixin:
             tries += [leg.random_configuration(rng) for _ in range(starts)]
             sols, worst = [], np.inf
             for q0 in tries:
-                sol = leg.solve(want, q0, restarts=0)
+                sol = leg.solve(want, q0, restarts=0, compiled=False)
                 worst = min(worst, sol.residual)
                 if not sol.converged or not leg.within_limits(sol.q):
                     continue
