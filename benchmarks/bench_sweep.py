@@ -23,7 +23,9 @@ from pkm_pin.sweep import pose_array
 
 
 def per_pose_rate(mech, X: np.ndarray) -> float:
-    """Poses per second of the plain per-pose loop on X."""
+    """Poses per second of the plain per-pose loop on X (after one warm-up call that
+    compiles or loads the numba kernels)."""
+    mech.assemble(mech.home, mech.home_assembly)
     t = time.perf_counter()
     prev = mech.home_assembly
     for x in X:
