@@ -98,22 +98,6 @@ def _apply_q(V, betas, m, nrow, x):
 
 
 @njit(cache=True, nogil=True)
-def _qrcp(A, Q, perm, ncol):
-    """Householder QR with column pivoting of the 6 × ncol matrix ``A`` (in place: R in
-    its upper triangle), ``Q`` (6×6 orthogonal) and the column order ``perm``."""
-    V = np.empty((6, 6))
-    betas = np.empty(6)
-    m = _qr_core(A, 6, ncol, perm, V, betas)
-    x = np.empty(6)
-    for c in range(6):
-        for r in range(6):
-            x[r] = 1.0 if r == c else 0.0
-        _apply_q(V, betas, m, 6, x)
-        for r in range(6):
-            Q[r, c] = x[r]
-
-
-@njit(cache=True, nogil=True)
 def _rank(R, n, rtol, absolute):
     """Rank from the diagonal of R (first n pivots): ``|R_jj| > rtol · |R_00|`` (or
     ``> rtol`` when ``absolute``); -1 when a ratio lies inside the ambiguity window."""
@@ -224,7 +208,6 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
     nv = J.shape[2]
     T = np.empty((nv, 6))  # motion twists (rows), homogenised and unit
     X = np.empty((6, nv))
-    Q = np.empty((6, 6))
     perm = np.empty(max(6 * n_legs, nv, 6), np.int64)
     C = np.empty((6, 6 * n_legs))  # constraint wrenches (columns)
     Ah = np.empty((max(n, 1), 6))  # homogenised unit actuation wrenches
@@ -297,7 +280,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
         for l in range(n_legs):
             c0, c1 = coords[l], coords[l + 1]
             k = c1 - c0
-            for c in range(k):  # columns of (T_h Δ)ᵀ: (v; ω) of each twist
+            for c in range(k):  # columns of (T_h Δ)ᵀ: each twist times Δ (halves swapped)
                 for r in range(3):
                     X[r, c] = T[c0 + c, 3 + r]
                     X[3 + r, c] = T[c0 + c, r]

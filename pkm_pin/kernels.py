@@ -27,6 +27,8 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
+from . import screws
+
 REVOLUTE, PRISMATIC = 0, 1
 #: Added to ``kind`` when the joint has a constant factor after its motion (mimic offset).
 HAS_POST = 2
@@ -64,6 +66,10 @@ class ChainKernel:
         return (self.parent, self.post, self.kind, self.axis, self.rate, self.iq, self.iv,
                 self.tip, self.base, self.nv)
 
+    def solver_args(self) -> tuple:
+        """:meth:`args` plus the limits and the length, as the solvers take them."""
+        return (*self.args(), self.lower, self.upper, self.length)
+
     def kinematics(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Tip placement (4×4, world) and 6×nv axis-first world Jacobian at ``q``."""
         T = np.empty((4, 4))
@@ -75,8 +81,8 @@ class ChainKernel:
         """Damped Newton for the tip at ``target`` (4×4, world) from ``q0``:
         ``(q, residual, iterations)``."""
         q = np.array(q0, dtype=float)
-        res, it = newton(*self.args(), self.lower, self.upper, self.length,
-                         np.ascontiguousarray(target, dtype=float), q, tol, max_iter)
+        res, it = newton(*self.solver_args(), np.ascontiguousarray(target, dtype=float), q,
+                         tol, max_iter)
         return q, res, it
 
 
@@ -113,8 +119,8 @@ def chain_kernel(leg) -> ChainKernel | None:
         q[jm.idx_q] = probe
         pin.forwardKinematics(m, data, q)
         M1 = m.jointPlacements[j].actInv(data.liMi[j])
-        S = pin.log6(M1 * M0.inverse()).vector / probe  # (v; ω) per unit coordinate
-        v, w = S[:3], S[3:]
+        S = screws.from_pinocchio(pin.log6(M1 * M0.inverse()).vector) / probe
+        w, v = S[:3], S[3:]  # (ω; v) per unit of the coordinate
         nw, nvv = np.linalg.norm(w), np.linalg.norm(v)
         if nw > 1e-12 and nvv <= 1e-12 * max(1.0, nw):
             kind[k], axis[k], rate[k] = REVOLUTE, w / nw, nw
@@ -521,7 +527,7 @@ class MechanismKernel:
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
     """Kernel of every leg of ``mech`` (``None`` if one leg has none)."""
-    legs = [chain_kernel(leg) for leg in mech.legs]
+    legs = [leg._kernel for leg in mech.legs]  # built once per leg
     if any(k is None for k in legs):
         return None
     joints = np.r_[0, np.cumsum([len(k.kind) for k in legs])].astype(np.int64)

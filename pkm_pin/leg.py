@@ -212,13 +212,21 @@ class Leg(SerialChainMixin):
         L = sum(np.linalg.norm(self.model.jointPlacements[j].translation)
                 for j in range(1, self.model.njoints))
         L += np.linalg.norm(self.model.frames[self.tip_id].placement.translation)
-        for j in range(1, self.model.njoints):
-            jm = self.model.joints[j]
-            if jm.nq == 1 and "P" in jm.shortname().replace("Mimic", ""):
-                lo, up = self.lower[jm.idx_q], self.upper[jm.idx_q]
-                if np.isfinite(lo) and np.isfinite(up):
-                    L += 0.5 * (abs(lo) + abs(up))
+        for j in self._prismatic_joints:
+            iq = self.model.joints[j].idx_q
+            lo, up = self.lower[iq], self.upper[iq]
+            if np.isfinite(lo) and np.isfinite(up):
+                L += 0.5 * (abs(lo) + abs(up))
         return float(L) if L > 0 else 1.0
+
+    @cached_property
+    def _prismatic_joints(self) -> list[int]:
+        """Joint indices of the 1-DOF prismatic joints of the chain (aligned or not;
+        mimicking joints excluded)."""
+        m = self.model
+        return [j for j in range(1, m.njoints)
+                if m.joints[j].nq == 1 and m.joints[j].nv == 1
+                and "P" in m.joints[j].shortname().replace("Mimic", "")]
 
     # ------------------------------------------------------------ configurations
     def neutral(self) -> np.ndarray:
@@ -442,8 +450,7 @@ class Leg(SerialChainMixin):
 
         k = self._kernel
         q = np.array(q, dtype=float)
-        _, it = newton(*k.args(), k.lower, k.upper, k.length, target.homogeneous, q, tol,
-                       max_iter)
+        _, it = newton(*k.solver_args(), target.homogeneous, q, tol, max_iter)
         sol = self._newton(target_local, q, tol, max(0, max_iter - it))
         sol.iterations += it
         return sol
@@ -503,10 +510,8 @@ class Leg(SerialChainMixin):
         """Unit of each velocity coordinate: the characteristic length for a prismatic
         joint, 1 rad otherwise."""
         units = np.ones(self.nv)
-        for j in range(1, self.model.njoints):
-            jm = self.model.joints[j]
-            if jm.nv == 1 and "P" in jm.shortname().replace("Mimic", ""):
-                units[jm.idx_v] = self.characteristic_length
+        for j in self._prismatic_joints:
+            units[self.model.joints[j].idx_v] = self.characteristic_length
         return units
 
     @cached_property

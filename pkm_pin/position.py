@@ -107,13 +107,8 @@ def _scales_of(mech) -> np.ndarray:
     out = []
     L = mech.characteristic_length
     for leg in mech.legs:
-        kinds = {}
-        for j in range(1, leg.model.njoints):
-            jm = leg.model.joints[j]
-            if jm.nq == 1:
-                kinds[jm.idx_q] = "P" in jm.shortname().replace("Mimic", "")
-        for iq in np.atleast_1d(leg.actuated_q):
-            out.append(L if kinds.get(int(iq), False) else 1.0)
+        prismatic = {leg.model.joints[j].idx_q for j in leg._prismatic_joints}
+        out += [L if int(iq) in prismatic else 1.0 for iq in np.atleast_1d(leg.actuated_q)]
     return np.array(out, dtype=float)
 
 

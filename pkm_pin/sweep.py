@@ -194,16 +194,14 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         Q = np.empty((N, leg.nq))
         res = np.empty(N)
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
-        track(*lk.args(), lk.lower, lk.upper, lk.length, targets, q_home.astype(float), along,
-              SWEEP_TOL, 50, TRUST, Q, res)
+        track(*lk.solver_args(), targets, q_home.astype(float), along, SWEEP_TOL, 50, TRUST,
+              Q, res)
         miss = np.flatnonzero(~(np.abs(res) <= SWEEP_TOL) & ~((res < 0) & (-res <= TRUST))
                               & ok)
         if len(miss):
             Qm, rm = np.empty((len(miss), leg.nq)), np.empty(len(miss))
-            solve_from(*lk.args(), lk.lower, lk.upper, lk.length,
-                       np.ascontiguousarray(targets[miss]), _restart_configurations(leg, q_home,
-                                                                                    restarts),
-                       SWEEP_TOL, 100, Qm, rm)
+            solve_from(*lk.solver_args(), np.ascontiguousarray(targets[miss]),
+                       _restart_configurations(leg, q_home, restarts), SWEEP_TOL, 100, Qm, rm)
             Q[miss] = Qm
             for i, r in zip(miss[rm > SWEEP_TOL], rm[rm > SWEEP_TOL]):
                 failures.append((int(i), str(AssemblyError(leg.name, r))))
@@ -326,18 +324,6 @@ def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:
         return
     for Q, q in zip(Qs, asm.leg_q):
         Q[i] = q
-
-
-def _closure_errors(tips: np.ndarray, targets: np.ndarray, length: float) -> np.ndarray:
-    """(N,) relative closure errors of 4×4 placements: sin of the rotation angle (with
-    the angle itself beyond 90°) and distance / length, combined in quadrature."""
-    R = np.swapaxes(tips[:, :3, :3], 1, 2) @ targets[:, :3, :3]
-    skew = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]],
-                    axis=1)
-    angle = 0.5 * np.linalg.norm(skew, axis=1)
-    angle = np.where(np.trace(R, axis1=1, axis2=2) < 1.0, np.pi, angle)
-    dist = np.linalg.norm(tips[:, :3, 3] - targets[:, :3, 3], axis=1) / length
-    return np.hypot(angle, dist)
 
 
 def _evaluate_chunk_pinocchio(mech, X, reference, rtol, singular_tol, progress,

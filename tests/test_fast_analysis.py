@@ -18,7 +18,7 @@ from pkm_pin.analysis import SINGULAR_TOL
 from pkm_pin.batch import homogenise
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
-from pkm_pin.fast_analysis import WINDOW, _det, _qrcp, _rank
+from pkm_pin.fast_analysis import WINDOW, _apply_q, _det, _qr_core, _rank
 from pkm_pin.kernels import jacobi_sv
 from pkm_pin.screws import RTOL
 from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
@@ -123,6 +123,15 @@ def test_type_II_pose_of_the_rpr3_in_a_sweep():
 
 
 # ------------------------------------------------------------------ building blocks
+def _qrcp(A, Q, perm, ncol):
+    """QR with column pivoting of the 6 × ncol A in place, Q formed from the reflectors."""
+    V, betas = np.empty((6, 6)), np.empty(6)
+    m = _qr_core(A, 6, ncol, perm, V, betas)
+    for c in range(6):
+        Q[:, c] = np.eye(6)[c]
+        _apply_q(V, betas, m, 6, Q[:, c])
+
+
 def test_qr_with_column_pivoting_factorises():
     """A P = Q R with Q orthogonal, R upper triangular, |R_jj| non-increasing."""
     rng = np.random.default_rng(0)
