@@ -38,8 +38,9 @@ WINDOW = 1e4
 @njit(cache=True, nogil=True)
 def _qr_core(A, nrow, ncol, perm, V, betas):
     """Householder QR with column pivoting of the leading nrow × ncol block of ``A`` (in
-    place: R in its upper triangle); the reflectors ``I − (2/β_j) v_j v_jᵀ`` are kept in
-    the columns of ``V`` and ``betas`` (β = 0: none); the column order in ``perm``.
+    place: R in its upper triangle); the reflectors ``I − f_j v_j v_jᵀ`` are kept in
+    the columns of ``V`` and ``f_j = 2/(v_jᵀv_j)`` in ``betas`` (0: none); the column
+    order in ``perm``.
     Returns the number of reflectors."""
     for c in range(ncol):
         perm[c] = c
@@ -69,12 +70,13 @@ def _qr_core(A, nrow, ncol, perm, V, betas):
             beta += V[r, j] * V[r, j]
         if beta == 0.0:
             continue
-        betas[j] = beta
+        f = 2.0 / beta
+        betas[j] = f
         for c in range(j + 1, ncol):
             s = 0.0
             for r in range(j, nrow):
                 s += V[r, j] * A[r, c]
-            s *= 2.0 / beta
+            s *= f
             for r in range(j, nrow):
                 A[r, c] -= s * V[r, j]
         A[j, j] = alpha
@@ -92,7 +94,7 @@ def _apply_q(V, betas, m, nrow, x):
         s = 0.0
         for r in range(j, nrow):
             s += V[r, j] * x[r]
-        s *= 2.0 / betas[j]
+        s *= betas[j]
         for r in range(j, nrow):
             x[r] -= s * V[r, j]
 
@@ -191,7 +193,8 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
     """Screw analysis of N assemblies (see the module docstring).
 
     Args:
-        J: (N, 6, nv) axis-first world Jacobians of the legs side by side.
+        J: (N, nv, 6) axis-first world joint twists (rows) of the legs, one after the
+            other (the transposed Jacobians).
         coords: (legs + 1,) column offsets of the legs in J.
         groups: (G, 3) columns of spherical groups (replaced by three lines).
         act_col, act_leg: column and leg of each actuated joint.
@@ -205,7 +208,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
     N = J.shape[0]
     n_legs = coords.shape[0] - 1
     n = act_col.shape[0]
-    nv = J.shape[2]
+    nv = J.shape[1]
     T = np.empty((nv, 6))  # motion twists (rows), homogenised and unit
     X = np.empty((6, nv))
     perm = np.empty(max(6 * n_legs, nv, 6), np.int64)
@@ -235,15 +238,15 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
         # ---- motion twists: J columns, spherical groups as three lines through centre
         for c in range(nv):
             for k in range(6):
-                T[c, k] = J[i, k, c]
+                T[c, k] = J[i, c, k]
         for g in range(groups.shape[0]):
             # centre c of the three concurrent axes: Σ(|ω|²I − ωωᵀ) c = Σ ω × v
             G[:, :] = 0.0
             gb[:] = 0.0
             for t in range(3):
                 col = groups[g, t]
-                w0, w1, w2 = J[i, 0, col], J[i, 1, col], J[i, 2, col]
-                v0, v1, v2 = J[i, 3, col], J[i, 4, col], J[i, 5, col]
+                w0, w1, w2 = J[i, col, 0], J[i, col, 1], J[i, col, 2]
+                v0, v1, v2 = J[i, col, 3], J[i, col, 4], J[i, col, 5]
                 ww = w0 * w0 + w1 * w1 + w2 * w2
                 G[0, 0] += ww - w0 * w0
                 G[1, 1] += ww - w1 * w1
@@ -372,13 +375,13 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                 if abs(A[a]) > abs(big):
                     big = A[a]
             for a in range(3):
-                B += A[a] * J[i, 3 + a, col] + A[3 + a] * J[i, a, col]
+                B += A[a] * J[i, col, 3 + a] + A[3 + a] * J[i, col, a]
             if B < 0 or (B == 0 and big < 0):
                 for a in range(6):
                     A[a] = -A[a]
             _homogeneous_unit(A, L, Ah[a_i])
             for a in range(6):
-                y[a] = J[i, a, col]
+                y[a] = J[i, col, a]
             _homogeneous_unit(y, L, a_h)
             s = 0.0
             for a in range(3):
@@ -425,16 +428,18 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
 
 
 @njit(cache=True, nogil=True)
-def leg_outputs(H, Jp, base, world_map, poses, idx, anchor, length, J_out, c0):
+def leg_outputs(H, Jp, base, targets, idx, length, J_out, c0):
     """Post-process one leg's Pinocchio pass over poses ``idx``.
 
     Args:
         H: (M, 4, 4) tip placements from Pinocchio (URDF root frame).
-        Jp: (M, 6, nv) Pinocchio WORLD frame Jacobians (linear-first, root frame).
-        base, world_map: root placement (4×4) and the 6×6 map of :meth:`Leg._world_map`
-            (Pinocchio's (v; ω) in the root frame → axis-first about the world origin).
-        poses, anchor: platform placements (N, 4, 4) and the leg's anchor (4×4).
-        J_out: (M, 6, nv_total) receives the axis-first twists in columns c0:c0+nv.
+        Jp: (M, 6, nv) Pinocchio WORLD frame Jacobians (linear-first ``(v; ω)``, root
+            frame).
+        base: root placement (R, p) in the world (4×4); a column becomes the axis-first
+            twist about the world origin ``(R ω; R v + p × R ω)`` (as
+            :meth:`Leg._world_map`).
+        targets: (N, 4, 4) world placements the tip must reach (pose · anchor).
+        J_out: (M, nv_total, 6) receives the axis-first twists in rows c0:c0+nv.
 
     Returns:
         (M,) closure errors: sin of the rotation angle between tip and target (π beyond
@@ -444,20 +449,18 @@ def leg_outputs(H, Jp, base, world_map, poses, idx, anchor, length, J_out, c0):
     nv = Jp.shape[2]
     err = np.empty(M)
     tip = np.empty((3, 4))
-    tgt = np.empty((3, 4))
     R = np.empty((3, 3))
+    il = 1.0 / length
+    px, py, pz = base[0, 3], base[1, 3], base[2, 3]
     for j in range(M):
-        P = poses[idx[j]]
-        # tip in the world: base · H; target: pose · anchor
+        tgt = targets[idx[j]]
+        # tip in the world: base · H
         for a in range(3):
             for b in range(4):
                 s = base[a, 3] if b == 3 else 0.0
-                u = P[a, 3] if b == 3 else 0.0
                 for k in range(3):
                     s += base[a, k] * H[j, k, b]
-                    u += P[a, k] * anchor[k, b]
                 tip[a, b] = s
-                tgt[a, b] = u
         # R = tipᵀ tgt: skew part and trace
         tr = 0.0
         for a in range(3):
@@ -468,14 +471,19 @@ def leg_outputs(H, Jp, base, world_map, poses, idx, anchor, length, J_out, c0):
         y = R[0, 2] - R[2, 0]
         z = R[1, 0] - R[0, 1]
         angle = 0.5 * math.sqrt(x * x + y * y + z * z) if tr >= 1.0 else math.pi
-        dx = (tip[0, 3] - tgt[0, 3]) / length
-        dy = (tip[1, 3] - tgt[1, 3]) / length
-        dz = (tip[2, 3] - tgt[2, 3]) / length
+        dx = (tip[0, 3] - tgt[0, 3]) * il
+        dy = (tip[1, 3] - tgt[1, 3]) * il
+        dz = (tip[2, 3] - tgt[2, 3]) * il
         err[j] = math.sqrt(angle * angle + dx * dx + dy * dy + dz * dz)
         for c in range(nv):
-            for a in range(6):
-                s = 0.0
-                for k in range(6):
-                    s += world_map[a, k] * Jp[j, k, c]
-                J_out[j, a, c0 + c] = s
+            v0, v1, v2 = Jp[j, 0, c], Jp[j, 1, c], Jp[j, 2, c]
+            w0, w1, w2 = Jp[j, 3, c], Jp[j, 4, c], Jp[j, 5, c]
+            a0 = base[0, 0] * w0 + base[0, 1] * w1 + base[0, 2] * w2
+            a1 = base[1, 0] * w0 + base[1, 1] * w1 + base[1, 2] * w2
+            a2 = base[2, 0] * w0 + base[2, 1] * w1 + base[2, 2] * w2
+            row = J_out[j, c0 + c]
+            row[0], row[1], row[2] = a0, a1, a2
+            row[3] = base[0, 0] * v0 + base[0, 1] * v1 + base[0, 2] * v2 + py * a2 - pz * a1
+            row[4] = base[1, 0] * v0 + base[1, 1] * v1 + base[1, 2] * v2 + pz * a0 - px * a2
+            row[5] = base[2, 0] * v0 + base[2, 1] * v1 + base[2, 2] * v2 + px * a1 - py * a0
     return err

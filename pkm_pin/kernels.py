@@ -141,31 +141,6 @@ def chain_kernel(leg) -> ChainKernel | None:
 
 # =============================================================== compiled functions
 @njit(cache=True, nogil=True)
-def _motion(kind, axis, angle, out):
-    """4×4 homogeneous transform of a revolute (angle [rad]) or prismatic motion."""
-    for a in range(4):
-        for b in range(4):
-            out[a, b] = 1.0 if a == b else 0.0
-    if kind == PRISMATIC:
-        out[0, 3] = axis[0] * angle
-        out[1, 3] = axis[1] * angle
-        out[2, 3] = axis[2] * angle
-        return
-    x, y, z = axis[0], axis[1], axis[2]
-    s, c = math.sin(angle), math.cos(angle)
-    t = 1.0 - c
-    out[0, 0] = c + t * x * x
-    out[0, 1] = t * x * y - s * z
-    out[0, 2] = t * x * z + s * y
-    out[1, 0] = t * x * y + s * z
-    out[1, 1] = c + t * y * y
-    out[1, 2] = t * y * z - s * x
-    out[2, 0] = t * x * z - s * y
-    out[2, 1] = t * y * z + s * x
-    out[2, 2] = c + t * z * z
-
-
-@njit(cache=True, nogil=True)
 def _compose(A, B, out):
     """out = A · B for 4×4 homogeneous transforms (out may not alias A or B)."""
     for a in range(3):
@@ -184,63 +159,81 @@ def _compose(A, B, out):
 def fk_jacobian(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
     """Tip placement ``T_out`` (4×4, world) and axis-first world Jacobian ``J_out``
     (6×nv, columns ``(ω; v_O)``; a mimic joint adds its twist to its primary's column)."""
-    _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out,
-        np.empty((2, 4, 4)))
+    _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out)
 
 
-@njit(cache=True, nogil=True)
-def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out, work):
-    """:func:`fk_jacobian` with caller-provided work space (2, 4, 4)."""
-    T, tmp = work[0], work[1]
-    T[:, :] = base
+@njit(cache=True, nogil=True, inline="always")
+def _times(r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz, P):
+    """(R, p) · P for a 4×4 homogeneous P, as 12 scalars (kept in registers)."""
+    return (r00 * P[0, 0] + r01 * P[1, 0] + r02 * P[2, 0],
+            r00 * P[0, 1] + r01 * P[1, 1] + r02 * P[2, 1],
+            r00 * P[0, 2] + r01 * P[1, 2] + r02 * P[2, 2],
+            r10 * P[0, 0] + r11 * P[1, 0] + r12 * P[2, 0],
+            r10 * P[0, 1] + r11 * P[1, 1] + r12 * P[2, 1],
+            r10 * P[0, 2] + r11 * P[1, 2] + r12 * P[2, 2],
+            r20 * P[0, 0] + r21 * P[1, 0] + r22 * P[2, 0],
+            r20 * P[0, 1] + r21 * P[1, 1] + r22 * P[2, 1],
+            r20 * P[0, 2] + r21 * P[1, 2] + r22 * P[2, 2],
+            px + r00 * P[0, 3] + r01 * P[1, 3] + r02 * P[2, 3],
+            py + r10 * P[0, 3] + r11 * P[1, 3] + r12 * P[2, 3],
+            pz + r20 * P[0, 3] + r21 * P[1, 3] + r22 * P[2, 3])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
+    """:func:`fk_jacobian`. The running placement (R, p) lives in twelve scalars, which
+    the compiler keeps in registers (2–3× faster than 4×4 work arrays)."""
+    r00, r01, r02, px = base[0, 0], base[0, 1], base[0, 2], base[0, 3]
+    r10, r11, r12, py = base[1, 0], base[1, 1], base[1, 2], base[1, 3]
+    r20, r21, r22, pz = base[2, 0], base[2, 1], base[2, 2], base[2, 3]
     for c in range(nv):
         for r in range(6):
             J_out[r, c] = 0.0
     for k in range(kind.shape[0]):
-        if kind[k] & AT_PARENT:
-            tmp[:3, :] = T[:3, :]
-        else:
-            _compose(T, parent[k], tmp)
+        kk = kind[k]
+        if not kk & AT_PARENT:
+            r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz = _times(
+                r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz, parent[k])
         # twist of the joint, from the frame before its motion
         x, y, z = axis[k, 0], axis[k, 1], axis[k, 2]
-        a0 = tmp[0, 0] * x + tmp[0, 1] * y + tmp[0, 2] * z
-        a1 = tmp[1, 0] * x + tmp[1, 1] * y + tmp[1, 2] * z
-        a2 = tmp[2, 0] * x + tmp[2, 1] * y + tmp[2, 2] * z
+        a0 = r00 * x + r01 * y + r02 * z
+        a1 = r10 * x + r11 * y + r12 * z
+        a2 = r20 * x + r21 * y + r22 * z
         col, g = iv[k], rate[k]
         angle = g * q[iq[k]]
-        if kind[k] & 1 == REVOLUTE:
-            px, py, pz = tmp[0, 3], tmp[1, 3], tmp[2, 3]
+        if kk & 1 == REVOLUTE:
             J_out[0, col] += g * a0
             J_out[1, col] += g * a1
             J_out[2, col] += g * a2
             J_out[3, col] += g * (py * a2 - pz * a1)
             J_out[4, col] += g * (pz * a0 - px * a2)
             J_out[5, col] += g * (px * a1 - py * a0)
-            # T = tmp · Rot(axis, angle) (Rodrigues), origin unchanged
+            # R ← R · Rot(axis, angle) (Rodrigues), origin unchanged
             s, c = math.sin(angle), math.cos(angle)
             t = 1.0 - c
-            r00, r01, r02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
-            r10, r11, r12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
-            r20, r21, r22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
-            for a in range(3):
-                u, v, w = tmp[a, 0], tmp[a, 1], tmp[a, 2]
-                T[a, 0] = u * r00 + v * r10 + w * r20
-                T[a, 1] = u * r01 + v * r11 + w * r21
-                T[a, 2] = u * r02 + v * r12 + w * r22
-                T[a, 3] = tmp[a, 3]
+            m00, m01, m02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
+            m10, m11, m12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
+            m20, m21, m22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                r00 * m00 + r01 * m10 + r02 * m20, r00 * m01 + r01 * m11 + r02 * m21,
+                r00 * m02 + r01 * m12 + r02 * m22, r10 * m00 + r11 * m10 + r12 * m20,
+                r10 * m01 + r11 * m11 + r12 * m21, r10 * m02 + r11 * m12 + r12 * m22,
+                r20 * m00 + r21 * m10 + r22 * m20, r20 * m01 + r21 * m11 + r22 * m21,
+                r20 * m02 + r21 * m12 + r22 * m22)
         else:
             J_out[3, col] += g * a0
             J_out[4, col] += g * a1
             J_out[5, col] += g * a2
-            for a in range(3):
-                T[a, 0], T[a, 1], T[a, 2] = tmp[a, 0], tmp[a, 1], tmp[a, 2]
-            T[0, 3] = tmp[0, 3] + a0 * angle
-            T[1, 3] = tmp[1, 3] + a1 * angle
-            T[2, 3] = tmp[2, 3] + a2 * angle
-        if kind[k] & HAS_POST:
-            _compose(T, post[k], tmp)
-            T[:3, :] = tmp[:3, :]
-    _compose(T, tip, T_out)
+            px += a0 * angle
+            py += a1 * angle
+            pz += a2 * angle
+        if kk & HAS_POST:
+            r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz = _times(
+                r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz, post[k])
+    (T_out[0, 0], T_out[0, 1], T_out[0, 2], T_out[1, 0], T_out[1, 1], T_out[1, 2],
+     T_out[2, 0], T_out[2, 1], T_out[2, 2], T_out[0, 3], T_out[1, 3], T_out[2, 3]) = _times(
+        r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz, tip)
+    T_out[3, 0], T_out[3, 1], T_out[3, 2], T_out[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -304,22 +297,49 @@ def pose_error(T, target, length, e):
 
 
 @njit(cache=True, nogil=True)
-def _solve_spd(A, b, x):
-    """x = A⁻¹ b for a symmetric positive definite A (Cholesky, A overwritten)."""
-    x[:] = b
-    return _cholesky_solve(A, x.reshape((x.shape[0], 1)))
+def _solve_spd(A, b, x, inv):
+    """x = A⁻¹ b for a symmetric positive definite n×n A (Cholesky in place on A's lower
+    triangle; ``inv`` (n) receives the reciprocals of the factor's diagonal, so that the
+    factorisation and both substitutions divide n times in all). Returns False if A is
+    not positive definite."""
+    n = A.shape[0]
+    for j in range(n):
+        s = A[j, j]
+        for k in range(j):
+            s -= A[j, k] * A[j, k]
+        if not 0.0 < s < np.inf:
+            return False
+        d = 1.0 / math.sqrt(s)
+        inv[j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for k in range(j):
+                s -= A[i, k] * A[j, k]
+            A[i, j] = s * d
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= A[i, k] * x[k]
+        x[i] = s * inv[i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= A[k, i] * x[k]
+        x[i] = s * inv[i]
+    return True
 
 
 @njit(cache=True, nogil=True)
 def _workspace(nv, kind, iv, length):
     """Work arrays of :func:`_newton`, and the unit of each coordinate (``length`` for a
-    prismatic one, 1 rad otherwise: the Newton unknowns are dimensionless)."""
+    prismatic one, 1 rad otherwise: the Newton unknowns are dimensionless) with its
+    reciprocal."""
     cs = np.ones(nv)
     for j in range(kind.shape[0]):
         if kind[j] & 1 == PRISMATIC:
             cs[iv[j]] = length
-    return (np.empty((4, 4)), np.empty((6, nv)), np.empty((6, nv)), np.empty((2, 4, 4)),
-            np.empty(6), np.empty((nv, nv)), np.empty(nv), np.empty(nv), cs)
+    return (np.empty((4, 4)), np.empty((6, nv)), np.empty((6, nv)), np.empty(6),
+            np.empty((nv, nv)), np.empty(nv), np.empty(nv), cs, 1.0 / cs, np.empty(nv))
 
 
 @njit(cache=True, nogil=True)
@@ -333,18 +353,19 @@ def newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, 
                    length, target, q, tol, max_iter, 0.0, _workspace(nv, kind, iv, length))
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
             target, q, tol, max_iter, trust, ws):
     """:func:`newton`; with ``trust > 0`` a step taken from a residual ``r ≤ trust``
     (Newton's quadratic regime: the next residual is ~r²) ends the iteration without
     evaluating the result, and the residual returned is −r (the caller verifies)."""
-    T, J, H, work, e, N, g, dq, cs = ws
+    T, J, H, e, N, g, dq, cs, ics, inv = ws
+    il = 1.0 / length
     it = 0
     best = np.inf
     slow = 0
     while True:
-        _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J, work)
+        _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
         r = pose_error(T, target, length, e)
         if r <= tol or it >= max_iter:
             return r, it
@@ -358,9 +379,9 @@ def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
             u = cs[c]  # per unit of the dimensionless unknown
             wx, wy, wz = u * J[0, c], u * J[1, c], u * J[2, c]
             H[0, c], H[1, c], H[2, c] = wx, wy, wz
-            H[3, c] = (u * J[3, c] + wy * pz - wz * py) / length
-            H[4, c] = (u * J[4, c] + wz * px - wx * pz) / length
-            H[5, c] = (u * J[5, c] + wx * py - wy * px) / length
+            H[3, c] = (u * J[3, c] + wy * pz - wz * py) * il
+            H[4, c] = (u * J[4, c] + wz * px - wx * pz) * il
+            H[5, c] = (u * J[5, c] + wx * py - wy * px) * il
         lam = 1e-10 + 1e-2 * r * r
         for a in range(nv):
             s = 0.0
@@ -372,9 +393,8 @@ def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
                 for k in range(6):
                     s += H[k, a] * H[k, b]
                 N[a, b] = s
-                N[b, a] = s
             N[a, a] += lam
-        if not _solve_spd(N, g, dq):
+        if not _solve_spd(N, g, dq, inv):
             return r, it
         step = 0.0
         size = 0.0
@@ -383,11 +403,12 @@ def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
             want = q[a] + cs[a] * dq[a]
             new = min(upper[a], max(lower[a], want))
             clipped = clipped or new != want
-            step += ((new - q[a]) / cs[a]) ** 2
-            size += (q[a] / cs[a]) ** 2
+            d, v = (new - q[a]) * ics[a], q[a] * ics[a]
+            step += d * d
+            size += v * v
             q[a] = new
         if not math.isfinite(step) or step < 1e-30 * (1.0 + size):
-            _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J, work)
+            _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
             return pose_error(T, target, length, e), it
         if r <= trust and not clipped:
             return -r, it
@@ -440,40 +461,63 @@ def jacobi_sv(M, m, n, sv, V, W):
     """Singular values (descending) of the m × n matrix M (m ≥ n) by one-sided Jacobi
     on ``M V``: ``V`` (n × n orthogonal, in/out) is the previous pose's right singular
     basis, a warm start that leaves few rotations to do along a sweep. ``W``: work
-    space of at least m × n."""
+    space of at least m × n.
+
+    Pairs of columns are visited in round-robin order (consecutive rotations touch
+    different columns, so their divisions and square roots overlap in the processor);
+    a pair whose cosine γ is below 1e-15 is left alone, a small rotation
+    (|tan| < 5·10⁻⁵) is computed without square roots (``cos = 1 − t²/2`` is exact to
+    1e-17), and the iteration stops after a sweep in which no γ exceeded 1e-10: the
+    convergence is quadratic, so the next γ would be ~1e-20, and the column norms are
+    then the singular values to round-off (even within a cluster, where their error is
+    of the order of γ)."""
     for a in range(m):
         for b in range(n):
             s = 0.0
             for k in range(n):
                 s += M[a, k] * V[k, b]
             W[a, b] = s
+    nn = n + (n & 1)  # players of the round-robin (one sits out when n is odd)
     for _ in range(60):
-        rotated = False
-        for p in range(n - 1):
-            for q in range(p + 1, n):
+        large = False
+        for rnd in range(nn - 1):
+            for k in range(nn // 2):
+                if k == 0:
+                    p, q = rnd, nn - 1
+                else:
+                    p, q = (rnd + k) % (nn - 1), (rnd - k + nn - 1) % (nn - 1)
+                if p >= n or q >= n:
+                    continue
                 a = 0.0
                 b = 0.0
                 c = 0.0
-                for k in range(m):
-                    a += W[k, p] * W[k, p]
-                    b += W[k, q] * W[k, q]
-                    c += W[k, p] * W[k, q]
-                if c == 0.0 or abs(c) <= 1e-15 * math.sqrt(a * b):
+                for r in range(m):
+                    a += W[r, p] * W[r, p]
+                    b += W[r, q] * W[r, q]
+                    c += W[r, p] * W[r, q]
+                cc = c * c
+                if cc <= 1e-30 * a * b:  # γ ≤ 1e-15
                     continue
-                rotated = True
-                zeta = (b - a) / (2.0 * c)
-                t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
-                cs = 1.0 / math.sqrt(1.0 + t * t)
+                if cc > 1e-20 * a * b:  # γ > 1e-10
+                    large = True
+                d = b - a
+                if abs(d) > 2e4 * abs(c):  # tan = 1/(2ζ) to 1/(4ζ²) ≤ 6e-10 relative
+                    t = c / d
+                    cs = 1.0 - 0.5 * t * t
+                else:
+                    zeta = d / (2.0 * c)
+                    t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                    cs = 1.0 / math.sqrt(1.0 + t * t)
                 sn = cs * t
-                for k in range(m):
-                    x, y = W[k, p], W[k, q]
-                    W[k, p] = cs * x - sn * y
-                    W[k, q] = sn * x + cs * y
-                for k in range(n):
-                    x, y = V[k, p], V[k, q]
-                    V[k, p] = cs * x - sn * y
-                    V[k, q] = sn * x + cs * y
-        if not rotated:
+                for r in range(m):
+                    x, y = W[r, p], W[r, q]
+                    W[r, p] = cs * x - sn * y
+                    W[r, q] = sn * x + cs * y
+                for r in range(n):
+                    x, y = V[r, p], V[r, q]
+                    V[r, p] = cs * x - sn * y
+                    V[r, q] = sn * x + cs * y
+        if not large:
             break
     for j in range(n):
         s = 0.0
@@ -489,6 +533,74 @@ def jacobi_sv(M, m, n, sv, V, W):
             k -= 1
         sv[k + 1] = x
     return n
+
+
+@njit(cache=True, nogil=True)
+def rpy_placements(X, out):
+    """out[i] (4×4) = placement of row i of X = (x, y, z, roll, pitch, yaw), with
+    ``R = Rz(yaw) Ry(pitch) Rx(roll)`` as ``pinocchio.rpy.rpyToMatrix``."""
+    for i in range(X.shape[0]):
+        cr, sr = math.cos(X[i, 3]), math.sin(X[i, 3])
+        cp, sp = math.cos(X[i, 4]), math.sin(X[i, 4])
+        cy, sy = math.cos(X[i, 5]), math.sin(X[i, 5])
+        H = out[i]
+        H[0, 0], H[0, 1], H[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+        H[1, 0], H[1, 1], H[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+        H[2, 0], H[2, 1], H[2, 2] = -sp, cp * sr, cp * cr
+        H[0, 3], H[1, 3], H[2, 3] = X[i, 0], X[i, 1], X[i, 2]
+        H[3, 0], H[3, 1], H[3, 2], H[3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+@njit(cache=True, nogil=True)
+def smooth_steps(X, length, out):
+    """out[i] = whether pose i continues the path smoothly: ``|d_i − d_{i−1}| ≤ 0.1 |d_i|``
+    for the steps ``d_i = X_i − X_{i−1}`` (translations divided by ``length``);
+    False for the first two poses."""
+    il = 1.0 / length
+    for i in range(X.shape[0]):
+        if i < 2:
+            out[i] = False
+            continue
+        dd = 0.0
+        d1 = 0.0
+        for k in range(6):
+            u = il if k < 3 else 1.0
+            a = (X[i, k] - X[i - 1, k]) * u
+            b = (X[i - 1, k] - X[i - 2, k]) * u
+            dd += (a - b) * (a - b)
+            d1 += a * a
+        out[i] = dd <= 0.01 * d1
+
+
+@njit(cache=True, nogil=True)
+def path_steps(X, length, out):
+    """out[i] = |X_{i+1} − X_i| (translations divided by ``length``), N − 1 steps."""
+    il = 1.0 / length
+    for i in range(X.shape[0] - 1):
+        s = 0.0
+        for k in range(6):
+            d = (X[i + 1, k] - X[i, k]) * (il if k < 3 else 1.0)
+            s += d * d
+        out[i] = math.sqrt(s)
+
+
+@njit(cache=True, nogil=True)
+def nearest_distances(X, length, rows, out):
+    """out[j] = distance from pose ``rows[j]`` to its nearest other pose of X
+    (translations divided by ``length``; inf when X has one pose)."""
+    il = 1.0 / length
+    for j in range(rows.shape[0]):
+        i = rows[j]
+        x0, x1, x2 = X[i, 0] * il, X[i, 1] * il, X[i, 2] * il
+        x3, x4, x5 = X[i, 3], X[i, 4], X[i, 5]
+        best = np.inf
+        for o in range(X.shape[0]):
+            d0, d1, d2 = X[o, 0] * il - x0, X[o, 1] * il - x1, X[o, 2] * il - x2
+            d3, d4, d5 = X[o, 3] - x3, X[o, 4] - x4, X[o, 5] - x5
+            s = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4 + d5 * d5
+            if s < best and o != i:
+                best = s
+        out[j] = math.sqrt(best)
 
 
 # ============================================================== a whole mechanism
@@ -647,7 +759,6 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
     S_last = np.zeros((6, 6))
     r = np.empty((6, 1))
     xi = np.empty(6)
-    work = np.empty((2, 4, 4))
     cs = np.ones(coords[-1])  # unit of each coordinate: L (prismatic) or 1 rad
     for i in range(n_legs):
         for j in range(joints[i], joints[i + 1]):
@@ -664,7 +775,7 @@ def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, 
             j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
             nv = c1 - c0
             _fk(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
-                iq[j0:j1], iv[j0:j1], tips[i], bases[i], nv, Q[c0:c1], T, J, work)
+                iq[j0:j1], iv[j0:j1], tips[i], bases[i], nv, Q[c0:c1], T, J)
             closure = max(closure, pose_error(T, Wt, length, e[i]))
             px, py, pz = T[0, 3], T[1, 3], T[2, 3]
             for c in range(nv):

@@ -115,15 +115,10 @@ def serpentine_order(X: np.ndarray) -> np.ndarray:
 def pose_matrices(X: np.ndarray) -> np.ndarray:
     """(N, 4, 4) homogeneous placements from rows x, y, z, roll, pitch, yaw
     (``R = Rz(yaw) Ry(pitch) Rx(roll)``, as ``pinocchio.rpy.rpyToMatrix``)."""
-    cr, sr = np.cos(X[:, 3]), np.sin(X[:, 3])
-    cp, sp = np.cos(X[:, 4]), np.sin(X[:, 4])
-    cy, sy = np.cos(X[:, 5]), np.sin(X[:, 5])
-    H = np.zeros((len(X), 4, 4))
-    H[:, 0, 0], H[:, 0, 1], H[:, 0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
-    H[:, 1, 0], H[:, 1, 1], H[:, 1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
-    H[:, 2, 0], H[:, 2, 1], H[:, 2, 2] = -sp, cp * sr, cp * cr
-    H[:, :3, 3] = X[:, :3]
-    H[:, 3, 3] = 1.0
+    from .kernels import rpy_placements
+
+    H = np.empty((len(X), 4, 4))
+    rpy_placements(np.ascontiguousarray(X, dtype=float), H)
     return H
 
 
@@ -132,28 +127,44 @@ def smooth_steps(X: np.ndarray, length: float) -> np.ndarray:
     the step before by less than a tenth of its size (a grid line, a smooth path), so
     that extrapolating the two previous solutions is a better warm start than the last.
     Translations are divided by ``length``."""
-    out = np.zeros(len(X), bool)
-    if len(X) > 2:
-        Y = X * np.r_[np.full(3, 1.0 / length), np.ones(3)]
-        d1, d2 = Y[2:] - Y[1:-1], Y[1:-1] - Y[:-2]
-        out[2:] = np.linalg.norm(d1 - d2, axis=1) <= 0.1 * np.linalg.norm(d1, axis=1)
+    from . import kernels
+
+    out = np.empty(len(X), bool)
+    kernels.smooth_steps(np.ascontiguousarray(X, dtype=float), float(length), out)
+    return out
+
+
+def _steps(X: np.ndarray, length: float) -> np.ndarray:
+    """(N − 1,) sizes of the steps between consecutive rows (translations / length)."""
+    from .kernels import path_steps
+
+    out = np.empty(max(len(X) - 1, 0))
+    path_steps(np.ascontiguousarray(X, dtype=float), float(length), out)
     return out
 
 
 def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
-    """The order of the poses for warm starts: the caller's own order when it is already
-    a path (no step over 3× the median step, or not longer than the serpentine order),
-    else :func:`serpentine_order`. Steps: translations divided by ``length``."""
-    scale = np.r_[np.full(3, 1.0 / length), np.ones(3)]
-    steps = np.linalg.norm(np.diff(X, axis=0) * scale, axis=1)
-    if len(steps) and steps.max() <= 3.0 * np.median(steps):
-        return np.arange(len(X))  # already a path without jumps
+    """The order of the poses for warm starts (steps: translations divided by ``length``).
+
+    The caller's own order is kept when it is already a path: no step over 3× the
+    median step, and the median step at most 2× the median distance from a pose to its
+    nearest neighbour (measured on 16 poses spread over the input; a shuffled grid has
+    steps far longer than its spacing). Otherwise :func:`serpentine_order`, unless the
+    caller's order travels less."""
+    from .kernels import nearest_distances
+
+    steps = _steps(X, length)
+    if not len(steps):
+        return np.arange(len(X))
+    median = np.median(steps)
+    if steps.max() <= 3.0 * median:
+        rows = np.unique(np.linspace(0, len(X) - 1, min(16, len(X))).astype(np.int64))
+        nearest = np.empty(len(rows))
+        nearest_distances(np.ascontiguousarray(X, dtype=float), float(length), rows, nearest)
+        if median <= 2.0 * np.median(nearest):
+            return np.arange(len(X))  # already a path without jumps
     serp = serpentine_order(X)
-
-    def travel(Y):
-        return float(np.sum(np.linalg.norm(np.diff(Y, axis=0) * scale, axis=1)))
-
-    return np.arange(len(X)) if travel(X) <= travel(X[serp]) else serp
+    return np.arange(len(X)) if steps.sum() <= _steps(X[serp], length).sum() else serp
 
 
 def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
@@ -187,10 +198,11 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     home = mech.home_assembly
     # 1. legs along the path, compiled; a target a leg misses is solved again from
     #    home, neutral, mid-limits and random starts (Leg.solve's restarts)
-    Qs, failures = [], []
+    Qs, Ts, failures = [], [], []
     ok = np.ones(N, bool)
     for leg, lk, anchor, q_home in zip(legs, kernel.legs, mech.anchors, home.leg_q):
         targets = (poses.reshape(-1, 4) @ anchor.homogeneous).reshape(N, 4, 4)  # one GEMM
+        Ts.append(targets)
         Q = np.empty((N, leg.nq))
         res = np.empty(N)
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
@@ -209,13 +221,13 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         Qs.append(Q)
     # 2. one Pinocchio pass per leg and pose: closure check and joint twists
     idx = np.flatnonzero(ok)
-    Js, bad = _pinocchio_pass(mech, Qs, poses, idx)
+    Js, bad = _pinocchio_pass(mech, Qs, Ts, idx)
     if bad.any():  # a closure Pinocchio does not confirm: Leg.solve from there
         for i in idx[bad]:
             _assemble_again(mech, poses[i], [Q[i] for Q in Qs], restarts, Qs, i, ok,
                             failures)
         rows = np.flatnonzero(bad & ok[idx])  # positions in idx of the poses redone
-        Js[rows], bad2 = _pinocchio_pass(mech, Qs, poses, idx[rows])
+        Js[rows], bad2 = _pinocchio_pass(mech, Qs, Ts, idx[rows])
         for i in idx[rows][bad2]:
             failures.append((int(i), "the closure found is not confirmed by Pinocchio"))
             ok[i] = False
@@ -224,8 +236,9 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
            "condition": np.full(N, np.nan), "det": np.full(N, np.nan), "reference_path": 0}
-    J = np.ascontiguousarray(Js[ok[idx]])
-    idx = idx[ok[idx]]
+    if not ok[idx].all():
+        Js = Js[ok[idx]]
+        idx = idx[ok[idx]]
     if not len(idx):
         return out
     out["q_actuated"][idx] = np.concatenate(
@@ -240,7 +253,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     dof, trans, red = (np.zeros(M, np.int64) for _ in range(3))
     t1, t2, cond, det = (np.zeros(M) for _ in range(4))
     flag = np.zeros(M, np.int64)
-    analyse_poses(J, coords, groups, act_col.astype(np.int64), act_leg.astype(np.int64),
+    analyse_poses(Js, coords, groups, act_col.astype(np.int64), act_leg.astype(np.int64),
                   float(mech.characteristic_length), float(rtol), ROTATION_TOL,
                   np.ascontiguousarray(reference, dtype=float), dof, trans, red, t1, t2, cond,
                   det, flag)
@@ -264,42 +277,67 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     return out
 
 
-def _pinocchio_pass(mech, Qs, poses, idx):
-    """One Pinocchio pass per leg at the poses ``idx``: the (M, 6, nv) axis-first world
-    Jacobians of the legs side by side, and (M,) whether a leg's closure error (from
-    Pinocchio's tip placement) exceeds :data:`SWEEP_TOL`."""
+def _pinocchio_pass(mech, Qs, targets, idx):
+    """One Pinocchio pass per leg at the poses ``idx``: the (M, nv, 6) axis-first world
+    joint twists of the legs one after the other, and (M,) whether a leg's closure error (from
+    Pinocchio's tip placement against its target in ``targets``) exceeds
+    :data:`SWEEP_TOL`."""
     from .fast_analysis import leg_outputs
 
     offs = mech._kernel.coords
-    J = np.empty((len(idx), 6, int(offs[-1])))
-    bad = np.zeros(len(idx), bool)
-    if not len(idx):
+    M = len(idx)
+    J = np.empty((M, int(offs[-1]), 6))
+    bad = np.zeros(M, bool)
+    if not M:
         return J, bad
-    for k, (leg, Q, anchor) in enumerate(zip(mech.legs, Qs, mech.anchors)):
+    jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
+    for k, (leg, Q) in enumerate(zip(mech.legs, Qs)):
         model, data, tip = leg.model, leg.data, leg.tip_id
-        jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
-        Jl, Hl = [], []
-        add_J, add_H = Jl.append, Hl.append
+        rows = Q[idx]
+        # Pinocchio's arrays are appended to byte buffers as they come (a memcpy; the
+        # array is freed at once): cheaper than keeping thousands of small arrays to
+        # concatenate. Their layout is checked on the first pose, their number of bytes
+        # at the end.
+        Jb, Hb = bytearray(), bytearray()
+        add_J, add_H = Jb.__iadd__, Hb.__iadd__
         if model.nvExtended == model.nv:
             # the joint Jacobians returned by computeJointJacobians are the tip frame's
             # WORLD Jacobian: every joint of a kernel's chain supports the tip
-            for q in Q[idx]:
+            _check_layout(jacobians(model, data, rows[0]), (6, leg.nv), leg.name)
+            _check_layout(place(model, data, tip).homogeneous, (4, 4), leg.name)
+            for q in rows:
                 add_J(jacobians(model, data, q))
                 add_H(place(model, data, tip).homogeneous)
         else:  # mimic joints have their own columns in data.J: ask for the frame's
             frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
-            for q in Q[idx]:
+            jacobians(model, data, rows[0])
+            _check_layout(frame_jacobian(model, data, tip, world), (6, leg.nv), leg.name)
+            _check_layout(place(model, data, tip).homogeneous, (4, 4), leg.name)
+            for q in rows:
                 jacobians(model, data, q)
                 add_H(place(model, data, tip).homogeneous)
                 add_J(frame_jacobian(model, data, tip, world))
-        Jp = np.concatenate(Jl).reshape(len(idx), 6, -1)
-        if Jp.shape[2] != leg.nv:  # leg_outputs writes without bounds checks
-            raise RuntimeError(f"leg {leg.name!r}: Pinocchio Jacobians of shape {Jp.shape}")
-        err = leg_outputs(np.concatenate(Hl).reshape(len(idx), 4, 4), Jp,
-                          leg.base.homogeneous, leg._world_map(), poses, idx,
-                          anchor.homogeneous, float(leg.characteristic_length), J, int(offs[k]))
+        H, Jp = _as_array(Hb, (M, 4, 4), leg.name), _as_array(Jb, (M, 6, leg.nv), leg.name)
+        err = leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
+                          float(leg.characteristic_length), J, int(offs[k]))
         bad |= ~(err <= SWEEP_TOL)
     return J, bad
+
+
+def _check_layout(a: np.ndarray, shape: tuple, leg: str) -> None:
+    """Pinocchio's output is the C-ordered float64 array :func:`_as_array` expects."""
+    if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
+        raise RuntimeError(f"leg {leg!r}: Pinocchio returned an array of shape {a.shape}, "
+                           f"type {a.dtype}; expected a C-ordered float64 {shape}")
+
+
+def _as_array(buffer: bytearray, shape: tuple, leg: str) -> np.ndarray:
+    """The float64 array of ``shape`` held in ``buffer`` (its size checked: the compiled
+    code reading it does not check bounds)."""
+    out = np.frombuffer(buffer, dtype=np.float64)
+    if out.size != int(np.prod(shape)):
+        raise RuntimeError(f"leg {leg!r}: Pinocchio's arrays do not add up to {shape}")
+    return out.reshape(shape)
 
 
 def _restart_configurations(leg, q_home, restarts: int) -> np.ndarray:

@@ -217,3 +217,26 @@ def test_closures_pinocchio_does_not_confirm_are_solved_again(monkeypatch):
     assert len(redone) >= 1  # the safety net was used
     assert fast["ok"].all()
     assert_same(fast, slow)
+
+
+@pytest.mark.parametrize("name", ["rpr3", "stewart", "delta", "orthoglide_quasi"])
+def test_pinocchio_pass_gives_the_legs_twists_and_closure(name):
+    """The sweep's Pinocchio pass returns each leg's axis-first world Jacobian (the
+    twists ``Leg.jacobian`` gives, base placement included) as rows, and closure errors
+    at round-off; a leg configuration moved off its solution is reported."""
+    from pkm_pin.sweep import _pinocchio_pass, pose_matrices
+
+    mech = mechanism(name)
+    X = path(mech, n=6)
+    poses = pose_matrices(X)
+    sols = [mech.assemble(pin.SE3(p)).leg_q for p in poses]
+    Qs = [np.array([s[k] for s in sols]) for k in range(len(mech.legs))]
+    targets = [poses @ a.homogeneous for a in mech.anchors]
+    Qs[0][2] += 1e-3  # pose 2: leg 0 no longer closes
+    J, bad = _pinocchio_pass(mech, Qs, targets, np.arange(len(X)))
+    np.testing.assert_array_equal(bad, np.arange(len(X)) == 2)
+    coords = mech._kernel.coords
+    for k, leg in enumerate(mech.legs):
+        for i in range(len(X)):
+            np.testing.assert_allclose(J[i, coords[k]:coords[k + 1]], leg.jacobian(Qs[k][i]).T,
+                                       rtol=0, atol=1e-14)

@@ -11,7 +11,7 @@ import pytest
 from pkm_pin import InputError, screws
 from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.planar import rpr3_type2_pose
-from pkm_pin.sweep import pose_array, serpentine_order
+from pkm_pin.sweep import pose_array, pose_matrices, serpentine_order, smooth_steps, visiting_order
 
 _CACHE: dict = {}
 
@@ -81,6 +81,42 @@ def test_serpentine_order_visits_grid_neighbours():
     assert sorted(order) == list(range(len(X)))
     steps = np.abs(np.diff(X[order, :2], axis=0)).sum(axis=1)
     assert np.all(steps == 1.0)
+
+
+def test_pose_matrices_are_pinocchio_rpy_placements():
+    """The compiled placements equal pin.SE3(rpyToMatrix(roll, pitch, yaw), x) to 1e-15."""
+    X = np.random.default_rng(3).uniform(-3.0, 3.0, size=(50, 6))
+    H = pose_matrices(X)
+    for x, h in zip(X, H):
+        np.testing.assert_allclose(h, pin.SE3(pin.rpy.rpyToMatrix(x[3:]), x[:3]).homogeneous,
+                                   rtol=0, atol=1e-15)
+
+
+def test_smooth_steps_and_visiting_order():
+    """Steps are compared with translations divided by the length: a straight line is
+    smooth after its first two poses, a corner is not; a shuffled grid is visited in the
+    serpentine order, a path in its own order."""
+    line = np.zeros((6, 6))
+    line[:, 0] = np.linspace(0.0, 5e-3, 6)  # 1 mm steps
+    line[3:, 3] = 0.2 * np.arange(3)  # a 0.2 rad turn starts at pose 4
+    np.testing.assert_array_equal(smooth_steps(line, 1e-3),
+                                  [False, False, True, True, False, True])
+    mm = line * np.r_[1e3, 1e3, 1e3, 1, 1, 1]
+    np.testing.assert_array_equal(smooth_steps(mm, 1.0), smooth_steps(line, 1e-3))
+    # a translation going back and forth by 1 mm while rolling 0.1 rad per step: a
+    # corner for a 1 mm length, smooth for a 1 m length (the rotation dominates)
+    zigzag = np.zeros((4, 6))
+    zigzag[:, 0] = [0.0, 1e-3, 0.0, 1e-3]
+    zigzag[:, 3] = 0.1 * np.arange(4)
+    assert not smooth_steps(zigzag, 1e-3)[2:].any()
+    assert smooth_steps(zigzag, 1.0)[2:].all()
+    xs, ys = np.meshgrid(np.arange(7.0), np.arange(5.0), indexing="ij")
+    X = np.zeros((xs.size, 6))
+    X[:, 0], X[:, 1] = xs.ravel(), ys.ravel()
+    shuffled = X[np.random.default_rng(0).permutation(len(X))]
+    order = visiting_order(shuffled, 1.0)
+    np.testing.assert_array_equal(order, serpentine_order(shuffled))
+    np.testing.assert_array_equal(visiting_order(line, 1e-3), np.arange(6))
 
 
 def test_det_changes_sign_across_the_type_II_pose():
