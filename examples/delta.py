@@ -1,4 +1,5 @@
-"""Delta robot (R + spatial parallelogram written with mimic joints): 3T mobility, redundant constraints, velocity maps."""
+"""Delta robot (R + spatial parallelogram written with mimic joints): 3T mobility,
+redundant constraints, velocity maps."""
 
 import numpy as np
 

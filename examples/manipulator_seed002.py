@@ -1,4 +1,5 @@
-"""Seed 002 manipulator (two revolute pairs, a prismatic pair, a spherical pair): link screws and the velocity and acceleration of the end point E."""
+"""Seed 002 manipulator (two revolute pairs, a prismatic pair, a spherical pair): link
+screws and the velocity and acceleration of the end point E."""
 
 import numpy as np
 

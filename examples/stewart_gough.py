@@ -1,4 +1,5 @@
-"""Gough–Stewart 6-UPS: mobility, the leg Plücker lines as A, forward kinematics and its assembly modes."""
+"""Gough–Stewart 6-UPS: mobility, the leg Plücker lines as A, forward kinematics and its
+assembly modes."""
 
 import numpy as np
 

@@ -6,6 +6,8 @@ that converts to and from Pinocchio's linear-first order).
 """
 
 from . import position, screws
+from .analysis import Analysis
+from .calibration import CalibrationResult, calibrate
 from .errors import (
     AssemblyError,
     ForwardKinematicsError,
@@ -17,8 +19,6 @@ from .errors import (
     SingularityError,
     UrdfError,
 )
-from .analysis import Analysis
-from .calibration import CalibrationResult, calibrate
 from .leg import Leg, LegSolution
 from .mechanism import Assembly, Mechanism, load_mechanism
 from .sensitivity import Sensitivity

@@ -291,7 +291,9 @@ def classify(type_I, type_II, tol: float = SINGULAR_TOL):
     """Singularity class(es) from closeness indices: ``"none"``, ``"I"``, ``"II"``, ``"III"``.
 
     Works on scalars (returns a str) and on arrays (returns an array of str)."""
-    one = np.asarray(type_I) < tol
-    two = np.asarray(type_II) < tol
-    out = np.where(one & two, "III", np.where(one, "I", np.where(two, "II", "none")))
+    code = (np.asarray(type_I) < tol).astype(np.int8) + 2 * (np.asarray(type_II) < tol)
+    out = _CLASSES[code]
     return str(out) if out.ndim == 0 else out
+
+
+_CLASSES = np.array(["none", "I", "II", "III"])  # by (type I) + 2 (type II)

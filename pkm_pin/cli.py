@@ -391,7 +391,8 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("list", help="shipped models with one-line descriptions",
-                       description="List the shipped models (builders and models/mechanisms/*.toml).")
+                       description="List the shipped models "
+                       "(builders and models/mechanisms/*.toml).")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.set_defaults(func=cmd_list)
 

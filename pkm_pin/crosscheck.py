@@ -35,7 +35,8 @@ def rpr3(analysis: Analysis) -> dict[str, float]:
                                for ls, f in zip(analysis.legs, legs_f))}
     err["platform_twists"] = _span_error(analysis.platform_twists,
                                          formulas.rpr3.platform_twists(), L)
-    err["A"] = _screw_error(analysis.A, formulas.rpr3.actuation_wrenches(L3, L6, angles, lengths), L)
+    err["A"] = _screw_error(analysis.A,
+                            formulas.rpr3.actuation_wrenches(L3, L6, angles, lengths), L)
     a3, b3 = formulas.rpr3.velocity_equation(L3, L6, angles, lengths)
     err["B"] = float(np.max(np.abs(np.diag(analysis.B) - np.diag(b3)) / np.r_[1.0, L, 1.0]))
     G_f = np.linalg.solve(a3, b3)  # (w_y, v_x, v_z) per unit actuated rate

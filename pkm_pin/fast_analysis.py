@@ -5,7 +5,10 @@ Same quantities, same conventions and the same decisions as :func:`pkm_pin.batch
 ``L``; rows normalised; rank decisions ``σ > rtol · σ_max``), computed pose by pose in
 numba with cheaper factorisations:
 
-* each leg's twist system by one Householder QR with column pivoting of ``(T_h Δ)ᵀ``:
+* a leg with six joint twists by the inverse of ``(T_h Δ)ᵀ`` when a bound on its
+  condition certifies the rank (no constraint; the actuation wrench is a row of the
+  inverse), at half the cost of the QR;
+* any other leg's twist system by one Householder QR with column pivoting of ``(T_h Δ)ᵀ``:
   its rank, an orthonormal basis of its reciprocal (the leg's constraint wrenches) and,
   when the leg's twists are independent, the actuation wrench of an actuated joint as
   the minimum-norm solution of ``T_h Δ w = e_k`` (reciprocal to the leg's other joints,
@@ -120,6 +123,57 @@ def _rank(R, n, rtol, absolute):
 
 
 @njit(cache=True, nogil=True)
+def _inverse(X, n, Xi, W):
+    """Xi = X⁻¹ for the n × n block of X (Gauss–Jordan, partial pivoting; W: n × n work
+    space). Returns False when a pivot is zero."""
+    for r in range(n):
+        for c in range(n):
+            W[r, c] = X[r, c]
+            Xi[r, c] = 1.0 if r == c else 0.0
+    for j in range(n):
+        p = j
+        for r in range(j + 1, n):
+            if abs(W[r, j]) > abs(W[p, j]):
+                p = r
+        if W[p, j] == 0.0:
+            return False
+        if p != j:
+            for c in range(n):
+                W[j, c], W[p, c] = W[p, c], W[j, c]
+                Xi[j, c], Xi[p, c] = Xi[p, c], Xi[j, c]
+        f = 1.0 / W[j, j]
+        for c in range(n):
+            W[j, c] *= f
+            Xi[j, c] *= f
+        for r in range(n):
+            if r != j:
+                g = W[r, j]
+                if g != 0.0:
+                    for c in range(n):
+                        W[r, c] -= g * W[j, c]
+                        Xi[r, c] -= g * Xi[j, c]
+    return True
+
+
+@njit(cache=True, nogil=True)
+def _square_leg(X, Xi, W, rtol):
+    """A leg with six joint twists: ``Xi = X⁻¹`` and whether X is certainly of full
+    rank for the rank decision ``σ_min > rtol · σ_max`` taken outside its ambiguity
+    window: ``σ_min / σ_max ≥ 1 / (‖X‖_F ‖X⁻¹‖_F) ≥ rtol · WINDOW`` (the bound is within a
+    factor 6 of the ratio, so every leg further than 6 · 10⁻⁵ from a leg singularity is
+    certified; the others go to QR)."""
+    if not _inverse(X, 6, Xi, W):
+        return False
+    a = 0.0
+    b = 0.0
+    for r in range(6):
+        for c in range(6):
+            a += X[r, c] * X[r, c]
+            b += Xi[r, c] * Xi[r, c]
+    return a * b * (rtol * WINDOW) ** 2 <= 1.0
+
+
+@njit(cache=True, nogil=True)
 def _det(M, n, A=None):
     """Determinant of the leading n × n block (Gaussian elimination, partial pivoting;
     ``A``: optional n × n work space)."""
@@ -157,10 +211,10 @@ def _solve3(G, b, x):
     c11 = G[0, 0] * G[2, 2] - G[0, 2] * G[2, 0]
     c12 = G[0, 1] * G[2, 0] - G[0, 0] * G[2, 1]
     c22 = G[0, 0] * G[1, 1] - G[0, 1] * G[1, 0]
-    d = G[0, 0] * c00 + G[0, 1] * c01 + G[0, 2] * c02
-    x[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) / d
-    x[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) / d
-    x[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) / d
+    f = 1.0 / (G[0, 0] * c00 + G[0, 1] * c01 + G[0, 2] * c02)
+    x[0] = (c00 * b[0] + c01 * b[1] + c02 * b[2]) * f
+    x[1] = (c01 * b[0] + c11 * b[1] + c12 * b[2]) * f
+    x[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) * f
 
 
 @njit(cache=True, nogil=True)
@@ -178,13 +232,14 @@ def _reciprocal_products(W, n, T, m, out):
 def _homogeneous_unit(x, L, out):
     """(x[:3]; x[3:] / L) scaled to unit norm (zero stays zero)."""
     s = 0.0
+    il = 1.0 / L
     for k in range(6):
-        out[k] = x[k] if k < 3 else x[k] / L
+        out[k] = x[k] if k < 3 else x[k] * il
         s += out[k] * out[k]
-    s = math.sqrt(s)
     if s > 0:
+        f = 1.0 / math.sqrt(s)
         for k in range(6):
-            out[k] /= s
+            out[k] *= f
 
 
 @njit(cache=True, nogil=True)
@@ -227,12 +282,15 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
     Ploc = np.empty((max(reference.shape[0], 1), 6))
     Wd = np.empty((max(n, 1), max(n, 1)))  # work space of the determinant
     Vh = np.empty((6, 6))  # Householder vectors
+    Xi = np.empty((6, 6))  # inverse of a square leg's X, and work space
+    Wi = np.empty((6, 6))
     betas = np.empty(6)
     x6 = np.empty(6)
     V = np.eye(6)  # right singular basis of M, carried from pose to pose
     Wk = np.empty((max(n, 6), 6))
     d_prev = -1
     n_ref = reference.shape[0]
+    iL = 1.0 / L
     for i in range(N):
         flag[i] = 0
         # ---- motion twists: J columns, spherical groups as three lines through centre
@@ -270,12 +328,12 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
             s = 0.0
             for k in range(6):
                 if k >= 3:
-                    T[c, k] /= L
+                    T[c, k] *= iL
                 s += T[c, k] * T[c, k]
-            s = math.sqrt(s)
             if s > 0:
+                f = 1.0 / math.sqrt(s)
                 for k in range(6):
-                    T[c, k] /= s
+                    T[c, k] *= f
         # ---- per leg: constraints, and actuation wrenches of its actuated joints
         m_c = 0
         leg_dims = 0
@@ -287,6 +345,15 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                 for r in range(3):
                     X[r, c] = T[c0 + c, 3 + r]
                     X[3 + r, c] = T[c0 + c, r]
+            if k == 6 and _square_leg(X, Xi, Wi, rtol):
+                # six independent twists: no constraint; an actuated joint's wrench
+                # solves (T_h Δ) w = Xᵀ w = e_k, i.e. w = row k of X⁻¹
+                for a_i in range(n):
+                    if act_leg[a_i] == l:
+                        ka = act_col[a_i] - c0
+                        for a in range(6):
+                            Ah[a_i, a] = Xi[ka, a]
+                continue
             nref = _qr_core(X, 6, k, perm, Vh, betas)
             r = _rank(X, min(6, k), rtol, False)
             if r < 0:
@@ -312,9 +379,11 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                 for j in range(k):
                     if perm[j] == ka:
                         jp = j
-                for j in range(k):  # Rᵀ y = e_jp (forward substitution)
+                for j in range(jp):
+                    y[j] = 0.0
+                for j in range(jp, k):  # Rᵀ y = e_jp (forward substitution)
                     s = 1.0 if j == jp else 0.0
-                    for t in range(j):
+                    for t in range(jp, j):
                         s -= X[t, j] * y[t]
                     y[j] = s / X[j, j]
                 for j in range(k, 6):
@@ -370,8 +439,9 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
             s = f if f * L > rtol * mm else (mm if mm > 0 else 1.0)
             B = 0.0
             big = 0.0
+            f = 1.0 / s
             for a in range(6):
-                A[a] /= s
+                A[a] *= f
                 if abs(A[a]) > abs(big):
                     big = A[a]
             for a in range(3):
@@ -428,7 +498,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
 
 
 @njit(cache=True, nogil=True)
-def leg_outputs(H, Jp, base, targets, idx, length, J_out, c0):
+def leg_outputs(H, Jp, base, targets, idx, length, tol, J_out, c0, bad):
     """Post-process one leg's Pinocchio pass over poses ``idx``.
 
     Args:
@@ -440,14 +510,12 @@ def leg_outputs(H, Jp, base, targets, idx, length, J_out, c0):
             :meth:`Leg._world_map`).
         targets: (N, 4, 4) world placements the tip must reach (pose · anchor).
         J_out: (M, nv_total, 6) receives the axis-first twists in rows c0:c0+nv.
-
-    Returns:
-        (M,) closure errors: sin of the rotation angle between tip and target (π beyond
-        90°) and their distance / length, in quadrature.
+        bad: (M,) set where the closure error exceeds ``tol`` (or is nan): sin of the
+            rotation angle between tip and target (π beyond 90°) and their distance /
+            length, in quadrature.
     """
     M = H.shape[0]
     nv = Jp.shape[2]
-    err = np.empty(M)
     tip = np.empty((3, 4))
     R = np.empty((3, 3))
     il = 1.0 / length
@@ -474,7 +542,8 @@ def leg_outputs(H, Jp, base, targets, idx, length, J_out, c0):
         dx = (tip[0, 3] - tgt[0, 3]) * il
         dy = (tip[1, 3] - tgt[1, 3]) * il
         dz = (tip[2, 3] - tgt[2, 3]) * il
-        err[j] = math.sqrt(angle * angle + dx * dx + dy * dy + dz * dz)
+        if not math.sqrt(angle * angle + dx * dx + dy * dy + dz * dz) <= tol:
+            bad[j] = True
         for c in range(nv):
             v0, v1, v2 = Jp[j, 0, c], Jp[j, 1, c], Jp[j, 2, c]
             w0, w1, w2 = Jp[j, 3, c], Jp[j, 4, c], Jp[j, 5, c]
@@ -486,4 +555,3 @@ def leg_outputs(H, Jp, base, targets, idx, length, J_out, c0):
             row[3] = base[0, 0] * v0 + base[0, 1] * v1 + base[0, 2] * v2 + py * a2 - pz * a1
             row[4] = base[1, 0] * v0 + base[1, 1] * v1 + base[1, 2] * v2 + pz * a0 - px * a2
             row[5] = base[2, 0] * v0 + base[2, 1] * v1 + base[2, 2] * v2 + px * a1 - py * a0
-    return err

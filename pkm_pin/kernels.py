@@ -268,7 +268,7 @@ def log3(R, out):
     out[0], out[1], out[2] = theta * u0 / n, theta * u1 / n, theta * u2 / n
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def pose_error(T, target, length, e):
     """Error ``e`` (6) from ``T`` to ``target``: world rotation vector of
     ``R_target R_Tᵀ`` and tip displacement divided by ``length``; returns its norm."""
@@ -296,7 +296,7 @@ def pose_error(T, target, length, e):
     return math.sqrt(s)
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _solve_spd(A, b, x, inv):
     """x = A⁻¹ b for a symmetric positive definite n×n A (Cholesky in place on A's lower
     triangle; ``inv`` (n) receives the reciprocals of the factor's diagonal, so that the
@@ -423,7 +423,8 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
     Fills ``Q`` (N, nq) and ``residual`` (N,): the residual reached, or −r when the
     last Newton step was taken from a residual ``r ≤ trust`` and not evaluated (see
     :func:`_newton`; the caller verifies).
-    A target that does not converge leaves the warm start unchanged for the next one."""
+    A target that does not converge leaves the warm start unchanged for the next one.
+    Returns the number of targets missed (neither converged nor trusted)."""
     ws = _workspace(nv, kind, iv, length)
     nq = q_start.shape[0]
     hist = np.empty((3, nq))  # the last three solutions, newest at row `head`
@@ -432,6 +433,7 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
     head = 0
     known = 1  # how many of them are consecutive solutions of this path
     q = np.empty(nq)
+    misses = 0
     for i in range(targets.shape[0]):
         q1 = hist[head]
         if extrapolate[i] and i >= 1 and extrapolate[i - 1] and known >= 3:
@@ -448,12 +450,15 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
                        length, targets[i], q, tol, max_iter, trust, ws)
         residual[i] = r
         Q[i] = q
+        if not (r <= tol or -r <= trust):
+            misses += 1
         if r <= tol:
             head = (head + 1) % 3
             hist[head] = q
             known = known + 1 if i > 0 else 1
         else:
             known = 0
+    return misses
 
 
 @njit(cache=True, nogil=True)
@@ -552,6 +557,21 @@ def rpy_placements(X, out):
 
 
 @njit(cache=True, nogil=True)
+def anchor_targets(poses, anchors, out):
+    """out[k, i] = poses[i] · anchors[k] (4×4 homogeneous): where leg k's tip must be."""
+    for k in range(anchors.shape[0]):
+        A = anchors[k]
+        for i in range(poses.shape[0]):
+            P = poses[i]
+            (out[k, i, 0, 0], out[k, i, 0, 1], out[k, i, 0, 2], out[k, i, 1, 0], out[k, i, 1, 1],
+             out[k, i, 1, 2], out[k, i, 2, 0], out[k, i, 2, 1], out[k, i, 2, 2], out[k, i, 0, 3],
+             out[k, i, 1, 3], out[k, i, 2, 3]) = _times(
+                P[0, 0], P[0, 1], P[0, 2], P[1, 0], P[1, 1], P[1, 2], P[2, 0], P[2, 1], P[2, 2],
+                P[0, 3], P[1, 3], P[2, 3], A)
+            out[k, i, 3, 0], out[k, i, 3, 1], out[k, i, 3, 2], out[k, i, 3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+@njit(cache=True, nogil=True)
 def smooth_steps(X, length, out):
     """out[i] = whether pose i continues the path smoothly: ``|d_i − d_{i−1}| ≤ 0.1 |d_i|``
     for the steps ``d_i = X_i − X_{i−1}`` (translations divided by ``length``);
@@ -585,22 +605,42 @@ def path_steps(X, length, out):
 
 
 @njit(cache=True, nogil=True)
-def nearest_distances(X, length, rows, out):
-    """out[j] = distance from pose ``rows[j]`` to its nearest other pose of X
-    (translations divided by ``length``; inf when X has one pose)."""
+def is_path(X, length, samples):
+    """Whether the rows of X, in their order, already form a path: no step over 3× the
+    median step, and the median step at most 2× the median distance from a pose to its
+    nearest neighbour (on ``samples`` poses spread over X; a shuffled grid has steps far
+    longer than its spacing). Distances: translations divided by ``length``."""
+    N = X.shape[0]
+    if N < 3:
+        return True
     il = 1.0 / length
-    for j in range(rows.shape[0]):
-        i = rows[j]
-        x0, x1, x2 = X[i, 0] * il, X[i, 1] * il, X[i, 2] * il
-        x3, x4, x5 = X[i, 3], X[i, 4], X[i, 5]
+    Y = X.copy()
+    for i in range(N):
+        for k in range(3):
+            Y[i, k] *= il
+    steps = np.empty(N - 1)
+    for i in range(N - 1):
+        s = 0.0
+        for k in range(6):
+            d = Y[i + 1, k] - Y[i, k]
+            s += d * d
+        steps[i] = math.sqrt(s)
+    median = np.median(steps)
+    if steps.max() > 3.0 * median:
+        return False
+    m = min(samples, N)
+    near = np.empty(m)
+    for j in range(m):
+        i = (j * (N - 1)) // max(m - 1, 1)
         best = np.inf
-        for o in range(X.shape[0]):
-            d0, d1, d2 = X[o, 0] * il - x0, X[o, 1] * il - x1, X[o, 2] * il - x2
-            d3, d4, d5 = X[o, 3] - x3, X[o, 4] - x4, X[o, 5] - x5
+        for o in range(N):
+            d0, d1, d2 = Y[o, 0] - Y[i, 0], Y[o, 1] - Y[i, 1], Y[o, 2] - Y[i, 2]
+            d3, d4, d5 = Y[o, 3] - Y[i, 3], Y[o, 4] - Y[i, 4], Y[o, 5] - Y[i, 5]
             s = d0 * d0 + d1 * d1 + d2 * d2 + d3 * d3 + d4 * d4 + d5 * d5
             if s < best and o != i:
                 best = s
-        out[j] = math.sqrt(best)
+        near[j] = math.sqrt(best)
+    return median <= 2.0 * np.median(near)
 
 
 # ============================================================== a whole mechanism
@@ -630,6 +670,9 @@ class MechanismKernel:
     actuated: np.ndarray  # global indices of the actuated coordinates in Q
     scales: np.ndarray  # unit of each actuated coordinate
     length: float
+    groups: np.ndarray  # (G, 3) columns of the spherical groups (Leg.spherical_groups)
+    act_col: np.ndarray  # column of each actuated joint in the legs' Jacobians side by side
+    act_leg: np.ndarray  # its leg
 
     def args(self) -> tuple:
         return (self.joints, self.coords, self.parent, self.post, self.kind, self.axis,
@@ -654,7 +697,13 @@ def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
         np.stack([k.tip for k in legs]), np.stack([k.base for k in legs]),
         np.stack([a.homogeneous for a in mech.anchors]),
         cat([k.lower for k in legs]), cat([k.upper for k in legs]), actuated,
-        np.asarray(scales, dtype=float), float(mech.characteristic_length))
+        np.asarray(scales, dtype=float), float(mech.characteristic_length),
+        np.array([coords[i] + np.array(g) for i, leg in enumerate(mech.legs)
+                  for g in leg.spherical_groups], dtype=np.int64).reshape(-1, 3),
+        np.concatenate([coords[i] + leg.actuated_v for i, leg in enumerate(mech.legs)]
+                       ).astype(np.int64),
+        np.concatenate([np.full(len(leg.actuated_v), i) for i, leg in enumerate(mech.legs)]
+                       ).astype(np.int64))
 
 
 @njit(cache=True, nogil=True)

@@ -46,8 +46,8 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
-from .screws import as_float_array, as_vector
 from .position import PositionMixin
+from .screws import as_float_array, as_vector
 from .sensitivity import SensitivityMixin
 from .sweep import SweepMixin
 
@@ -69,7 +69,8 @@ def placement(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> pin.SE3:
 
 
 def as_pose(pose) -> pin.SE3:
-    """A platform pose from a ``pin.SE3``, a 4×4 matrix, or 6 numbers (x, y, z, roll, pitch, yaw)."""
+    """A platform pose from a ``pin.SE3``, a 4×4 matrix, or 6 numbers
+    (x, y, z, roll, pitch, yaw)."""
     if isinstance(pose, pin.SE3):
         if not (np.all(np.isfinite(pose.translation)) and np.all(np.isfinite(pose.rotation))):
             raise InputError("the pose must be finite")

@@ -291,8 +291,9 @@ def text(r: dict) -> str:
     if r["crosscheck"] is None:
         out += ["cross-check        no hand-written formulas for this mechanism"]
     else:
-        out += [f"cross-check        max |Pinocchio − formulas| = {r['crosscheck_max_error']:.3g}  ("
-                + ", ".join(f"{k} {v:.2g}" for k, v in r["crosscheck"].items()) + ")"]
+        parts = ", ".join(f"{k} {v:.2g}" for k, v in r["crosscheck"].items())
+        out += ["cross-check        max |Pinocchio − formulas| = "
+                f"{r['crosscheck_max_error']:.3g}  ({parts})"]
     out += [f"plot               {p}" for p in r.get("plots", [])]
     return "\n".join(out)
 

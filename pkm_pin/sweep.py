@@ -23,6 +23,7 @@ Without kernels (a leg with a continuous or multi-DOF joint) the legs are solved
 
 from __future__ import annotations
 
+import math
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 
@@ -146,25 +147,18 @@ def _steps(X: np.ndarray, length: float) -> np.ndarray:
 def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
     """The order of the poses for warm starts (steps: translations divided by ``length``).
 
-    The caller's own order is kept when it is already a path: no step over 3× the
-    median step, and the median step at most 2× the median distance from a pose to its
-    nearest neighbour (measured on 16 poses spread over the input; a shuffled grid has
-    steps far longer than its spacing). Otherwise :func:`serpentine_order`, unless the
-    caller's order travels less."""
-    from .kernels import nearest_distances
+    The caller's own order is kept when it is already a path (:func:`kernels.is_path`:
+    no step over 3× the median step, and the median step at most 2× the typical
+    distance between nearest neighbours: a shuffled grid has steps far longer than its
+    spacing). Otherwise :func:`serpentine_order`, unless the caller's order travels
+    less."""
+    from .kernels import is_path
 
-    steps = _steps(X, length)
-    if not len(steps):
+    X = np.ascontiguousarray(X, dtype=float)
+    if is_path(X, float(length), 16):
         return np.arange(len(X))
-    median = np.median(steps)
-    if steps.max() <= 3.0 * median:
-        rows = np.unique(np.linspace(0, len(X) - 1, min(16, len(X))).astype(np.int64))
-        nearest = np.empty(len(rows))
-        nearest_distances(np.ascontiguousarray(X, dtype=float), float(length), rows, nearest)
-        if median <= 2.0 * np.median(nearest):
-            return np.arange(len(X))  # already a path without jumps
     serp = serpentine_order(X)
-    return np.arange(len(X)) if steps.sum() <= _steps(X[serp], length).sum() else serp
+    return np.arange(len(X)) if _steps(X, length).sum() <= _steps(X[serp], length).sum() else serp
 
 
 def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
@@ -190,7 +184,7 @@ TRUST = 1e-7
 def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restarts) -> dict:
     from .batch import ROTATION_TOL
     from .fast_analysis import analyse_poses
-    from .kernels import solve_from, track
+    from .kernels import anchor_targets, solve_from, track
 
     N, n, legs = len(X), mech.n_actuated, mech.legs
     poses = pose_matrices(X)
@@ -198,18 +192,18 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     home = mech.home_assembly
     # 1. legs along the path, compiled; a target a leg misses is solved again from
     #    home, neutral, mid-limits and random starts (Leg.solve's restarts)
-    Qs, Ts, failures = [], [], []
+    Qs, failures = [], []
     ok = np.ones(N, bool)
-    for leg, lk, anchor, q_home in zip(legs, kernel.legs, mech.anchors, home.leg_q):
-        targets = (poses.reshape(-1, 4) @ anchor.homogeneous).reshape(N, 4, 4)  # one GEMM
-        Ts.append(targets)
+    Ts = np.empty((len(legs), N, 4, 4))  # where each leg's tip must be
+    anchor_targets(poses, kernel.anchors, Ts)
+    for leg, lk, targets, q_home in zip(legs, kernel.legs, Ts, home.leg_q):
         Q = np.empty((N, leg.nq))
         res = np.empty(N)
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
-        track(*lk.solver_args(), targets, q_home.astype(float), along, SWEEP_TOL, 50, TRUST,
-              Q, res)
+        misses = track(*lk.solver_args(), targets, q_home.astype(float), along, SWEEP_TOL, 50,
+                       TRUST, Q, res)
         miss = np.flatnonzero(~(np.abs(res) <= SWEEP_TOL) & ~((res < 0) & (-res <= TRUST))
-                              & ok)
+                              & ok) if misses else ()
         if len(miss):
             Qm, rm = np.empty((len(miss), leg.nq)), np.empty(len(miss))
             solve_from(*lk.solver_args(), np.ascontiguousarray(targets[miss]),
@@ -241,19 +235,15 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         idx = idx[ok[idx]]
     if not len(idx):
         return out
+    every = len(idx) == N
     out["q_actuated"][idx] = np.concatenate(
-        [Q[idx][:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
+        [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
     # 3. screw algebra, compiled; flagged (near-singular) poses by batch.analyse
-    coords = kernel.coords
-    groups = np.array([coords[k] + np.array(g) for k, leg in enumerate(legs)
-                       for g in leg.spherical_groups], dtype=np.int64).reshape(-1, 3)
-    act_col = np.concatenate([coords[k] + leg.actuated_v for k, leg in enumerate(legs)])
-    act_leg = np.concatenate([np.full(len(leg.actuated_v), k) for k, leg in enumerate(legs)])
     M = len(idx)
     dof, trans, red = (np.zeros(M, np.int64) for _ in range(3))
     t1, t2, cond, det = (np.zeros(M) for _ in range(4))
     flag = np.zeros(M, np.int64)
-    analyse_poses(Js, coords, groups, act_col.astype(np.int64), act_leg.astype(np.int64),
+    analyse_poses(Js, kernel.coords, kernel.groups, kernel.act_col, kernel.act_leg,
                   float(mech.characteristic_length), float(rtol), ROTATION_TOL,
                   np.ascontiguousarray(reference, dtype=float), dof, trans, red, t1, t2, cond,
                   det, flag)
@@ -318,9 +308,8 @@ def _pinocchio_pass(mech, Qs, targets, idx):
                 add_H(place(model, data, tip).homogeneous)
                 add_J(frame_jacobian(model, data, tip, world))
         H, Jp = _as_array(Hb, (M, 4, 4), leg.name), _as_array(Jb, (M, 6, leg.nv), leg.name)
-        err = leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
-                          float(leg.characteristic_length), J, int(offs[k]))
-        bad |= ~(err <= SWEEP_TOL)
+        leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
+                    float(leg.characteristic_length), SWEEP_TOL, J, int(offs[k]), bad)
     return J, bad
 
 
@@ -335,7 +324,7 @@ def _as_array(buffer: bytearray, shape: tuple, leg: str) -> np.ndarray:
     """The float64 array of ``shape`` held in ``buffer`` (its size checked: the compiled
     code reading it does not check bounds)."""
     out = np.frombuffer(buffer, dtype=np.float64)
-    if out.size != int(np.prod(shape)):
+    if out.size != math.prod(shape):
         raise RuntimeError(f"leg {leg!r}: Pinocchio's arrays do not add up to {shape}")
     return out.reshape(shape)
 
@@ -499,8 +488,7 @@ def _gather(X, chunks, parts, n, singular_tol) -> SweepResult:
         for key in res:
             res[key][idx] = part[key]
         failures += [(int(idx[i]), reason) for i, reason in part["failures"]]
-    sing = np.where(res["ok"], classify(np.nan_to_num(res["type_I"], nan=np.inf),
-                                        np.nan_to_num(res["type_II"], nan=np.inf),
-                                        singular_tol), "")
+    # nan (not assembled) compares False: "none", then "" where not ok
+    sing = np.where(res["ok"], classify(res["type_I"], res["type_II"], singular_tol), "")
     return SweepResult(X, res["ok"], res["dof"], sing, res["type_I"], res["type_II"],
                        res["condition"], res["det"], res["q_actuated"], sorted(failures))

@@ -18,7 +18,15 @@ from pkm_pin.analysis import SINGULAR_TOL
 from pkm_pin.batch import homogenise
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
-from pkm_pin.fast_analysis import WINDOW, _apply_q, _det, _qr_core, _rank
+from pkm_pin.fast_analysis import (
+    WINDOW,
+    _apply_q,
+    _det,
+    _inverse,
+    _qr_core,
+    _rank,
+    _square_leg,
+)
 from pkm_pin.kernels import jacobi_sv
 from pkm_pin.screws import RTOL
 from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
@@ -163,6 +171,31 @@ def test_rank_decision_and_its_ambiguity_window():
         if expected == 5:  # the last column of Q spans the left null space
             np.testing.assert_allclose(Q[:, 5] @ A, 0.0, atol=1e-13)
     assert WINDOW >= 1e3
+
+
+def test_inverse_and_the_square_leg_certificate():
+    """Gauss–Jordan inverse against numpy; False on an exactly singular matrix; a 6-twist
+    leg is certified of full rank at σ_min/σ_max = 1e-3 and handed to QR at 1e-6
+    (inside the factor-6 slack of the Frobenius bound below rtol · WINDOW = 1e-5)."""
+    rng = np.random.default_rng(3)
+    Xi, W = np.empty((6, 6)), np.empty((6, 6))
+    for n in (1, 3, 6):
+        X = rng.normal(size=(6, 6))
+        assert _inverse(X, n, Xi, W)
+        np.testing.assert_allclose(Xi[:n, :n], np.linalg.inv(X[:n, :n]), rtol=1e-12,
+                                   atol=1e-12)
+    S = rng.normal(size=(6, 6))
+    S[4] = 0.0
+    assert not _inverse(S, 6, Xi, W)
+    assert not _square_leg(S, Xi, W, RTOL)
+    U, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    V, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    assert RTOL * WINDOW == pytest.approx(1e-5)
+    for small, certified in ((1e-3, True), (1e-6, False), (1e-12, False)):
+        X = U @ np.diag([1.0, 0.9, 0.8, 0.5, 0.3, small]) @ V.T
+        assert _square_leg(X, Xi, W, RTOL) is certified
+        if certified:
+            np.testing.assert_allclose(Xi @ X, np.eye(6), atol=1e-10)
 
 
 def test_jacobi_singular_values_and_det():

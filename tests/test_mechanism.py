@@ -109,7 +109,8 @@ def test_python_construction_errors():
 
 
 def test_assembly_respects_prismatic_limits_and_reports_unreachable_leg():
-    """A pose beyond a leg's stroke raises AssemblyError naming that leg, never a negative length."""
+    """A pose beyond a leg's stroke raises AssemblyError naming that leg, never a negative
+    length."""
     mech = MECHANISMS["rpr3"]().build()
     far = pin.SE3(mech.home.rotation, mech.home.translation + np.array([0.0, 0.0, 50.0]))
     with pytest.raises(AssemblyError, match="leg 'A'") as info:

@@ -139,7 +139,8 @@ def test_fk_all_rpr3_beyond_type2_pose():
     P2 = rpr3_type2_pose()
     pose = pin.SE3(P2.rotation, P2.translation + np.array([0.05, 0.0, 0.0]))
     qa = m.inverse_kinematics(pose)
-    modes = m.forward_kinematics_all(qa, starts=8)
+    # 32 starts (the default): 8 found a single mode with numpy 2.4's SVD basis
+    modes = m.forward_kinematics_all(qa)
     assert len(modes) >= 2
     L = m.characteristic_length
     for a in modes:

@@ -119,6 +119,38 @@ def test_smooth_steps_and_visiting_order():
     np.testing.assert_array_equal(visiting_order(line, 1e-3), np.arange(6))
 
 
+def test_anchor_targets_and_is_path():
+    """Tip targets are pose · anchor (Pinocchio's SE3 product); a line and a serpentine
+    scan are paths, a raster scan (jumps back at each row end) and a shuffled grid are
+    not, and millimetres change nothing."""
+    from pkm_pin.kernels import anchor_targets, is_path
+
+    poses = [pin.SE3.Random() for _ in range(5)]
+    anchors = [pin.SE3.Random() for _ in range(3)]
+    out = np.empty((3, 5, 4, 4))
+    anchor_targets(np.array([P.homogeneous for P in poses]),
+                   np.array([A.homogeneous for A in anchors]), out)
+    for k, A in enumerate(anchors):
+        for i, P in enumerate(poses):
+            np.testing.assert_allclose(out[k, i], (P * A).homogeneous, atol=1e-14)
+    line = np.zeros((50, 6))
+    line[:, 0] = np.linspace(0.0, 0.1, 50)
+    line[:, 5] = np.linspace(0.0, 0.3, 50)
+    assert is_path(line, 1.0, 16)
+    xs, ys = np.meshgrid(np.arange(9.0), np.arange(8.0), indexing="ij")
+    raster = np.zeros((xs.size, 6))
+    raster[:, 0], raster[:, 1] = 1e-2 * xs.ravel(), 1e-2 * ys.ravel()
+    assert not is_path(raster, 1.0, 16)
+    snake = raster[serpentine_order(raster)]
+    assert is_path(snake, 1.0, 16)
+    shuffled = snake[np.random.default_rng(1).permutation(len(snake))]
+    assert not is_path(shuffled, 1.0, 16)
+    mm = np.r_[1e3, 1e3, 1e3, 1, 1, 1]
+    for X in (line, raster, snake, shuffled):
+        assert is_path(X * mm, 1e3, 16) == is_path(X, 1.0, 16)
+    assert is_path(line[:2], 1.0, 16)
+
+
 def test_det_changes_sign_across_the_type_II_pose():
     """Along x through the 3-RPR type II pose the carried det(A Δ) changes sign once."""
     mech = mechanism("rpr3")

@@ -28,6 +28,7 @@ matrices ``B_rho = (p - g_i).u_i``, ``B_L = L_i``, ``B_phi = rho_i (p - g_i).du_
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 
 #: Nominal actuator axes ``n_i`` (rows: legs x, y, z).
