@@ -53,6 +53,18 @@ def best_of(fn, repeat: int = 3) -> float:
     return min(times)
 
 
+def best_of_each(fns: dict, repeat: int) -> dict:
+    """Smallest wall time [s] of each callable over ``repeat`` rounds, each round
+    calling every callable once (interleaved)."""
+    best = dict.fromkeys(fns, float("inf"))
+    for _ in range(repeat):
+        for key, fn in fns.items():
+            t = time.perf_counter()
+            fn()
+            best[key] = min(best[key], time.perf_counter() - t)
+    return best
+
+
 def framework_loop(mech, poses):
     prev = mech.home_assembly
     for pose in poses:
@@ -125,16 +137,20 @@ def main(n: int = 1000, n_loop: int = 200) -> dict:
         mech.sweep(X[:10])  # compile / load the kernels
         m = min(n, n_loop)
         t_loop = best_of(lambda: framework_loop(mech, poses[:m])) / m
-        # best of many short runs: the minimum is what a quiet machine gives
-        t_sweep = best_of(lambda: mech.sweep(X), repeat=15) / n
-        t_hand = best_of(lambda: HANDWRITTEN[name](mech, poses), repeat=5) / n
-        t_floor = min(best_of(lambda: pinocchio_floor_frames(mech, solutions), repeat=15),
-                      best_of(lambda: pinocchio_floor_joints(mech, solutions), repeat=15)) / n
         # a Pinocchio-only warm-started assembly also evaluates every leg at its warm
         # start (the previous pose's solution) before the Newton step
         warm = [mech.home_assembly.leg_q] + solutions[:-1]
-        t_floor2 = best_of(lambda: pinocchio_floor_joints(mech, warm + solutions),
-                           repeat=15) / n
+        # best of many short runs, taken in interleaved rounds so that a noisy spell of
+        # the machine slows the figure and its references alike
+        t = best_of_each({
+            "sweep": lambda: mech.sweep(X),
+            "frames": lambda: pinocchio_floor_frames(mech, solutions),
+            "joints": lambda: pinocchio_floor_joints(mech, solutions),
+            "warm": lambda: pinocchio_floor_joints(mech, warm + solutions),
+        }, repeat=15)
+        t_sweep, t_floor2 = t["sweep"] / n, t["warm"] / n
+        t_floor = min(t["frames"], t["joints"]) / n
+        t_hand = best_of(lambda: HANDWRITTEN[name](mech, poses), repeat=5) / n
         rows[name] = (t_loop, t_sweep, t_hand, t_floor)
         print(f"\n{mech.name}: {n} poses, time per pose [µs]")
         print(f"  framework, per-pose loop   {1e6 * t_loop:9.1f}   "

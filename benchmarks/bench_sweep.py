@@ -68,7 +68,8 @@ def _warm_worker() -> None:
     mech.sweep(pose_array([mech.home, mech.home]))
 
 
-def dask_scaling(mech, X: np.ndarray, chunk: int) -> list[tuple[int, float]]:
+def dask_scaling(mech, X: np.ndarray, chunk: int, repeat: int = 3) -> list[tuple[int, float]]:
+    """Poses per second with 1 and 2 workers (best of ``repeat`` sweeps on one cluster)."""
     import distributed
 
     out = []
@@ -78,7 +79,8 @@ def dask_scaling(mech, X: np.ndarray, chunk: int) -> list[tuple[int, float]]:
                 distributed.Client(cluster) as client:
             client.run(_warm_worker)  # every worker: imports, numba kernels loaded
             ex = client.get_executor()
-            rate, _ = sweep_rate(mech, X, executor=ex, chunk_size=chunk)
+            rate = max(sweep_rate(mech, X, executor=ex, chunk_size=chunk, progress=False)[0]
+                       for _ in range(repeat))
         out.append((workers, rate))
     return out
 
@@ -99,7 +101,7 @@ def main(small: bool = False) -> None:
     # Dask: tasks of thousands of poses (a task of a few ms would time the scheduler)
     mech, X = grid_stewart(k + 1)
     chunk = max(64, len(X) // 8)
-    rate, _ = sweep_rate(mech, X)
+    rate = max(sweep_rate(mech, X, progress=False)[0] for _ in range(3))
     scaling = dask_scaling(mech, X, chunk)
     base = scaling[0][1]
     for workers, r in scaling:

@@ -39,15 +39,22 @@ WINDOW = 1e4
 
 
 @njit(cache=True, nogil=True)
-def _qr_core(A, nrow, ncol, perm, V, betas):
+def _qr_core(A, nrow, ncol, perm, V, betas, stop=0.0):
     """Householder QR with column pivoting of the leading nrow × ncol block of ``A`` (in
     place: R in its upper triangle); the reflectors ``I − f_j v_j v_jᵀ`` are kept in
     the columns of ``V`` and ``f_j = 2/(v_jᵀv_j)`` in ``betas`` (0: none); the column
     order in ``perm``.
+
+    With ``stop > 0`` the factorisation ends at step j when every remaining column is
+    shorter than ``stop · |R_00|``: the block left unreduced then has every diagonal
+    entry below that bound, so :func:`_rank` reads the same decision from it (for
+    ``stop ≤ rtol / WINDOW``), and ``Q e_i`` (i ≥ j) from the j reflectors still spans
+    the orthogonal complement of the first j columns.
     Returns the number of reflectors."""
     for c in range(ncol):
         perm[c] = c
     m = min(nrow, ncol)
+    top2 = 0.0
     for j in range(m):
         best, p = -1.0, j
         for c in range(j, ncol):
@@ -56,6 +63,10 @@ def _qr_core(A, nrow, ncol, perm, V, betas):
                 s += A[r, c] * A[r, c]
             if s > best:
                 best, p = s, c
+        if j == 0:
+            top2 = best * stop * stop
+        elif best <= top2:
+            return j
         if p != j:
             for r in range(nrow):
                 A[r, j], A[r, p] = A[r, p], A[r, j]
@@ -400,7 +411,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
         nref = 0
         rank_c = 0
         if m_c > 0:
-            nref = _qr_core(C, 6, m_c, perm, Vh, betas)
+            nref = _qr_core(C, 6, m_c, perm, Vh, betas, rtol / WINDOW)
             rank_c = _rank(C, min(6, m_c), rtol, False)
             if rank_c < 0:
                 flag[i] = 1

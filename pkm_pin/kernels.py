@@ -445,16 +445,19 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
             for a in range(nq):
                 q[a] = min(upper[a], max(lower[a], 2.0 * q1[a] - q2[a]))
         else:
-            q[:] = q1
+            for a in range(nq):
+                q[a] = q1[a]
         r, _ = _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
                        length, targets[i], q, tol, max_iter, trust, ws)
         residual[i] = r
-        Q[i] = q
-        if not (r <= tol or -r <= trust):
+        for a in range(nq):
+            Q[i, a] = q[a]
+        if not r <= tol:  # neither converged nor trusted (a trusted r is negative)
             misses += 1
         if r <= tol:
             head = (head + 1) % 3
-            hist[head] = q
+            for a in range(nq):
+                hist[head, a] = q[a]
             known = known + 1 if i > 0 else 1
         else:
             known = 0

@@ -284,20 +284,20 @@ def _pinocchio_pass(mech, Qs, targets, idx):
     for k, (leg, Q) in enumerate(zip(mech.legs, Qs)):
         model, data, tip = leg.model, leg.data, leg.tip_id
         rows = Q[idx]
-        # Pinocchio's arrays are appended to byte buffers as they come (a memcpy; the
-        # array is freed at once): cheaper than keeping thousands of small arrays to
-        # concatenate. Their layout is checked on the first pose, their number of bytes
-        # at the end.
-        Jb, Hb = bytearray(), bytearray()
-        add_J, add_H = Jb.__iadd__, Hb.__iadd__
+        # Pinocchio's arrays are kept in one list as they come (Jacobian, then tip
+        # placement, per pose) and joined into one byte string at the end: cheaper than
+        # copying each into a numpy array. Their layout is checked on the first pose,
+        # their number of bytes at the end.
+        out = []
+        keep = out.append
         if model.nvExtended == model.nv:
             # the joint Jacobians returned by computeJointJacobians are the tip frame's
             # WORLD Jacobian: every joint of a kernel's chain supports the tip
             _check_layout(jacobians(model, data, rows[0]), (6, leg.nv), leg.name)
             _check_layout(place(model, data, tip).homogeneous, (4, 4), leg.name)
             for q in rows:
-                add_J(jacobians(model, data, q))
-                add_H(place(model, data, tip).homogeneous)
+                keep(jacobians(model, data, q))
+                keep(place(model, data, tip).homogeneous)
         else:  # mimic joints have their own columns in data.J: ask for the frame's
             frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
             jacobians(model, data, rows[0])
@@ -305,9 +305,11 @@ def _pinocchio_pass(mech, Qs, targets, idx):
             _check_layout(place(model, data, tip).homogeneous, (4, 4), leg.name)
             for q in rows:
                 jacobians(model, data, q)
-                add_H(place(model, data, tip).homogeneous)
-                add_J(frame_jacobian(model, data, tip, world))
-        H, Jp = _as_array(Hb, (M, 4, 4), leg.name), _as_array(Jb, (M, 6, leg.nv), leg.name)
+                keep(frame_jacobian(model, data, tip, world))
+                keep(place(model, data, tip).homogeneous)
+        nj = 6 * leg.nv
+        B = _as_array(b"".join(out), (M, nj + 16), leg.name)
+        Jp, H = B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
         leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
                     float(leg.characteristic_length), SWEEP_TOL, J, int(offs[k]), bad)
     return J, bad
@@ -320,7 +322,7 @@ def _check_layout(a: np.ndarray, shape: tuple, leg: str) -> None:
                            f"type {a.dtype}; expected a C-ordered float64 {shape}")
 
 
-def _as_array(buffer: bytearray, shape: tuple, leg: str) -> np.ndarray:
+def _as_array(buffer: bytes, shape: tuple, leg: str) -> np.ndarray:
     """The float64 array of ``shape`` held in ``buffer`` (its size checked: the compiled
     code reading it does not check bounds)."""
     out = np.frombuffer(buffer, dtype=np.float64)

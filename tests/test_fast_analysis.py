@@ -156,6 +156,37 @@ def test_qr_with_column_pivoting_factorises():
         assert np.all(d[:-1] >= d[1:] - 1e-14)
 
 
+def test_qr_early_stop_keeps_the_rank_and_the_complement():
+    """With ``stop = rtol / WINDOW`` the QR of 9 constraint columns of rank 3 (plus
+    round-off) ends after 3 reflectors; the rank read from it, and the span of
+    ``Q e_j`` (j ≥ 3), are those of the full factorisation; a rank-4 matrix whose
+    4th singular value sits inside the window still goes the whole way (rank −1)."""
+    rng = np.random.default_rng(4)
+    for noise in (0.0, 1e-15):
+        A = rng.normal(size=(6, 3)) @ rng.normal(size=(3, 9)) + noise * rng.normal(size=(6, 9))
+        stops = []
+        for stop in (0.0, RTOL / WINDOW):
+            R = A.copy()
+            V, betas, perm = np.empty((6, 6)), np.empty(6), np.empty(9, np.int64)
+            m = _qr_core(R, 6, 9, perm, V, betas, stop)
+            N = np.empty((6, 3))
+            for j in range(3):
+                N[:, j] = np.eye(6)[3 + j]
+                _apply_q(V, betas, m, 6, N[:, j])
+            stops.append((m, _rank(R, 6, RTOL, False), N))
+        (m0, r0, N0), (m1, r1, N1) = stops
+        assert (m0, m1, r0, r1) == (6, 3, 3, 3)
+        np.testing.assert_allclose(N1.T @ A, 0.0, atol=1e-13)
+        np.testing.assert_allclose(N1 @ N1.T, N0 @ N0.T, atol=1e-12)  # same complement
+    U, _ = np.linalg.qr(rng.normal(size=(6, 6)))
+    V9, _ = np.linalg.qr(rng.normal(size=(9, 9)))
+    A = U[:, :4] @ np.diag([2.0, 1.0, 0.5, 1e-9]) @ V9[:4]
+    R = A.copy()
+    V, betas, perm = np.empty((6, 6)), np.empty(6), np.empty(9, np.int64)
+    _qr_core(R, 6, 9, perm, V, betas, RTOL / WINDOW)
+    assert _rank(R, 6, RTOL, False) == -1
+
+
 def test_rank_decision_and_its_ambiguity_window():
     """Rank of matrices with chosen singular values; −1 inside the window."""
     rng = np.random.default_rng(1)

@@ -489,8 +489,11 @@ def _track(kernel, q0, targets, extrapolate, tol=1e-12, trust=TRUST):
     n = targets.shape[0]
     Q = np.full((n, kernel.nv), np.nan)
     res = np.full(n, np.nan)
-    track(*kernel.args(), kernel.lower, kernel.upper, kernel.length, targets,
-          q0.astype(float), np.asarray(extrapolate, dtype=np.bool_), tol, 50, trust, Q, res)
+    misses = track(*kernel.args(), kernel.lower, kernel.upper, kernel.length, targets,
+                   q0.astype(float), np.asarray(extrapolate, dtype=np.bool_), tol, 50, trust,
+                   Q, res)
+    # the count returned: targets neither converged nor trusted
+    assert misses == np.count_nonzero(~(res <= tol))
     return Q, res
 
 
@@ -520,7 +523,7 @@ def test_track_survives_an_unreachable_target():
     targets = targets.copy()
     targets[10, :3, 3] += 10.0
     Q, res = _track(kernel, q0, targets, np.ones(len(targets), bool))
-    assert res[10] > 1.0
+    assert res[10] > 1.0 and np.count_nonzero(~(res <= 1e-12)) == 1  # one miss counted
     ok = np.delete(np.arange(len(targets)), 10)
     assert np.all((np.abs(res[ok]) <= 1e-12) | ((res[ok] < 0) & (-res[ok] <= TRUST)))
     for i in ok:
