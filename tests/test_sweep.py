@@ -176,6 +176,41 @@ def test_thread_executor_gives_the_serial_results():
     np.testing.assert_allclose(threaded.q_actuated, serial.q_actuated, atol=1e-9)
 
 
+def test_executor_tasks_unpickle_the_mechanism_once_per_thread():
+    """A task gets the mechanism as bytes and its digest; each thread unpickles it once
+    and reuses its private copy (never the caller's object, never another thread's);
+    the results are those of evaluate_chunk; corrupted bytes are refused."""
+    import hashlib
+    import pickle
+
+    from pkm_pin import batch, sweep
+    from pkm_pin.screws import RTOL
+
+    mech = mechanism("rpr3")
+    X = grid_around_home(mech, n=3)
+    ref = batch.homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+    blob = pickle.dumps(mech)
+    digest = hashlib.sha256(blob).hexdigest()
+    sweep._SHARED.clear()
+    first = sweep._evaluate_shared(blob, digest, X, ref, RTOL, sweep.SINGULAR_TOL)
+    again = sweep._evaluate_shared(blob, digest, X, ref, RTOL, sweep.SINGULAR_TOL)
+    assert len(sweep._SHARED) == 1
+    (here,) = sweep._SHARED.values()
+    assert here is not mech
+    with ThreadPoolExecutor(1) as ex:
+        ex.submit(sweep._evaluate_shared, blob, digest, X, ref, RTOL,
+                  sweep.SINGULAR_TOL).result()
+    assert len(sweep._SHARED) == 2 and all(m is not mech for m in sweep._SHARED.values())
+    direct = sweep.evaluate_chunk(mech, X, ref, RTOL, sweep.SINGULAR_TOL)
+    for part in (first, again):
+        np.testing.assert_array_equal(part["ok"], direct["ok"])
+        np.testing.assert_allclose(part["type_II"], direct["type_II"], rtol=1e-12)
+    with pytest.raises(RuntimeError, match="digest"):
+        sweep._evaluate_shared(blob[:-1] + b"x", hashlib.sha256(b"other").hexdigest(), X,
+                               ref, RTOL, sweep.SINGULAR_TOL)
+    sweep._SHARED.clear()
+
+
 def test_dask_local_cluster_gives_the_serial_results():
     """A Dask LocalCluster (2 worker processes) through its executor reproduces the sweep."""
     import distributed  # part of the test extra: dask[distributed]
