@@ -50,8 +50,8 @@ class ChainKernel:
     parent: np.ndarray  # (nj, 4, 4) joint placements in the parent joint frame
     post: np.ndarray  # (nj, 4, 4) constant factor after the motion (mimic offset)
     kind: np.ndarray  # (nj,) REVOLUTE / PRISMATIC, + HAS_POST, + AT_PARENT
-    axis: np.ndarray  # (nj, 3) unit axis in the joint frame
-    rate: np.ndarray  # (nj,) rad or m per unit of the coordinate
+    axis: np.ndarray  # (nj, 3) unit axis in the joint frame (e_a exactly along a frame axis)
+    rate: np.ndarray  # (nj,) rad or m per unit of the coordinate (signed)
     iq: np.ndarray  # (nj,) configuration index driving the joint
     iv: np.ndarray  # (nj,) Jacobian column
     tip: np.ndarray  # (4, 4) tip frame in the last joint frame
@@ -128,6 +128,14 @@ def chain_kernel(leg) -> ChainKernel | None:
             kind[k], axis[k], rate[k] = PRISMATIC, v / nvv, nvv
         else:
             return None  # helical or a joint that does not move
+        # an axis along ±e_a to round-off is stored as e_a exactly (the sign goes to the
+        # rate: the same motion), which lets _fk turn two columns instead of Rodrigues
+        a = int(np.argmax(np.abs(axis[k])))
+        if np.all(np.abs(np.delete(axis[k], a)) <= 1e-15):
+            sign = 1.0 if axis[k, a] > 0 else -1.0
+            axis[k] = 0.0
+            axis[k, a] = 1.0
+            rate[k] *= sign
         post[k] = M0.homogeneous
         if not np.allclose(post[k], np.eye(4), rtol=0.0, atol=1e-15):
             kind[k] += HAS_POST
@@ -208,18 +216,33 @@ def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
             J_out[3, col] += g * (py * a2 - pz * a1)
             J_out[4, col] += g * (pz * a0 - px * a2)
             J_out[5, col] += g * (px * a1 - py * a0)
-            # R ← R · Rot(axis, angle) (Rodrigues), origin unchanged
+            # R ← R · Rot(axis, angle), origin unchanged: about a coordinate axis e_a
+            # two columns turn (b = a+1, c = a+2 cyclic: r_b ← c r_b + s r_c,
+            # r_c ← c r_c − s r_b); otherwise Rodrigues
             s, c = math.sin(angle), math.cos(angle)
-            t = 1.0 - c
-            m00, m01, m02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
-            m10, m11, m12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
-            m20, m21, m22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
-                r00 * m00 + r01 * m10 + r02 * m20, r00 * m01 + r01 * m11 + r02 * m21,
-                r00 * m02 + r01 * m12 + r02 * m22, r10 * m00 + r11 * m10 + r12 * m20,
-                r10 * m01 + r11 * m11 + r12 * m21, r10 * m02 + r11 * m12 + r12 * m22,
-                r20 * m00 + r21 * m10 + r22 * m20, r20 * m01 + r21 * m11 + r22 * m21,
-                r20 * m02 + r21 * m12 + r22 * m22)
+            if x == 0.0 and y == 0.0 and z == 1.0:
+                r00, r01 = c * r00 + s * r01, c * r01 - s * r00
+                r10, r11 = c * r10 + s * r11, c * r11 - s * r10
+                r20, r21 = c * r20 + s * r21, c * r21 - s * r20
+            elif x == 1.0 and y == 0.0 and z == 0.0:
+                r01, r02 = c * r01 + s * r02, c * r02 - s * r01
+                r11, r12 = c * r11 + s * r12, c * r12 - s * r11
+                r21, r22 = c * r21 + s * r22, c * r22 - s * r21
+            elif x == 0.0 and y == 1.0 and z == 0.0:
+                r02, r00 = c * r02 + s * r00, c * r00 - s * r02
+                r12, r10 = c * r12 + s * r10, c * r10 - s * r12
+                r22, r20 = c * r22 + s * r20, c * r20 - s * r22
+            else:
+                t = 1.0 - c
+                m00, m01, m02 = c + t * x * x, t * x * y - s * z, t * x * z + s * y
+                m10, m11, m12 = t * x * y + s * z, c + t * y * y, t * y * z - s * x
+                m20, m21, m22 = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+                r00, r01, r02, r10, r11, r12, r20, r21, r22 = (
+                    r00 * m00 + r01 * m10 + r02 * m20, r00 * m01 + r01 * m11 + r02 * m21,
+                    r00 * m02 + r01 * m12 + r02 * m22, r10 * m00 + r11 * m10 + r12 * m20,
+                    r10 * m01 + r11 * m11 + r12 * m21, r10 * m02 + r11 * m12 + r12 * m22,
+                    r20 * m00 + r21 * m10 + r22 * m20, r20 * m01 + r21 * m11 + r22 * m21,
+                    r20 * m02 + r21 * m12 + r22 * m22)
         else:
             J_out[3, col] += g * a0
             J_out[4, col] += g * a1
