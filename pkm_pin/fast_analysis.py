@@ -133,6 +133,16 @@ def _rank(R, n, rtol, absolute):
     return rank
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _pivot(A, j, n):
+    """Partial pivoting: the row r ≥ j of the largest |A[r, j]| among the first n."""
+    p = j
+    for r in range(j + 1, n):
+        if abs(A[r, j]) > abs(A[p, j]):
+            p = r
+    return p
+
+
 @njit(cache=True, nogil=True)
 def _inverse(X, n, Xi, W):
     """Xi = X⁻¹ for the n × n block of X (Gauss–Jordan, partial pivoting; W: n × n work
@@ -142,10 +152,7 @@ def _inverse(X, n, Xi, W):
             W[r, c] = X[r, c]
             Xi[r, c] = 1.0 if r == c else 0.0
     for j in range(n):
-        p = j
-        for r in range(j + 1, n):
-            if abs(W[r, j]) > abs(W[p, j]):
-                p = r
+        p = _pivot(W, j, n)
         if W[p, j] == 0.0:
             return False
         if p != j:
@@ -195,10 +202,7 @@ def _det(M, n, A=None):
             A[r, c] = M[r, c]
     d = 1.0
     for j in range(n):
-        p = j
-        for r in range(j + 1, n):
-            if abs(A[r, j]) > abs(A[p, j]):
-                p = r
+        p = _pivot(A, j, n)
         if A[p, j] == 0.0:
             return 0.0
         if p != j:
