@@ -38,7 +38,7 @@ from .kernels import jacobi_sv
 WINDOW = 1e4
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _qr_core(A, nrow, ncol, perm, V, betas, stop=0.0):
     """Householder QR with column pivoting of the leading nrow × ncol block of ``A`` (in
     place: R in its upper triangle); the reflectors ``I − f_j v_j v_jᵀ`` are kept in
@@ -99,7 +99,7 @@ def _qr_core(A, nrow, ncol, perm, V, betas, stop=0.0):
     return m
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _apply_q(V, betas, m, nrow, x):
     """x ← Q x with Q = H_0 ⋯ H_{m−1} from :func:`_qr_core`."""
     for j in range(m - 1, -1, -1):
@@ -113,7 +113,7 @@ def _apply_q(V, betas, m, nrow, x):
             x[r] -= s * V[r, j]
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _rank(R, n, rtol, absolute):
     """Rank from the diagonal of R (first n pivots): ``|R_jj| > rtol · |R_00|`` (or
     ``> rtol`` when ``absolute``); -1 when a ratio lies inside the ambiguity window."""
@@ -143,7 +143,7 @@ def _pivot(A, j, n):
     return p
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _inverse(X, n, Xi, W):
     """Xi = X⁻¹ for the n × n block of X (Gauss–Jordan, partial pivoting; W: n × n work
     space). Returns False when a pivot is zero."""
@@ -173,7 +173,7 @@ def _inverse(X, n, Xi, W):
     return True
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _square_leg(X, Xi, W, rtol):
     """A leg with six joint twists: ``Xi = X⁻¹`` and whether X is certainly of full
     rank for the rank decision ``σ_min > rtol · σ_max`` taken outside its ambiguity
@@ -191,7 +191,7 @@ def _square_leg(X, Xi, W, rtol):
     return a * b * (rtol * WINDOW) ** 2 <= 1.0
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _det(M, n, A=None):
     """Determinant of the leading n × n block (Gaussian elimination, partial pivoting;
     ``A``: optional n × n work space)."""
@@ -217,7 +217,7 @@ def _det(M, n, A=None):
     return d
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _solve3(G, b, x):
     """x = G⁻¹ b for a symmetric 3×3 matrix (adjugate)."""
     c00 = G[1, 1] * G[2, 2] - G[1, 2] * G[2, 1]
@@ -232,7 +232,7 @@ def _solve3(G, b, x):
     x[2] = (c02 * b[0] + c12 * b[1] + c22 * b[2]) * f
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _reciprocal_products(W, n, T, m, out):
     """out[a, j] = W_a Δ T_j (wrench rows W[:n], twist rows T[:m], axis-first)."""
     for a in range(n):
@@ -243,7 +243,7 @@ def _reciprocal_products(W, n, T, m, out):
             out[a, j] = s
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def _homogeneous_unit(x, L, out):
     """(x[:3]; x[3:] / L) scaled to unit norm (zero stays zero)."""
     s = 0.0

@@ -487,7 +487,7 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
     return misses
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, inline="always")
 def jacobi_sv(M, m, n, sv, V, W):
     """Singular values (descending) of the m × n matrix M (m ≥ n) by one-sided Jacobi
     on ``M V``: ``V`` (n × n orthogonal, in/out) is the previous pose's right singular
