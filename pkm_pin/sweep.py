@@ -272,7 +272,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
 
 
 def _pinocchio_pass(mech, Qs, targets, idx):
-    """One Pinocchio pass per leg at the poses ``idx``: the (M, nv, 6) axis-first world
+    """One Pinocchio pass per leg at the poses ``idx`` (increasing): the (M, nv, 6) axis-first world
     joint twists of the legs one after the other, and (M,) whether a leg's closure error (from
     Pinocchio's tip placement against its target in ``targets``) exceeds
     :data:`SWEEP_TOL`."""
@@ -285,9 +285,11 @@ def _pinocchio_pass(mech, Qs, targets, idx):
     if not M:
         return J, bad
     jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
+    # idx is increasing (np.flatnonzero): of full length, it is every pose in order
+    every = bool(Qs) and M == len(Qs[0]) and idx[-1] == M - 1
     for k, (leg, Q) in enumerate(zip(mech.legs, Qs)):
         model, data, tip = leg.model, leg.data, leg.tip_id
-        rows = Q[idx]
+        rows = Q if every else Q[idx]
         # Pinocchio's arrays are kept in one list as they come (Jacobian, then tip
         # placement, per pose) and joined into one byte string at the end: cheaper than
         # copying each into a numpy array. Their layout is checked on the first pose,
@@ -297,20 +299,17 @@ def _pinocchio_pass(mech, Qs, targets, idx):
         if model.nvExtended == model.nv:
             # the joint Jacobians returned by computeJointJacobians are the tip frame's
             # WORLD Jacobian: every joint of a kernel's chain supports the tip
-            _check_layout(jacobians(model, data, rows[0]), (6, leg.nv), leg.name)
-            _check_layout(place(model, data, tip).homogeneous, (4, 4), leg.name)
             for q in rows:
                 keep(jacobians(model, data, q))
                 keep(place(model, data, tip).homogeneous)
         else:  # mimic joints have their own columns in data.J: ask for the frame's
             frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
-            jacobians(model, data, rows[0])
-            _check_layout(frame_jacobian(model, data, tip, world), (6, leg.nv), leg.name)
-            _check_layout(place(model, data, tip).homogeneous, (4, 4), leg.name)
             for q in rows:
                 jacobians(model, data, q)
                 keep(frame_jacobian(model, data, tip, world))
                 keep(place(model, data, tip).homogeneous)
+        _check_layout(out[0], (6, leg.nv), leg.name)
+        _check_layout(out[1], (4, 4), leg.name)
         nj = 6 * leg.nv
         B = _as_array(b"".join(out), (M, nj + 16), leg.name)
         Jp, H = B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
