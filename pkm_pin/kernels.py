@@ -475,14 +475,13 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
         residual[i] = r
         for a in range(nq):
             Q[i, a] = q[a]
-        if not r <= tol:  # neither converged nor trusted (a trusted r is negative)
-            misses += 1
-        if r <= tol:
+        if r <= tol:  # converged, or trusted (a trusted r is negative)
             head = (head + 1) % 3
             for a in range(nq):
                 hist[head, a] = q[a]
             known = known + 1 if i > 0 else 1
         else:
+            misses += 1
             known = 0
     return misses
 
@@ -645,12 +644,7 @@ def is_path(X, length, samples):
         for k in range(3):
             Y[i, k] *= il
     steps = np.empty(N - 1)
-    for i in range(N - 1):
-        s = 0.0
-        for k in range(6):
-            d = Y[i + 1, k] - Y[i, k]
-            s += d * d
-        steps[i] = math.sqrt(s)
+    path_steps(X, length, steps)
     median = np.median(steps)
     if steps.max() > 3.0 * median:
         return False

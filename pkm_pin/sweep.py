@@ -206,8 +206,8 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
         misses = track(*lk.solver_args(), targets, q_home.astype(float), along, SWEEP_TOL, 50,
                        TRUST, Q, res)
-        miss = np.flatnonzero(~(np.abs(res) <= SWEEP_TOL) & ~((res < 0) & (-res <= TRUST))
-                              & ok) if misses else ()
+        # a miss: neither converged (0 ≤ r ≤ tol) nor trusted (r < 0), as track counts
+        miss = np.flatnonzero(~(res <= SWEEP_TOL) & ok) if misses else ()
         if len(miss):
             Qm, rm = np.empty((len(miss), leg.nq)), np.empty(len(miss))
             solve_from(*lk.solver_args(), np.ascontiguousarray(targets[miss]),
@@ -272,10 +272,10 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
 
 
 def _pinocchio_pass(mech, Qs, targets, idx):
-    """One Pinocchio pass per leg at the poses ``idx`` (increasing): the (M, nv, 6) axis-first world
-    joint twists of the legs one after the other, and (M,) whether a leg's closure error (from
-    Pinocchio's tip placement against its target in ``targets``) exceeds
-    :data:`SWEEP_TOL`."""
+    """One Pinocchio pass per leg at the poses ``idx`` (increasing): the (M, nv, 6)
+    axis-first world joint twists of the legs one after the other, and (M,) whether a
+    leg's closure error (from Pinocchio's tip placement against its target in
+    ``targets``) exceeds :data:`SWEEP_TOL`."""
     from .fast_analysis import leg_outputs
 
     offs = mech._kernel.coords
