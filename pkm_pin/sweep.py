@@ -24,6 +24,7 @@ Without kernels (a leg with a continuous or multi-DOF joint) the legs are solved
 from __future__ import annotations
 
 import hashlib
+import io
 import math
 import os
 import pickle
@@ -290,48 +291,56 @@ def _pinocchio_pass(mech, Qs, targets, idx):
     for k, (leg, Q) in enumerate(zip(mech.legs, Qs)):
         model, data, tip = leg.model, leg.data, leg.tip_id
         rows = Q if every else Q[idx]
-        # Pinocchio's arrays are kept in one list as they come (Jacobian, then tip
-        # placement, per pose) and joined into one byte string at the end: cheaper than
-        # copying each into a numpy array. Their layout is checked on the first pose,
-        # their number of bytes at the end.
-        out = []
-        keep = out.append
+        nj = 6 * leg.nv
+        # Pinocchio's arrays (Jacobian, then tip placement, per pose) are copied as they
+        # come into one pre-sized byte buffer: each is freed at once, so the allocator
+        # recycles its memory (cheaper than keeping them and joining at the end). Their
+        # layout is checked on the first pose, their number of bytes at the end.
+        buf = io.BytesIO(bytes(8 * M * (nj + 16)))
+        write = buf.write
         if model.nvExtended == model.nv:
             # the joint Jacobians returned by computeJointJacobians are the tip frame's
             # WORLD Jacobian: every joint of a kernel's chain supports the tip
-            for q in rows:
-                keep(jacobians(model, data, q))
-                keep(place(model, data, tip).homogeneous)
+            first = (jacobians(model, data, rows[0]), place(model, data, tip).homogeneous)
+            _check_layout(first, leg)
+            write(first[0])
+            write(first[1])
+            for q in rows[1:]:
+                write(jacobians(model, data, q))
+                write(place(model, data, tip).homogeneous)
         else:  # mimic joints have their own columns in data.J: ask for the frame's
             frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
-            for q in rows:
+            for j, q in enumerate(rows):
                 jacobians(model, data, q)
-                keep(frame_jacobian(model, data, tip, world))
-                keep(place(model, data, tip).homogeneous)
-        _check_layout(out[0], (6, leg.nv), leg.name)
-        _check_layout(out[1], (4, 4), leg.name)
-        nj = 6 * leg.nv
-        B = _as_array(b"".join(out), (M, nj + 16), leg.name)
+                pair = (frame_jacobian(model, data, tip, world),
+                        place(model, data, tip).homogeneous)
+                if not j:
+                    _check_layout(pair, leg)
+                write(pair[0])
+                write(pair[1])
+        B = _as_array(buf, (M, nj + 16), leg.name)
         Jp, H = B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
         leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
                     float(leg.characteristic_length), SWEEP_TOL, J, int(offs[k]), bad)
     return J, bad
 
 
-def _check_layout(a: np.ndarray, shape: tuple, leg: str) -> None:
-    """Pinocchio's output is the C-ordered float64 array :func:`_as_array` expects."""
-    if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
-        raise RuntimeError(f"leg {leg!r}: Pinocchio returned an array of shape {a.shape}, "
-                           f"type {a.dtype}; expected a C-ordered float64 {shape}")
+def _check_layout(pair: tuple, leg) -> None:
+    """Pinocchio's Jacobian and tip placement are the C-ordered float64 (6, nv) and
+    (4, 4) arrays :func:`_as_array` expects."""
+    for a, shape in zip(pair, ((6, leg.nv), (4, 4))):
+        if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
+            raise RuntimeError(f"leg {leg.name!r}: Pinocchio returned an array of shape "
+                               f"{a.shape}, type {a.dtype}; expected a C-ordered float64 "
+                               f"{shape}")
 
 
-def _as_array(buffer: bytes, shape: tuple, leg: str) -> np.ndarray:
-    """The float64 array of ``shape`` held in ``buffer`` (its size checked: the compiled
-    code reading it does not check bounds)."""
-    out = np.frombuffer(buffer, dtype=np.float64)
-    if out.size != math.prod(shape):
+def _as_array(buf: io.BytesIO, shape: tuple, leg: str) -> np.ndarray:
+    """The float64 array of ``shape`` written in ``buf`` (the number of bytes written is
+    checked: the compiled code reading it does not check bounds)."""
+    if buf.tell() != 8 * math.prod(shape):
         raise RuntimeError(f"leg {leg!r}: Pinocchio's arrays do not add up to {shape}")
-    return out.reshape(shape)
+    return np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(shape)
 
 
 def _restart_configurations(leg, q_home, restarts: int) -> np.ndarray:
