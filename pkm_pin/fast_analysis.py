@@ -39,11 +39,23 @@ WINDOW = 1e4
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _qr_core(A, nrow, ncol, perm, V, betas, stop=0.0):
+def _qr_core(A, nrow, ncol, perm, V, betas, stop=0.0, unit=False):
     """Householder QR with column pivoting of the leading nrow × ncol block of ``A`` (in
     place: R in its upper triangle); the reflectors ``I − f_j v_j v_jᵀ`` are kept in
     the columns of ``V`` and ``f_j = 2/(v_jᵀv_j)`` in ``betas`` (0: none); the column
     order in ``perm``.
+
+    The pivot is the first column whose squared norm no later column exceeds by a
+    factor 1 + 10⁻¹⁰ (within that factor of the largest): near-ties (the unit columns
+    of this module) go to the lowest index rather than to round-off, so that the bases
+    built from the factorisation vary continuously along a path of poses (which keeps
+    the warm start of :func:`~pkm_pin.kernels.jacobi_sv` valid: one sweep fewer). The
+    bounds of pivoted QR on the singular values change by that factor only, far inside
+    the window of :data:`WINDOW`.
+
+    ``unit``: the caller's columns all have norm 1 or 0 (normalised twists, orthonormal
+    constraints); a unit first column is then the first pivot under that rule, and the
+    norms of the others are not computed at step 0 (same factorisation).
 
     With ``stop > 0`` the factorisation ends at step j when every remaining column is
     shorter than ``stop · |R_00|``: the block left unreduced then has every diagonal
@@ -57,15 +69,22 @@ def _qr_core(A, nrow, ncol, perm, V, betas, stop=0.0):
     top2 = 0.0
     for j in range(m):
         best, p = -1.0, j
-        for c in range(j, ncol):
+        if j == 0 and unit:  # a unit first column is the first pivot: no search
             s = 0.0
-            for r in range(j, nrow):
-                s += A[r, c] * A[r, c]
-            if s > best:
-                best, p = s, c
+            for r in range(nrow):
+                s += A[r, 0] * A[r, 0]
+            if s > 0.5:
+                best = s
+        if best < 0.0:
+            for c in range(j, ncol):
+                s = 0.0
+                for r in range(j, nrow):
+                    s += A[r, c] * A[r, c]
+                if s > best * (1.0 + 1e-10):
+                    best, p = s, c
         if j == 0:
             top2 = best * stop * stop
-        elif best <= top2:
+        elif best * (1.0 + 1e-10) <= top2:  # then every remaining column is too
             return j
         if p != j:
             for r in range(nrow):
@@ -369,7 +388,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
                         for a in range(6):
                             Ah[a_i, a] = Xi[ka, a]
                 continue
-            nref = _qr_core(X, 6, k, perm, Vh, betas)
+            nref = _qr_core(X, 6, k, perm, Vh, betas, 0.0, True)  # unit twist rows
             r = _rank(X, min(6, k), rtol, False)
             if r < 0:
                 bad = True
@@ -415,7 +434,7 @@ def analyse_poses(J, coords, groups, act_col, act_leg, L, rtol, rot_tol, referen
         nref = 0
         rank_c = 0
         if m_c > 0:
-            nref = _qr_core(C, 6, m_c, perm, Vh, betas, rtol / WINDOW)
+            nref = _qr_core(C, 6, m_c, perm, Vh, betas, rtol / WINDOW, True)
             rank_c = _rank(C, min(6, m_c), rtol, False)
             if rank_c < 0:
                 flag[i] = 1

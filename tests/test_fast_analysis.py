@@ -187,6 +187,38 @@ def test_qr_early_stop_keeps_the_rank_and_the_complement():
     assert _rank(R, 6, RTOL, False) == -1
 
 
+def test_qr_pivot_near_ties_go_to_the_first_column():
+    """Unit columns whose norms differ by round-off: the pivots follow the column order
+    (not the round-off), so the complement basis ``Q e_j`` (j ≥ rank) of a smoothly
+    moving set of constraints moves smoothly; ``unit=True`` (no norm search at step
+    0) gives the same factorisation bit for bit."""
+    rng = np.random.default_rng(7)
+    B, _ = np.linalg.qr(rng.normal(size=(6, 3)))  # three orthonormal constraints
+    O, _ = np.linalg.qr(rng.normal(size=(3, 3)))  # the same span, another basis
+
+    def factorise(t, unit):
+        G, _ = np.linalg.qr(np.eye(6) + t * np.triu(np.ones((6, 6)), 1))  # moves with t
+        A = np.hstack([G @ B, G @ B @ O])
+        A *= 1.0 + 1e-14 * np.arange(6)  # later columns longer by round-off only
+        R = A.copy()
+        V, betas, perm = np.empty((6, 6)), np.empty(6), np.empty(6, np.int64)
+        m = _qr_core(R, 6, 6, perm, V, betas, RTOL / WINDOW, unit)
+        N = np.empty((6, 3))
+        for j in range(3):
+            N[:, j] = np.eye(6)[3 + j]
+            _apply_q(V, betas, m, 6, N[:, j])
+        return perm.copy(), R, N
+
+    p0, R0, N0 = factorise(0.3, False)
+    assert p0[0] == 0  # not column 5, the longest by round-off
+    p1, R1, N1 = factorise(0.3, True)
+    np.testing.assert_array_equal(p0, p1)
+    np.testing.assert_array_equal(R0, R1)
+    np.testing.assert_array_equal(N0, N1)
+    _, _, N2 = factorise(0.3 + 1e-7, True)
+    assert np.abs(N2 - N1).max() < 1e-5  # the basis itself moves by O(dt), not its span only
+
+
 def test_rank_decision_and_its_ambiguity_window():
     """Rank of matrices with chosen singular values; −1 inside the window."""
     rng = np.random.default_rng(1)
