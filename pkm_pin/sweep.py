@@ -288,9 +288,20 @@ def _pinocchio_pass(mech, Qs, targets, idx):
     jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
     # idx is increasing (np.flatnonzero): of full length, it is every pose in order
     every = bool(Qs) and M == len(Qs[0]) and idx[-1] == M - 1
+    # the configurations are handed to Pinocchio as M row views of one buffer per
+    # configuration size, made once and refilled for each leg of that size (a view
+    # costs as much as a fifth of Pinocchio's call)
+    shared = {}
     for k, (leg, Q) in enumerate(zip(mech.legs, Qs)):
         model, data, tip = leg.model, leg.data, leg.tip_id
-        rows = Q if every else Q[idx]
+        if leg.nq not in shared:
+            Qb = np.empty((M, leg.nq))
+            shared[leg.nq] = Qb, list(Qb)
+        Qb, rows = shared[leg.nq]
+        if every:
+            Qb[...] = Q
+        else:
+            np.take(Q, idx, axis=0, out=Qb)
         nj = 6 * leg.nv
         # Pinocchio's arrays (Jacobian, then tip placement, per pose) are copied as they
         # come into one pre-sized byte buffer: each is freed at once, so the allocator
