@@ -336,3 +336,7 @@ def test_pinocchio_pass_gives_the_legs_twists_and_closure(name):
         for i in range(len(X)):
             np.testing.assert_allclose(J[i, coords[k]:coords[k + 1]], leg.jacobian(Qs[k][i]).T,
                                        rtol=0, atol=1e-14)
+    some = np.array([1, 2, 5])  # a subset of the poses: their rows, in order
+    Js, bads = _pinocchio_pass(mech, Qs, targets, some)
+    np.testing.assert_array_equal(Js, J[some])
+    np.testing.assert_array_equal(bads, bad[some])
