@@ -329,7 +329,7 @@ def _pinocchio_pass(mech, Qs, targets, idx):
                     _check_layout(pair, leg)
                 write(pair[0])
                 write(pair[1])
-        B = _as_array(buf, (M, nj + 16), leg.name)
+        B = _as_array(buf, (M, nj + 16), leg)
         Jp, H = B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
         leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
                     float(leg.characteristic_length), SWEEP_TOL, J, int(offs[k]), bad)
@@ -346,11 +346,11 @@ def _check_layout(pair: tuple, leg) -> None:
                                f"{shape}")
 
 
-def _as_array(buf: io.BytesIO, shape: tuple, leg: str) -> np.ndarray:
+def _as_array(buf: io.BytesIO, shape: tuple, leg) -> np.ndarray:
     """The float64 array of ``shape`` written in ``buf`` (the number of bytes written is
     checked: the compiled code reading it does not check bounds)."""
     if buf.tell() != 8 * math.prod(shape):
-        raise RuntimeError(f"leg {leg!r}: Pinocchio's arrays do not add up to {shape}")
+        raise RuntimeError(f"leg {leg.name!r}: Pinocchio's arrays do not add up to {shape}")
     return np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(shape)
 
 
