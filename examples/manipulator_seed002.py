@@ -1,5 +1,8 @@
 """Seed 002 manipulator (two revolute pairs, a prismatic pair, a spherical pair): link
-screws and the velocity and acceleration of the end point E."""
+screws and the velocity and acceleration of the end point E.
+
+Seed 002: anon., Polish, 1987, see docs/references.md.
+"""
 
 import numpy as np
 

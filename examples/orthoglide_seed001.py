@@ -1,4 +1,7 @@
-"""Orthoglide of seed 001: mobility, closed forms vs Pinocchio, sensitivity, calibration."""
+"""Orthoglide of seed 001: mobility, closed forms vs Pinocchio, sensitivity, calibration.
+
+Seed 001: Pashkevich & Gomolitsky 2007, see docs/references.md.
+"""
 
 import numpy as np
 import pinocchio as pin

@@ -1,4 +1,7 @@
-"""Planar 3-RPR of seed 000: mobility, velocity equation (58) and the type II pose."""
+"""Planar 3-RPR of seed 000: mobility, velocity equation (58) and the type II pose.
+
+Seed 000: Michalková & Guldan, see docs/references.md.
+"""
 
 import numpy as np
 

@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError, PkmError
+from .tolerances import CROSSCHECK_TOL
 
 #: Pose coordinates in the order of ``--pose`` and of the sweep arrays.
 POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
@@ -67,7 +68,7 @@ def shipped_models() -> dict[str, dict]:
 
 def load(spec: str | None):
     """The mechanism named by ``spec``: a file path, a shipped model name, or ``None``
-    (the seed-000 3-RPR).
+    (the 3-RPR of seed 000, Michalková & Guldan, see docs/references.md).
 
     Raises:
         MechanismFileError: the file is missing or wrong.
@@ -182,7 +183,7 @@ def cmd_check(args) -> int:
     checks = crosscheck(an)
     if checks is not None:
         worst = max(checks.values())
-        if worst > 1e-6:
+        if worst > CROSSCHECK_TOL:
             warnings.append(f"the hand-written formulas disagree with the analysis by {worst:.2g}")
         else:
             print(f"ok    cross-check with the hand-written formulas: {worst:.2g}")

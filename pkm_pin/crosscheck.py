@@ -21,9 +21,10 @@ def _screw_error(a: np.ndarray, b: np.ndarray, length: float) -> float:
 
 
 def rpr3(analysis: Analysis) -> dict[str, float]:
-    """Compare a 3-RPR of seed 000 (legs A, B, C: R-P-R in the xz-plane) with
-    :mod:`pkm_pin.formulas.rpr3`: joint screws (50)–(52), constraint system (54),
-    the rows of ``A`` and ``B`` (58) with unit screws, and the forward velocity map."""
+    """Compare a 3-RPR of seed 000 (Michalková & Guldan, see docs/references.md; legs A,
+    B, C: R-P-R in the xz-plane) with :mod:`pkm_pin.formulas.rpr3`: joint screws
+    (50)–(52), constraint system (54), the rows of ``A`` and ``B`` (58) with unit screws,
+    and the forward velocity map."""
     mech, L = analysis.mechanism, analysis.length
     xs = [leg.base.translation[0] for leg in mech.legs]
     L3, L6 = xs[1] - xs[0], xs[2] - xs[1]

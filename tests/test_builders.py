@@ -319,7 +319,8 @@ def test_rpr3_paper_layout_and_actuation(designs):
 
 
 def _paper_det60(design, qs) -> float:
-    """Determinant of the matrix of seed 000 eq. (60), normalised by its row norms."""
+    """Determinant of the matrix of seed 000 (Michalková & Guldan, see docs/references.md)
+    eq. (60), normalised by its row norms."""
     (alpha, _, _), (beta, L5, _), (gamma, _, _) = [(-q[0], q[1], q[2]) for q in qs]
     L3, L6 = 1.0, 1.0
     M = np.array([

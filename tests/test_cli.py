@@ -15,7 +15,8 @@ from pkm_pin.cli import main
 
 
 def test_analyze_default_prints_the_3rpr_report(capsys):
-    """With no file, analyze reports the seed-000 3-RPR: 3 DOF 2T1R and a tiny cross-check error."""
+    """With no file, analyze reports the 3-RPR of seed 000 (Michalková & Guldan, see
+    docs/references.md): 3 DOF 2T1R and a tiny cross-check error."""
     assert main(["analyze"]) == 0
     out = capsys.readouterr().out
     assert "3-RPR" in out

@@ -1,4 +1,7 @@
-"""Tests of the hand-written 3-RPR witness (seed 000, section 5) and seed 000 errata."""
+"""Tests of the hand-written 3-RPR witness (seed 000, section 5) and seed 000 errata.
+
+Seed 000: Michalková & Guldan, see docs/references.md.
+"""
 
 from __future__ import annotations
 

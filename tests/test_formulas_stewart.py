@@ -1,4 +1,7 @@
-"""Tests of the hand-written Gough-Stewart / l-coordinate witness (seed 003) and its errata."""
+"""Tests of the hand-written Gough-Stewart / l-coordinate witness (seed 003) and its errata.
+
+Seed 003: Demidov 2025, see docs/references.md.
+"""
 
 from __future__ import annotations
 

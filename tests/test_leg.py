@@ -6,6 +6,8 @@ with the prismatic screws made unit), a Gough-Stewart U-P-S leg (lines through t
 centres along the current joint axes), and a parallelogram written as a revolute plus a
 mimicking revolute. Jacobians are also checked against finite differences of the tip
 placement taken with ``pin.integrate`` and ``pin.log6``. Seeded random configurations.
+
+Seed 000: Michalková & Guldan, see docs/references.md.
 """
 
 from __future__ import annotations

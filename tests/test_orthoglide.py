@@ -1,4 +1,7 @@
-"""Orthoglide of seed 001: the hand-written closed forms and the Pinocchio path agree."""
+"""Orthoglide of seed 001: the hand-written closed forms and the Pinocchio path agree.
+
+Seed 001: Pashkevich & Gomolitsky 2007, see docs/references.md.
+"""
 
 from __future__ import annotations
 

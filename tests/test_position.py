@@ -1,4 +1,7 @@
-"""Position problems (seed 003): continuation FK, IK, assembly modes, iterative IK."""
+"""Position problems (seed 003): continuation FK, IK, assembly modes, iterative IK.
+
+Seed 003: Demidov 2025, see docs/references.md.
+"""
 
 from __future__ import annotations
 

@@ -6,6 +6,8 @@ Rank properties are tested on integer-grid geometry, whose Plücker coordinates 
 integers: such systems are either exactly dependent or well conditioned, so the
 expected rank is computed exactly (rational Gaussian elimination), independently of
 the SVD under test.
+
+Seed 000: Michalková & Guldan, see docs/references.md.
 """
 
 from __future__ import annotations

@@ -8,6 +8,8 @@ Pinocchio model by the adapter :func:`leg_chain` below (joint placements, joint 
 from the joint motion subspaces, the leg's base folded into the first offset). Robots:
 UR5 and Panda (example-robot-data) and the seed 002 §6 manipulator (R R P + spherical
 pair, ``models/urdf/manipulator_seed002.urdf``), at seeded random states.
+
+Seed 002: anon., Polish, 1987, see docs/references.md.
 """
 
 from __future__ import annotations

@@ -1,5 +1,7 @@
 """Orthoglide of seed 001: three P-R-Pa-R legs on (quasi-)orthogonal linear actuators.
 
+Seed 001: Pashkevich & Gomolitsky 2007, see docs/references.md.
+
 Every leg is written in its own *leg frame* ``(n_i, a_i, o_i)``: ``x`` along the nominal
 actuator axis ``n_i``, ``z`` along the offset direction ``o_i`` of ``dd_i``, ``y = z × x``.
 The three leg frames are the cyclic permutations of the world axes (leg x: the world

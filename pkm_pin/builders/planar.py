@@ -1,5 +1,7 @@
 """Planar parallel mechanisms: the 3-RPR of seed 000 (xz-plane) and a 3-RRR (xy-plane).
 
+Seed 000: Michalková & Guldan, see docs/references.md.
+
 Every length is multiplied by ``scale`` (``scale=1000`` builds the same mechanism in
 millimetres); angles are in radians.
 

@@ -1,5 +1,7 @@
 """URDF models of the serial chains of the source papers (seeds 002 and 003).
 
+Seed 002: anon., Polish, 1987; seed 003: Demidov 2025; see docs/references.md.
+
 Every chain is written with :func:`pkm_pin.builders.urdf_writer.chain_urdf`: a root
 link ``base``, one link ``<joint>_link`` per joint, and the frame ``tip`` fixed to the
 last link. Lengths in metres, angles in radians.

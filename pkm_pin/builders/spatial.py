@@ -76,7 +76,8 @@ def stewart(
     slug: str = "stewart",
     urdf_file: str = "ups_leg.urdf",
 ) -> MechanismDesign:
-    """6-UPS Gough–Stewart platform (also the 6-SPS ℓ-coordinate body of seed 003).
+    """6-UPS Gough–Stewart platform (also the 6-SPS ℓ-coordinate body of seed 003,
+    Demidov 2025, see docs/references.md).
 
     Leg URDF (shared by the six legs): ``U1`` revolute about x then ``U2`` about y at the
     base point, ``P`` prismatic along z (actuated; its value is the leg length), then a

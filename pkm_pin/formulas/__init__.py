@@ -5,9 +5,14 @@ of the Pinocchio path. Screw coordinates are axis-first ``(s; s0)`` about the wo
 origin: twists ``(w; v_O)``, wrenches ``(f; m_O)``; reciprocal product
 ``a o b = a[:3].b[3:] + a[3:].b[:3]``; SI units, radians.
 
-* :mod:`.rpr3` — planar 3-RPR of seed 000, section 5.
-* :mod:`.stewart` — Gough-Stewart / l-coordinate body of seed 003.
-* :mod:`.serial_reduction` — recursive screw reduction of a serial chain, seed 002.
+* :mod:`.rpr3` — planar 3-RPR of seed 000 (Michalková & Guldan), section 5.
+* :mod:`.stewart` — Gough-Stewart / l-coordinate body of seed 003 (Demidov 2025).
+* :mod:`.serial_reduction` — recursive screw reduction of a serial chain, seed 002
+  (anon., Polish, 1987).
+* :mod:`.orthoglide` — quasi-orthogonal Orthoglide of seed 001 (Pashkevich &
+  Gomolitsky 2007).
+
+The seeds are the four source papers; see docs/references.md.
 """
 
 from .rpr3 import (
@@ -92,7 +97,8 @@ __all__ = [
     "velocity_equation_paper",
 ]
 
-# Seed 001 — quasi-orthogonal Orthoglide (module docstring: pkm_pin.formulas.orthoglide).
+# Seed 001 (Pashkevich & Gomolitsky 2007) — quasi-orthogonal Orthoglide (module docstring:
+# pkm_pin.formulas.orthoglide).
 from . import orthoglide  # noqa: E402
 from .orthoglide import OrthoglideParameters  # noqa: E402
 

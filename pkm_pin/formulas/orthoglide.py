@@ -1,4 +1,6 @@
-"""Quasi-orthogonal Orthoglide of seed 001 (Pashkevich, Gomolitsky), eq. (2)-(16), by hand.
+"""Quasi-orthogonal Orthoglide of seed 001, eq. (2)-(16), by hand.
+
+Seed 001: Pashkevich & Gomolitsky 2007, see docs/references.md.
 
 This module is part of the independent witness :mod:`pkm_pin.formulas`: it imports
 nothing from ``pkm_pin`` and nothing from Pinocchio. Plain numpy, SI units, radians.

@@ -1,5 +1,7 @@
 """Planar 3-RPR ("3-RTR") of seed 000, section 5, written out by hand — plain numpy.
 
+Seed 000: Michalková & Guldan, see docs/references.md.
+
 This module is part of the independent witness :mod:`pkm_pin.formulas`: it imports
 nothing from ``pkm_pin`` and nothing from Pinocchio.
 

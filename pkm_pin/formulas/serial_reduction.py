@@ -1,5 +1,7 @@
 """Recursive "screw reduction" of an open serial chain (seed 002), by hand — plain numpy.
 
+Seed 002: anon., Polish, 1987, see docs/references.md.
+
 Part of the independent witness :mod:`pkm_pin.formulas`: imports nothing from
 ``pkm_pin`` and nothing from Pinocchio.
 

@@ -1,5 +1,7 @@
 """Gough-Stewart (6-UPS / 6-SPS) l-coordinate body of seed 003, by hand — plain numpy.
 
+Seed 003: Demidov 2025, see docs/references.md.
+
 Part of the independent witness :mod:`pkm_pin.formulas`: imports nothing from
 ``pkm_pin`` and nothing from Pinocchio.
 
