@@ -1,4 +1,10 @@
-"""Shared fixtures: the example-robot-data legs (loaded once per session)."""
+"""Shared fixtures: the example-robot-data legs (loaded once per session), and the
+hypothesis profile of every run.
+
+Shared plain functions (shipped-model caches, random states and platform twists,
+finite-difference Jacobians, screw-span oracles, model paths) are in ``helpers.py``,
+imported as ``from helpers import ...``.
+"""
 
 from __future__ import annotations
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import shipped_mechanisms
 
 from pkm_pin import Assembly, AssemblyError, InputError, SingularityError, screws
-from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.planar import rpr3_type2_pose, rrr3_stretched_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
 from pkm_pin.crosscheck import crosscheck
@@ -22,15 +22,8 @@ EXPECTED = {
     "rps3": (3, "1T2R", 3, 0),
 }
 
-_CACHE: dict = {}
-
-
-def mechanism(name: str, scale: float = 1.0):
-    """Built mechanism, cached per (name, scale) for the whole module."""
-    key = (name, scale)
-    if key not in _CACHE:
-        _CACHE[key] = MECHANISMS[name](scale=scale).build()
-    return _CACHE[key]
+#: Built mechanism, cached per (name, scale) for the whole module.
+mechanism = shipped_mechanisms()
 
 
 #: mechanisms whose platform motion is not a subgroup (exp of a platform twist leaves

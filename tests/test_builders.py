@@ -6,7 +6,6 @@ import math
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -16,6 +15,8 @@ try:
     import tomllib
 except ImportError:  # Python 3.10
     import tomli as tomllib
+
+from helpers import MECHANISM_DIR, MODELS
 
 from pkm_pin import InputError, Leg, screws
 from pkm_pin.builders import (
@@ -31,7 +32,6 @@ from pkm_pin.builders import (
     upu3_constraint_singular_pose,
 )
 
-REPO = Path(__file__).resolve().parents[1]
 NAMES = sorted(MECHANISMS)
 
 #: Rank of one leg's joint twists at home.
@@ -247,7 +247,7 @@ def test_committed_models_are_current(designs, name, tmp_path):
     """The files under models/ equal what the builders generate now."""
     written = designs[name].write(tmp_path)
     for path in written:
-        committed = REPO / "models" / path.relative_to(tmp_path)
+        committed = MODELS / path.relative_to(tmp_path)
         assert committed.is_file(), f"{committed} missing: run python -m pkm_pin.builders"
         assert _same_up_to_rounding(committed.read_text(), path.read_text()), (
             f"{committed} is stale: run python -m pkm_pin.builders"
@@ -272,7 +272,7 @@ def test_committed_file_loads_and_assembles_in_the_home_working_mode(designs, na
     from pkm_pin.mechanism import load_mechanism
 
     d = designs[name]
-    mech = load_mechanism(REPO / "models" / "mechanisms" / f"{d.slug}.toml")
+    mech = load_mechanism(MECHANISM_DIR / f"{d.slug}.toml")
     for q, q_design in zip(mech.home_assembly.leg_q, d.home_q):
         assert np.allclose(q, q_design, atol=1e-9)
     built = d.build()

@@ -5,10 +5,10 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import MECHANISM_DIR
 
 from pkm_pin.builders import DESCRIPTIONS
 from pkm_pin.cli import main
@@ -70,7 +70,7 @@ def _one_error_line(capsys) -> str:
     return lines[0]
 
 
-RPR3_TOML = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "rpr3.toml"
+RPR3_TOML = MECHANISM_DIR / "rpr3.toml"
 
 
 # --------------------------------------------------------------------------- help

@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import MODELS
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
@@ -30,7 +31,6 @@ from pkm_pin import InputError, Leg, MechanismFileError, PkmError, UrdfError, lo
 from pkm_pin.builders import MECHANISMS
 from pkm_pin.cli import main
 
-MODELS = Path(__file__).resolve().parents[1] / "models"
 #: The shipped 3-RPR file with absolute URDF paths (so that a copy loads from anywhere).
 BASE_TOML = (MODELS / "mechanisms" / "rpr3.toml").read_text().replace(
     '"../urdf/', f'"{MODELS / "urdf"}/')
@@ -38,6 +38,9 @@ BASE_URDF = (MODELS / "urdf" / "rpr_leg_a.urdf").read_text()
 
 FUZZ = settings(max_examples=50, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much])
+#: The API-argument properties: every public call, 15 examples each (module fixture).
+API_FUZZ = settings(max_examples=15, deadline=None, derandomize=True,
+                    suppress_health_check=[HealthCheck.function_scoped_fixture])
 
 
 def _run_cli(argv: list[str]) -> tuple[int, str, str]:
@@ -268,8 +271,7 @@ def with_non_finite(draw, shape: tuple) -> np.ndarray:
 
 
 @pytest.mark.parametrize("name", sorted(API_CALLS))
-@settings(max_examples=15, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@API_FUZZ
 @given(data=st.data())
 def test_non_finite_arguments_are_refused_as_not_finite(rpr3, name, data):
     """NaN or inf in an API argument is an InputError that says it must be finite."""
@@ -280,8 +282,7 @@ def test_non_finite_arguments_are_refused_as_not_finite(rpr3, name, data):
 
 
 @pytest.mark.parametrize("name", sorted(API_CALLS))
-@settings(max_examples=15, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@API_FUZZ
 @given(data=st.data())
 def test_wrong_shapes_are_refused_with_the_shape(rpr3, name, data):
     """An API argument of the wrong shape is an InputError that names the shape."""

@@ -14,6 +14,7 @@ import dataclasses
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import fd_jacobian, random_platform_twist, shipped_mechanisms
 
 from pkm_pin import InputError, Leg, Mechanism, screws
 from pkm_pin.builders import MECHANISMS
@@ -35,14 +36,8 @@ from pkm_pin.position import _actuated_scales
 
 TRUST = 1e-7  # as pkm_pin.sweep.TRUST
 
-_MECHS: dict = {}
-
-
-def mech(name):
-    """Shipped mechanism ``name``, built once per session."""
-    if name not in _MECHS:
-        _MECHS[name] = MECHANISMS[name]().build()
-    return _MECHS[name]
+#: Shipped mechanism ``name``, built once for the module.
+mech = shipped_mechanisms()
 
 
 def _base() -> pin.SE3:
@@ -130,12 +125,9 @@ def test_jacobian_against_finite_differences(which, request):
     for _ in range(3):
         q = leg.random_configuration(rng)
         _, J = kernel.kinematics(q)
+        J_fd = fd_jacobian(leg, q, h)  # axis-first, from pin.log6
         for k in range(leg.nv):
-            e = np.zeros(leg.nv)
-            e[k] = h
-            D = leg.tip_placement(q + e) * leg.tip_placement(q - e).inverse()
-            twist = screws.log(D) / (2 * h)  # axis-first, from pin.log6
-            np.testing.assert_allclose(J[:, k], twist, rtol=0, atol=1e-7)
+            np.testing.assert_allclose(J[:, k], J_fd[:, k], rtol=0, atol=1e-7)
 
 
 def test_kernel_kinds_of_the_shipped_legs():
@@ -552,16 +544,6 @@ def test_mechanism_kernel_layout():
     assert k.length == m.characteristic_length
 
 
-def _platform_twist(m, rng, angle, distance) -> np.ndarray:
-    """A twist of the platform twist system at home with rotation ``angle`` and
-    translation ``distance`` (as tests/test_position.py)."""
-    P = m.analyze(m.home_assembly).platform_twists
-    c = rng.normal(size=P.shape[0]) @ P
-    w, v = c[:3], c[3:]
-    nw, nv = np.linalg.norm(w), np.linalg.norm(v)
-    return np.r_[w / nw * angle if nw > 1e-9 else 0 * w, v / nv * distance if nv > 1e-9 else v]
-
-
 @pytest.mark.parametrize("name", ["stewart", "rpr3"])
 def test_system_newton_from_home(name):
     """system_newton from home to the actuated coordinates of a pose 2 cm / 2° away:
@@ -571,7 +553,7 @@ def test_system_newton_from_home(name):
     home = m.home_assembly
     rng = np.random.default_rng(14)
     for _ in range(3):
-        xi = _platform_twist(m, rng, np.radians(2.0), 0.02)
+        xi = random_platform_twist(m, m.home_assembly, rng, np.radians(2.0), 0.02)
         target_pose = screws.exp(xi) * home.pose
         target = m.assemble(target_pose)
         pose = home.pose.homogeneous.copy()

@@ -15,6 +15,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import fd_jacobian, spans_equal
+from helpers import screw_rank as rank
 
 from pkm_pin import InputError, Leg, LegSolution, screws
 
@@ -142,35 +144,6 @@ def random_q(leg: Leg, rng: np.random.Generator) -> np.ndarray:
     if leg.nq != leg.nv:  # continuous joints (cos, sin): the leg's own sampler
         return leg.random_configuration(rng)
     return rng.uniform(leg.lower, leg.upper)
-
-
-def fd_jacobian(leg: Leg, q: np.ndarray, eps: float = 1e-6) -> np.ndarray:
-    """Central differences of the world tip placement, axis-first (ω; v_O) columns."""
-    cols = []
-    for k in range(leg.nv):
-        dq = np.zeros(leg.nv)
-        dq[k] = eps
-        plus = leg.tip_placement(pin.integrate(leg.model, q, dq))
-        minus = leg.tip_placement(pin.integrate(leg.model, q, -dq))
-        m = pin.log6(plus * minus.inverse())
-        cols.append(np.r_[m.angular, m.linear] / (2 * eps))
-    return np.array(cols).T
-
-
-def rank(S, length, tol=1e-9) -> int:
-    """Rank by numpy SVD of homogenised, row-normalised screws (test oracle)."""
-    S = np.asarray(S, float).reshape(-1, 6).copy()
-    S[:, 3:] /= length
-    S = S[np.linalg.norm(S, axis=1) > 1e-12]
-    if S.shape[0] == 0:
-        return 0
-    S /= np.linalg.norm(S, axis=1)[:, None]
-    sv = np.linalg.svd(S, compute_uv=False)
-    return int(np.sum(sv > tol * sv[0]))
-
-
-def spans_equal(A, B, length=1.0) -> bool:
-    return rank(A, length) == rank(B, length) == rank(np.vstack([A, B]), length)
 
 
 PLANAR_XZ = np.array([[0, 1, 0, 0, 0, 0], [0, 0, 0, 1, 0, 0], [0, 0, 0, 0, 0, 1]], float)

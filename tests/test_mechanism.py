@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import MECHANISM_DIR
 
 from pkm_pin import (
     AssemblyError,
@@ -18,8 +19,6 @@ from pkm_pin import (
     screws,
 )
 from pkm_pin.builders import MECHANISMS
-
-MODELS = Path(__file__).resolve().parents[1] / "models" / "mechanisms"
 
 
 @pytest.fixture(scope="module")
@@ -38,7 +37,7 @@ def _edited(path: Path, tmp_path: Path, old: str, new: str, count: int = 1) -> P
     return out
 
 
-@pytest.mark.parametrize("toml", sorted(MODELS.glob("*.toml")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("toml", sorted(MECHANISM_DIR.glob("*.toml")), ids=lambda p: p.stem)
 def test_every_shipped_mechanism_file_loads_and_assembles_at_home(toml):
     """Each committed mechanism file loads, and assembles at home with a tiny residual."""
     mech = load_mechanism(toml)

@@ -7,11 +7,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import MECHANISM_DIR, URDF_DIR
 
 from pkm_pin import screws
 from pkm_pin.builders.orthoglide import QUASI, orthoglide, orthoglide_quasi
@@ -19,7 +19,6 @@ from pkm_pin.formulas import orthoglide as og
 from pkm_pin.formulas.orthoglide import OrthoglideParameters
 from pkm_pin.mechanism import load_mechanism
 
-REPO = Path(__file__).resolve().parents[1]
 E = 0.1  # tool offset of the shipped designs
 
 
@@ -263,11 +262,11 @@ def test_shipped_models_load_and_match_the_builders():
     """The shipped orthoglide*.toml load and assemble at home with the builders' joint values."""
     for build in (orthoglide, orthoglide_quasi):
         d = build()
-        mech = load_mechanism(REPO / "models" / "mechanisms" / f"{d.slug}.toml")
+        mech = load_mechanism(MECHANISM_DIR / f"{d.slug}.toml")
         for q, q_design in zip(mech.home_assembly.leg_q, d.home_q):
             assert np.allclose(q, q_design, atol=1e-9)
         for leg in d.legs:
-            assert (REPO / "models" / "urdf" / leg.urdf_file).read_text() == leg.urdf
+            assert (URDF_DIR / leg.urdf_file).read_text() == leg.urdf
 
 
 def test_scale_1000_gives_the_same_angles_and_lengths_times_1000():

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import random_platform_twist, shipped_mechanisms
 
 from pkm_pin import Leg, screws
 from pkm_pin.builders import MECHANISMS, rpr3_type2_pose
@@ -16,28 +17,13 @@ from pkm_pin.errors import ForwardKinematicsError, InputError, SingularityError
 from pkm_pin.formulas.stewart import SEED003_DL, SEED003_LINES, SEED003_TWIST, seed003_geometry
 from pkm_pin.position import iterative_ik, screw_step
 
-_MECHS: dict = {}
-
-
-def mech(name):
-    if name not in _MECHS:
-        _MECHS[name] = MECHANISMS[name]().build()
-    return _MECHS[name]
+#: Shipped mechanism ``name``, built once for the module.
+mech = shipped_mechanisms()
 
 
 def pose_error(a: pin.SE3, b: pin.SE3, L: float) -> float:
     e = pin.log6(a.actInv(b)).vector
     return float(np.max(np.abs(np.r_[e[:3] / L, e[3:]])))
-
-
-def random_platform_twist(m, assembly, rng, angle, distance):
-    """A twist of the platform twist system with rotation ``angle`` and translation
-    ``distance`` (parts absent from the system stay zero)."""
-    P = m.analyze(assembly).platform_twists
-    c = rng.normal(size=P.shape[0]) @ P
-    w, v = c[:3], c[3:]
-    nw, nv = np.linalg.norm(w), np.linalg.norm(v)
-    return np.r_[w / nw * angle if nw > 1e-9 else 0 * w, v / nv * distance if nv > 1e-9 else v]
 
 
 @pytest.mark.parametrize("name", sorted(MECHANISMS))

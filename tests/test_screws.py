@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from fractions import Fraction
 
+import helpers
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -118,22 +119,10 @@ def spans_equal(A, B, length: float = 1.0, tol: float = 1e-8) -> bool:
     """Whether two screw systems span the same space.
 
     An oracle independent of :mod:`pkm_pin.screws`: moments divided by ``length``, rows
-    normalised, ranks by numpy's SVD with a relative tolerance.
+    normalised, ranks by numpy's SVD with a relative tolerance (rows below 1e-12 of the
+    largest dropped first): :func:`helpers.spans_equal`.
     """
-
-    def _rank(M):
-        M = np.asarray(M, dtype=float).reshape(-1, 6).copy()
-        M[:, 3:] /= length
-        n = np.linalg.norm(M, axis=1)
-        M = M[n > 1e-12 * max(n.max(initial=0.0), 1e-300)]
-        if M.shape[0] == 0:
-            return 0
-        M /= np.linalg.norm(M, axis=1)[:, None]
-        sv = np.linalg.svd(M, compute_uv=False)
-        return int(np.sum(sv > tol * sv[0]))
-
-    rA, rB = _rank(A), _rank(B)
-    return rA == rB == _rank(np.vstack([np.reshape(A, (-1, 6)), np.reshape(B, (-1, 6))]))
+    return helpers.spans_equal(A, B, length, tol, relative_zero=True)
 
 
 # A planar motion system in the xz-plane (normal y): rotation about y, translations x, z
@@ -337,16 +326,22 @@ def test_reciprocal_has_complementary_dimension_and_is_reciprocal(S):
         assert np.all(np.abs(S @ DELTA @ R.T) <= 1e-10 * scale)
 
 
+def _assert_same_system(X, S):
+    """``X`` spans ``S`` (oracle) and, both non-empty, each contains the other
+    (:func:`pkm_pin.screws.contains` at the grid length)."""
+    assert spans_equal(X, S)
+    if S.shape[0] and X.shape[0]:
+        assert np.all(screws.contains(X, S, GRID_L))
+        assert np.all(screws.contains(S, X, GRID_L))
+
+
 @SETTINGS
 @given(grid_systems())
 def test_reciprocal_of_reciprocal_spans_original(S):
     """reciprocal(reciprocal(S)) spans the same system as S."""
     RR = screws.reciprocal(screws.reciprocal(S, GRID_L), GRID_L)
     assert RR.shape[0] == exact_rank(S)
-    assert spans_equal(RR, S)
-    if S.shape[0] and RR.shape[0]:
-        assert np.all(screws.contains(RR, S, GRID_L))
-        assert np.all(screws.contains(S, RR, GRID_L))
+    _assert_same_system(RR, S)
 
 
 @SETTINGS
@@ -355,10 +350,7 @@ def test_basis_is_independent_and_spans(S):
     """basis(S) has rank(S) rows that span S."""
     B = screws.basis(S, GRID_L)
     assert B.shape == (exact_rank(S), 6)
-    assert spans_equal(B, S)
-    if S.shape[0] and B.shape[0]:
-        assert np.all(screws.contains(B, S, GRID_L))
-        assert np.all(screws.contains(S, B, GRID_L))
+    _assert_same_system(B, S)
 
 
 @SETTINGS

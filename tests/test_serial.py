@@ -9,31 +9,20 @@ Seed 002: anon., Polish, 1987; seed 003: Demidov 2025; see docs/references.md.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import URDF_DIR, fd_point, path_configuration, random_states, serial_model_path
 
 from pkm_pin import FrameNotFound, InputError, Leg, SingularityError, screws
 from pkm_pin.builders import serial_chains
 from pkm_pin.serial import LinkScrew
 
-MODELS = Path(__file__).resolve().parents[1] / "models" / "urdf"
 SEED = 20240611
 N_STATES = 5
 
 
 # ------------------------------------------------------------------------- fixtures
-def _model_path(key: str, tmp_factory) -> Path:
-    """The committed URDF, or a freshly generated one if the file is not there yet."""
-    path = MODELS / serial_chains.SERIAL_MODEL_FILES[key]
-    if path.is_file():
-        return path
-    return serial_chains.write_serial_models(tmp_factory.mktemp("models"))[
-        list(serial_chains.SERIAL_MODEL_FILES).index(key)]
-
-
 @pytest.fixture(scope="module")
 def ur5() -> Leg:
     return Leg.from_example_robot_data("ur5")
@@ -46,17 +35,17 @@ def panda() -> Leg:
 
 @pytest.fixture(scope="module")
 def manipulator(tmp_path_factory) -> Leg:
-    return Leg.from_urdf(_model_path("manipulator_seed002", tmp_path_factory), "tip")
+    return Leg.from_urdf(serial_model_path("manipulator_seed002", tmp_path_factory), "tip")
 
 
 @pytest.fixture(scope="module")
 def chain_6r(tmp_path_factory) -> Leg:
-    return Leg.from_urdf(_model_path("chain_6r_seed003", tmp_path_factory), "tip")
+    return Leg.from_urdf(serial_model_path("chain_6r_seed003", tmp_path_factory), "tip")
 
 
 @pytest.fixture(scope="module")
 def chain_rp(tmp_path_factory) -> Leg:
-    return Leg.from_urdf(_model_path("chain_rprrrr_seed003", tmp_path_factory), "tip")
+    return Leg.from_urdf(serial_model_path("chain_rprrrr_seed003", tmp_path_factory), "tip")
 
 
 @pytest.fixture(scope="module")
@@ -75,21 +64,9 @@ def leg(request) -> Leg:
 
 
 def _states(leg: Leg, n: int = N_STATES, seed: int = SEED):
-    """Seeded random (q, qd, qdd) inside the joint limits."""
-    rng = np.random.default_rng(seed)
-    for _ in range(n):
-        q = leg.random_configuration(rng)
-        yield q, rng.uniform(-1.0, 1.0, leg.nv), rng.uniform(-1.0, 1.0, leg.nv)
-
-
-def _path(leg: Leg, q, qd, qdd, t: float) -> np.ndarray:
-    return pin.integrate(leg.model, q, qd * t + 0.5 * qdd * t * t)
-
-
-def _fd_point(leg: Leg, link: str, p, q, qd, qdd, h: float):
-    """Central first and second differences of a point's world position."""
-    x = {t: leg.point_position(link, p, _path(leg, q, qd, qdd, t)) for t in (-h, 0.0, h)}
-    return (x[h] - x[-h]) / (2 * h), (x[h] - 2 * x[0.0] + x[-h]) / (h * h)
+    """Seeded random (q, qd, qdd) inside the joint limits, rates and accelerations in
+    [-1, 1]."""
+    return random_states(leg, n, seed)
 
 
 def _moving_links(leg: Leg) -> list[str]:
@@ -105,7 +82,7 @@ def test_generated_models_are_current():
              "chain_rprrrr_seed003": serial_chains.chain_rprrrr_seed003_urdf(),
              "manipulator_seed002": serial_chains.manipulator_seed002_urdf()}
     for key, text in texts.items():
-        path = MODELS / serial_chains.SERIAL_MODEL_FILES[key]
+        path = URDF_DIR / serial_chains.SERIAL_MODEL_FILES[key]
         assert path.is_file(), f"run write_serial_models('models') to create {path}"
         assert path.read_text() == text, f"{path} is stale: regenerate it"
 
@@ -246,8 +223,8 @@ def test_link_twists_match_finite_differences_of_placements(leg):
         twists = leg.link_twists(q, qd)
         assert list(twists) == leg.link_names
         for link, twist in twists.items():
-            D = leg.link_placement(link, _path(leg, q, qd, qdd, h)) * \
-                leg.link_placement(link, _path(leg, q, qd, qdd, -h)).inverse()
+            D = leg.link_placement(link, path_configuration(leg, q, qd, qdd, h)) * \
+                leg.link_placement(link, path_configuration(leg, q, qd, qdd, -h)).inverse()
             fd = screws.log(D) / (2 * h)
             scale = 1.0 + np.linalg.norm(twist)
             assert np.linalg.norm(twist - fd) < 1e-7 * scale, link
@@ -364,7 +341,7 @@ def test_point_velocity_matches_finite_differences(leg):
         for link in _moving_links(leg):
             p = rng.uniform(-0.3, 0.3, 3)
             v = leg.point_velocity(link, p, q, qd)
-            v_fd, _ = _fd_point(leg, link, p, q, qd, qdd, 1e-6)
+            v_fd, _ = fd_point(leg, link, p, q, qd, qdd, 1e-6)
             assert np.linalg.norm(v - v_fd) < 1e-7 * (1 + np.linalg.norm(v)), link
 
 
@@ -376,7 +353,7 @@ def test_point_acceleration_matches_finite_differences(leg):
         for link in _moving_links(leg):
             p = rng.uniform(-0.3, 0.3, 3)
             a = leg.point_acceleration(link, p, q, qd, qdd)
-            _, a_fd = _fd_point(leg, link, p, q, qd, qdd, 1e-4)
+            _, a_fd = fd_point(leg, link, p, q, qd, qdd, 1e-4)
             assert np.linalg.norm(a - a_fd) < 1e-6 * (1 + np.linalg.norm(a)), link
 
 

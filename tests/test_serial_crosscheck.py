@@ -14,17 +14,14 @@ Seed 002: anon., Polish, 1987, see docs/references.md.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import fd_point, random_states, serial_model_path
 
 from pkm_pin import Leg, screws
-from pkm_pin.builders import serial_chains
 from pkm_pin.formulas import serial_reduction as red
 
-MODELS = Path(__file__).resolve().parents[1] / "models" / "urdf"
 SEED = 7
 N_STATES = 6
 #: Relative tolerances (of 1 + the magnitude compared).
@@ -82,10 +79,7 @@ def _world_point(states, frame: pin.Frame, p_link: np.ndarray) -> np.ndarray:
 @pytest.fixture(scope="module", params=["ur5", "panda", "manipulator_seed002", "ur5_on_base"])
 def leg(request, tmp_path_factory) -> Leg:
     if request.param == "manipulator_seed002":
-        path = MODELS / serial_chains.SERIAL_MODEL_FILES["manipulator_seed002"]
-        if not path.is_file():
-            path = serial_chains.write_serial_models(tmp_path_factory.mktemp("m"))[2]
-        return Leg.from_urdf(path, "tip")
+        return Leg.from_urdf(serial_model_path("manipulator_seed002", tmp_path_factory), "tip")
     if request.param == "ur5_on_base":
         base = pin.SE3(pin.rpy.rpyToMatrix(-0.2, 0.6, 2.0), np.array([1.0, 0.5, -0.3]))
         return Leg.from_example_robot_data("ur5", base=base)
@@ -93,10 +87,8 @@ def leg(request, tmp_path_factory) -> Leg:
 
 
 def _states(leg: Leg, n: int = N_STATES):
-    rng = np.random.default_rng(SEED)
-    for _ in range(n):
-        yield (leg.random_configuration(rng), rng.uniform(-1.5, 1.5, leg.nv),
-               rng.uniform(-2.0, 2.0, leg.nv))
+    """Seeded random (q, qd, qdd): rates in [-1.5, 1.5], accelerations in [-2, 2]."""
+    return random_states(leg, n, SEED, qd_max=1.5, qdd_max=2.0)
 
 
 def _close(a, b, rtol) -> bool:
@@ -144,10 +136,7 @@ def test_point_velocities_pinocchio_reduction_finite_differences(leg):
             P = _world_point(states, f, p)
             np.testing.assert_allclose(P, leg.point_position(name, p, q), atol=1e-12)
             v_red = red.point_velocity(states[f.parentJoint - 1], P)
-            x_plus, x_minus = (
-                leg.point_position(name, p, pin.integrate(leg.model, q, qd * t + qdd * t * t / 2))
-                for t in (h, -h))
-            v_fd = (x_plus - x_minus) / (2 * h)
+            v_fd, _ = fd_point(leg, name, p, q, qd, qdd, h)
             assert _close(v_pin, v_red, TOL_EXACT), name
             assert _close(v_pin, v_fd, TOL_FD_V), name
 
@@ -166,9 +155,7 @@ def test_point_accelerations_pinocchio_reduction_finite_differences(leg):
             p = rng.uniform(-0.4, 0.4, 3)
             a_pin = leg.point_acceleration(name, p, q, qd, qdd)
             a_red = red.point_acceleration(states[f.parentJoint - 1], _world_point(states, f, p))
-            x = [leg.point_position(name, p, pin.integrate(leg.model, q, qd * t + qdd * t * t / 2))
-                 for t in (-h, 0.0, h)]
-            a_fd = (x[2] - 2 * x[1] + x[0]) / (h * h)
+            _, a_fd = fd_point(leg, name, p, q, qd, qdd, h)
             assert _close(a_pin, a_red, TOL_EXACT), name
             assert _close(a_pin, a_fd, TOL_FD_A), name
 
@@ -212,10 +199,7 @@ def test_tip_jacobian_columns_equal_reduction_unit_rates(leg):
 def test_seed002_constant_rates_end_point(tmp_path_factory):
     """Seed 002 §6: constant joint rates (qdd = 0); the end point E's velocity and
     acceleration agree between Pinocchio and the reduction (1e-11) at 20 states."""
-    path = MODELS / serial_chains.SERIAL_MODEL_FILES["manipulator_seed002"]
-    if not path.is_file():
-        path = serial_chains.write_serial_models(tmp_path_factory.mktemp("m"))[2]
-    leg = Leg.from_urdf(path, "tip")
+    leg = Leg.from_urdf(serial_model_path("manipulator_seed002", tmp_path_factory), "tip")
     chain = leg_chain(leg)
     assert [j.kind for j in chain] == ["R", "R", "P", "R", "R", "R"]
     rng = np.random.default_rng(SEED)

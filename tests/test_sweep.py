@@ -7,20 +7,14 @@ from concurrent.futures import ThreadPoolExecutor
 import numpy as np
 import pinocchio as pin
 import pytest
+from helpers import shipped_mechanisms
 
 from pkm_pin import InputError, screws
-from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.sweep import pose_array, pose_matrices, serpentine_order, smooth_steps, visiting_order
 
-_CACHE: dict = {}
-
-
-def mechanism(name):
-    """Built mechanism, cached for the module."""
-    if name not in _CACHE:
-        _CACHE[name] = MECHANISMS[name]().build()
-    return _CACHE[name]
+#: Built mechanism, cached for the module.
+mechanism = shipped_mechanisms()
 
 
 def grid_around_home(mech, n=4, size=0.04):
