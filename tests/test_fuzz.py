@@ -6,8 +6,9 @@ mutations of a shipped mechanism file (keys deleted or renamed, values of the wr
 truncations, random text and bytes) and of a shipped leg URDF (elements and attributes
 deleted, renamed, duplicated, given absurd values) go through the public loaders and
 through ``pkm-pin check`` / ``pkm-pin analyze`` in-process; NaN, inf and wrong shapes go
-to the public API calls. The tests at the end pin down specific inputs that currently
-escape as other exceptions (each docstring says where); they fail until fixed.
+to the public API calls. The tests at the end pin down specific inputs that the
+fuzzing found escaping as other exceptions (overlong paths, non-numeric and non-finite
+arguments, far targets); each states the error that such an input must give.
 """
 
 from __future__ import annotations
@@ -296,38 +297,38 @@ def test_wrong_shapes_are_refused_with_the_shape(rpr3, name, data):
 
 # --------------------------------------------------- inputs found by the fuzzing
 def test_overlong_urdf_path_is_a_urdf_error():
-    """A non-XML URDF source too long for a file name is a UrdfError (fails until
-    pkm_pin/urdf.py read() catches the OSError ENAMETOOLONG of Path.is_file())."""
+    """A non-XML URDF source too long for a file name is a UrdfError, not the OSError
+    (ENAMETOOLONG) of asking the file system whether it is a file."""
     with pytest.raises(UrdfError):
         Leg.from_urdf("x" * 300, "tip")
 
 
 def test_overlong_urdf_path_in_a_mechanism_file_is_one_cli_line(tmp_path):
-    """A mechanism file whose urdf key is 300 characters long gives one error line (fails
-    until pkm_pin/urdf.py read() catches the OSError of Path.is_file())."""
+    """A mechanism file whose urdf key is 300 characters long gives one error line and
+    status 2 from ``pkm-pin check``."""
     path = _write(str(tmp_path), "m.toml",
                   BASE_TOML.replace(f'"{MODELS / "urdf"}/rpr_leg_a.urdf"', '"' + "z" * 300 + '"'))
     assert _assert_cli_fails_cleanly_or_succeeds(["check", path]) == 2
 
 
 def test_overlong_mechanism_path_is_a_mechanism_file_error():
-    """A mechanism path too long for a file name is a MechanismFileError (fails until
-    pkm_pin/mechanism.py load_mechanism() catches the OSError of Path.is_file())."""
+    """A mechanism path too long for a file name is a MechanismFileError, not the
+    OSError of asking the file system whether it is a file."""
     with pytest.raises(MechanismFileError):
         load_mechanism("y" * 300)
 
 
 def test_crosscheck_of_a_3rpr_with_other_actuators_does_not_crash(tmp_path):
-    """A '3-RPR' whose leg A is not actuated is analysed without an exception (fails until
-    pkm_pin/crosscheck.py rpr3() declines mechanisms whose actuation differs from the
-    paper's instead of broadcasting a 2-row A against 3 formula rows)."""
+    """A '3-RPR' whose leg A is not actuated is analysed (status 0) or refused in one
+    line (status 2): the cross-check against the paper's formulas, which assume the
+    paper's three actuators, must not crash on it."""
     path = _write(str(tmp_path), "m.toml", BASE_TOML.replace('actuated = ["A1"]', "actuated = []"))
     assert _assert_cli_fails_cleanly_or_succeeds(["analyze", path]) in (0, 2)
 
 
 def test_non_finite_analysis_tolerances_are_refused(rpr3):
-    """rtol or singular_tol NaN is an InputError (fails until pkm_pin/analysis.py
-    Analysis.__init__ checks them: with rtol=nan the 3-RPR reports 6 DOF)."""
+    """A non-finite or negative rtol / singular_tol is an InputError saying it must be
+    finite or positive (with rtol=nan the 3-RPR would otherwise report 6 DOF)."""
     mech = rpr3[0]
     for options in ({"rtol": np.nan}, {"singular_tol": np.inf}, {"rtol": -1.0}):
         with pytest.raises(InputError, match="finite|positive"):
@@ -335,9 +336,9 @@ def test_non_finite_analysis_tolerances_are_refused(rpr3):
 
 
 def test_non_numeric_arguments_are_input_errors(rpr3):
-    """Text or objects where numbers are expected are InputErrors (fails until as_pose,
-    Mechanism.check_actuated, Leg.check_q and screws.as_screws wrap the ValueError /
-    TypeError of numpy's float conversion)."""
+    """Text or objects where numbers are expected (a pose, actuated coordinates, a leg
+    configuration, screws) are InputErrors, not the ValueError / TypeError of numpy's
+    float conversion."""
     mech, analysis, leg = rpr3
     calls = [lambda: mech.assemble("abc"), lambda: mech.assemble([object()] * 6),
              lambda: mech.forward_kinematics(["a", "b", "c"]),
@@ -348,23 +349,23 @@ def test_non_numeric_arguments_are_input_errors(rpr3):
 
 
 def test_non_finite_screws_in_the_reciprocal_product_are_refused():
-    """reciprocal_product refuses NaN screws (fails until pkm_pin/screws.py
-    reciprocal_product checks finiteness like as_screws: it returns nan today)."""
+    """reciprocal_product refuses a NaN screw with an InputError saying it must be finite
+    (rather than returning nan)."""
     with pytest.raises(InputError, match="finite"):
         screws.reciprocal_product([np.nan, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0])
 
 
 def test_a_scalar_is_refused_by_sweep(rpr3):
-    """Mechanism.sweep of a 0-d array is an InputError naming the shape (fails until
-    pkm_pin/sweep.py pose_array() stops calling list() on a 0-d array: TypeError)."""
+    """Mechanism.sweep of a 0-d array is an InputError naming the shape, not a
+    TypeError."""
     with pytest.raises(InputError, match="shape"):
         rpr3[0].sweep(np.array(0.0))
 
 
 def test_screws_exp_takes_exactly_one_twist():
-    """screws.exp of a (k, 6) array with k != 1 is an InputError naming the shape (fails
-    until pkm_pin/screws.py exp() checks it: (2, 6) silently uses the first row, (0, 6)
-    raises IndexError)."""
+    """screws.exp of a (k, 6) array with k != 1 is an InputError naming the shape: a
+    (2, 6) array does not silently use its first row, a (0, 6) array raises no
+    IndexError."""
     for shape in [(2, 6), (0, 6)]:
         with pytest.raises(InputError, match="shape"):
             screws.exp(np.zeros(shape))
@@ -372,16 +373,15 @@ def test_screws_exp_takes_exactly_one_twist():
 
 def test_a_far_target_is_an_unconverged_leg_solution(rpr3):
     """Leg.solve of a finite target 1e12 m away returns a non-converged solution, as its
-    docstring promises (fails until pkm_pin/leg.py Leg._newton stops raising numpy's
-    LinAlgError 'Singular matrix' from np.linalg.solve; a mechanism file with
-    base xyz = [1e16, 0, 0] reaches it through Mechanism.home_assembly)."""
+    docstring promises, and raises no LinAlgError (a mechanism file with base
+    xyz = [1e16, 0, 0] reaches this case through Mechanism.home_assembly)."""
     leg = rpr3[2]
     assert not leg.solve(pin.SE3(np.eye(3), np.array([1e12, 0.0, 0.0]))).converged
 
 
 def test_non_finite_leg_targets_are_refused(rpr3):
-    """Leg.solve refuses a target placement with NaN (fails until pkm_pin/leg.py
-    Leg.solve checks the target: it returns a non-converged solution with residual nan)."""
+    """Leg.solve refuses a target placement containing NaN with an InputError saying it
+    must be finite (rather than returning a non-converged solution with residual nan)."""
     leg = rpr3[2]
     with pytest.raises(InputError, match="finite"):
         leg.solve(pin.SE3(np.eye(3), np.array([np.nan, 0.0, 0.0])))
