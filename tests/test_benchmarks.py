@@ -1,14 +1,22 @@
-"""The benchmark scripts run (small sizes) and produce positive timings."""
+"""The benchmark scripts run (small sizes) and produce positive timings.
+
+Marked ``benchmark``: ``python -m pytest -m "not benchmark"`` leaves them out of a quick
+local run; CI runs them (nothing deselects them by default).
+"""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
+import pytest
+
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import bench_analysis  # noqa: E402
 import bench_fk  # noqa: E402
+
+pytestmark = pytest.mark.benchmark
 
 
 def test_bench_analysis_runs_and_reports_every_figure(capsys):
