@@ -3,7 +3,7 @@
 ``calibrate(mech, samples, parameters)`` fits the errors of the named parameters (see
 :mod:`pkm_pin.sensitivity` for the names) to measurements ``(q_actuated, measured)``:
 Gauss–Newton on the sensitivity Jacobian, the model re-solved by the forward kinematics
-(:meth:`Mechanism.forward_kinematics`) of the perturbed mechanism at every iteration.
+(:func:`pkm_pin.position.forward_kinematics`) of the perturbed mechanism at every iteration.
 
 Residual of a sample: the small displacement from the model's pose to the measured one,
 expressed at the platform origin: ``(L ω; δp)`` [m], ``ω`` the rotation error [rad]
@@ -30,11 +30,15 @@ import numpy as np
 import pinocchio as pin
 
 from . import screws
+from .assembly import Assembly, as_pose
 from .errors import InputError
+from .position import forward_kinematics
 from .sensitivity import perturb, select_parameters, sensitivity
+from .tolerances import CALIBRATION_STEP_TOL, IDENTIFIABILITY_TOL
 
-#: Relative pivot threshold of the identifiability test (scaled Jacobian columns).
-IDENT_TOL = 1e-6
+#: Relative pivot threshold of the identifiability test (scaled Jacobian columns); alias
+#: of :data:`pkm_pin.tolerances.IDENTIFIABILITY_TOL`.
+IDENT_TOL = IDENTIFIABILITY_TOL
 
 
 @dataclass
@@ -68,8 +72,6 @@ class CalibrationResult:
 
 
 def _samples(mech, samples) -> list[tuple[np.ndarray, object]]:
-    from .mechanism import as_pose
-
     out = []
     for k, item in enumerate(samples):
         try:
@@ -105,12 +107,10 @@ def _jacobian_rows(sens_matrix: np.ndarray, pose: pin.SE3, measured, L: float) -
 
 def _solve_all(mech, samples, guesses):
     """Forward kinematics at every sample, warm-started from ``guesses``."""
-    from .mechanism import Assembly
-
     out = []
     for (qa, _), g in zip(samples, guesses):
         start = None if g is None else Assembly(mech, g.pose, [q.copy() for q in g.leg_q])
-        out.append(mech.forward_kinematics(qa, start))
+        out.append(forward_kinematics(mech, qa, start))
     return out
 
 
@@ -128,7 +128,7 @@ def _rms(r: np.ndarray, samples) -> float:
     return float(np.sqrt(np.sum(r * r) / len(samples)))
 
 
-def identifiable(J: np.ndarray, tol: float = IDENT_TOL) -> np.ndarray:
+def identifiable(J: np.ndarray, tol: float = IDENTIFIABILITY_TOL) -> np.ndarray:
     """Boolean mask of the columns of ``J`` kept by a Gram–Schmidt pass in column order:
     a column is kept when its part orthogonal to the kept ones exceeds ``tol`` times its
     norm (columns of zero norm, relative to the largest, are dropped)."""
@@ -154,8 +154,8 @@ def calibrate(
     parameters,
     *,
     max_iter: int = 20,
-    tol: float = 1e-10,
-    ident_tol: float = IDENT_TOL,
+    tol: float = CALIBRATION_STEP_TOL,
+    ident_tol: float = IDENTIFIABILITY_TOL,
 ) -> CalibrationResult:
     """Identify the errors of ``parameters`` from measured platform poses.
 

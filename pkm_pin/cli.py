@@ -232,7 +232,7 @@ def cmd_ik(args) -> int:
             body["q_actuated"] = body["q_actuated"][0]
         print(json.dumps(body, indent=2))
         return 0
-    from .mechanism import as_pose
+    from .assembly import as_pose
 
     print(f"mechanism  {mech.name}")
     print(f"pose       {_pose_text(as_pose(pose))}")

@@ -8,12 +8,17 @@ The joint twists are the columns of Pinocchio's spatial (``WORLD``) frame Jacobi
 the tip: column ``k`` is the twist of the tip produced by a unit rate of the ``k``-th
 velocity coordinate. A mimic pair (a parallelogram written as a revolute plus a
 mimicking revolute) therefore contributes one column: the combined twist of the pair.
+
+Pinocchio data (:attr:`Leg.data`) is working state private to each thread: several
+threads may use one leg (one mechanism) at once, and a pickled leg carries none. Every
+method runs its own Pinocchio pass for the configuration it is given.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import threading
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -22,7 +27,16 @@ import pinocchio as pin
 
 from . import screws, urdf
 from .errors import FrameNotFound, InputError, JointNotFound
-from .serial import SerialChainMixin
+from .serial import SerialChain
+from .tolerances import (
+    CLOSURE_TOL,
+    JOINT_LIMIT_SLACK,
+    NEWTON_SLOW_RTOL,
+    NEWTON_SLOW_STEPS,
+    NEWTON_STALL_RTOL,
+    SPHERICAL_OFFSET_RTOL,
+    damping,
+)
 
 
 @dataclass
@@ -44,7 +58,7 @@ class LegSolution:
 
 
 @dataclass(eq=False)
-class Leg(SerialChainMixin):
+class Leg(SerialChain):
     """One serial chain of a parallel mechanism (or a serial robot on its own).
 
     Build it with :meth:`from_urdf` or :meth:`from_example_robot_data`. The Pinocchio
@@ -58,6 +72,8 @@ class Leg(SerialChainMixin):
         base: Placement of the URDF root in the world.
         name: Name of the leg.
         source: Where the URDF came from (file path or a string label).
+        xml: The URDF text (for the geometric parameters of :mod:`pkm_pin.sensitivity`).
+        tip_id: Pinocchio frame index of :attr:`tip` (set from the model).
     """
 
     model: pin.Model
@@ -67,12 +83,17 @@ class Leg(SerialChainMixin):
     name: str = "leg"
     source: str = "<model>"
     xml: str | None = field(default=None, repr=False)
+    tip_id: int = field(init=False, repr=False)
+    #: Per-thread working state: ``_local.data`` is the thread's Pinocchio data.
+    _local: threading.local = field(init=False, repr=False)
+    #: ``(base, matrix)`` of :meth:`_world_map` for the current :attr:`base` object.
+    _world_map_cache: tuple | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not self.model.existFrame(self.tip):
             raise FrameNotFound(self.tip, self._frame_names(), f"leg {self.name!r}")
         self.tip_id = self.model.getFrameId(self.tip)
-        self.data = self.model.createData()
+        self._local = threading.local()
         self.actuated = tuple(self.actuated)
         for a in self.actuated:
             if a not in self.joint_names:
@@ -250,7 +271,7 @@ class Leg(SerialChainMixin):
         """Project ``q`` onto the joint limits of the 1-DOF joints."""
         return np.clip(q, *self._bounds)
 
-    def within_limits(self, q: np.ndarray, tol: float = 1e-9) -> bool:
+    def within_limits(self, q: np.ndarray, tol: float = JOINT_LIMIT_SLACK) -> bool:
         """Whether ``q`` respects the joint limits (with absolute slack ``tol``)."""
         lo, up = self._bounds
         return bool(np.all(q >= lo - tol) and np.all(q <= up + tol))
@@ -267,31 +288,53 @@ class Leg(SerialChainMixin):
                                 f"joints {self.joint_names}")
 
     # ---------------------------------------------------------------- kinematics
-    def _update(self, q: np.ndarray) -> None:
-        pin.computeJointJacobians(self.model, self.data, q)
-        pin.updateFramePlacement(self.model, self.data, self.tip_id)
+    @property
+    def data(self) -> pin.Data:
+        """Pinocchio data of :attr:`model` private to the calling thread (made on the
+        thread's first use). Methods that fill it return it: read it before the next
+        Pinocchio call on this leg."""
+        local = self._local
+        try:
+            return local.data
+        except AttributeError:
+            local.data = self.model.createData()
+            return local.data
+
+    def _jacobian_pass(self, q: np.ndarray) -> pin.Data:
+        """The calling thread's data after one pass at ``q``: joint placements and
+        Jacobians, and the tip frame's placement."""
+        data = self.data
+        pin.computeJointJacobians(self.model, data, q)
+        pin.updateFramePlacement(self.model, data, self.tip_id)
+        return data
+
+    def _world_jacobian(self, data: pin.Data) -> np.ndarray:
+        """The tip's 6×nv axis-first world Jacobian from ``data`` filled by
+        :meth:`_jacobian_pass`."""
+        J = pin.getFrameJacobian(self.model, data, self.tip_id, pin.WORLD).reshape(6, -1)
+        return self._world_map() @ J
 
     def tip_placement(self, q) -> pin.SE3:
         """World placement of the tip frame (base placement included)."""
         q = self.check_q(q)
-        pin.framesForwardKinematics(self.model, self.data, q)
-        return self.base * self.data.oMf[self.tip_id]
+        data = self.data
+        pin.framesForwardKinematics(self.model, data, q)
+        return self.base * data.oMf[self.tip_id]
 
     def kinematics(self, q) -> tuple[pin.SE3, np.ndarray]:
         """Tip placement and the 6×nv axis-first world Jacobian, from one Pinocchio pass."""
-        q = self.check_q(q)
-        self._update(q)
-        J = pin.getFrameJacobian(self.model, self.data, self.tip_id, pin.WORLD).reshape(6, -1)
-        return self.base * self.data.oMf[self.tip_id], self._world_map() @ J
+        data = self._jacobian_pass(self.check_q(q))
+        return self.base * data.oMf[self.tip_id], self._world_jacobian(data)
 
     def _world_map(self) -> np.ndarray:
         """6×6 map from Pinocchio's WORLD Jacobian of the URDF root frame to axis-first
-        twists about the world origin (base placement included), cached per base."""
-        cached = self.__dict__.get("_world_map_cache")
+        twists about the world origin (base placement included), cached per base
+        object in :attr:`_world_map_cache`."""
+        cached = self._world_map_cache
         if cached is None or cached[0] is not self.base:
             matrix = screws.adjoint(self.base) @ screws.from_pinocchio(np.eye(6))
             cached = (self.base, matrix)
-            self.__dict__["_world_map_cache"] = cached
+            self._world_map_cache = cached
         return cached[1]
 
     def jacobian(self, q) -> np.ndarray:
@@ -305,8 +348,9 @@ class Leg(SerialChainMixin):
     def joint_origins(self, q) -> np.ndarray:
         """World positions of the joint frames of the chain at ``q``, (njoints − 1) × 3."""
         q = self.check_q(q)
-        pin.forwardKinematics(self.model, self.data, q)
-        return np.array([(self.base * self.data.oMi[j]).translation
+        data = self.data
+        pin.forwardKinematics(self.model, data, q)
+        return np.array([(self.base * data.oMi[j]).translation
                          for j in range(1, self.model.njoints)])
 
     @cached_property
@@ -333,7 +377,7 @@ class Leg(SerialChainMixin):
             trio = (j, j + 1, j + 2)
             if all(rev[k - 1] for k in trio) and all(
                 m.parents[k] == k - 1
-                and np.linalg.norm(m.jointPlacements[k].translation) <= 1e-9 * L
+                and np.linalg.norm(m.jointPlacements[k].translation) <= SPHERICAL_OFFSET_RTOL * L
                 for k in trio[1:]
             ):
                 groups.append(tuple(m.joints[k].idx_v for k in trio))
@@ -353,10 +397,11 @@ class Leg(SerialChainMixin):
     def screws(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Jacobian (6 × nv) and motion twists (nv × 6, see :meth:`motion_twists`) at
         ``q`` from a single Pinocchio pass."""
-        _, J = self.kinematics(q)  # also updates data.oMi
+        data = self._jacobian_pass(self.check_q(q))
+        J = self._world_jacobian(data)
         T = J.T.copy()
         for group, j in zip(self.spherical_groups, self._group_joints):
-            centre = self.base.act(self.data.oMi[j].translation)
+            centre = self.base.act(data.oMi[j].translation)
             # rows (e_k; centre × e_k): lines through the centre along the world axes
             T[list(group)] = np.hstack([np.eye(3), -pin.skew(centre)])
         return J, T
@@ -367,14 +412,16 @@ class Leg(SerialChainMixin):
 
     # -------------------------------------------------------------------- pickle
     def __getstate__(self) -> dict:
+        """The description only: no Pinocchio data, no cached values."""
         state = {k: v for k, v in self.__dict__.items()
-                 if k not in ("data", "_world_map_cache")
+                 if k not in ("_local", "_world_map_cache")
                  and not isinstance(getattr(type(self), k, None), cached_property)}
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
-        self.data = self.model.createData()
+        self._local = threading.local()
+        self._world_map_cache = None
 
     # ----------------------------------------------------------------------- IK
     def solve(
@@ -382,7 +429,7 @@ class Leg(SerialChainMixin):
         target: pin.SE3,
         q0=None,
         *,
-        tol: float = 1e-12,
+        tol: float = CLOSURE_TOL,
         max_iter: int = 100,
         restarts: int = 24,
         seed: int = 0,
@@ -391,13 +438,13 @@ class Leg(SerialChainMixin):
         """Joint configuration placing the tip at ``target`` (world), inside the limits.
 
         Damped (Levenberg–Marquardt) Newton on the SE(3) error ``log6(tip⁻¹ target)``
-        (linear part divided by the characteristic length; damping ``1e-2 r²`` with
-        ``r`` the error norm), each step projected onto the joint limits, warm
-        started from ``q0`` (default: neutral). If it stalls above ``tol`` (a local
-        minimum, a limit), it restarts deterministically from the neutral configuration,
-        the middle of the limits and ``restarts`` configurations drawn with ``seed``,
-        and returns the best result found. It never raises for an unreachable target:
-        check :attr:`LegSolution.converged`.
+        (linear part divided by the characteristic length; damping
+        :func:`pkm_pin.tolerances.damping` of the error norm), each step projected onto
+        the joint limits, warm started from ``q0`` (default: neutral). If it stalls
+        above ``tol`` (a local minimum, a limit), it restarts deterministically from the
+        neutral configuration, the middle of the limits and ``restarts`` configurations
+        drawn with ``seed``, and returns the best result found. It never raises for an
+        unreachable target: check :attr:`LegSolution.converged`.
 
         ``compiled``: run the first attempt with the compiled kernel
         (:mod:`pkm_pin.kernels`, same damping, world-frame error), its result checked
@@ -474,18 +521,16 @@ class Leg(SerialChainMixin):
         while it < max_iter and (r := math.sqrt(err @ err)) > tol:
             it += 1
             # a least-squares minimum (unreachable target) stops improving: leave early
-            slow = slow + 1 if r > (1 - 1e-3) * best else 0
+            slow = slow + 1 if r > (1 - NEWTON_SLOW_RTOL) * best else 0
             best = min(best, r)
-            if slow >= 10:
+            if slow >= NEWTON_SLOW_STEPS:
                 break
             J = pin.getFrameJacobian(model, data, tip, pin.LOCAL).reshape(6, -1)
             # dimensionless unknowns (prismatic increments / L): the same steps in mm
             J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J) * units
             try:
-                # Levenberg–Marquardt: damping 1e-2 r² grows with the error and
-                # vanishes at the solution (quadratic convergence kept); it tames
-                # singular starts (UR5 from neutral: 48/60 first-try vs 5/60 undamped)
-                dq = np.linalg.solve(J.T @ J + (1e-10 + 1e-2 * r * r) * eye, J.T @ err)
+                # Levenberg–Marquardt (see tolerances.damping)
+                dq = np.linalg.solve(J.T @ J + damping(r) * eye, J.T @ err)
             except np.linalg.LinAlgError:
                 break  # numerically singular normal equations (e.g. a target at 1e12 m)
             dq *= units
@@ -493,7 +538,7 @@ class Leg(SerialChainMixin):
                 break
             q_new = np.clip(pin.integrate(model, q, dq), *self._bounds)
             step = q_new - q
-            if step @ step < 1e-30 * (1 + q @ q):
+            if step @ step < NEWTON_STALL_RTOL * (1 + q @ q):
                 break  # stalled (at a limit or a local minimum)
             q = q_new
             iMd, err = state(q)

@@ -29,13 +29,18 @@ from __future__ import annotations
 import os
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from concurrent.futures import Executor
 from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
+from . import position
+from . import sensitivity as _sensitivity
+from . import sweep as _sweep
+from .analysis import Analysis
+from .assembly import Assembly, as_pose, placement
 from .errors import (
     AssemblyError,
     FrameNotFound,
@@ -46,10 +51,8 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
-from .position import PositionMixin
-from .screws import as_float_array, as_vector
-from .sensitivity import SensitivityMixin
-from .sweep import SweepMixin
+from .screws import as_vector
+from .tolerances import CLOSENESS_SINGULAR_TOL, CLOSURE_TOL, INERTIA_TOL
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -57,68 +60,15 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 
-def placement(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> pin.SE3:
-    """``pin.SE3`` from a translation [m] and URDF roll-pitch-yaw angles [rad]."""
-    xyz = as_float_array(xyz, "xyz")
-    rpy = as_float_array(rpy, "rpy")
-    if xyz.shape != (3,) or rpy.shape != (3,):
-        raise InputError(f"xyz and rpy must have 3 values each, got {xyz.shape} and {rpy.shape}")
-    if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
-        raise InputError(f"xyz and rpy must be finite, got {xyz} and {rpy}")
-    return pin.SE3(pin.rpy.rpyToMatrix(*rpy), xyz)
-
-
-def as_pose(pose) -> pin.SE3:
-    """A platform pose from a ``pin.SE3``, a 4×4 matrix, or 6 numbers
-    (x, y, z, roll, pitch, yaw)."""
-    if isinstance(pose, pin.SE3):
-        if not (np.all(np.isfinite(pose.translation)) and np.all(np.isfinite(pose.rotation))):
-            raise InputError("the pose must be finite")
-        return pose
-    a = as_float_array(pose, "pose")
-    if a.shape == (6,):
-        return placement(a[:3], a[3:])
-    if a.shape == (4, 4):
-        if not np.all(np.isfinite(a)):
-            raise InputError("the pose must be finite")
-        R = a[:3, :3]
-        if not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or np.linalg.det(R) < 0:
-            raise InputError("the 4×4 pose has no rotation matrix in its upper-left block")
-        return pin.SE3(R, a[:3, 3])
-    raise InputError(
-        "a pose is a pinocchio.SE3, a 4×4 homogeneous matrix or 6 numbers "
-        f"(x, y, z, roll, pitch, yaw); got shape {a.shape}"
-    )
-
-
-@dataclass
-class Assembly:
-    """One assembled configuration of a mechanism.
-
-    Attributes:
-        mechanism: The mechanism.
-        pose: Platform placement in the world (``pin.SE3``).
-        leg_q: One configuration per leg (legs in mechanism order).
-        residual: Largest relative closure error over the legs (see :meth:`Leg.solve`).
-        info: Free-form details from the solver that produced it (steps, iterations…).
-    """
-
-    mechanism: Mechanism
-    pose: pin.SE3
-    leg_q: list[np.ndarray]
-    residual: float = 0.0
-    info: dict = field(default_factory=dict)
-
-    @property
-    def q_actuated(self) -> np.ndarray:
-        """Actuated coordinates: legs in mechanism order, each in its ``actuated`` order."""
-        return np.concatenate(
-            [q[leg.actuated_q] for leg, q in zip(self.mechanism.legs, self.leg_q)]
-        ) if self.leg_q else np.zeros(0)
-
-
-class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
+class Mechanism:
     """A parallel mechanism: legs whose tips are fixed to one platform.
+
+    The description (legs, anchors, home) is set once; what is computed from it is
+    cached in the properties declared below (:attr:`characteristic_length`,
+    :attr:`actuated_scales`, :attr:`home_assembly`, :attr:`home_analysis`, ``_kernel``).
+    The position problems, the sensitivity and the sweeps are functions of
+    :mod:`pkm_pin.position`, :mod:`pkm_pin.sensitivity` and :mod:`pkm_pin.sweep` taking
+    the mechanism first; the methods of the same names call them.
 
     Args:
         legs: The legs; their names must be distinct.
@@ -189,6 +139,28 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
         """Unit of length of the relative tolerances [m]: mean of the legs' lengths."""
         return float(np.mean([leg.characteristic_length for leg in self.legs]))
 
+    @cached_property
+    def actuated_scales(self) -> np.ndarray:
+        """Unit of each actuated coordinate (cached; do not modify it in place): the
+        :attr:`characteristic_length` [m] for a prismatic joint, 1 rad for a revolute
+        one. Actuated errors divided by it are the dimensionless errors the position
+        solvers compare with their tolerances."""
+        out = []
+        L = self.characteristic_length
+        for leg in self.legs:
+            prismatic = {leg.model.joints[j].idx_q for j in leg._prismatic_joints}
+            out += [L if int(iq) in prismatic else 1.0 for iq in np.atleast_1d(leg.actuated_q)]
+        return np.array(out, dtype=float)
+
+    @cached_property
+    def _kernel(self):
+        """The mechanism's compiled kinematics (:class:`pkm_pin.kernels.MechanismKernel`,
+        read-only arrays for the compiled solvers; cached and pickled with the
+        mechanism), or ``None`` when a leg has a joint the kernels do not represent."""
+        from .kernels import mechanism_kernel
+
+        return mechanism_kernel(self, self.actuated_scales.copy())
+
     @property
     def grubler(self) -> int:
         """Grübler–Kutzbach count ``6 (1 − legs) + Σ leg nv`` (1-DOF joints, mimic pairs
@@ -203,12 +175,13 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
         return self.assemble(self.home, guess=self.home_q)
 
     @cached_property
-    def home_analysis(self):
+    def home_analysis(self) -> Analysis:
         """The :class:`~pkm_pin.analysis.Analysis` of the home assembly (the reference
         for constraint singularities: the home pose is taken as a generic pose)."""
         return self.analyze(self.home_assembly)
 
-    def assemble(self, pose, guess=None, *, tol: float = 1e-12, restarts: int = 24) -> Assembly:
+    def assemble(self, pose, guess=None, *, tol: float = CLOSURE_TOL,
+                 restarts: int = 24) -> Assembly:
         """Solve every leg so that its tip coincides with ``pose * anchor``.
 
         Args:
@@ -222,7 +195,7 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
             AssemblyError: a leg cannot reach the pose within its joint limits.
         """
         pose = as_pose(pose)
-        starts = self._guess_q(guess)
+        starts = self.leg_starts(guess)
         leg_q, worst = [], 0.0
         for leg, anchor, q0 in zip(self.legs, self.anchors, starts):
             sol = leg.solve(pose * anchor, q0, tol=tol, restarts=restarts)
@@ -232,7 +205,14 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
             worst = max(worst, sol.residual)
         return Assembly(self, pose, leg_q, worst)
 
-    def _guess_q(self, guess) -> list:
+    def leg_starts(self, guess=None) -> list:
+        """The leg configurations an assembly warm-starts from (one per leg; ``None``:
+        the leg's neutral configuration).
+
+        ``guess``: an :class:`Assembly`, a list of leg configurations, or ``None``: the
+        home assembly once it has been computed, else ``home_q`` (the home assembly is
+        itself solved from ``home_q``).
+        """
         if guess is None:
             if "home_assembly" in self.__dict__:
                 return list(self.home_assembly.leg_q)
@@ -249,11 +229,9 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
         return as_vector(q_actuated, self.n_actuated, name, ", ".join(self.actuated_names))
 
     # ----------------------------------------------------------------- analysis
-    def analyze(self, pose_or_assembly=None, **options):
+    def analyze(self, pose_or_assembly=None, **options) -> Analysis:
         """Screw analysis (:class:`~pkm_pin.analysis.Analysis`) at a pose or assembly
         (default: home)."""
-        from .analysis import Analysis
-
         if pose_or_assembly is None:
             assembly = self.home_assembly
         elif isinstance(pose_or_assembly, Assembly):
@@ -261,6 +239,65 @@ class Mechanism(PositionMixin, SensitivityMixin, SweepMixin):
         else:
             assembly = self.assemble(pose_or_assembly)
         return Analysis(assembly, **options)
+
+    # ------------------------------------------------------- position problems
+    def forward_kinematics(self, q_actuated, guess=None, *, steps: int | None = None,
+                           tol: float = CLOSURE_TOL, inertia_tol: float = INERTIA_TOL,
+                           max_newton: int = 50, max_inertia: int = 200,
+                           method: str = "auto") -> Assembly:
+        """Platform pose (an :class:`Assembly`) for the actuated coordinates, by
+        continuation from ``guess`` (default: home).
+
+        See :func:`pkm_pin.position.forward_kinematics`.
+        """
+        return position.forward_kinematics(
+            self, q_actuated, guess, steps=steps, tol=tol, inertia_tol=inertia_tol,
+            max_newton=max_newton, max_inertia=max_inertia, method=method)
+
+    def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
+                               tol: float = CLOSURE_TOL, max_iter: int = 100,
+                               method: str = "auto") -> list[Assembly]:
+        """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
+
+        See :func:`pkm_pin.position.forward_kinematics_all`.
+        """
+        return position.forward_kinematics_all(self, q_actuated, starts=starts, seed=seed,
+                                               tol=tol, max_iter=max_iter, method=method)
+
+    def inverse_kinematics(self, pose, guess=None) -> np.ndarray:
+        """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
+        default home).
+
+        See :func:`pkm_pin.position.inverse_kinematics`.
+        """
+        return position.inverse_kinematics(self, pose, guess)
+
+    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0,
+                               max_modes: int = 4096) -> list[Assembly]:
+        """Every working mode at ``pose``: the distinct actuated-coordinate vectors.
+
+        See :func:`pkm_pin.position.inverse_kinematics_all`.
+        """
+        return position.inverse_kinematics_all(self, pose, starts=starts, seed=seed,
+                                               max_modes=max_modes)
+
+    # ------------------------------------------------------------------ studies
+    def sensitivity(self, assembly=None, parameters=None) -> _sensitivity.Sensitivity:
+        """Platform pose error per unit parameter error; ``assembly`` defaults to home.
+
+        See :func:`pkm_pin.sensitivity.sensitivity`.
+        """
+        return _sensitivity.sensitivity(self, assembly, parameters)
+
+    def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
+              progress: bool = False, rtol: float | None = None,
+              singular_tol: float = CLOSENESS_SINGULAR_TOL) -> _sweep.SweepResult:
+        """Assemble and analyse the mechanism at every pose.
+
+        See :func:`pkm_pin.sweep.sweep`.
+        """
+        return _sweep.sweep(self, poses, executor=executor, chunk_size=chunk_size,
+                            progress=progress, rtol=rtol, singular_tol=singular_tol)
 
 
 # --------------------------------------------------------------------- TOML files
@@ -385,3 +422,6 @@ def _pose_table(table, label: str, where: str) -> pin.SE3:
     xyz = _numbers(table.get("xyz", [0.0, 0.0, 0.0]), 3, label, f"{where}.xyz")
     rpy = _numbers(table.get("rpy", [0.0, 0.0, 0.0]), 3, label, f"{where}.rpy")
     return placement(xyz, rpy)
+
+
+__all__ = ["Assembly", "Mechanism", "as_pose", "load_mechanism", "placement"]

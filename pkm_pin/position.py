@@ -1,8 +1,8 @@
 """Position problems (seed 003): forward kinematics by screw continuation, assembly
 modes, iterative inverse kinematics of a serial chain.
 
-Forward position problem (:meth:`PositionMixin.forward_kinematics`)
---------------------------------------------------------------------
+Forward position problem (:func:`forward_kinematics`)
+------------------------------------------------------
 Seed 003's continuation: from a known assembly the actuated coordinates go to the
 target in ``N`` equal increments ``Δq``. At each step the screw analysis of the current
 assembly (:class:`~pkm_pin.analysis.Analysis`) gives the small platform twist ``t``
@@ -38,27 +38,40 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
 from itertools import product
 
 import numpy as np
 import pinocchio as pin
 
 from . import screws
+from .analysis import Analysis
+from .assembly import Assembly, as_pose
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .leg import pose_error
+from .tolerances import (
+    CLOSURE_TOL,
+    COMPILED_CONTINUATION_STEP,
+    CONTINUATION_MIN_STEP,
+    CONTINUATION_STEP,
+    CONTINUATION_TOL,
+    FK_ACCEPT_FLOOR,
+    INERTIA_TOL,
+    JOINT_LIMIT_SLACK,
+    LINES_SINGULAR_TOL,
+    SAME_ACTUATED_ATOL,
+    SAME_CONFIGURATION_TOL,
+    SAME_POSE_TOL,
+    TARGET_LIMIT_SLACK,
+)
 
-#: Largest increment of one continuation step: fraction of the characteristic length
+#: Largest increment of one continuation step (alias of
+#: :data:`pkm_pin.tolerances.CONTINUATION_STEP`): fraction of the characteristic length
 #: for prismatic coordinates, radians for revolute ones.
-STEP = 0.05
-#: Loose closure tolerance of the legs during the continuation.
-CONTINUATION_TOL = 1e-6
-#: Type II closeness index below which the continuation moves "by inertia".
-INERTIA_TOL = 1e-2
-#: Largest step of the compiled predictor–corrector (same units as :data:`STEP`): its
-#: steps are corrected to their intermediate targets and accepted only while Newton's
-#: corrections contract, so they may be longer than the Euler steps.
-COMPILED_STEP = 0.2
+STEP = CONTINUATION_STEP
+#: Largest step of the compiled predictor–corrector (alias of
+#: :data:`pkm_pin.tolerances.COMPILED_CONTINUATION_STEP`, same units as :data:`STEP`).
+COMPILED_STEP = COMPILED_CONTINUATION_STEP
+# CONTINUATION_TOL and INERTIA_TOL are imported from pkm_pin.tolerances under their names.
 
 
 # ============================================================ seed 003: one screw step
@@ -86,7 +99,7 @@ def screw_step(lines, dl) -> np.ndarray:
         raise InputError(f"dl must be 6 finite numbers, got {d!r}")
     M = E @ screws.DELTA
     sv = np.linalg.svd(M, compute_uv=False)
-    if sv[-1] <= 1e-12 * sv[0]:
+    if sv[-1] <= LINES_SINGULAR_TOL * sv[0]:
         raise SingularityError(
             f"the six leg lines are linearly dependent (singular values {sv})", "forward",
             float(sv[-1] / sv[0]))
@@ -95,21 +108,10 @@ def screw_step(lines, dl) -> np.ndarray:
 
 # ======================================================================= helpers
 def _actuated_scales(mech) -> np.ndarray:
-    """Unit of each actuated coordinate: the characteristic length for a prismatic
-    joint, 1 rad for a revolute one (cached on the mechanism)."""
-    cached = mech.__dict__.get("_actuated_scales_cache")
-    if cached is None:
-        cached = mech.__dict__["_actuated_scales_cache"] = _scales_of(mech)
-    return cached.copy()
-
-
-def _scales_of(mech) -> np.ndarray:
-    out = []
-    L = mech.characteristic_length
-    for leg in mech.legs:
-        prismatic = {leg.model.joints[j].idx_q for j in leg._prismatic_joints}
-        out += [L if int(iq) in prismatic else 1.0 for iq in np.atleast_1d(leg.actuated_q)]
-    return np.array(out, dtype=float)
+    """A copy of :attr:`Mechanism.actuated_scales`: the unit of each actuated
+    coordinate (the characteristic length for a prismatic joint, 1 rad for a revolute
+    one)."""
+    return mech.actuated_scales.copy()
 
 
 def _weights(L: float) -> np.ndarray:
@@ -126,503 +128,516 @@ class _State:
     iterations: int = 0
 
 
-class PositionMixin:
-    """Forward and inverse position problems of a :class:`~pkm_pin.Mechanism`."""
+# ========================================================================= Newton
+def _q_actuated_of(mech, leg_q) -> np.ndarray:
+    """The actuated coordinates of leg configurations ``leg_q`` (mechanism order)."""
+    return np.concatenate([q[leg.actuated_q] for leg, q in zip(mech.legs, leg_q)])
 
-    # ------------------------------------------------------------------ Newton
-    def _q_actuated_of(self, leg_q) -> np.ndarray:
-        return np.concatenate([q[leg.actuated_q] for leg, q in zip(self.legs, leg_q)])
 
-    def _closure_newton(self, pose, leg_q, target=None, *, tol, max_iter,
-                        move_pose=True, damping=0.0) -> _State:
-        """Newton (Gauss–Newton, optional Levenberg damping) on the closure equations of
-        every leg, plus ``q_a = target`` when ``target`` is given; the platform moves
-        only with ``move_pose``. Joint updates are projected onto the limits."""
-        L = self.characteristic_length
-        w = _weights(L)
-        scales = _actuated_scales(self) if target is not None else None
-        leg_q = [np.array(q, dtype=float) for q in leg_q]
-        nvs = [leg.nv for leg in self.legs]
-        offs = np.r_[0, np.cumsum(nvs)]
-        ncol = int(offs[-1]) + (6 if move_pose else 0)
-        state = _State(pose, leg_q)
-        for it in range(max_iter + 1):
-            rows, rhs, closure = [], [], 0.0
-            for i, (leg, anchor, q) in enumerate(zip(self.legs, self.anchors, leg_q)):
-                want = pose * anchor
-                tip, J = leg.kinematics(q)
-                e = screws.log(want * tip.inverse())
-                closure = max(closure, pose_error(tip, want, leg.characteristic_length))
-                block = np.zeros((6, ncol))
-                block[:, offs[i]:offs[i + 1]] = w[:, None] * J
-                if move_pose:
-                    block[:, offs[-1]:] = -np.diag(w)
-                rows.append(block)
-                rhs.append(w * e)
-            act = 0.0
-            if target is not None:
-                qa = self._q_actuated_of(leg_q)
-                da = (target - qa) / scales
-                act = float(np.max(np.abs(da))) if da.size else 0.0
-                block = np.zeros((len(da), ncol))
-                k = 0
-                for i, leg in enumerate(self.legs):
-                    for iv in np.atleast_1d(leg.actuated_v):
-                        block[k, offs[i] + int(iv)] = 1.0 / scales[k]
-                        k += 1
-                rows.append(block)
-                rhs.append(da)
-            state = _State(pose, leg_q, closure, act, it)
-            if closure <= tol and act <= tol:
-                return state
-            if it == max_iter:
-                break
-            H, r = np.vstack(rows), np.concatenate(rhs)
-            if damping > 0:
-                x = np.linalg.solve(H.T @ H + damping * np.eye(ncol), H.T @ r)
-            else:
-                x, *_ = np.linalg.lstsq(H, r, rcond=1e-12)
-            if not np.all(np.isfinite(x)):
-                break
-            leg_q = [leg.clip(pin.integrate(leg.model, q, x[offs[i]:offs[i + 1]]))
-                     for i, (leg, q) in enumerate(zip(self.legs, leg_q))]
+def _closure_newton(mech, pose, leg_q, target=None, *, tol, max_iter,
+                    move_pose=True, damping=0.0) -> _State:
+    """Newton (Gauss–Newton, optional Levenberg damping) on the closure equations of
+    every leg, plus ``q_a = target`` when ``target`` is given; the platform moves
+    only with ``move_pose``. Joint updates are projected onto the limits."""
+    L = mech.characteristic_length
+    w = _weights(L)
+    scales = _actuated_scales(mech) if target is not None else None
+    leg_q = [np.array(q, dtype=float) for q in leg_q]
+    nvs = [leg.nv for leg in mech.legs]
+    offs = np.r_[0, np.cumsum(nvs)]
+    ncol = int(offs[-1]) + (6 if move_pose else 0)
+    state = _State(pose, leg_q)
+    for it in range(max_iter + 1):
+        rows, rhs, closure = [], [], 0.0
+        for i, (leg, anchor, q) in enumerate(zip(mech.legs, mech.anchors, leg_q)):
+            want = pose * anchor
+            tip, J = leg.kinematics(q)
+            e = screws.log(want * tip.inverse())
+            closure = max(closure, pose_error(tip, want, leg.characteristic_length))
+            block = np.zeros((6, ncol))
+            block[:, offs[i]:offs[i + 1]] = w[:, None] * J
             if move_pose:
-                pose = screws.exp(x[offs[-1]:]) * pose
-        return state
-
-    def _assembly_of(self, state: _State):
-        from .mechanism import Assembly
-
-        return Assembly(self, state.pose, [q.copy() for q in state.leg_q], state.closure)
-
-    # ------------------------------------------------------------ forward problem
-    def forward_kinematics(self, q_actuated, guess=None, *, steps: int | None = None,
-                           tol: float = 1e-12, inertia_tol: float = INERTIA_TOL,
-                           max_newton: int = 50, max_inertia: int = 200,
-                           method: str = "auto"):
-        """Platform pose (an :class:`~pkm_pin.mechanism.Assembly`) for the actuated
-        coordinates ``q_actuated``, by continuation from ``guess``.
-
-        Two continuations share the same predictor (seed 003's ``A Δ t = B Δq``, which
-        is the first Newton step of the closure system from an assembled state):
-
-        * ``method="euler"``: seed 003's algorithm as printed: Euler steps whose legs
-          are re-closed at the predicted pose, "motion by inertia" near type II
-          singularities, then Newton's method on all closures and actuated coordinates.
-          ``info["continuation_error"]`` is the Euler polyline's error.
-        * ``method="compiled"``: the same homotopy as a predictor–corrector in compiled
-          code (:mod:`pkm_pin.kernels`): each step is corrected by Newton's method on
-          the whole closure system to its intermediate actuated coordinates and is
-          accepted only in Newton's contracting regime (each correction at most half the
-          previous, so no jump to another assembly mode); steps are halved otherwise.
-          It stops (``ForwardKinematicsError``) where the closeness of the 6×6 Schur
-          complement of the system falls below ``inertia_tol`` (a type II or constraint
-          singularity ahead). The result is checked by Pinocchio like the other's.
-        * ``method="auto"`` (default): ``"compiled"`` when every leg has a kernel,
-          ``"euler"`` (with motion by inertia) where it stops or fails.
-
-        Args:
-            q_actuated: Target actuated coordinates (see :attr:`Mechanism.actuated_names`).
-            guess: The :class:`Assembly` to start from (default: home), or a pose that
-                assembles; its assembly mode is followed.
-            steps: Number of continuation steps (default: each step moves every actuated
-                coordinate by at most :data:`STEP` of the characteristic length or
-                :data:`STEP` rad). Steps that fail to re-assemble are halved.
-            tol: Final tolerance on ``|q_a − target|`` (relative to the characteristic
-                length for prismatic coordinates, radians otherwise) and on the closure.
-            inertia_tol: Type II closeness index below which the platform moves "by
-                inertia" along the last twist.
-            max_newton: Newton iterations of the final correction.
-            max_inertia: Inertia moves allowed in a row.
-
-        Returns:
-            The assembly; its ``info`` holds ``steps`` (accepted continuation steps),
-            ``halvings``, ``newton_iterations``, ``residual`` (final scaled actuated
-            error), ``continuation_error`` (largest scaled actuated error after the
-            continuation, before Newton: the Euler polyline's error), ``inertia``
-            (whether motion by inertia was used), ``inertia_steps``, and ``method``
-            ("compiled" or "euler").
-
-        Raises:
-            InputError: wrong length or non-finite values, a bad guess.
-            ForwardKinematicsError: the continuation or the Newton correction failed
-                (target out of reach, joint limits, singularity); ``reached`` holds the
-                last assembly reached.
-        """
-        from .analysis import Analysis
-        from .mechanism import Assembly
-
-        target = self.check_actuated(q_actuated)
-        if steps is not None and (not isinstance(steps, (int, np.integer)) or steps < 1):
-            raise InputError(f"steps must be a positive integer, got {steps!r}")
-        if guess is None:
-            start = self.home_assembly
-        elif isinstance(guess, Assembly):
-            start = guess
+                block[:, offs[-1]:] = -np.diag(w)
+            rows.append(block)
+            rhs.append(w * e)
+        act = 0.0
+        if target is not None:
+            qa = _q_actuated_of(mech, leg_q)
+            da = (target - qa) / scales
+            act = float(np.max(np.abs(da))) if da.size else 0.0
+            block = np.zeros((len(da), ncol))
+            k = 0
+            for i, leg in enumerate(mech.legs):
+                for iv in np.atleast_1d(leg.actuated_v):
+                    block[k, offs[i] + int(iv)] = 1.0 / scales[k]
+                    k += 1
+            rows.append(block)
+            rhs.append(da)
+        state = _State(pose, leg_q, closure, act, it)
+        if closure <= tol and act <= tol:
+            return state
+        if it == max_iter:
+            break
+        H, r = np.vstack(rows), np.concatenate(rhs)
+        if damping > 0:
+            x = np.linalg.solve(H.T @ H + damping * np.eye(ncol), H.T @ r)
         else:
-            start = self.assemble(guess)
-        scales = _actuated_scales(self)
-        self._check_limits(target)
-        if method not in ("auto", "compiled", "euler"):
-            raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")
-        if method != "euler":
-            kernel = self._kernel if method == "auto" else self._require_kernel()
-            if kernel is not None:
-                try:
-                    return self._forward_compiled(kernel, target, start, steps, tol,
-                                                  inertia_tol, max_newton)
-                except ForwardKinematicsError:
-                    if method == "compiled":
-                        raise
+            x, *_ = np.linalg.lstsq(H, r, rcond=1e-12)
+        if not np.all(np.isfinite(x)):
+            break
+        leg_q = [leg.clip(pin.integrate(leg.model, q, x[offs[i]:offs[i + 1]]))
+                 for i, (leg, q) in enumerate(zip(mech.legs, leg_q))]
+        if move_pose:
+            pose = screws.exp(x[offs[-1]:]) * pose
+    return state
 
-        state = _State(start.pose, [q.copy() for q in start.leg_q], start.residual, np.inf)
-        q0 = start.q_actuated
-        if steps is None:
-            steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
-        n_total, lam, h = steps, 0.0, 1.0 / steps
-        accepted = halvings = inertia_steps = 0
-        last_twist = None
-        budget = 20 * n_total + 200  # continuation steps, halvings and re-aims in all
-        while lam < 1.0 - 1e-15:
-            budget -= 1
-            if budget < 0:
+
+def _assembly_of(mech, state: _State) -> Assembly:
+    """The assembly of a Newton state (leg configurations copied)."""
+    return Assembly(mech, state.pose, [q.copy() for q in state.leg_q], state.closure)
+
+
+# ================================================================ forward problem
+def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None,
+                       tol: float = CLOSURE_TOL, inertia_tol: float = INERTIA_TOL,
+                       max_newton: int = 50, max_inertia: int = 200,
+                       method: str = "auto") -> Assembly:
+    """Platform pose (an :class:`~pkm_pin.assembly.Assembly`) for the actuated
+    coordinates ``q_actuated``, by continuation from ``guess``.
+
+    Two continuations share the same predictor (seed 003's ``A Δ t = B Δq``, which
+    is the first Newton step of the closure system from an assembled state):
+
+    * ``method="euler"``: seed 003's algorithm as printed: Euler steps whose legs
+      are re-closed at the predicted pose, "motion by inertia" near type II
+      singularities, then Newton's method on all closures and actuated coordinates.
+      ``info["continuation_error"]`` is the Euler polyline's error.
+    * ``method="compiled"``: the same homotopy as a predictor–corrector in compiled
+      code (:mod:`pkm_pin.kernels`): each step is corrected by Newton's method on
+      the whole closure system to its intermediate actuated coordinates and is
+      accepted only in Newton's contracting regime (each correction at most half the
+      previous, so no jump to another assembly mode); steps are halved otherwise.
+      It stops (``ForwardKinematicsError``) where the closeness of the 6×6 Schur
+      complement of the system falls below ``inertia_tol`` (a type II or constraint
+      singularity ahead). The result is checked by Pinocchio like the other's.
+    * ``method="auto"`` (default): ``"compiled"`` when every leg has a kernel,
+      ``"euler"`` (with motion by inertia) where it stops or fails.
+
+    Args:
+        mech: The :class:`~pkm_pin.mechanism.Mechanism`.
+        q_actuated: Target actuated coordinates (see :attr:`Mechanism.actuated_names`).
+        guess: The :class:`Assembly` to start from (default: home), or a pose that
+            assembles; its assembly mode is followed.
+        steps: Number of continuation steps (default: each step moves every actuated
+            coordinate by at most :data:`STEP` of the characteristic length or
+            :data:`STEP` rad). Steps that fail to re-assemble are halved.
+        tol: Final tolerance on ``|q_a − target|`` (relative to the characteristic
+            length for prismatic coordinates, radians otherwise) and on the closure.
+        inertia_tol: Type II closeness index below which the platform moves "by
+            inertia" along the last twist.
+        max_newton: Newton iterations of the final correction.
+        max_inertia: Inertia moves allowed in a row.
+
+    Returns:
+        The assembly; its ``info`` holds ``steps`` (accepted continuation steps),
+        ``halvings``, ``newton_iterations``, ``residual`` (final scaled actuated
+        error), ``continuation_error`` (largest scaled actuated error after the
+        continuation, before Newton: the Euler polyline's error), ``inertia``
+        (whether motion by inertia was used), ``inertia_steps``, and ``method``
+        ("compiled" or "euler").
+
+    Raises:
+        InputError: wrong length or non-finite values, a bad guess.
+        ForwardKinematicsError: the continuation or the Newton correction failed
+            (target out of reach, joint limits, singularity); ``reached`` holds the
+            last assembly reached.
+    """
+    target = mech.check_actuated(q_actuated)
+    if steps is not None and (not isinstance(steps, (int, np.integer)) or steps < 1):
+        raise InputError(f"steps must be a positive integer, got {steps!r}")
+    if guess is None:
+        start = mech.home_assembly
+    elif isinstance(guess, Assembly):
+        start = guess
+    else:
+        start = mech.assemble(guess)
+    scales = _actuated_scales(mech)
+    _check_limits(mech, target)
+    if method not in ("auto", "compiled", "euler"):
+        raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")
+    if method != "euler":
+        kernel = mech._kernel if method == "auto" else _require_kernel(mech)
+        if kernel is not None:
+            try:
+                return _forward_compiled(mech, kernel, target, start, steps, tol,
+                                         inertia_tol, max_newton)
+            except ForwardKinematicsError:
+                if method == "compiled":
+                    raise
+
+    state = _State(start.pose, [q.copy() for q in start.leg_q], start.residual, np.inf)
+    q0 = start.q_actuated
+    if steps is None:
+        steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
+    n_total, lam, h = steps, 0.0, 1.0 / steps
+    accepted = halvings = inertia_steps = 0
+    last_twist = None
+    budget = 20 * n_total + 200  # continuation steps, halvings and re-aims in all
+    while lam < 1.0 - 1e-15:
+        budget -= 1
+        if budget < 0:
+            raise ForwardKinematicsError(
+                f"continuation did not reach the target (λ = {lam:.4g} after "
+                f"{accepted} steps, {halvings} halvings, {inertia_steps} inertia moves)",
+                _assembly_of(mech, state))
+        current = _assembly_of(mech, state)
+        an = Analysis(current)
+        index = an.indices["type_II"]
+        if index < inertia_tol:
+            if last_twist is None:
                 raise ForwardKinematicsError(
-                    f"continuation did not reach the target (λ = {lam:.4g} after "
-                    f"{accepted} steps, {halvings} halvings, {inertia_steps} inertia moves)",
-                    self._assembly_of(state))
-            current = self._assembly_of(state)
-            an = Analysis(current)
-            index = an.indices["type_II"]
-            if index < inertia_tol:
-                if last_twist is None:
+                    f"the start assembly is at or near a type II singularity (index "
+                    f"{index:.3g} < {inertia_tol:g}): no twist to move by inertia",
+                    current)
+            moves = 0
+            L = mech.characteristic_length
+            size = max(float(np.linalg.norm(last_twist[:3])),
+                       float(np.linalg.norm(last_twist[3:])) / L)
+            last_twist = last_twist * (STEP / size)  # inertia moves of bounded size
+            while index < inertia_tol:
+                if moves >= max_inertia or budget < 0:
                     raise ForwardKinematicsError(
-                        f"the start assembly is at or near a type II singularity (index "
-                        f"{index:.3g} < {inertia_tol:g}): no twist to move by inertia",
-                        current)
-                moves = 0
-                L = self.characteristic_length
-                size = max(float(np.linalg.norm(last_twist[:3])),
-                           float(np.linalg.norm(last_twist[3:])) / L)
-                last_twist = last_twist * (STEP / size)  # inertia moves of bounded size
-                while index < inertia_tol:
-                    if moves >= max_inertia or budget < 0:
+                        f"motion by inertia did not leave the type II singularity after "
+                        f"{moves} moves (index {index:.3g})", _assembly_of(mech, state))
+                pose = screws.exp(last_twist) * state.pose
+                legs = _predict_legs(mech, state.leg_q, last_twist)
+                new = _closure_newton(mech, pose, legs, tol=CONTINUATION_TOL, max_iter=10,
+                                      move_pose=False)
+                if new.closure > CONTINUATION_TOL:
+                    new = _closure_newton(mech, pose, legs, tol=CONTINUATION_TOL,
+                                          max_iter=10, move_pose=True)
+                if new.closure > CONTINUATION_TOL:
+                    last_twist = 0.5 * last_twist  # a shorter inertia move
+                    if np.linalg.norm(last_twist[:3]) + np.linalg.norm(last_twist[3:]) / L \
+                            < CONTINUATION_MIN_STEP * STEP:
                         raise ForwardKinematicsError(
-                            f"motion by inertia did not leave the type II singularity after "
-                            f"{moves} moves (index {index:.3g})", self._assembly_of(state))
-                    pose = screws.exp(last_twist) * state.pose
-                    legs = self._predict_legs(state.leg_q, last_twist)
-                    new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL, max_iter=10,
-                                               move_pose=False)
-                    if new.closure > CONTINUATION_TOL:
-                        new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL,
-                                                   max_iter=10, move_pose=True)
-                    if new.closure > CONTINUATION_TOL:
-                        last_twist = 0.5 * last_twist  # a shorter inertia move
-                        if np.linalg.norm(last_twist[:3]) + np.linalg.norm(last_twist[3:]) / L \
-                                < 1e-6 * STEP:
-                            raise ForwardKinematicsError(
-                                "motion by inertia left the workspace (the legs no longer "
-                                f"assemble: closure error {new.closure:.3g})",
-                                self._assembly_of(state))
-                        budget -= 1
-                        continue
-                    state = new
-                    moves += 1
+                            "motion by inertia left the workspace (the legs no longer "
+                            f"assemble: closure error {new.closure:.3g})",
+                            _assembly_of(mech, state))
                     budget -= 1
-                    index = Analysis(self._assembly_of(state)).indices["type_II"]
-                inertia_steps += moves
-                # re-aim from the actuated coordinates reached
-                q0 = self._q_actuated_of(state.leg_q)
-                remaining = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
-                lam, h = 0.0, 1.0 / remaining
-                n_total = remaining
-                continue
-            lam_new = min(1.0, lam + h)
-            q_step = q0 + lam_new * (target - q0)
-            dq = (lam_new - lam) * (target - q0)
-            try:
-                t = an.forward_velocity(dq)
-            except SingularityError as e:  # pragma: no cover - guarded by inertia_tol
-                raise ForwardKinematicsError(str(e), current) from e
-            pose = screws.exp(t) * state.pose
-            legs = self._predict_legs(state.leg_q, t, an)
-            new = self._closure_newton(pose, legs, tol=CONTINUATION_TOL, max_iter=10,
-                                       move_pose=False)
-            if new.closure > CONTINUATION_TOL:
-                # off the constraint manifold (curved motion): project back, aiming at q_step
-                new = self._closure_newton(pose, legs, q_step, tol=CONTINUATION_TOL,
-                                           max_iter=10, move_pose=True)
-            if new.closure > CONTINUATION_TOL or not self._in_limits(new.leg_q):
-                if h < 1e-6:
-                    raise ForwardKinematicsError(
-                        f"continuation stalled at λ = {lam:.4g} (the legs do not re-assemble "
-                        f"at the predicted pose: closure error {new.closure:.3g}); the target "
-                        "may be out of reach", self._assembly_of(state))
-                h *= 0.5
-                halvings += 1
-                continue
-            h = min(2 * h, 1.0 / n_total)
-            state = new
-            last_twist = t
-            lam = lam_new
-            accepted += 1
-        qa = self._q_actuated_of(state.leg_q)
-        cont_err = float(np.max(np.abs(qa - target) / scales))
-        final = self._closure_newton(state.pose, state.leg_q, target, tol=tol,
-                                     max_iter=max_newton, move_pose=True)
-        if final.closure > max(tol, 1e-10) or final.actuated > tol:
-            raise ForwardKinematicsError(
-                f"Newton correction did not converge after {final.iterations} iterations: "
-                f"actuated error {final.actuated:.3g}, closure error {final.closure:.3g} "
-                f"(tol {tol:g}); the target may be out of reach or singular",
-                self._assembly_of(final))
-        try:
-            result = self.assemble(final.pose, final.leg_q, tol=max(tol, 1e-12))
-        except AssemblyError as e:
-            raise ForwardKinematicsError(f"the final pose does not assemble: {e}",
-                                         self._assembly_of(final)) from e
-        err = float(np.max(np.abs(result.q_actuated - target) / scales))
-        if err > max(tol, 1e-10) or not self._in_limits(result.leg_q):
-            raise ForwardKinematicsError(
-                f"the final assembly misses the target by {err:.3g} (joint limits?)", result)
-        result.info.update(steps=accepted, halvings=halvings, newton_iterations=final.iterations,
-                           residual=err, continuation_error=cont_err,
-                           inertia=inertia_steps > 0, inertia_steps=inertia_steps,
-                           requested_steps=n_total, method="euler")
-        return result
-
-    # -------------------------------------------------- compiled continuation
-    @cached_property
-    def _kernel(self):
-        """The mechanism's compiled kinematics (:mod:`pkm_pin.kernels`), or ``None``."""
-        from .kernels import mechanism_kernel
-
-        return mechanism_kernel(self, _actuated_scales(self))
-
-    def _require_kernel(self):
-        if self._kernel is None:
-            raise InputError(
-                f"{self.name}: a leg has a joint the compiled kinematics do not represent "
-                "(continuous, multi-DOF or helical joints); use method='euler'")
-        return self._kernel
-
-    def _forward_compiled(self, kernel, target, start, steps, tol, inertia_tol, max_newton):
-        """Predictor–corrector continuation in compiled code (see forward_kinematics)."""
-        from .kernels import system_newton
-
-        args = kernel.args()
-        scales = kernel.scales
-        pose = start.pose.homogeneous.copy()
-        Q = np.concatenate(start.leg_q).astype(float)
-        q0 = Q[kernel.actuated].copy()
-        if steps is None:
-            steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales,
-                                                  initial=0.0)) / COMPILED_STEP))
-        lam, h = 0.0, 1.0 / steps
-        accepted = halvings = iterations = 0
-        out = np.zeros(5)
-        while lam < 1.0 - 1e-15:
-            lam_new = min(1.0, lam + h)
-            P, Qn = pose.copy(), Q.copy()
-            system_newton(*args, P, Qn, q0 + lam_new * (target - q0), CONTINUATION_TOL, 10, out)
-            iterations += int(out[2])
-            if not (out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1):
-                if h < 1e-6:
-                    raise ForwardKinematicsError(
-                        f"compiled continuation stalled at λ = {lam:.4g}", self._state_of(P, Qn))
-                h *= 0.5
-                halvings += 1
-                continue
-            if math.sqrt(out[3]) < inertia_tol:
-                raise ForwardKinematicsError(
-                    f"compiled continuation stopped near a singularity at λ = {lam_new:.4g} "
-                    f"(Schur closeness {math.sqrt(out[3]):.3g} < {inertia_tol:g})",
-                    self._state_of(P, Qn))
-            pose, Q, lam = P, Qn, lam_new
-            h = min(2 * h, 1.0 / steps)
-            accepted += 1
-        cont_err = float(np.max(np.abs(Q[kernel.actuated] - target) / scales, initial=0.0))
-        system_newton(*args, pose, Q, target, 0.1 * min(tol, 1e-12), max_newton, out)
-        iterations += int(out[2])
-        final = self._state_of(pose, Q)
-        err = float(np.max(np.abs(final.q_actuated - target) / scales, initial=0.0))
-        inside = bool(np.all(Q >= kernel.lower - 1e-9) and np.all(Q <= kernel.upper + 1e-9))
-        if final.residual > max(tol, 1e-12) or err > max(tol, 1e-10) or not inside:
-            raise ForwardKinematicsError(
-                f"compiled Newton correction did not converge: actuated error {err:.3g}, "
-                f"closure error {final.residual:.3g} (tol {tol:g})", final)
-        final.info.update(steps=accepted, halvings=halvings, newton_iterations=iterations,
-                          residual=err, continuation_error=cont_err, inertia=False,
-                          inertia_steps=0, requested_steps=steps, method="compiled")
-        return final
-
-    def _state_of(self, pose: np.ndarray, Q: np.ndarray):
-        """Assembly at a 4×4 pose and concatenated leg configurations; its residual is
-        the largest closure error evaluated by Pinocchio."""
-        from .mechanism import Assembly
-
-        offs = self._kernel.coords
-        leg_q = [Q[offs[i]:offs[i + 1]].copy() for i in range(len(self.legs))]
-        M = pin.SE3(pose)
-        residual = 0.0
-        for leg, q, a in zip(self.legs, leg_q, self.anchors):
-            pin.framesForwardKinematics(leg.model, leg.data, q)
-            tip = leg.base * leg.data.oMf[leg.tip_id]
-            residual = max(residual, pose_error(tip, M * a, leg.characteristic_length))
-        return Assembly(self, M, leg_q, residual)
-
-    def _predict_legs(self, leg_q, t, an=None) -> list:
-        """Leg configurations moved by the joint rates of the platform twist ``t``."""
-        out = []
-        for k, (leg, q) in enumerate(zip(self.legs, leg_q)):
-            J = an.legs[k].jacobian if an is not None else leg.jacobian(q)
-            dq, *_ = np.linalg.lstsq(J, t, rcond=1e-10)
-            out.append(leg.clip(pin.integrate(leg.model, q, dq)))
-        return out
-
-    def _in_limits(self, leg_q) -> bool:
-        return all(leg.within_limits(q) for leg, q in zip(self.legs, leg_q))
-
-    def _check_limits(self, target: np.ndarray) -> None:
-        k = 0
-        names = self.actuated_names
-        for leg in self.legs:
-            lo, up = leg._bounds
-            for iq in np.atleast_1d(leg.actuated_q):
-                if not (lo[iq] - 1e-12 <= target[k] <= up[iq] + 1e-12):
-                    raise ForwardKinematicsError(
-                        f"{names[k]} = {target[k]:.6g} is outside its joint limits "
-                        f"[{lo[iq]:.6g}, {up[iq]:.6g}]: unreachable")
-                k += 1
-
-    # ---------------------------------------------------------- assembly modes
-    def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
-                               tol: float = 1e-12, max_iter: int = 100,
-                               method: str = "auto") -> list:
-        """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
-
-        The continuation from home comes first (when it succeeds); then the continuation
-        (:meth:`forward_kinematics`) from ``starts`` deterministic start assemblies drawn
-        with ``seed`` (seed 003: "several start positions give several solutions"):
-        alternately the home pose moved by a random twist of the platform twist system
-        (homogenised size 0.2–1.5) and the assembly reached from random actuated
-        coordinates (home ± 0.4 units). Each result is checked (closure, actuated
-        coordinates, joint limits) by :meth:`forward_kinematics`, which uses ``method``
-        (see there: ``"compiled"`` is much faster and may find fewer modes than
-        ``"auto"``, which falls back to the Euler continuation where it stops).
-
-        Returns:
-            A list of :class:`Assembly`, continuation result first, the others in the
-            order found.
-        """
-        target = self.check_actuated(q_actuated)
-        self._check_limits(target)
-        if not isinstance(starts, (int, np.integer)) or starts < 0:
-            raise InputError(f"starts must be a non-negative integer, got {starts!r}")
-        found = []
-        try:
-            found.append(self.forward_kinematics(target, tol=tol, method=method))
-        except ForwardKinematicsError:
-            pass
-        rng = np.random.default_rng(seed)
-        L = self.characteristic_length
-        home = self.home_assembly
-        P = self.analyze(home).platform_twists
-        scales = _actuated_scales(self)
-        lo = np.concatenate([leg._bounds[0][leg.actuated_q] for leg in self.legs])
-        up = np.concatenate([leg._bounds[1][leg.actuated_q] for leg in self.legs])
-        for k in range(starts):
-            start = None
-            if k % 2 == 0:  # a random pose reached by a twist of the platform twist system
-                c = rng.normal(size=P.shape[0]) @ P
-                size = max(float(np.linalg.norm(c[:3])), float(np.linalg.norm(c[3:])) / L)
-                pose = screws.exp(c * rng.uniform(0.2, 1.5) / size) * home.pose
-                try:
-                    start = self.assemble(pose, home)
-                except AssemblyError:
-                    start = None
-            if start is None:  # the continuation to random actuated coordinates
-                qa = np.clip(home.q_actuated + rng.uniform(-0.4, 0.4, len(scales)) * scales,
-                             lo, up)
-                try:
-                    start = self.forward_kinematics(qa, tol=1e-9, method=method)
-                except ForwardKinematicsError:
                     continue
+                state = new
+                moves += 1
+                budget -= 1
+                index = Analysis(_assembly_of(mech, state)).indices["type_II"]
+            inertia_steps += moves
+            # re-aim from the actuated coordinates reached
+            q0 = _q_actuated_of(mech, state.leg_q)
+            remaining = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
+            lam, h = 0.0, 1.0 / remaining
+            n_total = remaining
+            continue
+        lam_new = min(1.0, lam + h)
+        q_step = q0 + lam_new * (target - q0)
+        dq = (lam_new - lam) * (target - q0)
+        try:
+            t = an.forward_velocity(dq)
+        except SingularityError as e:  # pragma: no cover - guarded by inertia_tol
+            raise ForwardKinematicsError(str(e), current) from e
+        pose = screws.exp(t) * state.pose
+        legs = _predict_legs(mech, state.leg_q, t, an)
+        new = _closure_newton(mech, pose, legs, tol=CONTINUATION_TOL, max_iter=10,
+                              move_pose=False)
+        if new.closure > CONTINUATION_TOL:
+            # off the constraint manifold (curved motion): project back, aiming at q_step
+            new = _closure_newton(mech, pose, legs, q_step, tol=CONTINUATION_TOL,
+                                  max_iter=10, move_pose=True)
+        if new.closure > CONTINUATION_TOL or not _in_limits(mech, new.leg_q):
+            if h < CONTINUATION_MIN_STEP:
+                raise ForwardKinematicsError(
+                    f"continuation stalled at λ = {lam:.4g} (the legs do not re-assemble "
+                    f"at the predicted pose: closure error {new.closure:.3g}); the target "
+                    "may be out of reach", _assembly_of(mech, state))
+            h *= 0.5
+            halvings += 1
+            continue
+        h = min(2 * h, 1.0 / n_total)
+        state = new
+        last_twist = t
+        lam = lam_new
+        accepted += 1
+    qa = _q_actuated_of(mech, state.leg_q)
+    cont_err = float(np.max(np.abs(qa - target) / scales))
+    final = _closure_newton(mech, state.pose, state.leg_q, target, tol=tol,
+                            max_iter=max_newton, move_pose=True)
+    if final.closure > max(tol, FK_ACCEPT_FLOOR) or final.actuated > tol:
+        raise ForwardKinematicsError(
+            f"Newton correction did not converge after {final.iterations} iterations: "
+            f"actuated error {final.actuated:.3g}, closure error {final.closure:.3g} "
+            f"(tol {tol:g}); the target may be out of reach or singular",
+            _assembly_of(mech, final))
+    try:
+        result = mech.assemble(final.pose, final.leg_q, tol=max(tol, CLOSURE_TOL))
+    except AssemblyError as e:
+        raise ForwardKinematicsError(f"the final pose does not assemble: {e}",
+                                     _assembly_of(mech, final)) from e
+    err = float(np.max(np.abs(result.q_actuated - target) / scales))
+    if err > max(tol, FK_ACCEPT_FLOOR) or not _in_limits(mech, result.leg_q):
+        raise ForwardKinematicsError(
+            f"the final assembly misses the target by {err:.3g} (joint limits?)", result)
+    result.info.update(steps=accepted, halvings=halvings, newton_iterations=final.iterations,
+                       residual=err, continuation_error=cont_err,
+                       inertia=inertia_steps > 0, inertia_steps=inertia_steps,
+                       requested_steps=n_total, method="euler")
+    return result
+
+
+# ========================================================== compiled continuation
+def _require_kernel(mech):
+    """The mechanism's compiled kinematics, or an :class:`InputError` saying why there
+    are none."""
+    kernel = mech._kernel
+    if kernel is None:
+        raise InputError(
+            f"{mech.name}: a leg has a joint the compiled kinematics do not represent "
+            "(continuous, multi-DOF or helical joints); use method='euler'")
+    return kernel
+
+
+def _forward_compiled(mech, kernel, target, start, steps, tol, inertia_tol,
+                      max_newton) -> Assembly:
+    """Predictor–corrector continuation in compiled code (see
+    :func:`forward_kinematics`) with the mechanism's ``kernel``."""
+    from .kernels import system_newton
+
+    args = kernel.args()
+    scales = kernel.scales
+    pose = start.pose.homogeneous.copy()
+    Q = np.concatenate(start.leg_q).astype(float)
+    q0 = Q[kernel.actuated].copy()
+    if steps is None:
+        steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales,
+                                              initial=0.0)) / COMPILED_STEP))
+    lam, h = 0.0, 1.0 / steps
+    accepted = halvings = iterations = 0
+    out = np.zeros(5)
+    while lam < 1.0 - 1e-15:
+        lam_new = min(1.0, lam + h)
+        P, Qn = pose.copy(), Q.copy()
+        system_newton(*args, P, Qn, q0 + lam_new * (target - q0), CONTINUATION_TOL, 10, out)
+        iterations += int(out[2])
+        if not (out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1):
+            if h < CONTINUATION_MIN_STEP:
+                raise ForwardKinematicsError(f"compiled continuation stalled at λ = {lam:.4g}",
+                                             _state_of(mech, kernel, P, Qn))
+            h *= 0.5
+            halvings += 1
+            continue
+        if math.sqrt(out[3]) < inertia_tol:
+            raise ForwardKinematicsError(
+                f"compiled continuation stopped near a singularity at λ = {lam_new:.4g} "
+                f"(Schur closeness {math.sqrt(out[3]):.3g} < {inertia_tol:g})",
+                _state_of(mech, kernel, P, Qn))
+        pose, Q, lam = P, Qn, lam_new
+        h = min(2 * h, 1.0 / steps)
+        accepted += 1
+    cont_err = float(np.max(np.abs(Q[kernel.actuated] - target) / scales, initial=0.0))
+    system_newton(*args, pose, Q, target, 0.1 * min(tol, CLOSURE_TOL), max_newton, out)
+    iterations += int(out[2])
+    final = _state_of(mech, kernel, pose, Q)
+    err = float(np.max(np.abs(final.q_actuated - target) / scales, initial=0.0))
+    inside = bool(np.all(Q >= kernel.lower - JOINT_LIMIT_SLACK)
+                  and np.all(Q <= kernel.upper + JOINT_LIMIT_SLACK))
+    if final.residual > max(tol, CLOSURE_TOL) or err > max(tol, FK_ACCEPT_FLOOR) or not inside:
+        raise ForwardKinematicsError(
+            f"compiled Newton correction did not converge: actuated error {err:.3g}, "
+            f"closure error {final.residual:.3g} (tol {tol:g})", final)
+    final.info.update(steps=accepted, halvings=halvings, newton_iterations=iterations,
+                      residual=err, continuation_error=cont_err, inertia=False,
+                      inertia_steps=0, requested_steps=steps, method="compiled")
+    return final
+
+
+def _state_of(mech, kernel, pose: np.ndarray, Q: np.ndarray) -> Assembly:
+    """Assembly at a 4×4 pose and the legs' configurations concatenated as in
+    ``kernel``; its residual is the largest closure error evaluated by Pinocchio."""
+    offs = kernel.coords
+    leg_q = [Q[offs[i]:offs[i + 1]].copy() for i in range(len(mech.legs))]
+    M = pin.SE3(pose)
+    residual = 0.0
+    for leg, q, a in zip(mech.legs, leg_q, mech.anchors):
+        tip = leg.tip_placement(q)
+        residual = max(residual, pose_error(tip, M * a, leg.characteristic_length))
+    return Assembly(mech, M, leg_q, residual)
+
+
+def _predict_legs(mech, leg_q, t, an=None) -> list:
+    """Leg configurations moved by the joint rates of the platform twist ``t``."""
+    out = []
+    for k, (leg, q) in enumerate(zip(mech.legs, leg_q)):
+        J = an.legs[k].jacobian if an is not None else leg.jacobian(q)
+        dq, *_ = np.linalg.lstsq(J, t, rcond=1e-10)
+        out.append(leg.clip(pin.integrate(leg.model, q, dq)))
+    return out
+
+
+def _in_limits(mech, leg_q) -> bool:
+    """Whether every leg configuration respects its joint limits."""
+    return all(leg.within_limits(q) for leg, q in zip(mech.legs, leg_q))
+
+
+def _check_limits(mech, target: np.ndarray) -> None:
+    """A :class:`ForwardKinematicsError` if a target actuated coordinate lies outside
+    its joint limits."""
+    k = 0
+    names = mech.actuated_names
+    for leg in mech.legs:
+        lo, up = leg._bounds
+        for iq in np.atleast_1d(leg.actuated_q):
+            if not (lo[iq] - TARGET_LIMIT_SLACK <= target[k] <= up[iq] + TARGET_LIMIT_SLACK):
+                raise ForwardKinematicsError(
+                    f"{names[k]} = {target[k]:.6g} is outside its joint limits "
+                    f"[{lo[iq]:.6g}, {up[iq]:.6g}]: unreachable")
+            k += 1
+
+
+# ================================================================= assembly modes
+def forward_kinematics_all(mech, q_actuated, *, starts: int = 32, seed: int = 0,
+                           tol: float = CLOSURE_TOL, max_iter: int = 100,
+                           method: str = "auto") -> list[Assembly]:
+    """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
+
+    The continuation from home comes first (when it succeeds); then the continuation
+    (:func:`forward_kinematics`) from ``starts`` deterministic start assemblies drawn
+    with ``seed`` (seed 003: "several start positions give several solutions"):
+    alternately the home pose moved by a random twist of the platform twist system
+    (homogenised size 0.2–1.5) and the assembly reached from random actuated
+    coordinates (home ± 0.4 units). Each result is checked (closure, actuated
+    coordinates, joint limits) by :func:`forward_kinematics`, which uses ``method``
+    (see there: ``"compiled"`` is much faster and may find fewer modes than
+    ``"auto"``, which falls back to the Euler continuation where it stops).
+
+    Args:
+        mech: The :class:`~pkm_pin.mechanism.Mechanism`.
+        q_actuated: Target actuated coordinates.
+        starts: Number of start assemblies besides home.
+        seed: Seed of the random start assemblies.
+        tol: Tolerance of each continuation (see :func:`forward_kinematics`).
+        method: Continuation method (see :func:`forward_kinematics`).
+
+    Returns:
+        A list of :class:`Assembly`, continuation result first, the others in the
+        order found.
+    """
+    target = mech.check_actuated(q_actuated)
+    _check_limits(mech, target)
+    if not isinstance(starts, (int, np.integer)) or starts < 0:
+        raise InputError(f"starts must be a non-negative integer, got {starts!r}")
+    found = []
+    try:
+        found.append(forward_kinematics(mech, target, tol=tol, method=method))
+    except ForwardKinematicsError:
+        pass
+    rng = np.random.default_rng(seed)
+    L = mech.characteristic_length
+    home = mech.home_assembly
+    P = mech.analyze(home).platform_twists
+    scales = _actuated_scales(mech)
+    lo = np.concatenate([leg._bounds[0][leg.actuated_q] for leg in mech.legs])
+    up = np.concatenate([leg._bounds[1][leg.actuated_q] for leg in mech.legs])
+    for k in range(starts):
+        start = None
+        if k % 2 == 0:  # a random pose reached by a twist of the platform twist system
+            c = rng.normal(size=P.shape[0]) @ P
+            size = max(float(np.linalg.norm(c[:3])), float(np.linalg.norm(c[3:])) / L)
+            pose = screws.exp(c * rng.uniform(0.2, 1.5) / size) * home.pose
             try:
-                a = self.forward_kinematics(target, start, tol=tol, method=method)
+                start = mech.assemble(pose, home)
+            except AssemblyError:
+                start = None
+        if start is None:  # the continuation to random actuated coordinates
+            qa = np.clip(home.q_actuated + rng.uniform(-0.4, 0.4, len(scales)) * scales,
+                         lo, up)
+            try:
+                start = forward_kinematics(mech, qa, tol=1e-9, method=method)
             except ForwardKinematicsError:
                 continue
-            if any(pose_error(a.pose, b.pose, L) < 1e-6 for b in found):
+        try:
+            a = forward_kinematics(mech, target, start, tol=tol, method=method)
+        except ForwardKinematicsError:
+            continue
+        if any(pose_error(a.pose, b.pose, L) < SAME_POSE_TOL for b in found):
+            continue
+        found.append(a)
+    return found
+
+
+# ================================================================ inverse problem
+def inverse_kinematics(mech, pose, guess=None) -> np.ndarray:
+    """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
+    default home): those of ``mech.assemble(pose, guess)``.
+
+    Raises:
+        InputError: a malformed pose.
+        AssemblyError: a leg cannot reach the pose within its limits.
+    """
+    return mech.assemble(pose, guess).q_actuated
+
+
+def inverse_kinematics_all(mech, pose, *, starts: int = 16, seed: int = 0,
+                           max_modes: int = 4096) -> list[Assembly]:
+    """Every working mode at ``pose``: the distinct actuated-coordinate vectors.
+
+    Each leg is solved from deterministic starts (its home configuration, neutral,
+    the middle of the limits and ``starts`` random configurations drawn with
+    ``seed``); converged solutions inside the limits are deduplicated (revolute
+    differences taken modulo 2π) and combined across the legs.
+
+    Returns:
+        A list of :class:`Assembly` (``.q_actuated`` gives the vector), one per
+        distinct actuated-coordinate vector; the home working mode first when it
+        reaches ``pose``.
+
+    Raises:
+        AssemblyError: some leg reaches the pose in no configuration.
+    """
+    pose = as_pose(pose)
+    rng = np.random.default_rng(seed)
+    per_leg = []
+    home_q = mech.leg_starts(None)
+    for leg, anchor, qh in zip(mech.legs, mech.anchors, home_q):
+        want = pose * anchor
+        lo, up = leg._bounds
+        middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
+        tries = ([qh] if qh is not None else []) + [leg.neutral(), middle]
+        tries += [leg.random_configuration(rng) for _ in range(starts)]
+        sols, worst = [], np.inf
+        for q0 in tries:
+            sol = leg.solve(want, q0, restarts=0, compiled=False)
+            worst = min(worst, sol.residual)
+            if not sol.converged or not leg.within_limits(sol.q):
                 continue
-            found.append(a)
-        return found
-
-    # ------------------------------------------------------------ inverse problem
-    def inverse_kinematics(self, pose, guess=None) -> np.ndarray:
-        """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
-        default home).
-
-        Raises:
-            InputError: a malformed pose.
-            AssemblyError: a leg cannot reach the pose within its limits.
-        """
-        return self.assemble(pose, guess).q_actuated
-
-    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0,
-                               max_modes: int = 4096) -> list:
-        """Every working mode at ``pose``: the distinct actuated-coordinate vectors.
-
-        Each leg is solved from deterministic starts (its home configuration, neutral,
-        the middle of the limits and ``starts`` random configurations drawn with
-        ``seed``); converged solutions inside the limits are deduplicated (revolute
-        differences taken modulo 2π) and combined across the legs.
-
-        Returns:
-            A list of :class:`Assembly` (``.q_actuated`` gives the vector), one per
-            distinct actuated-coordinate vector; the home working mode first when it
-            reaches ``pose``.
-
-        Raises:
-            AssemblyError: some leg reaches the pose in no configuration.
-        """
-        from .mechanism import Assembly, as_pose
-
-        pose = as_pose(pose)
-        rng = np.random.default_rng(seed)
-        per_leg = []
-        home_q = self._guess_q(None)
-        for leg, anchor, qh in zip(self.legs, self.anchors, home_q):
-            want = pose * anchor
-            lo, up = leg._bounds
-            middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
-            tries = ([qh] if qh is not None else []) + [leg.neutral(), middle]
-            tries += [leg.random_configuration(rng) for _ in range(starts)]
-            sols, worst = [], np.inf
-            for q0 in tries:
-                sol = leg.solve(want, q0, restarts=0, compiled=False)
-                worst = min(worst, sol.residual)
-                if not sol.converged or not leg.within_limits(sol.q):
-                    continue
-                if not any(_same_q(leg, sol.q, s) for s, _ in sols):
-                    sols.append((sol.q, sol.residual))
-            if not sols:
-                raise AssemblyError(leg.name, worst)
-            per_leg.append(sols)
-        out, seen = [], []
-        for combo in product(*per_leg):
-            if len(out) >= max_modes:
-                break
-            leg_q = [q for q, _ in combo]
-            a = Assembly(self, pose, leg_q, max(r for _, r in combo))
-            qa = a.q_actuated
-            if any(np.allclose(qa, s, atol=1e-9, rtol=0) for s in seen):
-                continue
-            seen.append(qa)
-            out.append(a)
-        return out
+            if not any(_same_q(leg, sol.q, s) for s, _ in sols):
+                sols.append((sol.q, sol.residual))
+        if not sols:
+            raise AssemblyError(leg.name, worst)
+        per_leg.append(sols)
+    out, seen = [], []
+    for combo in product(*per_leg):
+        if len(out) >= max_modes:
+            break
+        leg_q = [q for q, _ in combo]
+        a = Assembly(mech, pose, leg_q, max(r for _, r in combo))
+        qa = a.q_actuated
+        if any(np.allclose(qa, s, atol=SAME_ACTUATED_ATOL, rtol=0) for s in seen):
+            continue
+        seen.append(qa)
+        out.append(a)
+    return out
 
 
-def _same_q(leg, a, b, tol: float = 1e-7) -> bool:
+def _same_q(leg, a, b, tol: float = SAME_CONFIGURATION_TOL) -> bool:
+    """Whether two configurations of ``leg`` are the same working mode."""
     d = pin.difference(leg.model, a, b)
     # revolute joints: compare modulo 2π
     d = np.where(np.abs(d) > np.pi, (d + np.pi) % (2 * np.pi) - np.pi, d)
@@ -706,8 +721,6 @@ def iterative_ik(leg, target, q0, *, max_angle_step: float, max_translation_step
     Raises:
         InputError: bad arguments.
     """
-    from .mechanism import as_pose
-
     target = as_pose(target)
     q = leg.check_q(q0, "q0").copy()
     for name, v in (("max_angle_step", max_angle_step),

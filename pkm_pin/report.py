@@ -26,8 +26,11 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-#: Components of a unit direction below this are printed as 0.
-_SNAP = 1e-9
+from .tolerances import DIRECTION_SNAP
+
+#: Components of a unit direction below this are printed as 0 (alias of
+#: :data:`pkm_pin.tolerances.DIRECTION_SNAP`).
+_SNAP = DIRECTION_SNAP
 
 
 @dataclass(frozen=True)

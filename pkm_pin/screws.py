@@ -33,14 +33,16 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InputError
+from .tolerances import RANK_RTOL, SPAN_RTOL, ZERO_SCREW_RTOL
 
 #: Matrix of the reciprocal product: ``a ∘ b = a @ DELTA @ b``.
 DELTA = np.block([[np.zeros((3, 3)), np.eye(3)], [np.eye(3), np.zeros((3, 3))]])
 DELTA.setflags(write=False)
 
 #: Default relative tolerance of rank decisions (on unit-homogenised, row-normalised
-#: screws, relative to the largest singular value).
-RTOL = 1e-9
+#: screws, relative to the largest singular value); alias of
+#: :data:`pkm_pin.tolerances.RANK_RTOL`.
+RTOL = RANK_RTOL
 
 _SWAP = np.r_[3:6, 0:3]
 
@@ -209,8 +211,9 @@ def _dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
     return S
 
 
-#: Rows whose homogenised norm is below this fraction of the largest are zero screws.
-_ZERO_ROW = 1e-12
+#: Rows whose homogenised norm is below this fraction of the largest are zero screws
+#: (alias of :data:`pkm_pin.tolerances.ZERO_SCREW_RTOL`).
+_ZERO_ROW = ZERO_SCREW_RTOL
 
 
 def _normalised_rows(S: np.ndarray, length: float) -> np.ndarray:
@@ -290,7 +293,8 @@ def intersection(*systems, length: float | None = None, rtol: float = RTOL) -> n
     return reciprocal(np.vstack(recips), L, rtol)
 
 
-def contains(S, x, length: float | None = None, rtol: float = 1e-7) -> np.ndarray | bool:
+def contains(S, x, length: float | None = None,
+             rtol: float = SPAN_RTOL) -> np.ndarray | bool:
     """Whether each row of ``x`` lies in the span of ``S`` (relative tolerance ``rtol``)."""
     S = as_screws(S)
     X = as_screws(x, "x")

@@ -55,17 +55,19 @@ from lxml import etree
 
 from . import screws
 from .errors import FrameNotFound, InputError, SingularityError
+from .leg import Leg
+from .tolerances import COMPATIBILITY_TOL, SENSITIVITY_SINGULAR_TOL
 
 #: Components of a placement (URDF origin, base, anchor).
 PLACEMENT_COMPONENTS = ("x", "y", "z", "roll", "pitch", "yaw")
 #: Components of a joint axis: small rotations about the joint frame's axes.
 AXIS_COMPONENTS = ("rx", "ry", "rz")
-#: Relative residual of the stacked system above which a parameter error is incompatible
-#: with the rigid mechanism (the residual is ~1e-15 for compatible ones).
-COMPATIBILITY_TOL = 1e-8
+# COMPATIBILITY_TOL (relative residual of the stacked system above which a parameter
+# error is incompatible with the rigid mechanism) is pkm_pin.tolerances.COMPATIBILITY_TOL.
 #: Smallest relative singular value of the stacked wrench system (homogenised, rows
-#: normalised) below which the pose error is undetermined (type II singularity).
-SINGULAR_TOL = 1e-9
+#: normalised) below which the pose error is undetermined (type II singularity); alias
+#: of :data:`pkm_pin.tolerances.SENSITIVITY_SINGULAR_TOL`.
+SINGULAR_TOL = SENSITIVITY_SINGULAR_TOL
 
 
 # ================================================================== URDF structure
@@ -207,10 +209,19 @@ def _rpy(M: pin.SE3) -> tuple:
     return tuple(pin.rpy.matrixToRpy(M.rotation))
 
 
-def _link_placement(leg, link: str) -> pin.SE3:
+def _frames_placed(leg, q) -> pin.Data:
+    """The calling thread's Pinocchio data of ``leg`` after one pass placing every frame
+    at ``q`` (read it before the next Pinocchio call on this leg)."""
+    data = leg.data
+    pin.framesForwardKinematics(leg.model, data, q)
+    return data
+
+
+def _link_placement(leg, data: pin.Data, link: str) -> pin.SE3:
+    """World placement of ``link`` from ``data`` returned by :func:`_frames_placed`."""
     if not leg.model.existFrame(link):
         raise FrameNotFound(link, [f.name for f in leg.model.frames], f"leg {leg.name!r}")
-    return leg.base * leg.data.oMf[leg.model.getFrameId(link)]
+    return leg.base * data.oMf[leg.model.getFrameId(link)]
 
 
 def virtual_twist(mech, assembly, name: str) -> np.ndarray:
@@ -218,13 +229,14 @@ def virtual_twist(mech, assembly, name: str) -> np.ndarray:
     at fixed joint values (anchor parameters: minus the platform twist they require)."""
     i = _split(mech, name)[0]
     leg = mech.legs[i]
-    pin.framesForwardKinematics(leg.model, leg.data, leg.check_q(assembly.leg_q[i]))
-    return _virtual_twist_placed(mech, assembly, name)
+    data = _frames_placed(leg, leg.check_q(assembly.leg_q[i]))
+    return _virtual_twist_placed(mech, assembly, name, data)
 
 
-def _virtual_twist_placed(mech, assembly, name: str) -> np.ndarray:
-    """:func:`virtual_twist` with the leg's frame placements already at its assembly
-    configuration (one Pinocchio pass per leg serves all of its parameters)."""
+def _virtual_twist_placed(mech, assembly, name: str, data: pin.Data) -> np.ndarray:
+    """:func:`virtual_twist` from ``data``, the leg's frames placed at its assembly
+    configuration by :func:`_frames_placed` (one Pinocchio pass per leg serves all of
+    its parameters)."""
     i, where, kind, comp = _split(mech, name)
     leg = mech.legs[i]
     if where == "base":
@@ -233,13 +245,13 @@ def _virtual_twist_placed(mech, assembly, name: str) -> np.ndarray:
         A = mech.anchors[i]
         return -screws.transform(_placement_twist(A.translation, _rpy(A), comp), assembly.pose)
     j = {jj.name: jj for jj in urdf_chain(leg)}[where]
-    F = _link_placement(leg, j.parent)
+    F = _link_placement(leg, data, j.parent)
     if kind == "origin":
         return screws.transform(_placement_twist(j.xyz, j.rpy, comp), F)
     e = np.zeros(6)
     e[AXIS_COMPONENTS.index(comp)] = 1.0  # rotation about e_k through the joint origin
     W0 = F * pin.SE3(pin.rpy.rpyToMatrix(*j.rpy), np.asarray(j.xyz, dtype=float))
-    Wq = _link_placement(leg, j.child)
+    Wq = _link_placement(leg, data, j.child)
     return screws.transform(e, W0) - screws.transform(e, Wq)
 
 
@@ -323,7 +335,7 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
     scale[scale == 0] = 1.0
     Mh /= scale[:, None]
     U, sv, Vt = np.linalg.svd(Mh, full_matrices=False)
-    if sv.size < 6 or sv[-1] < SINGULAR_TOL * sv[0]:
+    if sv.size < 6 or sv[-1] < SENSITIVITY_SINGULAR_TOL * sv[0]:
         raise SingularityError(
             "the platform pose error is undetermined here (the legs' actuation and "
             f"constraint wrenches span rank < 6: singular values {sv})", "sensitivity",
@@ -335,10 +347,9 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
     for k, name in enumerate(names):
         columns.setdefault(leg_of[name.split("/")[0]], []).append(k)
     for i, ks in columns.items():
-        leg = mech.legs[i]
-        pin.framesForwardKinematics(leg.model, leg.data, assembly.leg_q[i])
+        data = _frames_placed(mech.legs[i], assembly.leg_q[i])
         for k in ks:
-            xi[:, k] = _virtual_twist_placed(mech, assembly, names[k])
+            xi[:, k] = _virtual_twist_placed(mech, assembly, names[k], data)
             R[offs[i]:offs[i + 1], k] = W[i] @ screws.DELTA @ xi[:, k]
     Rh = R / scale[:, None]
     X = Vt.T @ ((U.T @ Rh) / sv[:, None])
@@ -346,15 +357,6 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
     norm = np.linalg.norm(xi / D[:, None], axis=0)  # |ξ| homogenised bounds every |Rh| row
     compat = np.where(norm > 0, resid / np.where(norm > 0, norm, 1.0), 0.0)
     return Sensitivity(names, X * D[:, None], xi, compat, assembly)
-
-
-class SensitivityMixin:
-    """Adds :meth:`sensitivity` to :class:`~pkm_pin.mechanism.Mechanism`."""
-
-    def sensitivity(self, assembly=None, parameters=None) -> Sensitivity:
-        """Platform pose error per unit parameter error (:func:`pkm_pin.sensitivity.
-        sensitivity`); ``assembly`` defaults to home."""
-        return sensitivity(self, assembly, parameters)
 
 
 # ================================================================ finite errors
@@ -405,11 +407,9 @@ def perturb(mech, errors: Mapping[str, float]):
     Joint origins and axes are edited in the leg's URDF text (origin: the component is
     incremented; axis: rotated by the angle about the joint frame's axis), bases and
     anchors in their placements (xyz incremented, or the rpy component incremented).
-    Legs without errors are shared with ``mech``.
+    Legs without errors are shared with ``mech``; the copy is of the same class as
+    ``mech``.
     """
-    from .leg import Leg
-    from .mechanism import Mechanism
-
     per_leg: dict[int, list] = {}
     for name, value in errors.items():
         v = float(value)
@@ -434,8 +434,8 @@ def perturb(mech, errors: Mapping[str, float]):
                                     leg.name)
         elif base is not leg.base:
             legs[i] = replace(leg, base=base)
-    return Mechanism(legs, anchors, name=mech.name, home=mech.home, home_q=mech.home_q,
-                     description=mech.description)
+    return type(mech)(legs, anchors, name=mech.name, home=mech.home, home_q=mech.home_q,
+                      description=mech.description)
 
 
 __all__ = [
@@ -443,7 +443,6 @@ __all__ = [
     "COMPATIBILITY_TOL",
     "PLACEMENT_COMPONENTS",
     "Sensitivity",
-    "SensitivityMixin",
     "UrdfJoint",
     "leg_parameter_names",
     "parameter_names",

@@ -18,13 +18,16 @@ Conventions:
 * ``q`` has the leg's ``nq`` values, ``qd`` and ``qdd`` its ``nv`` values [rad/s or
   m/s, rad/s² or m/s²].
 
-The mixin expects the host class (:class:`pkm_pin.Leg`) to provide ``model``, ``data``,
-``base``, ``tip_id``, ``name``, ``characteristic_length``, ``check_q`` and
-``kinematics``.
+:class:`SerialChain` is the base class of :class:`pkm_pin.Leg`; it declares what it
+needs from a chain (the abstract members: ``model``, ``base``, ``name``, ``data``,
+``characteristic_length``, ``joint_names``, ``check_q``, ``kinematics``). Every method
+runs its own Pinocchio pass for the configuration it is given, on the Pinocchio data
+of the calling thread, and reads only the data that pass returned.
 """
 
 from __future__ import annotations
 
+import abc
 from dataclasses import dataclass
 
 import numpy as np
@@ -32,15 +35,18 @@ import pinocchio as pin
 
 from . import screws
 from .errors import FrameNotFound, InputError, SingularityError
+from .tolerances import LINK_TWIST_RTOL, SERIAL_SINGULAR_TOL
 
-#: Default threshold of :meth:`SerialChainMixin.is_serial_singular` and of the
-#: singularity check of :meth:`SerialChainMixin.serial_inverse_velocity`, on the
-#: dimensionless index of :meth:`SerialChainMixin.serial_singularity_index`.
-SINGULAR_TOL = 1e-9
+#: Default threshold of :meth:`SerialChain.is_serial_singular` and of the singularity
+#: check of :meth:`SerialChain.serial_inverse_velocity`, on the dimensionless index of
+#: :meth:`SerialChain.serial_singularity_index` (alias of
+#: :data:`pkm_pin.tolerances.SERIAL_SINGULAR_TOL`).
+SINGULAR_TOL = SERIAL_SINGULAR_TOL
 
 #: Relative tolerance under which a link twist counts as zero (the link at rest) and a
-#: twist as outside the span of the Jacobian (:meth:`serial_inverse_velocity`).
-TWIST_RTOL = 1e-9
+#: twist as outside the span of the Jacobian (:meth:`SerialChain.serial_inverse_velocity`;
+#: alias of :data:`pkm_pin.tolerances.LINK_TWIST_RTOL`).
+TWIST_RTOL = LINK_TWIST_RTOL
 
 
 @dataclass(frozen=True)
@@ -68,8 +74,43 @@ class LinkScrew:
         return self.pitch is None
 
 
-class SerialChainMixin:
-    """Link screws, point velocities/accelerations and the serial Jacobian of a Leg."""
+class SerialChain(abc.ABC):
+    """Link screws, point velocities/accelerations and the serial Jacobian of a chain.
+
+    The base class of :class:`pkm_pin.Leg`. A subclass provides the members declared
+    here: the attributes ``model``, ``base``, ``name`` and the abstract properties and
+    methods below.
+    """
+
+    #: Pinocchio model of the chain.
+    model: pin.Model
+    #: Placement of the chain's root in the world.
+    base: pin.SE3
+    #: Name of the chain (in messages).
+    name: str
+
+    @property
+    @abc.abstractmethod
+    def data(self) -> pin.Data:
+        """Pinocchio data of :attr:`model` private to the calling thread."""
+
+    @property
+    @abc.abstractmethod
+    def characteristic_length(self) -> float:
+        """Unit of length [m] of the chain's relative tolerances."""
+
+    @property
+    @abc.abstractmethod
+    def joint_names(self) -> list[str]:
+        """Movable joints of the chain, in velocity order."""
+
+    @abc.abstractmethod
+    def check_q(self, q, name: str = "q") -> np.ndarray:
+        """``q`` as a finite float array of shape (nq,), or an :class:`InputError`."""
+
+    @abc.abstractmethod
+    def kinematics(self, q) -> tuple[pin.SE3, np.ndarray]:
+        """Tip placement and the 6×nv axis-first world Jacobian at ``q``."""
 
     # ------------------------------------------------------------------ checks
     def check_v(self, v, name: str = "qd") -> np.ndarray:
@@ -99,27 +140,31 @@ class SerialChainMixin:
         return self.model.getFrameId(link, pin.FrameType.BODY)
 
     # ----------------------------------------------------------- Pinocchio passes
-    def _pass(self, q, qd=None, qdd=None) -> None:
-        """Forward kinematics at (q, qd, qdd) and every frame placement (model world)."""
+    def _pass(self, q, qd=None, qdd=None) -> pin.Data:
+        """The calling thread's data after forward kinematics at (q, qd, qdd) and every
+        frame placement (model world); read it before the next pass."""
+        data = self.data
         if qd is None:
-            pin.forwardKinematics(self.model, self.data, q)
+            pin.forwardKinematics(self.model, data, q)
         elif qdd is None:
-            pin.forwardKinematics(self.model, self.data, q, qd)
+            pin.forwardKinematics(self.model, data, q, qd)
         else:
-            pin.forwardKinematics(self.model, self.data, q, qd, qdd)
-        pin.updateFramePlacements(self.model, self.data)
+            pin.forwardKinematics(self.model, data, q, qd, qdd)
+        pin.updateFramePlacements(self.model, data)
+        return data
 
-    def _twist(self, frame_id: int) -> np.ndarray:
-        """Axis-first world twist (base included) of a frame after :meth:`_pass` with qd."""
-        v = pin.getFrameVelocity(self.model, self.data, frame_id, pin.WORLD)
+    def _twist(self, data: pin.Data, frame_id: int) -> np.ndarray:
+        """Axis-first world twist (base included) of a frame in ``data`` returned by
+        :meth:`_pass` with qd."""
+        v = pin.getFrameVelocity(self.model, data, frame_id, pin.WORLD)
         return screws.adjoint(self.base) @ screws.from_pinocchio(v)
 
     # -------------------------------------------------------------- placements
     def link_placement(self, link: str, q) -> pin.SE3:
         """World placement of a link's frame (base placement included)."""
         fid = self.link_id(link)
-        self._pass(self.check_q(q))
-        return self.base * self.data.oMf[fid]
+        data = self._pass(self.check_q(q))
+        return self.base * data.oMf[fid]
 
     def point_position(self, link: str, point, q) -> np.ndarray:
         """World position [m] of a point given in the frame of ``link``."""
@@ -130,8 +175,8 @@ class SerialChainMixin:
     def link_twist(self, link: str, q, qd) -> np.ndarray:
         """Twist (ω; v_O) of one link [rad/s; m/s], axis-first, about the world origin."""
         fid = self.link_id(link)
-        self._pass(self.check_q(q), self.check_v(qd))
-        return self._twist(fid)
+        data = self._pass(self.check_q(q), self.check_v(qd))
+        return self._twist(data, fid)
 
     def link_twists(self, q, qd) -> dict[str, np.ndarray]:
         """Twist (ω; v_O) of every link, axis-first, about the world origin.
@@ -141,9 +186,9 @@ class SerialChainMixin:
             the root link's twist is zero.
         """
         q, qd = self.check_q(q), self.check_v(qd)
-        self._pass(q, qd)
+        data = self._pass(q, qd)
         return {
-            f.name: self._twist(i)
+            f.name: self._twist(data, i)
             for i, f in enumerate(self.model.frames)
             if f.type == pin.FrameType.BODY
         }
@@ -159,7 +204,7 @@ class SerialChainMixin:
     def _screw_of(self, link: str, twist: np.ndarray, scale: float) -> LinkScrew:
         L = self.characteristic_length
         size = np.linalg.norm(twist[:3]) + np.linalg.norm(twist[3:]) / L
-        if size <= TWIST_RTOL * scale or size == 0.0:
+        if size <= LINK_TWIST_RTOL * scale or size == 0.0:
             return LinkScrew(link, None, None, None)
         point, direction = screws.axis(twist, length=L)
         return LinkScrew(link, point, direction, float(screws.pitch(twist, length=L)))
@@ -190,9 +235,9 @@ class SerialChainMixin:
         """
         fid = self.link_id(link)
         p = screws.as_vector3(point, "point")
-        self._pass(self.check_q(q), self.check_v(qd))
-        twist = self._twist(fid)
-        P = (self.base * self.data.oMf[fid]).act(p)
+        data = self._pass(self.check_q(q), self.check_v(qd))
+        twist = self._twist(data, fid)
+        P = (self.base * data.oMf[fid]).act(p)
         return twist[3:] + np.cross(twist[:3], P)
 
     def point_acceleration(self, link: str, point, q, qd, qdd) -> np.ndarray:
@@ -209,12 +254,12 @@ class SerialChainMixin:
         fid = self.link_id(link)
         p = screws.as_vector3(point, "point")
         q, qd, qdd = self.check_q(q), self.check_v(qd), self.check_v(qdd, "qdd")
-        self._pass(q, qd, qdd)
+        data = self._pass(q, qd, qdd)
         rf = pin.LOCAL_WORLD_ALIGNED
-        a_frame = pin.getFrameClassicalAcceleration(self.model, self.data, fid, rf)
-        v_frame = pin.getFrameVelocity(self.model, self.data, fid, rf)
+        a_frame = pin.getFrameClassicalAcceleration(self.model, data, fid, rf)
+        v_frame = pin.getFrameVelocity(self.model, data, fid, rf)
         w, eps = v_frame.angular, a_frame.angular
-        r = self.data.oMf[fid].rotation @ p
+        r = data.oMf[fid].rotation @ p
         a = a_frame.linear + np.cross(eps, r) + np.cross(w, np.cross(w, r))
         return self.base.rotation @ a
 
@@ -258,11 +303,11 @@ class SerialChainMixin:
             return 0.0
         return float(sv[min(6, self.model.nv) - 1] / sv[0])
 
-    def is_serial_singular(self, q, tol: float = SINGULAR_TOL) -> bool:
+    def is_serial_singular(self, q, tol: float = SERIAL_SINGULAR_TOL) -> bool:
         """Whether :meth:`serial_singularity_index` is below ``tol`` (dimensionless)."""
         return self.serial_singularity_index(q) < tol
 
-    def serial_inverse_velocity(self, q, twist, tol: float = SINGULAR_TOL) -> np.ndarray:
+    def serial_inverse_velocity(self, q, twist, tol: float = SERIAL_SINGULAR_TOL) -> np.ndarray:
         """Joint rates producing a tip twist (ω; v_O) (seed 000, (42) solved for q̇).
 
         * 6 joints: ``q̇ = J⁻¹ V``.
@@ -297,7 +342,7 @@ class SerialChainMixin:
         Vh = row * V
         x, *_ = np.linalg.lstsq(H, Vh, rcond=None)
         residual = np.linalg.norm(H @ x - Vh)
-        if residual > TWIST_RTOL * max(np.linalg.norm(Vh), np.finfo(float).tiny):
+        if residual > LINK_TWIST_RTOL * max(np.linalg.norm(Vh), np.finfo(float).tiny):
             raise SingularityError(
                 f"the twist {V} is not reachable by leg {self.name!r} at this configuration "
                 f"(its {self.model.nv} joint twists leave a relative residual "

@@ -39,6 +39,7 @@ from . import batch
 from .analysis import SINGULAR_TOL, classify
 from .errors import AssemblyError, InputError
 from .screws import as_float_array
+from .tolerances import RANK_RTOL
 
 
 @dataclass
@@ -465,58 +466,55 @@ def _carried_det(b: batch.BatchScrews, reference: np.ndarray) -> np.ndarray:
     return np.linalg.det(Ahu @ batch.DELTA @ np.swapaxes(P_loc, 1, 2))
 
 
-class SweepMixin:
-    """Many-pose evaluation for :class:`~pkm_pin.Mechanism`."""
+def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
+          progress: bool = False, rtol: float | None = None,
+          singular_tol: float = SINGULAR_TOL) -> SweepResult:
+    """Assemble and analyse the mechanism at every pose.
 
-    def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
-              progress: bool = False, rtol: float | None = None,
-              singular_tol: float = SINGULAR_TOL) -> SweepResult:
-        """Assemble and analyse the mechanism at every pose.
+    Args:
+        mech: The :class:`~pkm_pin.mechanism.Mechanism`.
+        poses: Sequence of ``pin.SE3`` or (N, 6) array of x, y, z, roll, pitch, yaw.
+        executor: Any ``concurrent.futures.Executor`` (threads, processes, or a Dask
+            ``distributed.Client.get_executor()``); chunks of ``chunk_size`` ordered
+            poses are its tasks. ``None``: evaluate here.
+        chunk_size: Poses per task (each task warm-starts from the home assembly).
+        progress: Show a progress bar on stderr (tqdm).
+        rtol: Relative tolerance of rank decisions (default
+            :data:`pkm_pin.tolerances.RANK_RTOL`).
+        singular_tol: Threshold of the closeness indices.
 
-        Args:
-            poses: Sequence of ``pin.SE3`` or (N, 6) array of x, y, z, roll, pitch, yaw.
-            executor: Any ``concurrent.futures.Executor`` (threads, processes, or a Dask
-                ``distributed.Client.get_executor()``); chunks of ``chunk_size`` ordered
-                poses are its tasks. ``None``: evaluate here.
-            chunk_size: Poses per task (each task warm-starts from the home assembly).
-            progress: Show a progress bar on stderr (tqdm).
-            rtol: Relative tolerance of rank decisions (default :data:`screws.RTOL`).
-            singular_tol: Threshold of the closeness indices.
-
-        Returns:
-            A :class:`SweepResult`; poses that do not assemble are recorded in
-            ``failures`` and hold nan / −1 / "".
-        """
-        from .screws import RTOL
-
-        X = pose_array(poses)
-        if int(chunk_size) < 1:
-            raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
-        rtol = RTOL if rtol is None else rtol
-        order = visiting_order(X, self.characteristic_length)
-        reference = batch.homogenise(self.home_analysis.platform_twists, self.characteristic_length)
-        chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
-        bar = _progress_bar(len(X)) if progress else None
-        if executor is None:
-            tick = bar.update if bar is not None else None
-            parts = [evaluate_chunk(self, X[c], reference, rtol, singular_tol, tick)
-                     for c in chunks]
-        else:
-            # the mechanism is pickled once per sweep; every worker thread unpickles its
-            # own copy once (Pinocchio Data buffers are not shareable between threads).
-            # Bytes also spare Dask the tokenising of the object at each submit (~20 ms).
-            blob = pickle.dumps(self, protocol=pickle.HIGHEST_PROTOCOL)
-            digest = hashlib.sha256(blob).hexdigest()
-            futures = [executor.submit(_evaluate_shared, blob, digest, X[c], reference, rtol,
-                                       singular_tol) for c in chunks]
-            parts = []
-            for c, fut in zip(chunks, futures):
-                parts.append(fut.result())
-                if bar is not None:
-                    bar.update(len(c))
-        if bar is not None:
-            bar.close()
-        return _gather(X, chunks, parts, self.n_actuated, singular_tol)
+    Returns:
+        A :class:`SweepResult`; poses that do not assemble are recorded in
+        ``failures`` and hold nan / −1 / "".
+    """
+    X = pose_array(poses)
+    if int(chunk_size) < 1:
+        raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
+    rtol = RANK_RTOL if rtol is None else rtol
+    order = visiting_order(X, mech.characteristic_length)
+    reference = batch.homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+    chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
+    bar = _progress_bar(len(X)) if progress else None
+    if executor is None:
+        tick = bar.update if bar is not None else None
+        parts = [evaluate_chunk(mech, X[c], reference, rtol, singular_tol, tick)
+                 for c in chunks]
+    else:
+        # the mechanism is pickled once per sweep and every worker unpickles its own
+        # copy once (:func:`_evaluate_shared`); bytes also spare Dask the tokenising of
+        # the object at each submit (~20 ms)
+        blob = pickle.dumps(mech, protocol=pickle.HIGHEST_PROTOCOL)
+        digest = hashlib.sha256(blob).hexdigest()
+        futures = [executor.submit(_evaluate_shared, blob, digest, X[c], reference, rtol,
+                                   singular_tol) for c in chunks]
+        parts = []
+        for c, fut in zip(chunks, futures):
+            parts.append(fut.result())
+            if bar is not None:
+                bar.update(len(c))
+    if bar is not None:
+        bar.close()
+    return _gather(X, chunks, parts, mech.n_actuated, singular_tol)
 
 
 def _progress_bar(total: int):

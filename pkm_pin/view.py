@@ -501,10 +501,11 @@ class _Painter:
 
     def leg_points(self, leg, q) -> np.ndarray:
         """Root, joint origins and tip of a leg, in the leg's root frame."""
-        pin.framesForwardKinematics(leg.model, leg.data, q)
+        data = leg.data  # this thread's
+        pin.framesForwardKinematics(leg.model, data, q)
         return np.vstack([np.zeros(3)]
-                         + [leg.data.oMi[j].translation for j in range(1, leg.model.njoints)]
-                         + [leg.data.oMf[leg.tip_id].translation])
+                         + [data.oMi[j].translation for j in range(1, leg.model.njoints)]
+                         + [data.oMf[leg.tip_id].translation])
 
     def pose_leg(self, target, drawn: dict, q) -> None:
         """Place a leg's nodes at ``q`` in ``target`` (the visualizer or an animation

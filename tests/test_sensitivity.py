@@ -7,9 +7,8 @@ import pytest
 
 from pkm_pin import InputError, PkmError, screws
 from pkm_pin.builders import delta, orthoglide_quasi, rps3, stewart
-from pkm_pin.mechanism import Assembly
+from pkm_pin.mechanism import Assembly, Mechanism
 from pkm_pin.sensitivity import (
-    SensitivityMixin,
     parameter_names,
     perturb,
     select_parameters,
@@ -131,10 +130,10 @@ def test_perturb_edits_urdf_base_and_anchor(ortho):
     assert m2.legs[0] is mech.legs[0]
 
 
-def test_mixin_defaults_to_home_and_matches_the_function(ortho):
-    """SensitivityMixin.sensitivity(mech) is the function at the home assembly."""
+def test_method_defaults_to_home_and_matches_the_function(ortho):
+    """Mechanism.sensitivity(mech) is the function at the home assembly."""
     mech, _ = ortho
-    a = SensitivityMixin.sensitivity(mech, parameters="legx/P")
+    a = Mechanism.sensitivity(mech, parameters="legx/P")
     b = sensitivity(mech, mech.home_assembly, "legx/P")
     assert a.parameters == b.parameters and np.allclose(a.matrix, b.matrix, atol=0)
 

@@ -1,0 +1,89 @@
+"""Assemblies of a mechanism and the platform poses they are built from.
+
+An :class:`Assembly` is one solution of a mechanism's closure equations: the platform
+pose and one configuration per leg. :func:`placement` and :func:`as_pose` turn the
+forms a pose is given in (``pin.SE3``, a 4×4 matrix, x, y, z, roll, pitch, yaw) into a
+``pin.SE3``.
+
+This module imports no other module of the mechanism's solvers: position, sensitivity,
+sweep and calibration build their results from it without importing
+:mod:`pkm_pin.mechanism`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import InputError
+from .screws import as_float_array
+from .tolerances import ROTATION_MATRIX_ATOL
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .mechanism import Mechanism
+
+
+def placement(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> pin.SE3:
+    """``pin.SE3`` from a translation [m] and URDF roll-pitch-yaw angles [rad]."""
+    xyz = as_float_array(xyz, "xyz")
+    rpy = as_float_array(rpy, "rpy")
+    if xyz.shape != (3,) or rpy.shape != (3,):
+        raise InputError(f"xyz and rpy must have 3 values each, got {xyz.shape} and {rpy.shape}")
+    if not (np.all(np.isfinite(xyz)) and np.all(np.isfinite(rpy))):
+        raise InputError(f"xyz and rpy must be finite, got {xyz} and {rpy}")
+    return pin.SE3(pin.rpy.rpyToMatrix(*rpy), xyz)
+
+
+def as_pose(pose) -> pin.SE3:
+    """A platform pose from a ``pin.SE3``, a 4×4 matrix, or 6 numbers
+    (x, y, z, roll, pitch, yaw)."""
+    if isinstance(pose, pin.SE3):
+        if not (np.all(np.isfinite(pose.translation)) and np.all(np.isfinite(pose.rotation))):
+            raise InputError("the pose must be finite")
+        return pose
+    a = as_float_array(pose, "pose")
+    if a.shape == (6,):
+        return placement(a[:3], a[3:])
+    if a.shape == (4, 4):
+        if not np.all(np.isfinite(a)):
+            raise InputError("the pose must be finite")
+        R = a[:3, :3]
+        if not np.allclose(R @ R.T, np.eye(3), atol=ROTATION_MATRIX_ATOL) or np.linalg.det(R) < 0:
+            raise InputError("the 4×4 pose has no rotation matrix in its upper-left block")
+        return pin.SE3(R, a[:3, 3])
+    raise InputError(
+        "a pose is a pinocchio.SE3, a 4×4 homogeneous matrix or 6 numbers "
+        f"(x, y, z, roll, pitch, yaw); got shape {a.shape}"
+    )
+
+
+@dataclass
+class Assembly:
+    """One assembled configuration of a mechanism.
+
+    Attributes:
+        mechanism: The mechanism.
+        pose: Platform placement in the world (``pin.SE3``).
+        leg_q: One configuration per leg (legs in mechanism order).
+        residual: Largest relative closure error over the legs (see :meth:`Leg.solve`).
+        info: Free-form details from the solver that produced it (steps, iterations…).
+    """
+
+    mechanism: Mechanism
+    pose: pin.SE3
+    leg_q: list[np.ndarray]
+    residual: float = 0.0
+    info: dict = field(default_factory=dict)
+
+    @property
+    def q_actuated(self) -> np.ndarray:
+        """Actuated coordinates: legs in mechanism order, each in its ``actuated`` order."""
+        return np.concatenate(
+            [q[leg.actuated_q] for leg, q in zip(self.mechanism.legs, self.leg_q)]
+        ) if self.leg_q else np.zeros(0)
+
+
+__all__ = ["Assembly", "as_pose", "placement"]

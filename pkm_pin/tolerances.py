@@ -1,0 +1,186 @@
+"""Every tolerance and numeric threshold of pkm_pin, in one place.
+
+Each constant says what it is relative to. Unless stated otherwise a tolerance is
+dimensionless and unit- and frame-invariant: lengths are divided by a characteristic
+length of the mechanism or leg (:attr:`Mechanism.characteristic_length`,
+:attr:`Leg.characteristic_length`), moments of screws likewise (the screws are
+*homogenised*), prismatic coordinates are counted in characteristic lengths and revolute
+ones in radians, and singular values are taken relative to the largest one. The few
+absolute slacks (joint limits) say so.
+
+The modules that use them keep their historical names as aliases
+(``pkm_pin.screws.RTOL is RANK_RTOL`` …); the table of aliases is at the end of this
+module. This module imports nothing from pkm_pin (every module may import it).
+"""
+
+from __future__ import annotations
+
+# ================================================================ rank decisions
+#: Default relative tolerance of rank decisions on screw systems: singular values of
+#: unit-homogenised (moments / characteristic length), row-normalised screws, relative
+#: to the largest (``screws.RTOL``).
+RANK_RTOL = 1e-9
+#: A screw whose homogenised norm is below this fraction of the largest screw of its
+#: system is a zero screw (``screws._ZERO_ROW``).
+ZERO_SCREW_RTOL = 1e-12
+#: Default relative tolerance of :func:`pkm_pin.screws.contains`: the homogenised part of
+#: a screw outside the span, relative to the screw's homogenised norm.
+SPAN_RTOL = 1e-7
+#: Singular values of the ω parts of an orthonormal (homogenised) platform twist basis
+#: below this count as zero when counting rotations of the platform twist system
+#: (``batch.ROTATION_TOL``).
+ROTATION_COUNT_TOL = 1e-7
+#: A rank decision is taken by pivoted QR only if every pivot ratio is this factor away
+#: from its threshold (QR with column pivoting brackets the singular values within
+#: 2^6·√6); otherwise it goes to an SVD (``fast_analysis.WINDOW``, a ratio).
+QR_DECISION_WINDOW = 1e4
+#: Pivoted QR: squared column norms within this relative margin of each other are ties,
+#: resolved towards the first column (bases move continuously along a path).
+PIVOT_TIE_RTOL = 1e-10
+
+# ================================================================= singularities
+#: Closeness indices (type I, type II, constraint; each a ratio of singular values of
+#: homogenised screw matrices) below this are singular (``analysis.SINGULAR_TOL``).
+CLOSENESS_SINGULAR_TOL = 1e-7
+#: Serial singularity of one chain: the index ``σ_k / σ_1`` of its unit-homogenised
+#: Jacobian below this is singular (``serial.SINGULAR_TOL``).
+SERIAL_SINGULAR_TOL = 1e-9
+#: A link twist whose homogenised size is below this fraction of what the joint rates
+#: could produce is zero (link at rest); a twist whose homogenised least-squares residual
+#: exceeds this fraction of its size is outside the span of the Jacobian
+#: (``serial.TWIST_RTOL``).
+LINK_TWIST_RTOL = 1e-9
+#: Sensitivity: the smallest singular value of the stacked wrench system (homogenised,
+#: rows normalised), relative to the largest, below which the pose error is
+#: undetermined (``sensitivity.SINGULAR_TOL``).
+SENSITIVITY_SINGULAR_TOL = 1e-9
+#: Seed 003's screw step: the six leg lines are dependent when the smallest singular
+#: value of their matrix is below this fraction of the largest.
+LINES_SINGULAR_TOL = 1e-12
+#: Residual of a parameter's stacked sensitivity system relative to the homogenised
+#: size of its virtual twist above which the parameter error cannot be absorbed by the
+#: rigid (overconstrained) mechanism (``sensitivity.COMPATIBILITY_TOL``; ~1e-15 for
+#: compatible errors).
+COMPATIBILITY_TOL = 1e-8
+#: Calibration: a column of the identification Jacobian is identifiable when its part
+#: orthogonal to the columns kept before it exceeds this fraction of its norm
+#: (``calibration.IDENT_TOL``).
+IDENTIFIABILITY_TOL = 1e-6
+#: Calibration stops when its Gauss–Newton step (each parameter times its column scale)
+#: is below this times the characteristic length.
+CALIBRATION_STEP_TOL = 1e-10
+
+# ================================================================ closure solvers
+#: Default closure tolerance of a leg (:meth:`Leg.solve`), of an assembly
+#: (:meth:`Mechanism.assemble`) and of forward kinematics: the norm of
+#: ``log6(tip⁻¹ target)`` with its linear part divided by the leg's characteristic
+#: length (:func:`pkm_pin.leg.pose_error`).
+CLOSURE_TOL = 1e-12
+#: Closure tolerance of the legs in a sweep (same measure as :data:`CLOSURE_TOL`;
+#: ``sweep.SWEEP_TOL``).
+SWEEP_CLOSURE_TOL = CLOSURE_TOL
+#: A leg's last Newton step taken from a relative residual below this is not evaluated
+#: by the compiled sweep solver: Newton's next residual is ~TRUST² ≪
+#: :data:`SWEEP_CLOSURE_TOL`, and Pinocchio's closure check verifies it (``sweep.TRUST``).
+NEWTON_TRUST = 1e-7
+#: Levenberg–Marquardt damping of the leg solvers, added to the normal equations of the
+#: dimensionless unknowns (see :func:`damping`): the floor …
+DAMPING_FLOOR = 1e-10
+#: … and the factor of the squared relative residual.
+DAMPING_GAIN = 1e-2
+#: A Newton iteration whose residual is above ``(1 − NEWTON_SLOW_RTOL)`` times the best
+#: so far is slow; :data:`NEWTON_SLOW_STEPS` slow iterations in a row end the solve (a
+#: least-squares minimum: the target is out of reach).
+NEWTON_SLOW_RTOL = 1e-3
+#: See :data:`NEWTON_SLOW_RTOL` (a count).
+NEWTON_SLOW_STEPS = 10
+#: A Newton step whose squared norm is below this fraction of ``1 + |q|²`` (dimensionless
+#: coordinates) has stalled (at a joint limit or a local minimum).
+NEWTON_STALL_RTOL = 1e-30
+#: Absolute slack of the joint-limit checks (:meth:`Leg.within_limits`, the compiled
+#: forward kinematics' result), in the joint's units [rad or m]: a guard against
+#: round-off at a limit, not a relative tolerance.
+JOINT_LIMIT_SLACK = 1e-9
+#: Absolute slack [rad or m] of the check that target actuated coordinates lie inside
+#: their joint limits (forward kinematics).
+TARGET_LIMIT_SLACK = 1e-12
+#: Three revolute joint frames form a spherical joint when the offsets between them are
+#: at most this fraction of the leg's characteristic length.
+SPHERICAL_OFFSET_RTOL = 1e-9
+#: A 4×4 pose is accepted when ``R Rᵀ`` differs from the identity by at most this
+#: (absolute, on a dimensionless rotation matrix).
+ROTATION_MATRIX_ATOL = 1e-9
+
+# ====================================================== forward kinematics (seed 003)
+#: Largest increment of one Euler continuation step: a fraction of the characteristic
+#: length for prismatic coordinates, radians for revolute ones (``position.STEP``).
+CONTINUATION_STEP = 0.05
+#: Largest step of the compiled predictor–corrector, same units as
+#: :data:`CONTINUATION_STEP` (``position.COMPILED_STEP``): its steps are corrected to
+#: their intermediate targets and accepted only while Newton's corrections contract.
+COMPILED_CONTINUATION_STEP = 0.2
+#: Loose relative closure tolerance (as :data:`CLOSURE_TOL`) of the legs, and scaled
+#: actuated tolerance, during a continuation (``position.CONTINUATION_TOL``).
+CONTINUATION_TOL = 1e-6
+#: Type II closeness index below which the Euler continuation moves "by inertia"; the
+#: compiled one stops where the closeness of its 6×6 Schur complement falls below it
+#: (``position.INERTIA_TOL``).
+INERTIA_TOL = 1e-2
+#: A continuation whose step (a fraction of the path from start to target) is halved
+#: below this has stalled.
+CONTINUATION_MIN_STEP = 1e-6
+#: Forward kinematics accepts a final assembly whose closure and scaled actuated errors
+#: are below ``max(tol, FK_ACCEPT_FLOOR)`` (the floor: what Newton reaches in floating
+#: point on ill-conditioned mechanisms).
+FK_ACCEPT_FLOOR = 1e-10
+#: Two assembly modes are the same when their platform poses differ by less than this
+#: (:func:`pkm_pin.leg.pose_error` at the characteristic length).
+SAME_POSE_TOL = 1e-6
+#: Two leg configurations are the same working mode when every coordinate differs by
+#: less than this times ``max(1, characteristic length)`` (revolute ones modulo 2π).
+SAME_CONFIGURATION_TOL = 1e-7
+#: Two actuated-coordinate vectors are the same when they differ by at most this
+#: (absolute [rad or m], after the legs' own :data:`SAME_CONFIGURATION_TOL` test).
+SAME_ACTUATED_ATOL = 1e-9
+
+# ======================================================================== reports
+#: Components of a unit direction below this are printed as 0; coordinates of points
+#: below this times the characteristic length likewise (``report._SNAP``).
+DIRECTION_SNAP = 1e-9
+#: Largest difference between the Pinocchio path and the hand-written formulas that
+#: ``pkm-pin check`` accepts (the cross-checks are relative differences).
+CROSSCHECK_TOL = 1e-6
+
+
+def damping(r: float) -> float:
+    """Levenberg–Marquardt damping of the leg solvers for a relative residual ``r``:
+    ``DAMPING_FLOOR + DAMPING_GAIN r²``.
+
+    It grows with the error and vanishes at the solution (quadratic convergence kept);
+    it tames singular starts (UR5 from neutral: 48/60 first-try vs 5/60 undamped). The
+    compiled solvers of :mod:`pkm_pin.kernels` write the same expression inline (numba's
+    cache would not see a change made here); a test checks that they agree.
+    """
+    return DAMPING_FLOOR + DAMPING_GAIN * r * r
+
+
+#: Historical names: ``module.NAME`` is an alias of ``tolerances.VALUE``.
+ALIASES = {
+    "screws.RTOL": "RANK_RTOL",
+    "screws._ZERO_ROW": "ZERO_SCREW_RTOL",
+    "batch.ROTATION_TOL": "ROTATION_COUNT_TOL",
+    "fast_analysis.WINDOW": "QR_DECISION_WINDOW",
+    "analysis.SINGULAR_TOL": "CLOSENESS_SINGULAR_TOL",
+    "serial.SINGULAR_TOL": "SERIAL_SINGULAR_TOL",
+    "serial.TWIST_RTOL": "LINK_TWIST_RTOL",
+    "sensitivity.SINGULAR_TOL": "SENSITIVITY_SINGULAR_TOL",
+    "sensitivity.COMPATIBILITY_TOL": "COMPATIBILITY_TOL",
+    "calibration.IDENT_TOL": "IDENTIFIABILITY_TOL",
+    "sweep.SWEEP_TOL": "SWEEP_CLOSURE_TOL",
+    "sweep.TRUST": "NEWTON_TRUST",
+    "position.STEP": "CONTINUATION_STEP",
+    "position.COMPILED_STEP": "COMPILED_CONTINUATION_STEP",
+    "position.CONTINUATION_TOL": "CONTINUATION_TOL",
+    "position.INERTIA_TOL": "INERTIA_TOL",
+    "report._SNAP": "DIRECTION_SNAP",
+}
