@@ -5,10 +5,14 @@ wrenches ``(f; m_O)`` about the world origin (see :mod:`pkm_pin.screws`, the one
 that converts to and from Pinocchio's linear-first order).
 """
 
-from . import position, screws
-from .analysis import Analysis
-from .calibration import CalibrationResult, calibrate
-from .errors import (
+from .compiling import install_notice
+
+install_notice()  # a compilation of pkm_pin's numba code that lasts says so on stderr
+
+from . import position, screws  # noqa: E402
+from .analysis import Analysis  # noqa: E402
+from .calibration import CalibrationResult, calibrate  # noqa: E402
+from .errors import (  # noqa: E402
     AssemblyError,
     ForwardKinematicsError,
     FrameNotFound,
@@ -19,11 +23,11 @@ from .errors import (
     SingularityError,
     UrdfError,
 )
-from .leg import Leg, LegSolution
-from .mechanism import Assembly, Mechanism, load_mechanism
-from .sensitivity import Sensitivity
-from .sweep import SweepResult
-from .view import view
+from .leg import Leg, LegSolution  # noqa: E402
+from .mechanism import Assembly, Mechanism, load_mechanism  # noqa: E402
+from .sensitivity import Sensitivity  # noqa: E402
+from .sweep import SweepResult  # noqa: E402
+from .view import view  # noqa: E402
 
 __version__ = "0.1.0"
 

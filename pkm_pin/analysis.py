@@ -30,11 +30,14 @@ from functools import cached_property
 
 import numpy as np
 
-from . import batch, screws
+from . import engine, screws
 from .errors import InputError, SingularityError
+from .tolerances import CLOSENESS_SINGULAR_TOL, ROTATION_COUNT_TOL
+from .twists import joint_twists
 
-#: Dimensionless threshold below which a closeness index counts as singular.
-SINGULAR_TOL = 1e-7
+#: Dimensionless threshold below which a closeness index counts as singular (alias of
+#: :data:`pkm_pin.tolerances.CLOSENESS_SINGULAR_TOL`).
+SINGULAR_TOL = CLOSENESS_SINGULAR_TOL
 
 
 @dataclass
@@ -43,26 +46,38 @@ class LegScrews:
 
     Attributes:
         jacobian: 6 × nv Jacobian (columns: joint twists).
-        twists: nv × 6 joint twists with spherical groups replaced by their full span.
         constraint_wrenches: basis of the wrenches reciprocal to every joint twist.
     """
 
     jacobian: np.ndarray
-    twists: np.ndarray
     constraint_wrenches: np.ndarray
 
 
-def _rows(masked: np.ndarray, length: float) -> np.ndarray:
-    """The non-zero rows of a masked homogenised basis, back in world units."""
-    keep = np.any(masked != 0.0, axis=1)
-    return batch.dehomogenise(masked[keep], length)
+def dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
+    """Copy of homogenised screws ``H`` (…, 6) with the moment part times ``length``."""
+    S = np.array(H, dtype=float, copy=True)
+    S[..., 3:] *= length
+    return S
+
+
+def homogenise(S: np.ndarray, length: float) -> np.ndarray:
+    """Copy of screws ``S`` (…, 6) with the moment part divided by ``length``."""
+    H = np.array(S, dtype=float, copy=True)
+    H[..., 3:] /= length
+    return H
+
+
+def unit_rows(H: np.ndarray) -> np.ndarray:
+    """Rows scaled to unit norm (zero rows stay zero)."""
+    n = np.linalg.norm(H, axis=-1, keepdims=True)
+    return np.where(n > 0, H / np.where(n > 0, n, 1.0), 0.0)
 
 
 class Analysis:
     """Mobility, Jacobians and singularity classes of a mechanism at an assembly.
 
-    The screw algebra is :func:`pkm_pin.batch.analyse` for one pose (the same code that
-    :meth:`Mechanism.sweep` runs over many poses).
+    The screw algebra is the analysis engine (:mod:`pkm_pin.engine`) at one pose: the
+    same compiled code that :meth:`Mechanism.sweep` runs over many poses.
 
     Args:
         assembly: The assembled configuration (see :meth:`Mechanism.assemble`).
@@ -77,16 +92,24 @@ class Analysis:
             if not (isinstance(value, (int, float)) and np.isfinite(value) and 0 < value < 1):
                 raise InputError(f"{name} must be a finite positive number below 1, got {value!r}")
         self.assembly = assembly
-        self.mechanism = assembly.mechanism
+        self.mechanism = mech = assembly.mechanism
         self.rtol = rtol
         self.singular_tol = singular_tol
-        self.length = self.mechanism.characteristic_length
-        legs = self.mechanism.legs
-        pairs = [leg.screws(q) for leg, q in zip(legs, assembly.leg_q)]
-        self._batch = batch.analyse([J[None] for J, _ in pairs], [T[None] for _, T in pairs],
-                                    [leg.actuated_v for leg in legs], self.length, rtol)
-        self.legs = [LegScrews(J, T, _rows(W[0], self.length))
-                     for (J, T), W in zip(pairs, self._batch.leg_constraints)]
+        self.length = mech.characteristic_length
+        #: (nv × 6) joint twists of every leg, one after the other.
+        self.joint_twists = assembly.joint_twists
+        if self.joint_twists is None:
+            self.joint_twists = joint_twists(mech, assembly.leg_q)
+        layout = mech.engine_layout if rtol == screws.RTOL else layout_of(mech, rtol)
+        self._results = engine.analyse(self.joint_twists[None], layout)
+
+    @cached_property
+    def legs(self) -> list[LegScrews]:
+        """Per leg: its Jacobian and its constraint wrenches."""
+        r, offs = self._results, _offsets(self.mechanism)
+        return [LegScrews(self.joint_twists[a:b].T,
+                          dehomogenise(r.leg_constraints[0, k, :r.leg_dims[0, k]], self.length))
+                for k, (a, b) in enumerate(zip(offs[:-1], offs[1:]))]
 
     # ------------------------------------------------------------------ mobility
     @property
@@ -97,24 +120,25 @@ class Analysis:
     @cached_property
     def constraint_wrenches(self) -> np.ndarray:
         """Basis of the mechanism's constraint wrench system (union over the legs, eq. 37)."""
-        return _rows(self._batch.constraints[0], self.length)
+        r = self._results
+        return dehomogenise(r.constraints[0, :6 - r.dof[0]], self.length)
 
     @cached_property
     def platform_twists(self) -> np.ndarray:
         """Basis (dof × 6) of the platform's twist system: reciprocal of the constraints.
 
         Orthonormal once the linear parts are divided by the characteristic length."""
-        return _rows(self._batch.platform[0], self.length)
+        return dehomogenise(self._results.platform[0, :self.dof], self.length)
 
     @property
     def dof(self) -> int:
         """Instantaneous degree of freedom of the platform."""
-        return int(self._batch.dof[0])
+        return int(self._results.dof[0])
 
     @property
     def translations(self) -> int:
         """Dimension of the pure translations (couples) in the platform twist system."""
-        return int(self._batch.translations[0])
+        return int(self._results.translations[0])
 
     @property
     def motion_type(self) -> str:
@@ -133,7 +157,7 @@ class Analysis:
 
         ``dof = grubler + redundant_constraints`` when no leg has an idle motion.
         """
-        return int(self._batch.redundant[0])
+        return int(self._results.redundant[0])
 
     # ----------------------------------------------------------------- actuation
     @property
@@ -142,24 +166,25 @@ class Analysis:
 
         For each actuated joint: the member of the reciprocal of the other joint twists
         of its leg that does the most work on the platform twists (orthogonal to the
-        leg's constraint wrenches, also at a type I singularity); a unit force, or a
-        unit moment when it is a couple; signed so that ``B_ii >= 0``."""
-        return self._batch.A[0]
+        leg's constraint wrenches (see :func:`pkm_pin.engine.stages.actuation_wrench`);
+        a unit force, or a unit moment when it is a couple; signed so that
+        ``B_ii >= 0``."""
+        return self._results.A[0]
 
     @property
     def A(self) -> np.ndarray:
         """Parallel Jacobian (n × 6): rows are the actuation wrenches; ``A Δ t = B q̇_a``."""
-        return self._batch.A[0]
+        return self._results.A[0]
 
     @property
     def B(self) -> np.ndarray:
         """Serial Jacobian (n × n, diagonal): ``B_ii = ζ_i ∘ $_a,i``."""
-        return np.diag(self._batch.B[0])
+        return np.diag(self._results.B[0])
 
     @property
     def actuated_twists(self) -> np.ndarray:
         """Twists (n × 6) of the actuated joints, in actuated-coordinate order."""
-        return self._batch.actuated_twists[0]
+        return self.joint_twists[self.mechanism.engine_layout.act_col]
 
     @property
     def full_jacobian(self) -> np.ndarray:
@@ -177,9 +202,9 @@ class Analysis:
         * ``type_I``: smallest ``|ζ_i ∘ $_a,i|`` of unit-homogenised screws.
         * ``condition_A``: condition number of that ``A Δ`` (inf when singular).
         """
-        b = self._batch
-        return {"type_I": float(b.type_I[0]), "type_II": float(b.type_II[0]),
-                "condition_A": float(b.condition[0])}
+        r = self._results
+        return {"type_I": float(r.type_I[0]), "type_II": float(r.type_II[0]),
+                "condition_A": float(r.condition[0])}
 
     @property
     def singularity(self) -> str:
@@ -200,10 +225,10 @@ class Analysis:
         (unit once homogenised, axis-first); ``None`` elsewhere."""
         if self.indices["type_II"] >= self.singular_tol or self.dof == 0:
             return None
-        P = batch.homogenise(self.platform_twists, self.length)
-        M = batch.unit_rows(batch.homogenise(self.A, self.length)) @ screws.DELTA @ P.T
+        P = self._results.platform[0, :self.dof]
+        M = self._results.A_h[0] @ screws.DELTA @ P.T
         _, _, Vt = np.linalg.svd(M, full_matrices=True)
-        return batch.dehomogenise(Vt[-1] @ P, self.length)
+        return dehomogenise(Vt[-1] @ P, self.length)
 
     @cached_property
     def unresisted_wrench(self) -> np.ndarray | None:
@@ -211,9 +236,9 @@ class Analysis:
         actuation and constraint wrenches balances; ``None`` elsewhere."""
         if self.indices["type_II"] >= self.singular_tol:
             return None
-        H = batch.unit_rows(batch.homogenise(self.full_jacobian, self.length))
+        H = unit_rows(homogenise(self.full_jacobian, self.length))
         _, _, Vt = np.linalg.svd(H, full_matrices=True)
-        return batch.dehomogenise(Vt[-1], self.length)
+        return dehomogenise(Vt[-1], self.length)
 
     @cached_property
     def lost_actuated_rates(self) -> np.ndarray | None:
@@ -291,9 +316,34 @@ def classify(type_I, type_II, tol: float = SINGULAR_TOL):
     """Singularity class(es) from closeness indices: ``"none"``, ``"I"``, ``"II"``, ``"III"``.
 
     Works on scalars (returns a str) and on arrays (returns an array of str)."""
+    if np.ndim(type_I) == 0 and np.ndim(type_II) == 0:
+        return str(_CLASSES[int(type_I < tol) + 2 * int(type_II < tol)])
     code = (np.asarray(type_I) < tol).astype(np.int8) + 2 * (np.asarray(type_II) < tol)
     out = _CLASSES[code]
     return str(out) if out.ndim == 0 else out
 
 
 _CLASSES = np.array(["none", "I", "II", "III"])  # by (type I) + 2 (type II)
+
+
+def _offsets(mechanism) -> np.ndarray:
+    """Row offsets of the legs among the joint twists."""
+    return np.r_[0, np.cumsum([leg.nv for leg in mechanism.legs])].astype(np.int64)
+
+
+def layout_of(mechanism, rtol: float = screws.RTOL, reference=None) -> engine.Layout:
+    """The engine's :class:`~pkm_pin.engine.Layout` of a mechanism (legs one after the
+    other; ``reference``: homogenised platform basis for the carried determinant)."""
+    offs = _offsets(mechanism)
+    legs = mechanism.legs
+    groups = np.array([offs[i] + np.array(g) for i, leg in enumerate(legs)
+                       for g in leg.spherical_groups], dtype=np.int64).reshape(-1, 3)
+    act_col = np.concatenate([offs[i] + np.atleast_1d(leg.actuated_v)
+                              for i, leg in enumerate(legs)]).astype(np.int64)
+    act_leg = np.concatenate([np.full(len(np.atleast_1d(leg.actuated_v)), i)
+                              for i, leg in enumerate(legs)]).astype(np.int64)
+    ref = np.zeros((0, 6)) if reference is None else np.ascontiguousarray(reference, float)
+    return engine.Layout(offs, groups, act_col, act_leg, ref,
+                         float(mechanism.characteristic_length), float(rtol),
+                         ROTATION_COUNT_TOL)
+

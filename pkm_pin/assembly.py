@@ -41,7 +41,7 @@ def as_pose(pose) -> pin.SE3:
     """A platform pose from a ``pin.SE3``, a 4×4 matrix, or 6 numbers
     (x, y, z, roll, pitch, yaw)."""
     if isinstance(pose, pin.SE3):
-        if not (np.all(np.isfinite(pose.translation)) and np.all(np.isfinite(pose.rotation))):
+        if not np.isfinite(pose.homogeneous).all():
             raise InputError("the pose must be finite")
         return pose
     a = as_float_array(pose, "pose")
@@ -70,6 +70,10 @@ class Assembly:
         leg_q: One configuration per leg (legs in mechanism order).
         residual: Largest relative closure error over the legs (see :meth:`Leg.solve`).
         info: Free-form details from the solver that produced it (steps, iterations…).
+        joint_twists: The legs' joint twists at ``leg_q`` (nv × 6 rows, axis-first,
+            world origin), from the Pinocchio pass that verified the closure, or None
+            (then :class:`~pkm_pin.Analysis` computes them). Valid for ``leg_q`` as
+            made: an assembly is not meant to be modified in place.
     """
 
     mechanism: Mechanism
@@ -77,6 +81,7 @@ class Assembly:
     leg_q: list[np.ndarray]
     residual: float = 0.0
     info: dict = field(default_factory=dict)
+    joint_twists: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @property
     def q_actuated(self) -> np.ndarray:

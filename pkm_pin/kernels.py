@@ -693,6 +693,7 @@ class MechanismKernel:
     groups: np.ndarray  # (G, 3) columns of the spherical groups (Leg.spherical_groups)
     act_col: np.ndarray  # column of each actuated joint in the legs' Jacobians side by side
     act_leg: np.ndarray  # its leg
+    lengths: np.ndarray  # characteristic length of each leg
 
     def args(self) -> tuple:
         return (self.joints, self.coords, self.parent, self.post, self.kind, self.axis,
@@ -723,7 +724,26 @@ def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
         np.concatenate([coords[i] + leg.actuated_v for i, leg in enumerate(mech.legs)]
                        ).astype(np.int64),
         np.concatenate([np.full(len(leg.actuated_v), i) for i, leg in enumerate(mech.legs)]
-                       ).astype(np.int64))
+                       ).astype(np.int64),
+        np.array([k.length for k in legs], dtype=float))
+
+
+@njit(cache=True, nogil=True)
+def assemble_legs(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases,
+                  anchors, lower, upper, lengths, pose, Q, tol, max_iter, residual):
+    """Every leg solved for its tip at ``pose · anchor`` (damped Newton of
+    :func:`newton`, in place on the legs' coordinates ``Q``, warm-started from them):
+    the inverse position problem of one platform pose. ``residual[i]``: leg i's
+    :func:`pose_error` (at its characteristic length ``lengths[i]``)."""
+    target = np.empty((4, 4))
+    for i in range(joints.shape[0] - 1):
+        j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
+        _compose(pose, anchors[i], target)
+        ws = _workspace(c1 - c0, kind[j0:j1], iv[j0:j1], lengths[i])
+        r, _ = _newton(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
+                       iq[j0:j1], iv[j0:j1], tips[i], bases[i], c1 - c0, lower[c0:c1],
+                       upper[c0:c1], lengths[i], target, Q[c0:c1], tol, max_iter, 0.0, ws)
+        residual[i] = r
 
 
 @njit(cache=True, nogil=True)

@@ -39,8 +39,10 @@ import pinocchio as pin
 from . import position
 from . import sensitivity as _sensitivity
 from . import sweep as _sweep
-from .analysis import Analysis
+from .analysis import Analysis, layout_of
 from .assembly import Assembly, as_pose, placement
+from .compiling import prefer_compiled
+from .engine import Layout
 from .errors import (
     AssemblyError,
     FrameNotFound,
@@ -50,9 +52,11 @@ from .errors import (
     PkmError,
     UrdfError,
 )
+from .kernels import assemble_legs
 from .leg import Leg
 from .screws import as_vector
 from .tolerances import CLOSENESS_SINGULAR_TOL, CLOSURE_TOL, INERTIA_TOL
+from .twists import LegFrames, leg_frames, verified_twists
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -161,6 +165,18 @@ class Mechanism:
 
         return mechanism_kernel(self, self.actuated_scales.copy())
 
+    @cached_property
+    def leg_frames(self) -> LegFrames:
+        """The legs' base and anchor placements, velocity offsets and lengths as arrays
+        (:class:`pkm_pin.twists.LegFrames`; cached)."""
+        return leg_frames(self)
+
+    @cached_property
+    def engine_layout(self) -> Layout:
+        """The analysis engine's :class:`~pkm_pin.engine.Layout` of this mechanism at the
+        default rank tolerance (cached)."""
+        return layout_of(self)
+
     @property
     def grubler(self) -> int:
         """Grübler–Kutzbach count ``6 (1 − legs) + Σ leg nv`` (1-DOF joints, mimic pairs
@@ -196,6 +212,10 @@ class Mechanism:
         """
         pose = as_pose(pose)
         starts = self.leg_starts(guess)
+        kernel = self._kernel
+        if kernel is not None and all(q is not None for q in starts) \
+                and prefer_compiled(assemble_legs):
+            return self._assemble_compiled(kernel, pose, starts, tol, restarts)
         leg_q, worst = [], 0.0
         for leg, anchor, q0 in zip(self.legs, self.anchors, starts):
             sol = leg.solve(pose * anchor, q0, tol=tol, restarts=restarts)
@@ -204,6 +224,35 @@ class Mechanism:
             leg_q.append(sol.q)
             worst = max(worst, sol.residual)
         return Assembly(self, pose, leg_q, worst)
+
+    def _assemble_compiled(self, kernel, pose: pin.SE3, starts: list, tol: float,
+                           restarts: int) -> Assembly:
+        """:meth:`assemble` from warm starts: every leg's damped Newton in one compiled
+        call, then one Pinocchio pass per leg that verifies each closure and gives the
+        joint twists the analysis needs; a leg it does not confirm is solved again by
+        :meth:`Leg.solve` (with its restarts)."""
+        Q = np.concatenate(starts)
+        np.clip(Q, kernel.lower, kernel.upper, out=Q)
+        M = pose.homogeneous
+        residual = np.empty(len(self.legs))
+        assemble_legs(kernel.joints, kernel.coords, kernel.parent, kernel.post, kernel.kind,
+                      kernel.axis, kernel.rate, kernel.iq, kernel.iv, kernel.tips,
+                      kernel.bases, kernel.anchors, kernel.lower, kernel.upper,
+                      kernel.lengths, M, Q, tol, 50, residual)
+        c = kernel.coords
+        leg_q = [Q[c[i]:c[i + 1]] for i in range(len(self.legs))]
+        J, errors = verified_twists(self, leg_q, M)
+        missed = np.flatnonzero(~(errors <= tol))
+        for i in missed:
+            leg = self.legs[i]
+            sol = leg.solve(pose * self.anchors[i], leg_q[i], tol=tol, restarts=restarts,
+                            compiled=False)
+            if not sol.converged:
+                raise AssemblyError(leg.name, sol.residual)
+            leg_q[i] = sol.q
+        if len(missed):
+            J, errors = verified_twists(self, leg_q, M)
+        return Assembly(self, pose, leg_q, float(errors.max()), joint_twists=J)
 
     def leg_starts(self, guess=None) -> list:
         """The leg configurations an assembly warm-starts from (one per leg; ``None``:

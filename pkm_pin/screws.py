@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import numpy as np
 import pinocchio as pin
+from numba import njit
 
 from .errors import InputError
 from .tolerances import RANK_RTOL, SPAN_RTOL, ZERO_SCREW_RTOL
@@ -336,8 +337,9 @@ def from_pinocchio(x) -> np.ndarray:
 
     Works on a 6-vector, a ``pin.Motion``, and on a 6×n Jacobian (the rows are swapped;
     the result is still 6×n). A ``pin.Force`` is ``(f; τ)``: force first, which is
-    already the axis-first order of a wrench, so it is returned unchanged. This and
-    :func:`to_pinocchio` are the only place where the two orders meet.
+    already the axis-first order of a wrench, so it is returned unchanged. This,
+    :func:`world_twist_rows` (its compiled form for Jacobians) and :func:`to_pinocchio`
+    are the only place where the two orders meet.
     """
     if isinstance(x, pin.Force):
         return x.vector.copy()
@@ -347,6 +349,25 @@ def from_pinocchio(x) -> np.ndarray:
     if a.shape[0] != 6:
         raise InputError(f"expected 6 rows in Pinocchio order (v; w), got shape {a.shape}")
     return a[_SWAP].copy()
+
+
+@njit(cache=True, nogil=True)
+def world_twist_rows(Jp, base, out):
+    """Compiled :func:`from_pinocchio` of a Jacobian, moved to the world: ``out`` (nv ×
+    6) receives the axis-first twists ``(R ω; R v + p × R ω)`` (rows) of the columns
+    ``(v; ω)`` of ``Jp`` (6 × nv, Pinocchio WORLD frame of a chain whose root stands at
+    ``base = (R, p)`` in the world, a 4×4 placement)."""
+    px, py, pz = base[0, 3], base[1, 3], base[2, 3]
+    for c in range(Jp.shape[1]):
+        v0, v1, v2 = Jp[0, c], Jp[1, c], Jp[2, c]
+        w0, w1, w2 = Jp[3, c], Jp[4, c], Jp[5, c]
+        a0 = base[0, 0] * w0 + base[0, 1] * w1 + base[0, 2] * w2
+        a1 = base[1, 0] * w0 + base[1, 1] * w1 + base[1, 2] * w2
+        a2 = base[2, 0] * w0 + base[2, 1] * w1 + base[2, 2] * w2
+        out[c, 0], out[c, 1], out[c, 2] = a0, a1, a2
+        out[c, 3] = base[0, 0] * v0 + base[0, 1] * v1 + base[0, 2] * v2 + py * a2 - pz * a1
+        out[c, 4] = base[1, 0] * v0 + base[1, 1] * v1 + base[1, 2] * v2 + pz * a0 - px * a2
+        out[c, 5] = base[2, 0] * v0 + base[2, 1] * v1 + base[2, 2] * v2 + px * a1 - py * a0
 
 
 def to_pinocchio(x) -> np.ndarray:

@@ -14,18 +14,17 @@ Per chunk (when every leg has a compiled kernel, :mod:`pkm_pin.kernels`):
    restarts of :meth:`Leg.solve`), and is recorded as a failure if none converges;
 2. one Pinocchio pass per leg and pose at the solution (joint Jacobians and tip frame):
    Pinocchio's tip placement verifies the closure, its Jacobian gives the joint twists;
-3. the screw algebra of every pose in compiled code (:mod:`pkm_pin.fast_analysis`),
-   near-singular poses by :func:`pkm_pin.batch.analyse` (stacked numpy SVDs).
+3. the analysis engine (:mod:`pkm_pin.engine`, the code of a single
+   :class:`~pkm_pin.Analysis`) on every assembled pose, its singular bases warm-started
+   from pose to pose.
 
 Without kernels (a leg with a continuous or multi-DOF joint) the legs are solved by
-:meth:`Leg.solve` and the algebra is :func:`pkm_pin.batch.analyse`.
+:meth:`Leg.solve`; the Pinocchio pass and the engine are the same.
 """
 
 from __future__ import annotations
 
 import hashlib
-import io
-import math
 import os
 import pickle
 import threading
@@ -35,11 +34,12 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from . import batch
-from .analysis import SINGULAR_TOL, classify
+from . import engine
+from .analysis import SINGULAR_TOL, classify, homogenise, layout_of
 from .errors import AssemblyError, InputError
 from .screws import as_float_array
 from .tolerances import RANK_RTOL
+from .twists import joint_twists, sweep_pass
 
 
 @dataclass
@@ -173,10 +173,10 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
 
     Module-level so that process-based executors can pickle it."""
     kernel = mech._kernel
+    layout = layout_of(mech, rtol, reference)
     if kernel is None:
-        return _evaluate_chunk_pinocchio(mech, X, reference, rtol, singular_tol, progress,
-                                         restarts)
-    return _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restarts)
+        return _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts)
+    return _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts)
 
 
 #: Closure tolerance of the legs in a sweep (relative, as :meth:`Mechanism.assemble`).
@@ -187,9 +187,7 @@ SWEEP_TOL = 1e-12
 TRUST = 1e-7
 
 
-def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restarts) -> dict:
-    from .batch import ROTATION_TOL
-    from .fast_analysis import analyse_poses
+def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dict:
     from .kernels import anchor_targets, solve_from, track
 
     N, n, legs = len(X), mech.n_actuated, mech.legs
@@ -221,13 +219,13 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         Qs.append(Q)
     # 2. one Pinocchio pass per leg and pose: closure check and joint twists
     idx = np.flatnonzero(ok)
-    Js, bad = _pinocchio_pass(mech, Qs, Ts, idx)
+    Js, bad = sweep_pass(mech, Qs, Ts, idx, SWEEP_TOL)
     if bad.any():  # a closure Pinocchio does not confirm: Leg.solve from there
         for i in idx[bad]:
             _assemble_again(mech, poses[i], [Q[i] for Q in Qs], restarts, Qs, i, ok,
                             failures)
         rows = np.flatnonzero(bad & ok[idx])  # positions in idx of the poses redone
-        Js[rows], bad2 = _pinocchio_pass(mech, Qs, Ts, idx[rows])
+        Js[rows], bad2 = sweep_pass(mech, Qs, Ts, idx[rows], SWEEP_TOL)
         for i in idx[rows][bad2]:
             failures.append((int(i), "the closure found is not confirmed by Pinocchio"))
             ok[i] = False
@@ -235,7 +233,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
         progress(N)
     out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan), "reference_path": 0}
+           "condition": np.full(N, np.nan), "det": np.full(N, np.nan)}
     if not ok[idx].all():
         Js = Js[ok[idx]]
         idx = idx[ok[idx]]
@@ -244,115 +242,11 @@ def _evaluate_chunk_compiled(mech, kernel, X, reference, rtol, progress, restart
     every = len(idx) == N
     out["q_actuated"][idx] = np.concatenate(
         [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
-    # 3. screw algebra, compiled; flagged (near-singular) poses by batch.analyse
-    M = len(idx)
-    dof, trans, red = (np.zeros(M, np.int64) for _ in range(3))
-    t1, t2, cond, det = (np.zeros(M) for _ in range(4))
-    flag = np.zeros(M, np.int64)
-    analyse_poses(Js, kernel.coords, kernel.groups, kernel.act_col, kernel.act_leg,
-                  float(mech.characteristic_length), float(rtol), ROTATION_TOL,
-                  np.ascontiguousarray(reference, dtype=float), dof, trans, red, t1, t2, cond,
-                  det, flag)
-    slow = np.flatnonzero(flag)
-    if len(slow):
-        Jl, Tl = [], []
-        for leg, Q in zip(legs, Qs):
-            pairs = [leg.screws(Q[idx[j]]) for j in slow]
-            Jl.append(np.stack([a for a, _ in pairs]))
-            Tl.append(np.stack([b for _, b in pairs]))
-        b = batch.analyse(Jl, Tl, [leg.actuated_v for leg in legs],
-                          mech.characteristic_length, rtol)
-        dof[slow], t1[slow], t2[slow] = b.dof, b.type_I, b.type_II
-        cond[slow], det[slow] = b.condition, _carried_det(b, reference)
-    out["dof"][idx] = dof
-    out["type_I"][idx] = t1
-    out["type_II"][idx] = t2
-    out["condition"][idx] = cond
-    out["det"][idx] = det
-    out["reference_path"] = len(slow)
+    # 3. the analysis engine (compiled screw algebra) on every assembled pose
+    r = engine.analyse(Js, layout, full=False)
+    for key in ("dof", "type_I", "type_II", "condition", "det"):
+        out[key][idx] = getattr(r, key)
     return out
-
-
-def _pinocchio_pass(mech, Qs, targets, idx):
-    """One Pinocchio pass per leg at the poses ``idx`` (increasing): the (M, nv, 6)
-    axis-first world joint twists of the legs one after the other, and (M,) whether a
-    leg's closure error (from Pinocchio's tip placement against its target in
-    ``targets``) exceeds :data:`SWEEP_TOL`."""
-    from .fast_analysis import leg_outputs
-
-    offs = mech._kernel.coords
-    M = len(idx)
-    J = np.empty((M, int(offs[-1]), 6))
-    bad = np.zeros(M, bool)
-    if not M:
-        return J, bad
-    jacobians, place = pin.computeJointJacobians, pin.updateFramePlacement
-    # idx is increasing (np.flatnonzero): of full length, it is every pose in order
-    every = bool(Qs) and M == len(Qs[0]) and idx[-1] == M - 1
-    # the configurations are handed to Pinocchio as M row views of one buffer per
-    # configuration size, made once and refilled for each leg of that size (a view
-    # costs as much as a fifth of Pinocchio's call)
-    shared = {}
-    for k, (leg, Q) in enumerate(zip(mech.legs, Qs)):
-        model, data, tip = leg.model, leg.data, leg.tip_id
-        if leg.nq not in shared:
-            Qb = np.empty((M, leg.nq))
-            shared[leg.nq] = Qb, list(Qb)
-        Qb, rows = shared[leg.nq]
-        if every:
-            Qb[...] = Q
-        else:
-            np.take(Q, idx, axis=0, out=Qb)
-        nj = 6 * leg.nv
-        # Pinocchio's arrays (Jacobian, then tip placement, per pose) are copied as they
-        # come into one pre-sized byte buffer: each is freed at once, so the allocator
-        # recycles its memory (cheaper than keeping them and joining at the end). Their
-        # layout is checked on the first pose, their number of bytes at the end.
-        buf = io.BytesIO(bytes(8 * M * (nj + 16)))
-        write = buf.write
-        if model.nvExtended == model.nv:
-            # the joint Jacobians returned by computeJointJacobians are the tip frame's
-            # WORLD Jacobian: every joint of a kernel's chain supports the tip
-            first = (jacobians(model, data, rows[0]), place(model, data, tip).homogeneous)
-            _check_layout(first, leg)
-            write(first[0])
-            write(first[1])
-            for q in rows[1:]:
-                write(jacobians(model, data, q))
-                write(place(model, data, tip).homogeneous)
-        else:  # mimic joints have their own columns in data.J: ask for the frame's
-            frame_jacobian, world = pin.getFrameJacobian, pin.WORLD
-            for j, q in enumerate(rows):
-                jacobians(model, data, q)
-                pair = (frame_jacobian(model, data, tip, world),
-                        place(model, data, tip).homogeneous)
-                if not j:
-                    _check_layout(pair, leg)
-                write(pair[0])
-                write(pair[1])
-        B = _as_array(buf, (M, nj + 16), leg)
-        Jp, H = B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
-        leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
-                    float(leg.characteristic_length), SWEEP_TOL, J, int(offs[k]), bad)
-    return J, bad
-
-
-def _check_layout(pair: tuple, leg) -> None:
-    """Pinocchio's Jacobian and tip placement are the C-ordered float64 (6, nv) and
-    (4, 4) arrays :func:`_as_array` expects."""
-    for a, shape in zip(pair, ((6, leg.nv), (4, 4))):
-        if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
-            raise RuntimeError(f"leg {leg.name!r}: Pinocchio returned an array of shape "
-                               f"{a.shape}, type {a.dtype}; expected a C-ordered float64 "
-                               f"{shape}")
-
-
-def _as_array(buf: io.BytesIO, shape: tuple, leg) -> np.ndarray:
-    """The float64 array of ``shape`` written in ``buf`` (the number of bytes written is
-    checked: the compiled code reading it does not check bounds)."""
-    if buf.tell() != 8 * math.prod(shape):
-        raise RuntimeError(f"leg {leg.name!r}: Pinocchio's arrays do not add up to {shape}")
-    return np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(shape)
 
 
 def _restart_configurations(leg, q_home, restarts: int) -> np.ndarray:
@@ -379,8 +273,7 @@ def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:
         Q[i] = q
 
 
-def _evaluate_chunk_pinocchio(mech, X, reference, rtol, singular_tol, progress,
-                              restarts) -> dict:
+def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts) -> dict:
     """:func:`evaluate_chunk` for legs without a compiled kernel."""
     N, n = len(X), mech.n_actuated
     ok = np.zeros(N, bool)
@@ -414,18 +307,10 @@ def _evaluate_chunk_pinocchio(mech, X, reference, rtol, singular_tol, progress,
            "condition": np.full(N, np.nan), "det": np.full(N, np.nan)}
     if not solved:
         return out
-    Js, Ts = [], []
-    for k, leg in enumerate(mech.legs):
-        pairs = [leg.screws(asm.leg_q[k]) for asm in solved]
-        Js.append(np.stack([J for J, _ in pairs]))
-        Ts.append(np.stack([T for _, T in pairs]))
-    b = batch.analyse(Js, Ts, [leg.actuated_v for leg in mech.legs],
-                      mech.characteristic_length, rtol)
-    out["dof"][ok] = b.dof
-    out["type_I"][ok] = b.type_I
-    out["type_II"][ok] = b.type_II
-    out["condition"][ok] = b.condition
-    out["det"][ok] = _carried_det(b, reference)
+    r = engine.analyse(np.stack([joint_twists(mech, asm.leg_q) for asm in solved]), layout,
+                       full=False)
+    for key in ("dof", "type_I", "type_II", "condition", "det"):
+        out[key][ok] = getattr(r, key)
     return out
 
 
@@ -455,17 +340,6 @@ def _evaluate_shared(blob: bytes, digest: str, *args) -> dict:
     return evaluate_chunk(mech, *args)
 
 
-def _carried_det(b: batch.BatchScrews, reference: np.ndarray) -> np.ndarray:
-    """det(A_h Δ P_locᵀ), P_loc = the home platform basis projected on each pose's."""
-    n = b.A.shape[1]
-    if reference.shape[0] != n or n == 0:
-        return np.full(b.A.shape[0], np.nan)
-    P = b.platform  # masked orthonormal rows
-    P_loc = reference[None] @ np.swapaxes(P, 1, 2) @ P
-    Ahu = batch.unit_rows(batch.homogenise(b.A, b.length))
-    return np.linalg.det(Ahu @ batch.DELTA @ np.swapaxes(P_loc, 1, 2))
-
-
 def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
           progress: bool = False, rtol: float | None = None,
           singular_tol: float = SINGULAR_TOL) -> SweepResult:
@@ -492,7 +366,7 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
         raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
     rtol = RANK_RTOL if rtol is None else rtol
     order = visiting_order(X, mech.characteristic_length)
-    reference = batch.homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+    reference = homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
     chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
     bar = _progress_bar(len(X)) if progress else None
     if executor is None:

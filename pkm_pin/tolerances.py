@@ -27,16 +27,8 @@ ZERO_SCREW_RTOL = 1e-12
 #: a screw outside the span, relative to the screw's homogenised norm.
 SPAN_RTOL = 1e-7
 #: Singular values of the ω parts of an orthonormal (homogenised) platform twist basis
-#: below this count as zero when counting rotations of the platform twist system
-#: (``batch.ROTATION_TOL``).
+#: below this count as zero when counting rotations of the platform twist system.
 ROTATION_COUNT_TOL = 1e-7
-#: A rank decision is taken by pivoted QR only if every pivot ratio is this factor away
-#: from its threshold (QR with column pivoting brackets the singular values within
-#: 2^6·√6); otherwise it goes to an SVD (``fast_analysis.WINDOW``, a ratio).
-QR_DECISION_WINDOW = 1e4
-#: Pivoted QR: squared column norms within this relative margin of each other are ties,
-#: resolved towards the first column (bases move continuously along a path).
-PIVOT_TIE_RTOL = 1e-10
 
 # ================================================================= singularities
 #: Closeness indices (type I, type II, constraint; each a ratio of singular values of
@@ -168,8 +160,6 @@ def damping(r: float) -> float:
 ALIASES = {
     "screws.RTOL": "RANK_RTOL",
     "screws._ZERO_ROW": "ZERO_SCREW_RTOL",
-    "batch.ROTATION_TOL": "ROTATION_COUNT_TOL",
-    "fast_analysis.WINDOW": "QR_DECISION_WINDOW",
     "analysis.SINGULAR_TOL": "CLOSENESS_SINGULAR_TOL",
     "serial.SINGULAR_TOL": "SERIAL_SINGULAR_TOL",
     "serial.TWIST_RTOL": "LINK_TWIST_RTOL",

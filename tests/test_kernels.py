@@ -246,7 +246,7 @@ def test_mechanism_without_kernel_falls_back_to_euler():
 
 
 def test_sweep_without_kernel_equals_the_compiled_sweep():
-    """The sweep of the continuous-joint 3-RPR (no kernel: Leg.solve + batch.analyse)
+    """The sweep of the continuous-joint 3-RPR (no kernel: Leg.solve + the engine)
     gives the DOF, indices and actuated coordinates of the compiled sweep of the
     ordinary 3-RPR at the same poses."""
     m, ref = _continuous_rpr3(), mech("rpr3")

@@ -177,12 +177,13 @@ def test_executor_tasks_unpickle_the_mechanism_once_per_thread():
     import hashlib
     import pickle
 
-    from pkm_pin import batch, sweep
+    from pkm_pin import sweep
+    from pkm_pin.analysis import homogenise
     from pkm_pin.screws import RTOL
 
     mech = mechanism("rpr3")
     X = grid_around_home(mech, n=3)
-    ref = batch.homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+    ref = homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
     blob = pickle.dumps(mech)
     digest = hashlib.sha256(blob).hexdigest()
     sweep._SHARED.clear()

@@ -19,8 +19,6 @@ PACKAGE = Path(tolerances.__file__).parent
 HISTORICAL = {
     "screws.RTOL": 1e-9,
     "screws._ZERO_ROW": 1e-12,
-    "batch.ROTATION_TOL": 1e-7,
-    "fast_analysis.WINDOW": 1e4,
     "analysis.SINGULAR_TOL": 1e-7,
     "serial.SINGULAR_TOL": 1e-9,
     "serial.TWIST_RTOL": 1e-9,
@@ -48,10 +46,7 @@ def test_every_alias_is_listed_with_its_historical_value():
 def test_historical_names_still_work(old):
     """``pkm_pin.<module>.<NAME>`` still exists and equals the constant of tolerances."""
     module, name = old.split(".")
-    try:
-        found = importlib.import_module(f"pkm_pin.{module}")
-    except ModuleNotFoundError:  # a module the analysis engine has replaced
-        pytest.skip(f"pkm_pin.{module} is gone")
+    found = importlib.import_module(f"pkm_pin.{module}")
     value = getattr(found, name)
     assert value == getattr(tolerances, tolerances.ALIASES[old]) == HISTORICAL[old]
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .screws import DELTA, RTOL
+from pkm_pin.screws import DELTA, RTOL
 
 #: ω-part singular values below this (rows orthonormal in homogenised coordinates)
 #: are zero when counting rotations in the platform twist system.

@@ -1,0 +1,117 @@
+"""pkm_pin's compiled code (numba): a notice while it compiles, and whether it is ready.
+
+numba compiles a function the first time it is called with new argument types and
+caches the machine code on disk (``cache=True``), so only the first run on a machine
+pays for it. A first run must not sit silent: :func:`install_notice` registers a numba
+event listener that prints one line on stderr when a compilation of pkm_pin's code has
+lasted :data:`NOTICE_AFTER` seconds (what is compiled, and that it happens once), and
+the time it took when it ends.
+
+:func:`is_ready` tells whether a compiled function can run now without compiling (it
+has run in this process, or numba's cache holds it), which lets a caller take a
+plain-Python path for a one-off call rather than compile (see
+:func:`pkm_pin.engine.analyse`).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import threading
+import time
+
+from numba.core import event
+
+#: Seconds of compilation after which the notice is printed.
+NOTICE_AFTER = 2.0
+
+
+class _Notice(event.Listener):
+    """Prints the notice for compilations of pkm_pin's functions that last."""
+
+    def __init__(self, stream=None):
+        self.stream = stream
+        self._lock = threading.Lock()
+        self._depth = 0
+        self._timer = None
+        self._started = 0.0
+        self._printed = False
+
+    def _print(self, text: str) -> None:
+        stream = self.stream or sys.stderr
+        print(text, file=stream, flush=True)
+
+    def on_start(self, event_):
+        data = event_.data or {}
+        dispatcher = data.get("dispatcher")
+        name = getattr(getattr(dispatcher, "py_func", None), "__module__", "") or ""
+        with self._lock:
+            self._depth += 1
+            if self._depth > 1 or not name.startswith("pkm_pin"):
+                return
+            qualname = getattr(dispatcher.py_func, "__qualname__", "?")
+            what = f"{name.removeprefix('pkm_pin.')}.{qualname}"
+            self._started = time.perf_counter()
+            self._printed = False
+
+            def notice():
+                with self._lock:
+                    self._printed = True
+                self._print(f"pkm_pin: compiling {what} to machine code (numba; once per "
+                            "installation: later runs load it from numba's cache)...")
+
+            self._timer = threading.Timer(NOTICE_AFTER, notice)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def on_end(self, event_):
+        with self._lock:
+            self._depth -= 1
+            if self._depth > 0 or self._timer is None:
+                return
+            self._timer.cancel()
+            self._timer = None
+            printed = self._printed
+        if printed:
+            self._print(f"pkm_pin: compiled in {time.perf_counter() - self._started:.1f} s")
+
+
+_INSTALLED: list = []
+
+
+def install_notice(stream=None) -> None:
+    """Register the compile notice (once per process; ``stream``: default stderr)."""
+    if not _INSTALLED:
+        listener = _Notice(stream)
+        event.register("numba:compile", listener)
+        _INSTALLED.append(listener)
+
+
+#: Calls a caller may make on a plain-Python path before :func:`prefer_compiled` says
+#: to compile anyway (a process that keeps calling will soon profit from it).
+PLAIN_CALLS = 8
+_plain_calls: dict = {}
+
+
+def prefer_compiled(dispatcher) -> bool:
+    """Whether to call the numba ``dispatcher`` now rather than a plain-Python path:
+    when it :func:`is_ready`, or after :data:`PLAIN_CALLS` calls of the process have
+    asked (one-off work on a fresh installation does not wait for a compilation;
+    repeated work compiles once, with the notice)."""
+    if is_ready(dispatcher):
+        return True
+    key = id(dispatcher)
+    _plain_calls[key] = _plain_calls.get(key, 0) + 1
+    return _plain_calls[key] > PLAIN_CALLS
+
+
+def is_ready(dispatcher) -> bool:
+    """Whether the numba ``dispatcher`` can run without compiling: it already has
+    machine code in this process, or numba's on-disk cache holds an index for it
+    (loading it takes a fraction of a second)."""
+    if dispatcher.overloads:
+        return True
+    try:  # numba's cache layout (private): a missing attribute means "not known"
+        return os.path.exists(dispatcher._cache._cache_file._index_path)
+    except AttributeError:
+        return False

@@ -1,0 +1,222 @@
+"""Joint twists from Pinocchio: the one Pinocchio pass per configuration.
+
+The columns of Pinocchio's WORLD Jacobian of a leg's tip frame are its joint twists
+(linear-first ``(v; ω)``, about the origin of the leg's URDF root frame); they become
+axis-first twists ``(ω; v_O)`` about the world origin through
+:func:`pkm_pin.screws.world_twist_rows` (the leg's base placement applied). Rows of the
+legs one after the other are the input of the analysis engine (:mod:`pkm_pin.engine`).
+
+* :func:`joint_twists` — one configuration (an :class:`~pkm_pin.Analysis`);
+* :func:`sweep_pass` — many configurations of a sweep, with the closure check of every
+  leg against its target placement (Pinocchio's tip placement confirms the compiled
+  leg solver's solution).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+
+from .kernels import _compose, pose_error
+from .screws import world_twist_rows
+
+
+class LegFrames(NamedTuple):
+    """The constant frames of a base–legs–platform mechanism, as arrays.
+
+    Attributes:
+        bases: (legs, 4, 4) placement of each leg's URDF root in the world.
+        anchors: (legs, 4, 4) placement of each leg's tip frame in the platform frame.
+        coords: (legs + 1,) offsets of the legs' velocity coordinates (and twist rows).
+        lengths: (legs,) characteristic length of each leg [m].
+    """
+
+    bases: np.ndarray
+    anchors: np.ndarray
+    coords: np.ndarray
+    lengths: np.ndarray
+
+
+def leg_frames(mechanism) -> LegFrames:
+    """The :class:`LegFrames` of a mechanism."""
+    legs = mechanism.legs
+    return LegFrames(np.stack([leg.base.homogeneous for leg in legs]),
+                     np.stack([a.homogeneous for a in mechanism.anchors]),
+                     np.r_[0, np.cumsum([leg.nv for leg in legs])].astype(np.int64),
+                     np.array([leg.characteristic_length for leg in legs], dtype=float))
+
+
+def leg_jacobian(leg, q: np.ndarray, data=None) -> np.ndarray:
+    """Pinocchio's WORLD Jacobian (6 × nv, ``(v; ω)``, URDF root frame) of the leg's tip
+    at ``q``, from one pass (``data``: default the calling thread's ``leg.data``)."""
+    model = leg.model
+    if data is None:
+        data = leg.data
+    J = pin.computeJointJacobians(model, data, q)
+    if model.nvExtended != model.nv:  # mimic joints have their own columns in data.J
+        J = pin.getFrameJacobian(model, data, leg.tip_id, pin.WORLD)
+    return J
+
+
+def joint_twists(mechanism, leg_q) -> np.ndarray:
+    """The joint twists of every leg at one configuration (nv × 6 rows, axis-first, about
+    the world origin; legs one after the other)."""
+    out = np.empty((sum(leg.nv for leg in mechanism.legs), 6))
+    row = 0
+    for leg, q in zip(mechanism.legs, leg_q):
+        q = np.asarray(q, dtype=float)
+        world_twist_rows(leg_jacobian(leg, q), leg.base.homogeneous, out[row:row + leg.nv])
+        row += leg.nv
+    return out
+
+
+def verified_twists(mechanism, leg_q, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The joint twists at one configuration (as :func:`joint_twists`) and each leg's
+    closure error against the platform pose (4×4): :func:`pkm_pin.kernels.pose_error`
+    of Pinocchio's tip placement from ``pose · anchor``, from the same single pass.
+
+    Returns ``(J, errors)``: (nv, 6) rows and (legs,) errors."""
+    legs = mechanism.legs
+    f = mechanism.leg_frames
+    place = pin.updateFramePlacement
+    Js, Hs = [], []
+    for leg, q in zip(legs, leg_q):
+        data = leg.data
+        Js.append(leg_jacobian(leg, np.asarray(q, dtype=float), data))
+        Hs.append(place(leg.model, data, leg.tip_id).homogeneous)
+    J = np.empty((f.coords[-1], 6))
+    errors = np.empty(len(legs))
+    pose_outputs(np.hstack(Js), np.stack(Hs), f.bases, f.anchors, f.coords, f.lengths, pose,
+                 J, errors)
+    return J, errors
+
+
+@njit(cache=True, nogil=True)
+def pose_outputs(Jp, H, bases, anchors, coords, lengths, pose, J_out, errors):
+    """:func:`verified_twists` in compiled code: ``J_out`` (nv × 6) the axis-first world
+    twists of the columns of ``Jp`` (6 × nv, the legs side by side, leg ``k`` in columns
+    ``coords[k]:coords[k+1]``, root placements ``bases``), ``errors[k]`` leg k's
+    :func:`~pkm_pin.kernels.pose_error` from ``pose · anchors[k]``."""
+    tip = np.empty((4, 4))
+    target = np.empty((4, 4))
+    e = np.empty(6)
+    for k in range(coords.shape[0] - 1):
+        _compose(bases[k], H[k], tip)
+        _compose(pose, anchors[k], target)
+        errors[k] = pose_error(tip, target, lengths[k], e)
+        c0, c1 = coords[k], coords[k + 1]
+        world_twist_rows(Jp[:, c0:c1], bases[k], J_out[c0:c1])
+
+
+def sweep_pass(mechanism, Qs, targets, idx, tol: float):
+    """One Pinocchio pass per leg at the poses ``idx`` (increasing) of a sweep.
+
+    Args:
+        Qs: Per leg, the (N, nq) configurations.
+        targets: (legs, N, 4, 4) world placements each leg's tip must reach.
+        idx: Indices of the poses to evaluate.
+        tol: Closure tolerance (as :func:`pkm_pin.leg.pose_error`).
+
+    Returns:
+        ``(J, bad)``: the (M, nv, 6) joint twists of the legs one after the other, and
+        (M,) whether a leg's tip (Pinocchio's placement) misses its target by more than
+        ``tol``.
+    """
+    M = len(idx)
+    nv = sum(leg.nv for leg in mechanism.legs)
+    J = np.empty((M, nv, 6))
+    bad = np.zeros(M, bool)
+    row = 0
+    for k, (leg, Q) in enumerate(zip(mechanism.legs, Qs)):
+        Jp, H = _leg_pass(leg, list(np.ascontiguousarray(Q[idx], dtype=float)))
+        leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx, float(leg.characteristic_length),
+                    tol, J, row, bad)
+        row += leg.nv
+    return J, bad
+
+
+def _leg_pass(leg, rows: list) -> tuple[np.ndarray, np.ndarray]:
+    """Pinocchio's WORLD Jacobians (M, 6, nv) and tip placements (M, 4, 4) of one leg at
+    the configurations ``rows``.
+
+    Pinocchio returns a new array per call; each is copied at once into one byte buffer
+    of the final size and freed, so the allocator recycles its memory: 2–3 µs per
+    6-UPS pose cheaper than assigning into numpy rows or stacking a list (measured).
+    Pinocchio's arrays must be C-ordered float64 of the expected shapes: checked on the
+    first pose, and the number of bytes at the end."""
+    model, data, tip = leg.model, leg.data, leg.tip_id
+    M, nj = len(rows), 6 * leg.nv
+    buf = io.BytesIO(bytes(8 * M * (nj + 16)))
+    if M:
+        first = (leg_jacobian(leg, rows[0]), pin.updateFramePlacement(model, data, tip).homogeneous)
+        for a, shape in zip(first, ((6, leg.nv), (4, 4))):
+            if a.dtype != np.float64 or a.shape != shape or not a.flags.c_contiguous:
+                raise RuntimeError(f"leg {leg.name!r}: Pinocchio returned an array of shape "
+                                   f"{a.shape}, type {a.dtype}; expected C-ordered float64 "
+                                   f"{shape}")
+    write, place = buf.write, pin.updateFramePlacement
+    if model.nvExtended == model.nv:
+        # computeJointJacobians returns the chain's WORLD Jacobian: every joint of a
+        # leg's chain supports its tip
+        jacobians = pin.computeJointJacobians
+        for q in rows:
+            write(jacobians(model, data, q))
+            write(place(model, data, tip).homogeneous)
+    else:
+        for q in rows:
+            write(leg_jacobian(leg, q))
+            write(place(model, data, tip).homogeneous)
+    if buf.tell() != 8 * M * (nj + 16):
+        raise RuntimeError(f"leg {leg.name!r}: Pinocchio's arrays do not add up to "
+                           f"{M} Jacobians and placements")
+    B = np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(M, nj + 16)
+    return B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
+
+
+@njit(cache=True, nogil=True)
+def leg_outputs(H, Jp, base, targets, idx, length, tol, J_out, c0, bad):
+    """Post-process one leg's Pinocchio pass over the poses ``idx``.
+
+    Args:
+        H: (M, 4, 4) tip placements from Pinocchio (URDF root frame).
+        Jp: (M, 6, nv) Pinocchio WORLD Jacobians (root frame).
+        base: root placement in the world (4×4).
+        targets: (N, 4, 4) world placements the tip must reach (pose · anchor).
+        J_out: (M, nv_total, 6) receives the axis-first twists in rows c0:c0+nv.
+        bad: (M,) set where the closure error exceeds ``tol`` (or is nan): the rotation
+            angle between tip and target (π beyond 90°) and their distance / length, in
+            quadrature.
+    """
+    M = H.shape[0]
+    nv = Jp.shape[2]
+    tip = np.empty((3, 4))
+    R = np.empty((3, 3))
+    il = 1.0 / length
+    for j in range(M):
+        tgt = targets[idx[j]]
+        for a in range(3):  # tip in the world: base · H
+            for b in range(4):
+                s = base[a, 3] if b == 3 else 0.0
+                for k in range(3):
+                    s += base[a, k] * H[j, k, b]
+                tip[a, b] = s
+        tr = 0.0  # R = tipᵀ tgt: skew part and trace
+        for a in range(3):
+            for b in range(3):
+                R[a, b] = tip[0, a] * tgt[0, b] + tip[1, a] * tgt[1, b] + tip[2, a] * tgt[2, b]
+            tr += R[a, a]
+        x = R[2, 1] - R[1, 2]
+        y = R[0, 2] - R[2, 0]
+        z = R[1, 0] - R[0, 1]
+        angle = 0.5 * math.sqrt(x * x + y * y + z * z) if tr >= 1.0 else math.pi
+        dx = (tip[0, 3] - tgt[0, 3]) * il
+        dy = (tip[1, 3] - tgt[1, 3]) * il
+        dz = (tip[2, 3] - tgt[2, 3]) * il
+        if not math.sqrt(angle * angle + dx * dx + dy * dy + dz * dz) <= tol:
+            bad[j] = True
+        world_twist_rows(Jp[j], base, J_out[j, c0:c0 + nv])
