@@ -25,7 +25,8 @@ from functools import cached_property
 import numpy as np
 import pinocchio as pin
 
-from . import screws, urdf
+from . import kernels, screws, urdf
+from .compiling import prefer_compiled
 from .errors import FrameNotFound, InputError, JointNotFound
 from .serial import SerialChain
 from .tolerances import (
@@ -450,7 +451,9 @@ class Leg(SerialChain):
         (:mod:`pkm_pin.kernels`, same damping, world-frame error), its result checked
         (and polished if needed) by the Pinocchio iteration; the restarts always run
         with Pinocchio. Default (None): compiled for a warm start (``q0`` given) when
-        the chain has a kernel. Searches that explore basins of attraction from
+        the chain has a kernel and the compiled solver is ready or has been asked for
+        repeatedly (:func:`pkm_pin.compiling.prefer_compiled`: a one-off solve does not
+        wait for its compilation). Searches that explore basins of attraction from
         arbitrary starts (``inverse_kinematics_all``) ask for ``compiled=False``.
         """
         if not isinstance(target, pin.SE3):
@@ -460,7 +463,7 @@ class Leg(SerialChain):
         target_local = self.base.actInv(target)
         starts = [self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))]
         if compiled is None:
-            compiled = q0 is not None
+            compiled = q0 is not None and prefer_compiled(kernels.newton)
         if compiled and self._kernel is not None:
             best = self._newton_compiled(target, target_local, starts[0], tol, max_iter)
         else:
