@@ -88,9 +88,12 @@ class Analysis:
     """
 
     def __init__(self, assembly, rtol: float = screws.RTOL, singular_tol: float = SINGULAR_TOL):
-        for name, value in (("rtol", rtol), ("singular_tol", singular_tol)):
-            if not (isinstance(value, (int, float)) and np.isfinite(value) and 0 < value < 1):
-                raise InputError(f"{name} must be a finite positive number below 1, got {value!r}")
+        if rtol is not screws.RTOL or singular_tol is not SINGULAR_TOL:
+            for name, value in (("rtol", rtol), ("singular_tol", singular_tol)):
+                if not (isinstance(value, (int, float)) and np.isfinite(value)
+                        and 0 < value < 1):
+                    raise InputError(f"{name} must be a finite positive number below 1, "
+                                     f"got {value!r}")
         self.assembly = assembly
         self.mechanism = mech = assembly.mechanism
         self.rtol = rtol

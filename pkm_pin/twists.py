@@ -83,34 +83,46 @@ def verified_twists(mechanism, leg_q, pose: np.ndarray) -> tuple[np.ndarray, np.
     Returns ``(J, errors)``: (nv, 6) rows and (legs,) errors."""
     legs = mechanism.legs
     f = mechanism.leg_frames
-    place = pin.updateFramePlacement
-    Js, Hs = [], []
+    # Pinocchio's Jacobian and tip placement of each leg, one after the other, copied
+    # as they come into one byte buffer (as in _leg_pass), read by pose_outputs
+    buf = io.BytesIO()
+    write, place, jacobians = buf.write, pin.updateFramePlacement, pin.computeJointJacobians
     for leg, q in zip(legs, leg_q):
-        data = leg.data
-        Js.append(leg_jacobian(leg, np.asarray(q, dtype=float), data))
-        Hs.append(place(leg.model, data, leg.tip_id).homogeneous)
+        model, data, q = leg.model, leg.data, np.asarray(q, dtype=float)
+        if model.nvExtended == model.nv:  # the chain's WORLD Jacobian (see leg_jacobian)
+            write(jacobians(model, data, q))
+        else:
+            write(leg_jacobian(leg, q, data))
+        write(place(model, data, leg.tip_id).homogeneous)
+    flat = np.frombuffer(buf.getbuffer(), dtype=np.float64)
+    if flat.shape[0] != 6 * f.coords[-1] + 16 * len(legs):
+        raise RuntimeError("Pinocchio's Jacobians and placements do not add up to the legs'")
     J = np.empty((f.coords[-1], 6))
     errors = np.empty(len(legs))
-    pose_outputs(np.hstack(Js), np.stack(Hs), f.bases, f.anchors, f.coords, f.lengths, pose,
-                 J, errors)
+    pose_outputs(flat, f.bases, f.anchors, f.coords, f.lengths, pose, J, errors)
     return J, errors
 
 
 @njit(cache=True, nogil=True)
-def pose_outputs(Jp, H, bases, anchors, coords, lengths, pose, J_out, errors):
-    """:func:`verified_twists` in compiled code: ``J_out`` (nv × 6) the axis-first world
-    twists of the columns of ``Jp`` (6 × nv, the legs side by side, leg ``k`` in columns
-    ``coords[k]:coords[k+1]``, root placements ``bases``), ``errors[k]`` leg k's
-    :func:`~pkm_pin.kernels.pose_error` from ``pose · anchors[k]``."""
+def pose_outputs(flat, bases, anchors, coords, lengths, pose, J_out, errors):
+    """:func:`verified_twists` in compiled code. ``flat`` holds, leg after leg,
+    Pinocchio's WORLD Jacobian (6 × nv, C order) and tip placement (4 × 4) in the leg's
+    root frame. ``J_out`` (nv × 6) receives the axis-first world twists, ``errors[k]``
+    leg k's :func:`~pkm_pin.kernels.pose_error` from ``pose · anchors[k]``."""
     tip = np.empty((4, 4))
     target = np.empty((4, 4))
     e = np.empty(6)
+    o = 0
     for k in range(coords.shape[0] - 1):
-        _compose(bases[k], H[k], tip)
+        c0, c1 = coords[k], coords[k + 1]
+        nv = c1 - c0
+        Jp = flat[o:o + 6 * nv].reshape(6, nv)
+        H = flat[o + 6 * nv:o + 6 * nv + 16].reshape(4, 4)
+        o += 6 * nv + 16
+        _compose(bases[k], H, tip)
         _compose(pose, anchors[k], target)
         errors[k] = pose_error(tip, target, lengths[k], e)
-        c0, c1 = coords[k], coords[k + 1]
-        world_twist_rows(Jp[:, c0:c1], bases[k], J_out[c0:c1])
+        world_twist_rows(Jp, bases[k], J_out[c0:c1])
 
 
 def sweep_pass(mechanism, Qs, targets, idx, tol: float):

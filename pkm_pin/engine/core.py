@@ -18,8 +18,10 @@ from typing import NamedTuple
 
 import numpy as np
 from numba import njit
+from numba.extending import register_jitable
 
 from ..compiling import prefer_compiled
+from .linalg import reset
 from .stages import (
     actuation_wrench,
     carried_determinant,
@@ -98,8 +100,9 @@ class Results(NamedTuple):
 
 def allocate(N: int, layout: Layout, full: bool = True) -> Results:
     """Output arrays for N poses (:func:`analyse_into` writes every entry, but the
-    leg constraint rows beyond each leg's dimension, which stay zero). Without ``full`` the bases and Jacobians are not
-    kept (their arrays are empty): sweeps keep the scalars only."""
+    leg constraint rows beyond each leg's dimension, which stay zero). Without
+    ``full`` the bases and Jacobians are not kept (their arrays are empty): sweeps keep
+    the scalars only."""
     legs = len(layout.coords) - 1
     n = len(layout.act_col)
     F = N if full else 0
@@ -136,100 +139,122 @@ def analyse(J: np.ndarray, layout: Layout, full: bool = True) -> Results:
     return out
 
 
-@njit(cache=True, nogil=True)
-def analyse_into(J, layout, out, full):
-    """:func:`analyse` in compiled code: fills ``out`` (see :func:`allocate`)."""
-    N, nv = J.shape[0], J.shape[1]
-    coords, act_col, act_leg = layout.coords, layout.act_col, layout.act_leg
-    L, rtol = layout.length, layout.rtol
-    legs = coords.shape[0] - 1
-    n = act_col.shape[0]
+class Workspace(NamedTuple):
+    """Work arrays of :func:`analyse_into`, made once per call (see the stages for what
+    each holds). ``V_legs``, ``V_union`` and ``V_M`` carry the singular bases of the
+    legs, of the union and of ``A_h Δ Pᵀ`` from pose to pose (warm starts)."""
+
+    T: np.ndarray
+    X: np.ndarray
+    W: np.ndarray
+    W2: np.ndarray
+    V2: np.ndarray
+    sv: np.ndarray
+    sv2: np.ndarray
+    order: np.ndarray
+    Xi: np.ndarray
+    work6: np.ndarray
+    C: np.ndarray
+    V_legs: np.ndarray
+    V_union: np.ndarray
+    V_M: np.ndarray
+    W3: np.ndarray
+    V3: np.ndarray
+    sv3: np.ndarray
+    G: np.ndarray
+    gb: np.ndarray
+    centre: np.ndarray
+    wh: np.ndarray
+    ok: np.ndarray
+    Ah: np.ndarray
+    A: np.ndarray
+    t_h: np.ndarray
+    B: np.ndarray
+    cons: np.ndarray
+    P: np.ndarray
+    Pw: np.ndarray
+    M: np.ndarray
+    P_loc: np.ndarray
+    work: np.ndarray
+
+
+@register_jitable
+def workspace(nv, legs, n, n_ref):
+    """The :class:`Workspace` for ``nv`` joint twists, ``legs`` legs, ``n`` actuators
+    and a reference basis of ``n_ref`` twists."""
     nn = max(n, 1)
-    T = np.empty((nv, 6))
-    X = np.empty((max(nv, 6), 6))
-    W = np.empty((max(6 * legs, nv, nn, 6), 6))
-    W2 = np.empty((max(nv, 6), 6))
-    V2 = np.empty((6, 6))
-    sv = np.empty(6)
-    Xi = np.empty((6, 6))
-    work6 = np.empty((6, 6))
-    sv2 = np.empty(6)
-    order = np.empty(6, np.int64)
-    C = np.empty((max(6 * legs, 1), 6))
     V_legs = np.zeros((legs, 6, 6))
     for l in range(legs):
         for a in range(6):
             V_legs[l, a, a] = 1.0
-    V_union = np.eye(6)
-    V_M = np.eye(6)
-    W3 = np.empty((6, 3))
-    V3 = np.empty((3, 3))
-    sv3 = np.empty(3)
-    G = np.empty((3, 3))
-    gb = np.empty(3)
-    centre = np.empty(3)
-    wh = np.empty((nn, 6))  # homogenised actuation wrenches of the legs' stage
-    ok = np.empty(nn, np.bool_)
-    Ah = np.empty((nn, 6))
-    A = np.empty(6)
-    t_h = np.empty(6)
-    B = np.empty(nn)
-    cons = np.empty((6, 6))
-    P = np.zeros((6, 6))
-    Pw = np.empty((6, 3))
-    M = np.empty((nn, 6))
-    P_loc = np.empty((max(layout.reference.shape[0], 1), 6))
-    work = np.empty((nn, nn))
+    return Workspace(
+        np.empty((nv, 6)), np.empty((max(nv, 6), 6)), np.empty((max(6 * legs, nv, nn, 6), 6)),
+        np.empty((max(nv, 6), 6)), np.empty((6, 6)), np.empty(6), np.empty(6),
+        np.empty(6, np.int64), np.empty((6, 6)), np.empty((6, 6)),
+        np.empty((max(6 * legs, 1), 6)), V_legs, np.eye(6), np.eye(6), np.empty((6, 3)),
+        np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3),
+        np.empty((nn, 6)), np.empty(nn, np.bool_), np.empty((nn, 6)), np.empty(6),
+        np.empty(6), np.empty(nn), np.empty((6, 6)), np.zeros((6, 6)), np.empty((6, 3)),
+        np.empty((nn, 6)), np.empty((max(n_ref, 1), 6)), np.empty((nn, nn)))
+
+
+@njit(cache=True, nogil=True)
+def analyse_into(J, layout, out, full):
+    """:func:`analyse` in compiled code: fills ``out`` (see :func:`allocate`)."""
+    coords, act_col, act_leg = layout.coords, layout.act_col, layout.act_leg
+    L, rtol = layout.length, layout.rtol
+    n = act_col.shape[0]
+    ws = workspace(J.shape[1], coords.shape[0] - 1, n, layout.reference.shape[0])
+    T, C, W, sv, Ah = ws.T, ws.C, ws.W, ws.sv, ws.Ah
     d_prev = -1
-    for i in range(N):
-        motion_twists(J[i], layout.groups, L, T, G, gb, centre)
-        # legs: constraint wrenches, then the actuation wrench of each actuated joint
+    for i in range(J.shape[0]):
+        motion_twists(J[i], layout.groups, L, T, ws.G, ws.gb, ws.centre)
+        # stages 2, 3: each leg's constraint wrenches and its actuation wrenches
         m_c = 0
-        for l in range(legs):
-            c0, k = coords[l], coords[l + 1] - coords[l]
-            first = m_c
-            r, m_c, square = leg_constraints(T, c0, k, rtol, X, W, V_legs[l], sv, C, m_c, Xi,
-                                             work6)
+        for l in range(coords.shape[0] - 1):
+            c0, k, first = coords[l], coords[l + 1] - coords[l], m_c
+            r, m_c, square = leg_constraints(T, c0, k, rtol, ws.X, W, ws.V_legs[l], sv, C,
+                                             m_c, ws.Xi, ws.work6)
             if full:
                 out.leg_dims[i, l] = m_c - first
-                for j in range(m_c - first):
-                    for a in range(6):
-                        out.leg_constraints[i, l, j, a] = C[first + j, a]
+                out.leg_constraints[i, l, :m_c - first] = C[first:m_c]
             for a_i in range(n):
-                if act_leg[a_i] == l:
-                    ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, square, Xi,
-                                               rtol, X, W, V_legs[l], sv, C, first, m_c, W2,
-                                               V2, sv2, wh[a_i])
-        # union of the constraints, platform twists
-        rank_c, rotations = platform_system(C, m_c, rtol, layout.rot_tol, W, V_union, sv,
-                                            order, cons, P, Pw, W3, V3, sv3)
+                if act_leg[a_i] != l:
+                    continue
+                if square:  # the wrench of a six-twist leg: a column of X⁻¹ (stage 3)
+                    ws.wh[a_i] = ws.Xi[:, act_col[a_i] - c0]
+                    ws.ok[a_i] = True
+                else:
+                    ws.ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, square,
+                                                  ws.Xi, rtol, ws.X, W, ws.V_legs[l], sv, C,
+                                                  first, m_c, ws.W2, ws.V2, ws.sv2, ws.wh[a_i])
+        # stage 4: the platform twist system
+        rank_c, rotations = platform_system(C, m_c, rtol, layout.rot_tol, W, ws.V_union, sv,
+                                            ws.order, ws.cons, ws.P, ws.Pw, ws.W3, ws.V3,
+                                            ws.sv3)
         d = 6 - rank_c
-        out.dof[i] = d
-        out.translations[i] = d - rotations
-        out.redundant[i] = m_c - rank_c
-        # actuation wrenches in world units, B, type I
+        out.dof[i], out.translations[i], out.redundant[i] = d, d - rotations, m_c - rank_c
+        # stage 5: actuation wrenches in world units, B, type I
         t1 = np.inf
         for a_i in range(n):
-            B[a_i], p = scale_actuation(wh[a_i], J[i, act_col[a_i]], L, rtol, A, Ah[a_i],
-                                        t_h)
+            B, p = scale_actuation(ws.wh[a_i], J[i, act_col[a_i]], L, rtol, ws.A, Ah[a_i],
+                                   ws.t_h)
             t1 = min(t1, p)
             if full:
-                out.B[i, a_i] = B[a_i]
-                out.independent[i, a_i] = ok[a_i]
-                for a in range(6):
-                    out.A[i, a_i, a] = A[a]
-                    out.A_h[i, a_i, a] = Ah[a_i, a]
+                out.B[i, a_i], out.independent[i, a_i] = B, ws.ok[a_i]
+                out.A[i, a_i] = ws.A
+                out.A_h[i, a_i] = Ah[a_i]
         out.type_I[i] = t1
-        # A_h Δ Pᵀ: type II index, condition, carried determinant
-        if d != d_prev:  # a new platform dimension: the warm start is void
-            for a in range(6):
-                for b in range(6):
-                    V_M[a, b] = 1.0 if a == b else 0.0
+        # stage 6: A_h Δ Pᵀ, type II index, condition, carried determinant
+        if d != d_prev:  # a new platform dimension: the warm start of V_M is void
+            reset(ws.V_M, 6)
             d_prev = d
-        out.type_II[i], out.condition[i] = transmission(Ah, n, P, d, M, W, V_M, sv, order)
-        out.det[i] = carried_determinant(Ah, n, P, d, layout.reference, M, P_loc, work)
+        out.type_II[i], out.condition[i] = transmission(Ah, n, ws.P, d, ws.M, W, ws.V_M, sv,
+                                                        ws.order)
+        out.det[i] = carried_determinant(Ah, n, ws.P, d, layout.reference, ws.M, ws.P_loc,
+                                         ws.work)
         if full:
-            for j in range(6):
-                for a in range(6):
-                    out.constraints[i, j, a] = cons[j, a] if j < rank_c else 0.0
-                    out.platform[i, j, a] = P[j, a] if j < d else 0.0
+            out.constraints[i] = 0.0
+            out.constraints[i, :rank_c] = ws.cons[:rank_c]
+            out.platform[i] = 0.0
+            out.platform[i, :d] = ws.P[:d]

@@ -89,7 +89,7 @@ def unit_homogeneous(x, L, out):
             out[k] *= f
 
 
-@register_jitable
+@register_jitable(inline="always")
 def motion_twists(J, groups, L, T, G, b, centre):
     """Stage 1. ``T`` (nv × 6): the joint twists ``J`` (rows, axis-first, world units)
     with every spherical group (rows of ``groups``) replaced by the three lines through
@@ -112,7 +112,7 @@ def motion_twists(J, groups, L, T, G, b, centre):
         unit_homogeneous(T[c], L, T[c])
 
 
-@register_jitable
+@register_jitable(inline="always")
 def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, Xi, work):
     """Stage 2. One leg, twists ``T[c0:c0+k]``: the Jacobi SVD of ``X = T_h Δ`` (its
     rows are the reciprocal products with a wrench). The right singular vectors of the
@@ -216,7 +216,7 @@ def actuation_wrench(T, c0, k, ka, r, square, Xi, rtol, X, W, V, sv, C, c_first,
     return False
 
 
-@register_jitable
+@register_jitable(inline="always")
 def platform_system(C, m_c, rtol, rot_tol, W, V, sv, order, constraints, P, Pw, W3, V3, sv3):
     """Stage 4. The union of the constraint wrenches (rows ``C[:m_c]``, homogenised):
     its rank by the Jacobi SVD of ``C`` (``V``: in/out warm start), an orthonormal basis
@@ -254,7 +254,7 @@ def platform_system(C, m_c, rtol, rot_tol, W, V, sv, order, constraints, P, Pw, 
     return rank_c, rotations
 
 
-@register_jitable
+@register_jitable(inline="always")
 def scale_actuation(w, twist, L, rtol, A, a_h, t_h):
     """Stage 5. ``A`` (world units) from the homogenised actuation wrench ``w``: a unit
     force, or a unit moment when it is a couple (force below ``rtol`` of the moment /
@@ -298,7 +298,7 @@ def reciprocal_products(W, n, T, m, out):
             out[a, j] = s
 
 
-@register_jitable
+@register_jitable(inline="always")
 def transmission(Ah, n, P, d, M, W, V, sv, order):
     """Stage 6. The singular values of ``M = A_h Δ Pᵀ`` (``n × d``; rows of ``A_h``
     homogenised unit actuation wrenches, rows of ``P`` the orthonormal platform twists):
@@ -314,7 +314,7 @@ def transmission(Ah, n, P, d, M, W, V, sv, order):
     return t2, (sv[order[0]] / t2 if t2 > 0 else math.inf)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def carried_determinant(Ah, n, P, d, reference, M, P_loc, work):
     """``det(A_h Δ P_locᵀ)`` with ``P_loc`` the reference (home) platform basis
     projected on this pose's platform twists: a signed index whose sign change along a
