@@ -13,10 +13,10 @@
   is drawn along its direction through the joint;
 * the actuation wrenches (rows of :attr:`Analysis.A`) and the constraint wrenches (a
   basis of :attr:`Analysis.constraint_wrenches` with the couples split off, see
-  :func:`_readable_basis`) as arrows of fixed length along the wrench axis, starting at
-  the point of the axis nearest to the platform origin; a pure couple is a double-headed
-  arrow through the platform origin. Only the axis is drawn: arrow lengths are not
-  magnitudes, pitches are not shown;
+  :func:`pkm_pin.report.readable_basis`) as arrows of fixed length along the wrench
+  axis, starting at the point of the axis nearest to the platform origin; a pure
+  couple is a double-headed arrow through the platform origin. Only the axis is
+  drawn: arrow lengths are not magnitudes, pitches are not shown;
 * at a type II or III singularity, an animation that moves the platform back and forth
   along :attr:`Analysis.uncontrolled_twist` (the legs follow by re-assembly).
 
@@ -65,6 +65,7 @@ import pinocchio as pin
 from . import screws
 from .errors import AssemblyError, InputError, PkmError
 from .mechanism import Assembly, Mechanism, as_pose
+from .report import readable_basis
 
 #: Leg colours (0xRRGGBB), cycled, for legs whose URDF gives no material.
 LEG_COLOURS = (0x377EB8, 0x4DAF4A, 0x17BECF, 0xA65628, 0xF781BF, 0xBCBD22)
@@ -583,7 +584,8 @@ class _Painter:
             self.arrow(f"actuation/{node_name(name.replace('/', '.'))}", w,
                        ACTUATION_WRENCH_COLOUR)
         centre = self.scene.assembly.pose.translation
-        for k, w in enumerate(_readable_basis(analysis.constraint_wrenches, centre, self.L)):
+        basis = readable_basis(analysis.constraint_wrenches, centre, self.L)
+        for k, w in enumerate(b.screw for b in basis):
             self.arrow(f"constraint/{k}", w, CONSTRAINT_WRENCH_COLOUR)
 
     def arrow(self, name: str, wrench: np.ndarray, colour: int) -> None:
@@ -643,29 +645,6 @@ class _Painter:
             rates = self.scene.analysis.passive_rates(displacement)
             return [pin.integrate(leg.model, q, qd)
                     for leg, q, qd in zip(self.mech.legs, self.scene.assembly.leg_q, rates)]
-
-
-def _readable_basis(W: np.ndarray, centre: np.ndarray, length: float) -> np.ndarray:
-    """Another basis of the wrench system spanned by the rows of ``W``, easier to read:
-    pure couples first split off, then forces whose moment about ``centre`` has no
-    component that the couples could supply (a planar mechanism's constraint force
-    along the normal then passes through ``centre``). Same span as ``W``."""
-    if W.shape[0] == 0:
-        return W
-    F = W[:, :3]
-    M = W[:, 3:] - np.cross(centre, F)  # moments about the centre
-    U, sv, _ = np.linalg.svd(F)
-    scale = max(float(np.max(np.linalg.norm(F, axis=1))) * length,
-                float(np.max(np.linalg.norm(M, axis=1))))
-    r = int(np.sum(sv * length > 1e-9 * scale))
-    F, M = U.T @ F, U.T @ M
-    forces, couples = slice(0, r), slice(r, W.shape[0])
-    if W.shape[0] > r:
-        Q, _ = np.linalg.qr(M[couples].T)  # the moments the couples span
-        M[forces] -= (M[forces] @ Q) @ Q.T
-        F[couples] = 0.0
-    out = np.hstack([F, M + np.cross(centre, F)])
-    return np.vstack([out[couples], out[forces]])
 
 
 def _velocity_names(model: pin.Model) -> list[str]:
