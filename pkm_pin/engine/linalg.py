@@ -138,6 +138,17 @@ def reset(V, n):
 
 
 @register_jitable
+def pivot_row(A, j, n):
+    """Partial pivoting: the row ``r ≥ j`` (among the first n) of the largest
+    ``|A[r, j]|``."""
+    p = j
+    for r in range(j + 1, n):
+        if abs(A[r, j]) > abs(A[p, j]):
+            p = r
+    return p
+
+
+@register_jitable
 def inverse(X, n, Xi, work):
     """``Xi = X⁻¹`` for the leading ``n × n`` block (Gauss–Jordan, partial pivoting;
     ``work``: at least ``n × n``). Returns False when a pivot is zero."""
@@ -146,10 +157,7 @@ def inverse(X, n, Xi, work):
             work[r, c] = X[r, c]
             Xi[r, c] = 1.0 if r == c else 0.0
     for j in range(n):
-        p = j
-        for r in range(j + 1, n):
-            if abs(work[r, j]) > abs(work[p, j]):
-                p = r
+        p = pivot_row(work, j, n)
         if work[p, j] == 0.0:
             return False
         if p != j:
@@ -197,10 +205,7 @@ def determinant(M, n, work):
             work[r, c] = M[r, c]
     d = 1.0
     for j in range(n):
-        p = j
-        for r in range(j + 1, n):
-            if abs(work[r, j]) > abs(work[p, j]):
-                p = r
+        p = pivot_row(work, j, n)
         if work[p, j] == 0.0:
             return 0.0
         if p != j:
