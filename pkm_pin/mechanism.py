@@ -172,6 +172,15 @@ class Mechanism:
         return leg_frames(self)
 
     @cached_property
+    def closure_model(self):
+        """The description as one tree plus closures (:class:`pkm_pin.model.ClosureModel`,
+        :func:`pkm_pin.model.from_mechanism`: the legs under the universe at their bases,
+        the platform a free flyer, each tip welded to it; cached)."""
+        from .model import from_mechanism
+
+        return from_mechanism(self)
+
+    @cached_property
     def engine_layout(self) -> Layout:
         """The analysis engine's :class:`~pkm_pin.engine.Layout` of this mechanism at the
         default rank tolerance (cached)."""
