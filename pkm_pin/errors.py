@@ -90,6 +90,14 @@ class JointNotFound(PkmError, KeyError):
         )
 
 
+class TreeFrameNotFound(FrameNotFound, InputError):
+    """A closure or the output of a closure model names a frame that is not in its tree."""
+
+
+class TreeJointNotFound(JointNotFound, InputError):
+    """An actuated name of a closure model is not a movable joint of its tree."""
+
+
 class MechanismFileError(PkmError):
     """A mechanism (TOML) file is wrong.
 

@@ -56,7 +56,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import screws
-from ..errors import FrameNotFound, InputError, JointNotFound
+from ..errors import InputError, TreeFrameNotFound, TreeJointNotFound
 from ..tolerances import RANK_RTOL, ZERO_SCREW_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -69,14 +69,6 @@ KINDS = {"weld": 6, "point": 3, "revolute": 5}
 #: Name of the platform's body frame and free-flyer joint in :func:`from_mechanism`.
 PLATFORM = "platform"
 PLATFORM_JOINT = "platform_joint"
-
-
-class TreeFrameNotFound(FrameNotFound, InputError):
-    """A closure or the output names a frame that is not in the tree."""
-
-
-class TreeJointNotFound(JointNotFound, InputError):
-    """An actuated name is not a movable joint of the tree."""
 
 
 @dataclass(frozen=True)
