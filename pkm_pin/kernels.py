@@ -1,4 +1,5 @@
-"""Compiled kinematics of a leg for the inner loops of sweeps and forward kinematics.
+"""Compiled kinematics of a leg for the inner loops of the closure solver
+(:mod:`pkm_pin.solve`: sweeps, assembly, forward kinematics).
 
 Why this module exists: a Newton iteration of a leg costs about 1 µs of Pinocchio work
 but 20–30 µs of Python around it (binding calls, small numpy arrays). For loops over
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 from numba import njit
+from numba.extending import register_jitable
 
 from . import screws
 
@@ -60,6 +62,8 @@ class ChainKernel:
     upper: np.ndarray  # (nq,)
     length: float  # characteristic length of the leg [m]
     nv: int
+    units: np.ndarray  # (nv,) unit of each coordinate: length (prismatic) or 1 rad
+
 
     def args(self) -> tuple:
         """The arrays in the order the compiled functions take them."""
@@ -67,8 +71,9 @@ class ChainKernel:
                 self.tip, self.base, self.nv)
 
     def solver_args(self) -> tuple:
-        """:meth:`args` plus the limits and the length, as the solvers take them."""
-        return (*self.args(), self.lower, self.upper, self.length)
+        """:meth:`args` plus the limits, the length and the units of the coordinates, as
+        the leg solvers of :mod:`pkm_pin.solve` take them."""
+        return (*self.args(), self.lower, self.upper, self.length, self.units)
 
     def kinematics(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Tip placement (4×4, world) and 6×nv axis-first world Jacobian at ``q``."""
@@ -78,12 +83,14 @@ class ChainKernel:
         return T, J
 
     def solve(self, target: np.ndarray, q0, tol: float = 1e-12, max_iter: int = 50):
-        """Damped Newton for the tip at ``target`` (4×4, world) from ``q0``:
-        ``(q, residual, iterations)``."""
-        q = np.array(q0, dtype=float)
-        res, it = newton(*self.solver_args(), np.ascontiguousarray(target, dtype=float), q,
-                         tol, max_iter)
-        return q, res, it
+        """The closure solver (:func:`pkm_pin.solve.solve_from`) for the tip at ``target``
+        (4×4, world) from ``q0``: ``(q, residual, iterations)``."""
+        from .solve import solve_from
+
+        Q, res, its = np.empty((1, self.nv)), np.empty(1), np.zeros(1, np.int64)
+        solve_from(*self.solver_args(), np.ascontiguousarray(target, dtype=float)[None],
+                   np.array(q0, dtype=float)[None], tol, max_iter, Q, res, its)
+        return Q[0], float(res[0]), int(its[0])
 
 
 def chain_kernel(leg) -> ChainKernel | None:
@@ -144,7 +151,8 @@ def chain_kernel(leg) -> ChainKernel | None:
     lo, up = leg._bounds
     return ChainKernel(parent, post, kind, axis, rate, iq, iv,
                        m.frames[leg.tip_id].placement.homogeneous, leg.base.homogeneous,
-                       lo.copy(), up.copy(), float(leg.characteristic_length), int(m.nv))
+                       lo.copy(), up.copy(), float(leg.characteristic_length), int(m.nv),
+                       leg._velocity_units.copy())
 
 
 # =============================================================== compiled functions
@@ -259,7 +267,7 @@ def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
     T_out[3, 0], T_out[3, 1], T_out[3, 2], T_out[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
-@njit(cache=True, nogil=True)
+@register_jitable
 def log3(R, out):
     """Rotation vector of a rotation matrix, accurate at every angle: θ from
     ``atan2(sin θ, cos θ)``; the axis from the skew part below 90° and from the
@@ -291,10 +299,12 @@ def log3(R, out):
     out[0], out[1], out[2] = theta * u0 / n, theta * u1 / n, theta * u2 / n
 
 
-@njit(cache=True, nogil=True, inline="always")
+@register_jitable(inline="always")
 def pose_error(T, target, length, e):
-    """Error ``e`` (6) from ``T`` to ``target``: world rotation vector of
-    ``R_target R_Tᵀ`` and tip displacement divided by ``length``; returns its norm."""
+    """Error ``e`` (6) from ``T`` to ``target`` (4×4 world placements): world rotation
+    vector of ``R_target R_Tᵀ`` [rad] and tip displacement ``p_target − p_T`` divided by
+    ``length``; returns its norm. The closure residual of every solver
+    (:func:`pkm_pin.solve.closure_error`); callable from Python and compiled code."""
     d00 = target[0, 0] * T[0, 0] + target[0, 1] * T[0, 1] + target[0, 2] * T[0, 2]
     d11 = target[1, 0] * T[1, 0] + target[1, 1] * T[1, 1] + target[1, 2] * T[1, 2]
     d22 = target[2, 0] * T[2, 0] + target[2, 1] * T[2, 1] + target[2, 2] * T[2, 2]
@@ -317,252 +327,6 @@ def pose_error(T, target, length, e):
         e[3 + a] = (target[a, 3] - T[a, 3]) / length
         s += e[a] * e[a] + e[3 + a] * e[3 + a]
     return math.sqrt(s)
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _solve_spd(A, b, x, inv):
-    """x = A⁻¹ b for a symmetric positive definite n×n A (Cholesky in place on A's lower
-    triangle; ``inv`` (n) receives the reciprocals of the factor's diagonal, so that the
-    factorisation and both substitutions divide n times in all). Returns False if A is
-    not positive definite."""
-    n = A.shape[0]
-    for j in range(n):
-        s = A[j, j]
-        for k in range(j):
-            s -= A[j, k] * A[j, k]
-        if not 0.0 < s < np.inf:
-            return False
-        d = 1.0 / math.sqrt(s)
-        inv[j] = d
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= A[i, k] * A[j, k]
-            A[i, j] = s * d
-    for i in range(n):
-        s = b[i]
-        for k in range(i):
-            s -= A[i, k] * x[k]
-        x[i] = s * inv[i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for k in range(i + 1, n):
-            s -= A[k, i] * x[k]
-        x[i] = s * inv[i]
-    return True
-
-
-@njit(cache=True, nogil=True)
-def _workspace(nv, kind, iv, length):
-    """Work arrays of :func:`_newton`, and the unit of each coordinate (``length`` for a
-    prismatic one, 1 rad otherwise: the Newton unknowns are dimensionless) with its
-    reciprocal."""
-    cs = np.ones(nv)
-    for j in range(kind.shape[0]):
-        if kind[j] & 1 == PRISMATIC:
-            cs[iv[j]] = length
-    return (np.empty((4, 4)), np.empty((6, nv)), np.empty((6, nv)), np.empty(6),
-            np.empty((nv, nv)), np.empty(nv), np.empty(nv), cs, 1.0 / cs, np.empty(nv))
-
-
-@njit(cache=True, nogil=True)
-def newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-           target, q, tol, max_iter):
-    """Levenberg–Marquardt Newton of the leg (in place on ``q``), steps projected on
-    the limits; the error is :func:`pose_error` (rotation, tip displacement / length),
-    damping ``1e-10 + 1e-2 r²`` as :meth:`pkm_pin.Leg.solve`. Returns
-    ``(residual, iterations)``; the residual is evaluated at the returned ``q``."""
-    return _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
-                   length, target, q, tol, max_iter, 0.0, _workspace(nv, kind, iv, length))
-
-
-@njit(cache=True, nogil=True, inline="always")
-def _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-            target, q, tol, max_iter, trust, ws):
-    """:func:`newton`; with ``trust > 0`` a step taken from a residual ``r ≤ trust``
-    (Newton's quadratic regime: the next residual is ~r²) ends the iteration without
-    evaluating the result, and the residual returned is −r (the caller verifies)."""
-    T, J, H, e, N, g, dq, cs, ics, inv = ws
-    il = 1.0 / length
-    it = 0
-    best = np.inf
-    slow = 0
-    while True:
-        _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
-        r = pose_error(T, target, length, e)
-        if r <= tol or it >= max_iter:
-            return r, it
-        slow = slow + 1 if r > (1.0 - 1e-3) * best else 0
-        best = min(best, r)
-        if slow >= 10:
-            return r, it
-        it += 1
-        px, py, pz = T[0, 3], T[1, 3], T[2, 3]
-        for c in range(nv):  # rows: ω, and the velocity of the tip point / length
-            u = cs[c]  # per unit of the dimensionless unknown
-            wx, wy, wz = u * J[0, c], u * J[1, c], u * J[2, c]
-            H[0, c], H[1, c], H[2, c] = wx, wy, wz
-            H[3, c] = (u * J[3, c] + wy * pz - wz * py) * il
-            H[4, c] = (u * J[4, c] + wz * px - wx * pz) * il
-            H[5, c] = (u * J[5, c] + wx * py - wy * px) * il
-        lam = 1e-10 + 1e-2 * r * r
-        for a in range(nv):
-            s = 0.0
-            for k in range(6):
-                s += H[k, a] * e[k]
-            g[a] = s
-            for b in range(a + 1):
-                s = 0.0
-                for k in range(6):
-                    s += H[k, a] * H[k, b]
-                N[a, b] = s
-            N[a, a] += lam
-        if not _solve_spd(N, g, dq, inv):
-            return r, it
-        step = 0.0
-        size = 0.0
-        clipped = False
-        for a in range(nv):
-            want = q[a] + cs[a] * dq[a]
-            new = min(upper[a], max(lower[a], want))
-            clipped = clipped or new != want
-            d, v = (new - q[a]) * ics[a], q[a] * ics[a]
-            step += d * d
-            size += v * v
-            q[a] = new
-        if not math.isfinite(step) or step < 1e-30 * (1.0 + size):
-            _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
-            return pose_error(T, target, length, e), it
-        if r <= trust and not clipped:
-            return -r, it
-
-
-@njit(cache=True, nogil=True)
-def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-          targets, q_start, extrapolate, tol, max_iter, trust, Q, residual):
-    """Solve the leg at each target of an ordered path (N, 4, 4), warm-started from the
-    previous solution (extrapolated from the previous ones where ``extrapolate[i]``:
-    linearly from two, quadratically from three where the path was smooth before too).
-    Fills ``Q`` (N, nq) and ``residual`` (N,): the residual reached, or −r when the
-    last Newton step was taken from a residual ``r ≤ trust`` and not evaluated (see
-    :func:`_newton`; the caller verifies).
-    A target that does not converge leaves the warm start unchanged for the next one.
-    Returns the number of targets missed (neither converged nor trusted)."""
-    ws = _workspace(nv, kind, iv, length)
-    nq = q_start.shape[0]
-    hist = np.empty((3, nq))  # the last three solutions, newest at row `head`
-    for k in range(3):
-        hist[k] = q_start
-    head = 0
-    known = 1  # how many of them are consecutive solutions of this path
-    q = np.empty(nq)
-    misses = 0
-    for i in range(targets.shape[0]):
-        q1 = hist[head]
-        if extrapolate[i] and i >= 1 and extrapolate[i - 1] and known >= 3:
-            q2, q3 = hist[(head + 2) % 3], hist[(head + 1) % 3]
-            for a in range(nq):  # quadratic through the last three
-                q[a] = min(upper[a], max(lower[a], 3.0 * (q1[a] - q2[a]) + q3[a]))
-        elif extrapolate[i] and known >= 2:
-            q2 = hist[(head + 2) % 3]
-            for a in range(nq):
-                q[a] = min(upper[a], max(lower[a], 2.0 * q1[a] - q2[a]))
-        else:
-            for a in range(nq):
-                q[a] = q1[a]
-        r, _ = _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
-                       length, targets[i], q, tol, max_iter, trust, ws)
-        residual[i] = r
-        for a in range(nq):
-            Q[i, a] = q[a]
-        if r <= tol:  # converged, or trusted (a trusted r is negative)
-            head = (head + 1) % 3
-            for a in range(nq):
-                hist[head, a] = q[a]
-            known = known + 1 if i > 0 else 1
-        else:
-            misses += 1
-            known = 0
-    return misses
-
-
-@njit(cache=True, nogil=True, inline="always")
-def jacobi_sv(M, m, n, sv, V, W):
-    """Singular values (descending) of the m × n matrix M (m ≥ n) by one-sided Jacobi
-    on ``M V``: ``V`` (n × n orthogonal, in/out) is the previous pose's right singular
-    basis, a warm start that leaves few rotations to do along a sweep. ``W``: work
-    space of at least m × n.
-
-    Pairs of columns are visited in round-robin order (consecutive rotations touch
-    different columns, so their divisions and square roots overlap in the processor);
-    a pair whose cosine γ is below 1e-15 is left alone, a small rotation
-    (|tan| < 5·10⁻⁵) is computed without square roots (``cos = 1 − t²/2`` is exact to
-    1e-17), and the iteration stops after a sweep in which no γ exceeded 1e-10: the
-    convergence is quadratic, so the next γ would be ~1e-20, and the column norms are
-    then the singular values to round-off (even within a cluster, where their error is
-    of the order of γ)."""
-    for a in range(m):
-        for b in range(n):
-            s = 0.0
-            for k in range(n):
-                s += M[a, k] * V[k, b]
-            W[a, b] = s
-    nn = n + (n & 1)  # players of the round-robin (one sits out when n is odd)
-    for _ in range(60):
-        large = False
-        for rnd in range(nn - 1):
-            for k in range(nn // 2):
-                if k == 0:
-                    p, q = rnd, nn - 1
-                else:
-                    p, q = (rnd + k) % (nn - 1), (rnd - k + nn - 1) % (nn - 1)
-                if p >= n or q >= n:
-                    continue
-                a = 0.0
-                b = 0.0
-                c = 0.0
-                for r in range(m):
-                    a += W[r, p] * W[r, p]
-                    b += W[r, q] * W[r, q]
-                    c += W[r, p] * W[r, q]
-                cc = c * c
-                if cc <= 1e-30 * a * b:  # γ ≤ 1e-15
-                    continue
-                if cc > 1e-20 * a * b:  # γ > 1e-10
-                    large = True
-                d = b - a
-                if abs(d) > 2e4 * abs(c):  # tan = 1/(2ζ) to 1/(4ζ²) ≤ 6e-10 relative
-                    t = c / d
-                    cs = 1.0 - 0.5 * t * t
-                else:
-                    zeta = d / (2.0 * c)
-                    t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
-                    cs = 1.0 / math.sqrt(1.0 + t * t)
-                sn = cs * t
-                for r in range(m):
-                    x, y = W[r, p], W[r, q]
-                    W[r, p] = cs * x - sn * y
-                    W[r, q] = sn * x + cs * y
-                for r in range(n):
-                    x, y = V[r, p], V[r, q]
-                    V[r, p] = cs * x - sn * y
-                    V[r, q] = sn * x + cs * y
-        if not large:
-            break
-    for j in range(n):
-        s = 0.0
-        for k in range(m):
-            s += W[k, j] * W[k, j]
-        sv[j] = math.sqrt(s)
-    # descending (insertion sort; a tiny array)
-    for j in range(1, n):
-        x = sv[j]
-        k = j - 1
-        while k >= 0 and sv[k] < x:
-            sv[k + 1] = sv[k]
-            k -= 1
-        sv[k + 1] = x
-    return n
 
 
 @njit(cache=True, nogil=True)
@@ -694,11 +458,13 @@ class MechanismKernel:
     act_col: np.ndarray  # column of each actuated joint in the legs' Jacobians side by side
     act_leg: np.ndarray  # its leg
     lengths: np.ndarray  # characteristic length of each leg
+    units: np.ndarray  # unit of each coordinate of Q: its leg's length (prismatic) or 1 rad
 
-    def args(self) -> tuple:
+    def solver_args(self) -> tuple:
+        """The arrays in the order :func:`pkm_pin.solve.solve_system` takes them."""
         return (self.joints, self.coords, self.parent, self.post, self.kind, self.axis,
                 self.rate, self.iq, self.iv, self.tips, self.bases, self.anchors, self.lower,
-                self.upper, self.actuated, self.scales, self.length)
+                self.upper, self.lengths, self.units, self.actuated, self.scales, self.length)
 
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
@@ -725,25 +491,7 @@ def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
                        ).astype(np.int64),
         np.concatenate([np.full(len(leg.actuated_v), i) for i, leg in enumerate(mech.legs)]
                        ).astype(np.int64),
-        np.array([k.length for k in legs], dtype=float))
-
-
-@njit(cache=True, nogil=True)
-def assemble_legs(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases,
-                  anchors, lower, upper, lengths, pose, Q, tol, max_iter, residual):
-    """Every leg solved for its tip at ``pose · anchor`` (damped Newton of
-    :func:`newton`, in place on the legs' coordinates ``Q``, warm-started from them):
-    the inverse position problem of one platform pose. ``residual[i]``: leg i's
-    :func:`pose_error` (at its characteristic length ``lengths[i]``)."""
-    target = np.empty((4, 4))
-    for i in range(joints.shape[0] - 1):
-        j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
-        _compose(pose, anchors[i], target)
-        ws = _workspace(c1 - c0, kind[j0:j1], iv[j0:j1], lengths[i])
-        r, _ = _newton(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
-                       iq[j0:j1], iv[j0:j1], tips[i], bases[i], c1 - c0, lower[c0:c1],
-                       upper[c0:c1], lengths[i], target, Q[c0:c1], tol, max_iter, 0.0, ws)
-        residual[i] = r
+        np.array([k.length for k in legs], dtype=float), cat([k.units for k in legs]))
 
 
 @njit(cache=True, nogil=True)
@@ -777,227 +525,3 @@ def twist_exp(xi, out):
     out[3, 1] = 0.0
     out[3, 2] = 0.0
     out[3, 3] = 1.0
-
-
-@njit(cache=True, nogil=True)
-def _cholesky_solve(A, B):
-    """Solve A X = B (A symmetric positive definite n×n, B n×m) in place on B; A is
-    overwritten by its Cholesky factor. Returns False if A is not positive definite."""
-    n = A.shape[0]
-    for j in range(n):
-        s = A[j, j]
-        for k in range(j):
-            s -= A[j, k] * A[j, k]
-        if s <= 0.0 or not math.isfinite(s):
-            return False
-        A[j, j] = math.sqrt(s)
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= A[i, k] * A[j, k]
-            A[i, j] = s / A[j, j]
-    for c in range(B.shape[1]):
-        for i in range(n):
-            s = B[i, c]
-            for k in range(i):
-                s -= A[i, k] * B[k, c]
-            B[i, c] = s / A[i, i]
-        for i in range(n - 1, -1, -1):
-            s = B[i, c]
-            for k in range(i + 1, n):
-                s -= A[k, i] * B[k, c]
-            B[i, c] = s / A[i, i]
-    return True
-
-
-@njit(cache=True, nogil=True)
-def system_newton(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases,
-                  anchors, lower, upper, actuated, scales, length, pose, Q, target, tol,
-                  max_iter, out):
-    """Newton's method on the closures of every leg plus ``Q[actuated] = target``.
-
-    Unknowns: every leg's joint increments and the platform twist ξ (world,
-    axis-first; the platform moves by ``exp(ξ) · pose``), all made dimensionless (the
-    prismatic increments and the linear part of ξ divided by L). Leg ``i``'s rows are
-    ``H_i Δq_i − X_i ξ = e_i`` (rotation error and displacement of its tip point / L),
-    the actuated rows ``Δq_a / s = (target − q_a) / s``. The least-squares step is
-    solved by eliminating each leg's increments (its normal-equation block) and then
-    the 6×6 Schur complement in ξ. ``pose`` and ``Q`` are updated in place; the same
-    mechanism in millimetres takes the same steps.
-
-    ``out`` receives (closure, actuated error, iterations, λ_min/λ_max of the Schur
-    complement at the last step, contracted) where "contracted" is 1 when every step
-    after the first was at most half the previous one (Newton's quadratic regime).
-    """
-    n_legs = joints.shape[0] - 1
-    n_a = actuated.shape[0]
-    mv = 0
-    for i in range(n_legs):
-        mv = max(mv, coords[i + 1] - coords[i])
-    T = np.empty((4, 4))
-    Wt = np.empty((4, 4))
-    E = np.empty((4, 4))
-    tmp = np.empty((4, 4))
-    J = np.empty((6, mv))
-    H = np.empty((n_legs, 6, mv))
-    X = np.empty((n_legs, 6, 6))
-    e = np.empty((n_legs, 6))
-    N = np.empty((mv, mv))
-    B = np.empty((n_legs, mv, 7))
-    S = np.empty((6, 6))
-    S_last = np.zeros((6, 6))
-    r = np.empty((6, 1))
-    xi = np.empty(6)
-    cs = np.ones(coords[-1])  # unit of each coordinate: L (prismatic) or 1 rad
-    for i in range(n_legs):
-        for j in range(joints[i], joints[i + 1]):
-            if kind[j] & 1 == PRISMATIC:
-                cs[coords[i] + iv[j]] = length
-    prev_step = np.inf
-    contracted = 1.0
-    ratio = 0.0
-    it = 0
-    while True:
-        closure = 0.0
-        for i in range(n_legs):
-            _compose(pose, anchors[i], Wt)
-            j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
-            nv = c1 - c0
-            _fk(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
-                iq[j0:j1], iv[j0:j1], tips[i], bases[i], nv, Q[c0:c1], T, J)
-            closure = max(closure, pose_error(T, Wt, length, e[i]))
-            px, py, pz = T[0, 3], T[1, 3], T[2, 3]
-            for c in range(nv):
-                g = cs[c0 + c]
-                wx, wy, wz = g * J[0, c], g * J[1, c], g * J[2, c]
-                H[i, 0, c], H[i, 1, c], H[i, 2, c] = wx, wy, wz
-                H[i, 3, c] = (g * J[3, c] + wy * pz - wz * py) / length
-                H[i, 4, c] = (g * J[4, c] + wz * px - wx * pz) / length
-                H[i, 5, c] = (g * J[5, c] + wx * py - wy * px) / length
-            # ξ = (ω; L u) ↦ (ω; u + ω × p_W / L)
-            qx, qy, qz = Wt[0, 3] / length, Wt[1, 3] / length, Wt[2, 3] / length
-            for a in range(6):
-                for b in range(6):
-                    X[i, a, b] = 0.0
-            for k in range(6):
-                X[i, k, k] = 1.0
-            X[i, 3, 1], X[i, 3, 2] = qz, -qy
-            X[i, 4, 0], X[i, 4, 2] = -qz, qx
-            X[i, 5, 0], X[i, 5, 1] = qy, -qx
-        act = 0.0
-        for a in range(n_a):
-            act = max(act, abs(target[a] - Q[actuated[a]]) / scales[a])
-        if (closure <= tol and act <= tol) or it >= max_iter:
-            break
-        it += 1
-        # ---- normal equations with each leg's increments eliminated
-        for a in range(6):
-            r[a, 0] = 0.0
-            for b in range(6):
-                S[a, b] = 0.0
-        for i in range(n_legs):
-            c0, c1 = coords[i], coords[i + 1]
-            nv = c1 - c0
-            for a in range(nv):
-                for b in range(a + 1):
-                    s = 0.0
-                    for k in range(6):
-                        s += H[i, k, a] * H[i, k, b]
-                    N[a, b] = s
-                    N[b, a] = s
-                for b in range(6):  # −(Hᵀ X)
-                    s = 0.0
-                    for k in range(6):
-                        s += H[i, k, a] * X[i, k, b]
-                    B[i, a, b] = -s
-                s = 0.0
-                for k in range(6):
-                    s += H[i, k, a] * e[i, k]
-                B[i, a, 6] = s
-            for a in range(n_a):  # rows (cs / s) Δq'_a = (target − q_a) / s
-                g = actuated[a] - c0
-                if 0 <= g < nv:
-                    w = cs[actuated[a]] / scales[a]
-                    N[g, g] += w * w
-                    B[i, g, 6] += w * (target[a] - Q[actuated[a]]) / scales[a]
-            # Levenberg damping as in Leg.solve: keeps a leg with self-motion (joint
-            # twists dependent) from taking arbitrary steps; vanishes at the solution
-            lam = 1e-10 + 1e-2 * closure * closure
-            for a in range(nv):
-                N[a, a] += lam
-            # S += XᵀX − (HᵀX)ᵀ N⁻¹ (HᵀX);  r += −Xᵀe + (HᵀX)ᵀ N⁻¹ Hᵀe, via G = N⁻¹ B
-            G = B[i, :nv, :].copy()
-            if not _cholesky_solve(N[:nv, :nv], G):
-                out[0], out[1], out[2], out[3], out[4] = closure, act, it, 0.0, 0.0
-                return
-            for a in range(6):
-                s = 0.0
-                for k in range(6):
-                    s += X[i, k, a] * e[i, k]
-                for k in range(nv):
-                    s += B[i, k, a] * G[k, 6]
-                r[a, 0] -= s
-                for b in range(6):
-                    s = 0.0
-                    for k in range(6):
-                        s += X[i, k, a] * X[i, k, b]
-                    for k in range(nv):
-                        s -= B[i, k, a] * G[k, b]
-                    S[a, b] += s
-            B[i, :nv, :] = G
-        for k in range(6):
-            S[k, k] += 1e-14 * (1.0 + S[k, k])
-        S_last[:, :] = S
-        if not _cholesky_solve(S, r):
-            out[0], out[1], out[2], out[3], out[4] = closure, act, it, 0.0, 0.0
-            return
-        size = 0.0
-        for k in range(6):
-            xi[k] = r[k, 0]
-            size += xi[k] * xi[k]
-        for i in range(n_legs):
-            c0, c1 = coords[i], coords[i + 1]
-            for k in range(c1 - c0):
-                d = B[i, k, 6]
-                for b in range(6):
-                    d -= B[i, k, b] * xi[b]
-                new = min(upper[c0 + k], max(lower[c0 + k], Q[c0 + k] + cs[c0 + k] * d))
-                size += ((new - Q[c0 + k]) / cs[c0 + k]) ** 2
-                Q[c0 + k] = new
-        for k in range(3, 6):
-            xi[k] *= length
-        size = math.sqrt(size)
-        if not math.isfinite(size):
-            break
-        if it > 1 and size > 0.5 * prev_step:
-            contracted = 0.0
-        prev_step = size
-        twist_exp(xi, E)
-        _compose(E, pose, tmp)
-        pose[:, :] = tmp
-    if it > 0:  # λ_min / λ_max of the symmetric positive definite S: its singular values
-        sv = np.empty(6)
-        jacobi_sv(S_last, 6, 6, sv, np.eye(6), np.empty((6, 6)))
-        ratio = sv[5] / sv[0] if sv[0] > 0 else 0.0
-    out[0], out[1], out[2], out[3], out[4] = closure, act, it, ratio, contracted
-
-
-@njit(cache=True, nogil=True)
-def solve_from(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-               targets, starts, tol, max_iter, Q, residual):
-    """Solve the leg at each target (M, 4, 4) from each of ``starts`` (S, nq) in turn
-    until one converges (``Leg.solve``'s restarts); fills ``Q`` (M, nq) and ``residual``
-    (M,) with the best attempt."""
-    ws = _workspace(nv, kind, iv, length)
-    q = np.empty(starts.shape[1])
-    for i in range(targets.shape[0]):
-        residual[i] = np.inf
-        for s in range(starts.shape[0]):
-            q[:] = starts[s]
-            r, _ = _newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper,
-                           length, targets[i], q, tol, max_iter, 0.0, ws)
-            if r < residual[i]:
-                residual[i] = r
-                Q[i] = q
-            if r <= tol:
-                break

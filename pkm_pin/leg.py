@@ -16,7 +16,6 @@ method runs its own Pinocchio pass for the configuration it is given.
 
 from __future__ import annotations
 
-import math
 import os
 import threading
 from dataclasses import dataclass, field, replace
@@ -25,37 +24,14 @@ from functools import cached_property
 import numpy as np
 import pinocchio as pin
 
-from . import kernels, screws, urdf
+from . import screws, solve, urdf
 from .compiling import prefer_compiled
 from .errors import FrameNotFound, InputError, JointNotFound
 from .serial import SerialChain
-from .tolerances import (
-    CLOSURE_TOL,
-    JOINT_LIMIT_SLACK,
-    NEWTON_SLOW_RTOL,
-    NEWTON_SLOW_STEPS,
-    NEWTON_STALL_RTOL,
-    SPHERICAL_OFFSET_RTOL,
-    damping,
-)
+from .solve import LegSolution, closure_error
+from .tolerances import CLOSURE_TOL, JOINT_LIMIT_SLACK, SPHERICAL_OFFSET_RTOL
 
-
-@dataclass
-class LegSolution:
-    """Result of :meth:`Leg.solve`.
-
-    Attributes:
-        q: Joint configuration (inside the joint limits).
-        residual: Relative pose error left: norm of ``log6(tip⁻¹ target)`` with the
-            linear part divided by the leg's characteristic length.
-        iterations: Newton iterations spent, all restarts included.
-        converged: Whether ``residual <= tol``.
-    """
-
-    q: np.ndarray
-    residual: float
-    iterations: int
-    converged: bool
+__all__ = ["Leg", "LegSolution", "pose_error"]
 
 
 @dataclass(eq=False)
@@ -438,51 +414,44 @@ class Leg(SerialChain):
     ) -> LegSolution:
         """Joint configuration placing the tip at ``target`` (world), inside the limits.
 
-        Damped (Levenberg–Marquardt) Newton on the SE(3) error ``log6(tip⁻¹ target)``
-        (linear part divided by the characteristic length; damping
-        :func:`pkm_pin.tolerances.damping` of the error norm), each step projected onto
-        the joint limits, warm started from ``q0`` (default: neutral). If it stalls
-        above ``tol`` (a local minimum, a limit), it restarts deterministically from the
-        neutral configuration, the middle of the limits and ``restarts`` configurations
-        drawn with ``seed``, and returns the best result found. It never raises for an
-        unreachable target: check :attr:`LegSolution.converged`.
+        The closure solver of :mod:`pkm_pin.solve` with mask LEGS: damped
+        (Levenberg–Marquardt) Newton on the residual :func:`pkm_pin.solve.closure_error`
+        (world rotation vector [rad] and tip displacement / the characteristic length;
+        damping :func:`pkm_pin.tolerances.damping`), dimensionless unknowns, each step
+        projected onto the joint limits, warm started from ``q0`` (default: neutral). If
+        it stalls above ``tol`` (a local minimum, a limit), it restarts from
+        :func:`pkm_pin.solve.start_configurations` (the neutral configuration, the middle
+        of the limits and ``restarts`` configurations drawn with ``seed``) and returns
+        the best result found. It never raises for an unreachable target: check
+        :attr:`LegSolution.converged`.
 
-        ``compiled``: run the first attempt with the compiled kernel
-        (:mod:`pkm_pin.kernels`, same damping, world-frame error), its result checked
-        (and polished if needed) by the Pinocchio iteration; the restarts always run
-        with Pinocchio. Default (None): compiled for a warm start (``q0`` given) when
-        the chain has a kernel and the compiled solver is ready or has been asked for
-        repeatedly (:func:`pkm_pin.compiling.prefer_compiled`: a one-off solve does not
-        wait for its compilation). Searches that explore basins of attraction from
-        arbitrary starts (``inverse_kinematics_all``) ask for ``compiled=False``.
+        ``compiled``: the compiled driver (:func:`pkm_pin.solve.solve_from`) when the
+        chain has a kernel, its result evaluated again (and a near miss polished) by
+        Pinocchio; else the Python driver (Pinocchio). Default (None): compiled once the
+        compiled solver is ready or has been asked for repeatedly
+        (:func:`pkm_pin.compiling.prefer_compiled`: a one-off solve does not wait for its
+        compilation).
         """
         if not isinstance(target, pin.SE3):
             raise InputError(f"the target of leg {self.name!r} must be a pinocchio.SE3")
         if not (np.all(np.isfinite(target.translation)) and np.all(np.isfinite(target.rotation))):
             raise InputError(f"the target of leg {self.name!r} must be finite, got\n{target}")
-        target_local = self.base.actInv(target)
-        starts = [self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))]
+        warm = self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))
         if compiled is None:
-            compiled = q0 is not None and prefer_compiled(kernels.newton)
-        if compiled and self._kernel is not None:
-            best = self._newton_compiled(target, target_local, starts[0], tol, max_iter)
-        else:
-            best = self._newton(target_local, starts[0], tol, max_iter)
+            compiled = self._kernel is not None and prefer_compiled(solve.solve_from)
+        best = solve.solve_leg(self, target, warm, tol=tol, max_iter=max_iter,
+                               compiled=compiled)
         if best.converged:
             return best
-        rng = np.random.default_rng(seed)
-        lo, up = self._bounds
-        middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), self.neutral())
-        extra = [self.neutral(), middle] + [self.random_configuration(rng) for _ in range(restarts)]
-        iterations = best.iterations
-        for q_start in extra:
-            sol = self._newton(target_local, q_start, tol, max_iter)
-            iterations += sol.iterations
-            if sol.residual < best.residual:
-                best = sol
-            if best.converged:
-                break
-        best.iterations = iterations
+        starts = solve.start_configurations(self, None, restarts, seed)
+        if q0 is None:
+            starts = starts[1:]  # the neutral configuration was the first attempt
+        sol = solve.solve_leg(self, target, starts, tol=tol, max_iter=max_iter,
+                              compiled=compiled)
+        sol.iterations += best.iterations
+        if sol.residual < best.residual:
+            return sol
+        best.iterations = sol.iterations
         return best
 
     @cached_property
@@ -492,88 +461,23 @@ class Leg(SerialChain):
 
         return chain_kernel(self)
 
-    def _newton_compiled(self, target: pin.SE3, target_local: pin.SE3, q: np.ndarray,
-                         tol: float, max_iter: int):
-        """The compiled damped Newton, then the Pinocchio iteration from its result: its
-        error decides convergence (and it polishes a near miss)."""
-        from .kernels import newton
-
-        k = self._kernel
-        q = np.array(q, dtype=float)
-        _, it = newton(*k.solver_args(), target.homogeneous, q, tol, max_iter)
-        sol = self._newton(target_local, q, tol, max(0, max_iter - it))
-        sol.iterations += it
-        return sol
-
-    def _newton(self, target_local: pin.SE3, q: np.ndarray, tol: float, max_iter: int):
-        model, data, tip = self.model, self.data, self.tip_id
-        w = self._error_weights
-        units = self._velocity_units
-        eye = self._identity
-
-        def state(q):
-            # one pass: joint placements and Jacobians, then the tip frame
-            pin.computeJointJacobians(model, data, q)
-            pin.updateFramePlacement(model, data, tip)
-            iMd = data.oMf[tip].actInv(target_local)
-            return iMd, w * pin.log6(iMd).vector
-
-        q = q.copy()
-        iMd, err = state(q)
-        it, best, slow = 0, np.inf, 0
-        while it < max_iter and (r := math.sqrt(err @ err)) > tol:
-            it += 1
-            # a least-squares minimum (unreachable target) stops improving: leave early
-            slow = slow + 1 if r > (1 - NEWTON_SLOW_RTOL) * best else 0
-            best = min(best, r)
-            if slow >= NEWTON_SLOW_STEPS:
-                break
-            J = pin.getFrameJacobian(model, data, tip, pin.LOCAL).reshape(6, -1)
-            # dimensionless unknowns (prismatic increments / L): the same steps in mm
-            J = w[:, None] * (pin.Jlog6(iMd.inverse()) @ J) * units
-            try:
-                # Levenberg–Marquardt (see tolerances.damping)
-                dq = np.linalg.solve(J.T @ J + damping(r) * eye, J.T @ err)
-            except np.linalg.LinAlgError:
-                break  # numerically singular normal equations (e.g. a target at 1e12 m)
-            dq *= units
-            if not np.all(np.isfinite(dq)):
-                break
-            q_new = np.clip(pin.integrate(model, q, dq), *self._bounds)
-            step = q_new - q
-            if step @ step < NEWTON_STALL_RTOL * (1 + q @ q):
-                break  # stalled (at a limit or a local minimum)
-            q = q_new
-            iMd, err = state(q)
-        residual = math.sqrt(err @ err)
-        return LegSolution(q, residual, it, residual <= tol)
-
-    @cached_property
-    def _error_weights(self) -> np.ndarray:
-        """Weights of the (v; ω) pose error: linear part divided by the length."""
-        return np.r_[np.full(3, 1.0 / self.characteristic_length), np.ones(3)]
-
     @cached_property
     def _velocity_units(self) -> np.ndarray:
         """Unit of each velocity coordinate: the characteristic length for a prismatic
-        joint, 1 rad otherwise."""
+        joint, 1 rad otherwise (the closure solver's unknowns are the increments divided
+        by it; the compiled kernel takes the same array)."""
         units = np.ones(self.nv)
         for j in self._prismatic_joints:
             units[self.model.joints[j].idx_v] = self.characteristic_length
         return units
 
-    @cached_property
-    def _identity(self) -> np.ndarray:
-        return np.eye(self.nv)
-
 
 # ---------------------------------------------------------------------- helpers
 def pose_error(current: pin.SE3, target: pin.SE3, length: float) -> float:
-    """Relative distance between two placements: the norm of ``log6(current⁻¹ target)``
-    with the linear part divided by ``length`` [m] (the residual of :meth:`Leg.solve`)."""
-    e = pin.log6(current.actInv(target)).vector  # Pinocchio order (v; ω): a norm only
-    v, w = e[:3], e[3:]
-    return math.sqrt(float(v @ v) / (length * length) + float(w @ w))
+    """Relative distance between two placements: the norm of the closure residual
+    :func:`pkm_pin.solve.closure_error` (world rotation vector of ``R_target R_currentᵀ``
+    [rad], displacement divided by ``length`` [m]), the residual of :meth:`Leg.solve`."""
+    return float(closure_error(current.homogeneous, target.homogeneous, length, np.empty(6)))
 
 
 def _frame_names(model: pin.Model) -> list[str]:

@@ -52,9 +52,9 @@ from .errors import (
     PkmError,
     UrdfError,
 )
-from .kernels import assemble_legs
 from .leg import Leg
 from .screws import as_vector
+from .solve import LEGS, solve_kernel, solve_system
 from .tolerances import CLOSENESS_SINGULAR_TOL, CLOSURE_TOL, INERTIA_TOL
 from .twists import LegFrames, leg_frames, verified_twists
 
@@ -223,7 +223,7 @@ class Mechanism:
         starts = self.leg_starts(guess)
         kernel = self._kernel
         if kernel is not None and all(q is not None for q in starts) \
-                and prefer_compiled(assemble_legs):
+                and prefer_compiled(solve_system):
             return self._assemble_compiled(kernel, pose, starts, tol, restarts)
         leg_q, worst = [], 0.0
         for leg, anchor, q0 in zip(self.legs, self.anchors, starts):
@@ -236,26 +236,21 @@ class Mechanism:
 
     def _assemble_compiled(self, kernel, pose: pin.SE3, starts: list, tol: float,
                            restarts: int) -> Assembly:
-        """:meth:`assemble` from warm starts: every leg's damped Newton in one compiled
-        call, then one Pinocchio pass per leg that verifies each closure and gives the
+        """:meth:`assemble` from warm starts: the closure solver with mask LEGS in one
+        compiled call (:func:`pkm_pin.solve.solve_kernel`; the starts projected onto the
+        limits), then one Pinocchio pass per leg that verifies each closure and gives the
         joint twists the analysis needs; a leg it does not confirm is solved again by
         :meth:`Leg.solve` (with its restarts)."""
         Q = np.concatenate(starts)
-        np.clip(Q, kernel.lower, kernel.upper, out=Q)
         M = pose.homogeneous
-        residual = np.empty(len(self.legs))
-        assemble_legs(kernel.joints, kernel.coords, kernel.parent, kernel.post, kernel.kind,
-                      kernel.axis, kernel.rate, kernel.iq, kernel.iv, kernel.tips,
-                      kernel.bases, kernel.anchors, kernel.lower, kernel.upper,
-                      kernel.lengths, M, Q, tol, 50, residual)
+        solve_kernel(kernel, LEGS, M, Q, tol=tol, max_iter=50)
         c = kernel.coords
         leg_q = [Q[c[i]:c[i + 1]] for i in range(len(self.legs))]
         J, errors = verified_twists(self, leg_q, M)
         missed = np.flatnonzero(~(errors <= tol))
         for i in missed:
             leg = self.legs[i]
-            sol = leg.solve(pose * self.anchors[i], leg_q[i], tol=tol, restarts=restarts,
-                            compiled=False)
+            sol = leg.solve(pose * self.anchors[i], leg_q[i], tol=tol, restarts=restarts)
             if not sol.converged:
                 raise AssemblyError(leg.name, sol.residual)
             leg_q[i] = sol.q

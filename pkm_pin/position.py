@@ -14,11 +14,13 @@ the paper: its error falls like ``1/N``. For lower-mobility mechanisms whose mot
 curved (3-RPS), ``exp(t)`` leaves the constraint manifold by ``O(|t|²)``; the step is
 then projected back by the Newton correction below aimed at the intermediate target.
 
-The final correction is Newton's method on the closure equations of every leg and the
-actuated coordinates, unknowns the platform twist ``t`` and the joint increments
-``Δq_i``::
+The Newton corrections are those of the closure solver (:mod:`pkm_pin.solve`): legs
+re-closed at the predicted pose (mask LEGS), or with the platform free (PLATFORM) and
+aimed at the actuated coordinates (ACTUATED). The final correction is Newton's method on
+the closure equations of every leg and the actuated coordinates, unknowns the platform
+twist ``t`` and the joint increments ``Δq_i``::
 
-    J_i Δq_i − t = e_i            (e_i: world twist from leg i's tip to pose * anchor_i)
+    J_i Δq_i − t = e_i      (e_i: leg i's closure residual towards pose * anchor_i)
     Δq_a = q_target − q_a
 
 Multiplying leg ``i``'s rows by its actuation wrench ``ζ`` (reciprocal to its passive
@@ -46,8 +48,20 @@ import pinocchio as pin
 from . import screws
 from .analysis import Analysis
 from .assembly import Assembly, as_pose
+from .compiling import prefer_compiled
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .leg import pose_error
+from .solve import (
+    ACTUATED,
+    LEGS,
+    PLATFORM,
+    ClosureSolution,
+    solve_closure,
+    solve_from,
+    solve_kernel,
+    solve_leg,
+    start_configurations,
+)
 from .tolerances import (
     CLOSURE_TOL,
     COMPILED_CONTINUATION_STEP,
@@ -63,6 +77,7 @@ from .tolerances import (
     SAME_POSE_TOL,
     TARGET_LIMIT_SLACK,
 )
+from .twists import verified_twists
 
 #: Largest increment of one continuation step (alias of
 #: :data:`pkm_pin.tolerances.CONTINUATION_STEP`): fraction of the characteristic length
@@ -114,85 +129,13 @@ def _actuated_scales(mech) -> np.ndarray:
     return mech.actuated_scales.copy()
 
 
-def _weights(L: float) -> np.ndarray:
-    """Row weights of an axis-first closure error (ω; v_O): moments divided by L."""
-    return np.r_[np.ones(3), np.full(3, 1.0 / L)]
-
-
-@dataclass
-class _State:
-    pose: pin.SE3
-    leg_q: list
-    closure: float = np.inf  # largest relative closure error of the legs
-    actuated: float = np.inf  # largest scaled |q_a − target|
-    iterations: int = 0
-
-
 # ========================================================================= Newton
 def _q_actuated_of(mech, leg_q) -> np.ndarray:
     """The actuated coordinates of leg configurations ``leg_q`` (mechanism order)."""
     return np.concatenate([q[leg.actuated_q] for leg, q in zip(mech.legs, leg_q)])
 
 
-def _closure_newton(mech, pose, leg_q, target=None, *, tol, max_iter,
-                    move_pose=True, damping=0.0) -> _State:
-    """Newton (Gauss–Newton, optional Levenberg damping) on the closure equations of
-    every leg, plus ``q_a = target`` when ``target`` is given; the platform moves
-    only with ``move_pose``. Joint updates are projected onto the limits."""
-    L = mech.characteristic_length
-    w = _weights(L)
-    scales = _actuated_scales(mech) if target is not None else None
-    leg_q = [np.array(q, dtype=float) for q in leg_q]
-    nvs = [leg.nv for leg in mech.legs]
-    offs = np.r_[0, np.cumsum(nvs)]
-    ncol = int(offs[-1]) + (6 if move_pose else 0)
-    state = _State(pose, leg_q)
-    for it in range(max_iter + 1):
-        rows, rhs, closure = [], [], 0.0
-        for i, (leg, anchor, q) in enumerate(zip(mech.legs, mech.anchors, leg_q)):
-            want = pose * anchor
-            tip, J = leg.kinematics(q)
-            e = screws.log(want * tip.inverse())
-            closure = max(closure, pose_error(tip, want, leg.characteristic_length))
-            block = np.zeros((6, ncol))
-            block[:, offs[i]:offs[i + 1]] = w[:, None] * J
-            if move_pose:
-                block[:, offs[-1]:] = -np.diag(w)
-            rows.append(block)
-            rhs.append(w * e)
-        act = 0.0
-        if target is not None:
-            qa = _q_actuated_of(mech, leg_q)
-            da = (target - qa) / scales
-            act = float(np.max(np.abs(da))) if da.size else 0.0
-            block = np.zeros((len(da), ncol))
-            k = 0
-            for i, leg in enumerate(mech.legs):
-                for iv in np.atleast_1d(leg.actuated_v):
-                    block[k, offs[i] + int(iv)] = 1.0 / scales[k]
-                    k += 1
-            rows.append(block)
-            rhs.append(da)
-        state = _State(pose, leg_q, closure, act, it)
-        if closure <= tol and act <= tol:
-            return state
-        if it == max_iter:
-            break
-        H, r = np.vstack(rows), np.concatenate(rhs)
-        if damping > 0:
-            x = np.linalg.solve(H.T @ H + damping * np.eye(ncol), H.T @ r)
-        else:
-            x, *_ = np.linalg.lstsq(H, r, rcond=1e-12)
-        if not np.all(np.isfinite(x)):
-            break
-        leg_q = [leg.clip(pin.integrate(leg.model, q, x[offs[i]:offs[i + 1]]))
-                 for i, (leg, q) in enumerate(zip(mech.legs, leg_q))]
-        if move_pose:
-            pose = screws.exp(x[offs[-1]:]) * pose
-    return state
-
-
-def _assembly_of(mech, state: _State) -> Assembly:
+def _assembly_of(mech, state: ClosureSolution) -> Assembly:
     """The assembly of a Newton state (leg configurations copied)."""
     return Assembly(mech, state.pose, [q.copy() for q in state.leg_q], state.closure)
 
@@ -275,7 +218,8 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
                 if method == "compiled":
                     raise
 
-    state = _State(start.pose, [q.copy() for q in start.leg_q], start.residual, np.inf)
+    state = ClosureSolution(start.pose, [q.copy() for q in start.leg_q], np.empty(0),
+                            start.residual, np.inf, 0)
     q0 = start.q_actuated
     if steps is None:
         steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
@@ -311,11 +255,10 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
                         f"{moves} moves (index {index:.3g})", _assembly_of(mech, state))
                 pose = screws.exp(last_twist) * state.pose
                 legs = _predict_legs(mech, state.leg_q, last_twist)
-                new = _closure_newton(mech, pose, legs, tol=CONTINUATION_TOL, max_iter=10,
-                                      move_pose=False)
+                new = solve_closure(mech, pose, legs, LEGS, tol=CONTINUATION_TOL, max_iter=10)
                 if new.closure > CONTINUATION_TOL:
-                    new = _closure_newton(mech, pose, legs, tol=CONTINUATION_TOL,
-                                          max_iter=10, move_pose=True)
+                    new = solve_closure(mech, pose, legs, PLATFORM, tol=CONTINUATION_TOL,
+                                        max_iter=10)
                 if new.closure > CONTINUATION_TOL:
                     last_twist = 0.5 * last_twist  # a shorter inertia move
                     if np.linalg.norm(last_twist[:3]) + np.linalg.norm(last_twist[3:]) / L \
@@ -346,12 +289,11 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
             raise ForwardKinematicsError(str(e), current) from e
         pose = screws.exp(t) * state.pose
         legs = _predict_legs(mech, state.leg_q, t, an)
-        new = _closure_newton(mech, pose, legs, tol=CONTINUATION_TOL, max_iter=10,
-                              move_pose=False)
+        new = solve_closure(mech, pose, legs, LEGS, tol=CONTINUATION_TOL, max_iter=10)
         if new.closure > CONTINUATION_TOL:
             # off the constraint manifold (curved motion): project back, aiming at q_step
-            new = _closure_newton(mech, pose, legs, q_step, tol=CONTINUATION_TOL,
-                                  max_iter=10, move_pose=True)
+            new = solve_closure(mech, pose, legs, ACTUATED, q_step, tol=CONTINUATION_TOL,
+                                max_iter=10)
         if new.closure > CONTINUATION_TOL or not _in_limits(mech, new.leg_q):
             if h < CONTINUATION_MIN_STEP:
                 raise ForwardKinematicsError(
@@ -368,8 +310,8 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
         accepted += 1
     qa = _q_actuated_of(mech, state.leg_q)
     cont_err = float(np.max(np.abs(qa - target) / scales))
-    final = _closure_newton(mech, state.pose, state.leg_q, target, tol=tol,
-                            max_iter=max_newton, move_pose=True)
+    final = solve_closure(mech, state.pose, state.leg_q, ACTUATED, target, tol=tol,
+                          max_iter=max_newton)
     if final.closure > max(tol, FK_ACCEPT_FLOOR) or final.actuated > tol:
         raise ForwardKinematicsError(
             f"Newton correction did not converge after {final.iterations} iterations: "
@@ -408,9 +350,6 @@ def _forward_compiled(mech, kernel, target, start, steps, tol, inertia_tol,
                       max_newton) -> Assembly:
     """Predictor–corrector continuation in compiled code (see
     :func:`forward_kinematics`) with the mechanism's ``kernel``."""
-    from .kernels import system_newton
-
-    args = kernel.args()
     scales = kernel.scales
     pose = start.pose.homogeneous.copy()
     Q = np.concatenate(start.leg_q).astype(float)
@@ -420,11 +359,11 @@ def _forward_compiled(mech, kernel, target, start, steps, tol, inertia_tol,
                                               initial=0.0)) / COMPILED_STEP))
     lam, h = 0.0, 1.0 / steps
     accepted = halvings = iterations = 0
-    out = np.zeros(5)
     while lam < 1.0 - 1e-15:
         lam_new = min(1.0, lam + h)
         P, Qn = pose.copy(), Q.copy()
-        system_newton(*args, P, Qn, q0 + lam_new * (target - q0), CONTINUATION_TOL, 10, out)
+        _, out = solve_kernel(kernel, ACTUATED, P, Qn, q0 + lam_new * (target - q0),
+                              tol=CONTINUATION_TOL, max_iter=10)
         iterations += int(out[2])
         if not (out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1):
             if h < CONTINUATION_MIN_STEP:
@@ -442,7 +381,8 @@ def _forward_compiled(mech, kernel, target, start, steps, tol, inertia_tol,
         h = min(2 * h, 1.0 / steps)
         accepted += 1
     cont_err = float(np.max(np.abs(Q[kernel.actuated] - target) / scales, initial=0.0))
-    system_newton(*args, pose, Q, target, 0.1 * min(tol, CLOSURE_TOL), max_newton, out)
+    _, out = solve_kernel(kernel, ACTUATED, pose, Q, target, tol=0.1 * min(tol, CLOSURE_TOL),
+                          max_iter=max_newton)
     iterations += int(out[2])
     final = _state_of(mech, kernel, pose, Q)
     err = float(np.max(np.abs(final.q_actuated - target) / scales, initial=0.0))
@@ -460,15 +400,12 @@ def _forward_compiled(mech, kernel, target, start, steps, tol, inertia_tol,
 
 def _state_of(mech, kernel, pose: np.ndarray, Q: np.ndarray) -> Assembly:
     """Assembly at a 4×4 pose and the legs' configurations concatenated as in
-    ``kernel``; its residual is the largest closure error evaluated by Pinocchio."""
+    ``kernel``; its residual is the largest closure error (:func:`pkm_pin.solve.closure_error`)
+    evaluated by one Pinocchio pass per leg, whose joint twists it keeps."""
     offs = kernel.coords
     leg_q = [Q[offs[i]:offs[i + 1]].copy() for i in range(len(mech.legs))]
-    M = pin.SE3(pose)
-    residual = 0.0
-    for leg, q, a in zip(mech.legs, leg_q, mech.anchors):
-        tip = leg.tip_placement(q)
-        residual = max(residual, pose_error(tip, M * a, leg.characteristic_length))
-    return Assembly(mech, M, leg_q, residual)
+    J, errors = verified_twists(mech, leg_q, pose)
+    return Assembly(mech, pin.SE3(pose), leg_q, float(errors.max()), joint_twists=J)
 
 
 def _predict_legs(mech, leg_q, t, an=None) -> list:
@@ -588,8 +525,9 @@ def inverse_kinematics_all(mech, pose, *, starts: int = 16, seed: int = 0,
                            max_modes: int = 4096) -> list[Assembly]:
     """Every working mode at ``pose``: the distinct actuated-coordinate vectors.
 
-    Each leg is solved from deterministic starts (its home configuration, neutral,
-    the middle of the limits and ``starts`` random configurations drawn with
+    Each leg is solved (:func:`pkm_pin.solve.solve_leg`) from every start of the
+    restart recipe :func:`pkm_pin.solve.start_configurations` (its home configuration,
+    neutral, the middle of the limits and ``starts`` random configurations drawn with
     ``seed``); converged solutions inside the limits are deduplicated (revolute
     differences taken modulo 2π) and combined across the legs.
 
@@ -602,18 +540,14 @@ def inverse_kinematics_all(mech, pose, *, starts: int = 16, seed: int = 0,
         AssemblyError: some leg reaches the pose in no configuration.
     """
     pose = as_pose(pose)
-    rng = np.random.default_rng(seed)
     per_leg = []
     home_q = mech.leg_starts(None)
+    compiled = mech._kernel is not None and prefer_compiled(solve_from)
     for leg, anchor, qh in zip(mech.legs, mech.anchors, home_q):
         want = pose * anchor
-        lo, up = leg._bounds
-        middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
-        tries = ([qh] if qh is not None else []) + [leg.neutral(), middle]
-        tries += [leg.random_configuration(rng) for _ in range(starts)]
         sols, worst = [], np.inf
-        for q0 in tries:
-            sol = leg.solve(want, q0, restarts=0, compiled=False)
+        for q0 in start_configurations(leg, qh, starts, seed):
+            sol = solve_leg(leg, want, q0, compiled=compiled)
             worst = min(worst, sol.residual)
             if not sol.converged or not leg.within_limits(sol.q):
                 continue

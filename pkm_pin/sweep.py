@@ -8,10 +8,11 @@ pose order.
 
 Per chunk (when every leg has a compiled kernel, :mod:`pkm_pin.kernels`):
 
-1. each leg follows the ordered poses in compiled code (damped Newton warm-started from
-   the previous poses, extrapolated along smooth paths); a pose a leg misses is solved
-   again in compiled code from home, neutral, mid-limits and random starts (the
-   restarts of :meth:`Leg.solve`), and is recorded as a failure if none converges;
+1. each leg follows the ordered poses in compiled code (the closure solver,
+   :func:`pkm_pin.solve.track`, warm-started from the previous poses, extrapolated along
+   smooth paths); a pose a leg misses is solved again in compiled code from the restart
+   recipe :func:`pkm_pin.solve.start_configurations` (home, neutral, mid-limits, random
+   starts with seed 0), and is recorded as a failure if none converges;
 2. one Pinocchio pass per leg and pose at the solution (joint Jacobians and tip frame):
    Pinocchio's tip placement verifies the closure, its Jacobian gives the joint twists;
 3. the analysis engine (:mod:`pkm_pin.engine`, the code of a single
@@ -188,14 +189,15 @@ TRUST = 1e-7
 
 
 def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dict:
-    from .kernels import anchor_targets, solve_from, track
+    from .kernels import anchor_targets
+    from .solve import solve_from, start_configurations, track
 
     N, n, legs = len(X), mech.n_actuated, mech.legs
     poses = pose_matrices(X)
     along = smooth_steps(X, mech.characteristic_length)
     home = mech.home_assembly
-    # 1. legs along the path, compiled; a target a leg misses is solved again from
-    #    home, neutral, mid-limits and random starts (Leg.solve's restarts)
+    # 1. legs along the path, compiled; a target a leg misses is solved again from the
+    #    restart recipe (home, neutral, mid-limits, random starts)
     Qs, failures = [], []
     ok = np.ones(N, bool)
     Ts = np.empty((len(legs), N, 4, 4))  # where each leg's tip must be
@@ -211,7 +213,8 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dic
         if len(miss):
             Qm, rm = np.empty((len(miss), leg.nq)), np.empty(len(miss))
             solve_from(*lk.solver_args(), np.ascontiguousarray(targets[miss]),
-                       _restart_configurations(leg, q_home, restarts), SWEEP_TOL, 100, Qm, rm)
+                       start_configurations(leg, q_home, restarts, seed=0), SWEEP_TOL, 100,
+                       Qm, rm, np.zeros(len(miss), np.int64))
             Q[miss] = Qm
             for i, r in zip(miss[rm > SWEEP_TOL], rm[rm > SWEEP_TOL]):
                 failures.append((int(i), str(AssemblyError(leg.name, r))))
@@ -247,17 +250,6 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dic
     for key in ("dof", "type_I", "type_II", "condition", "det"):
         out[key][idx] = getattr(r, key)
     return out
-
-
-def _restart_configurations(leg, q_home, restarts: int) -> np.ndarray:
-    """Starts of :meth:`Leg.solve`'s restarts: home, neutral, mid-limits, ``restarts``
-    random configurations (seed 0)."""
-    lo, up = leg._bounds
-    middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
-    rng = np.random.default_rng(0)
-    starts = [q_home, leg.neutral(), middle] + [leg.random_configuration(rng)
-                                                for _ in range(restarts)]
-    return np.ascontiguousarray(starts, dtype=float)
 
 
 def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:

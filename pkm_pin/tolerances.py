@@ -64,9 +64,10 @@ CALIBRATION_STEP_TOL = 1e-10
 
 # ================================================================ closure solvers
 #: Default closure tolerance of a leg (:meth:`Leg.solve`), of an assembly
-#: (:meth:`Mechanism.assemble`) and of forward kinematics: the norm of
-#: ``log6(tip⁻¹ target)`` with its linear part divided by the leg's characteristic
-#: length (:func:`pkm_pin.leg.pose_error`).
+#: (:meth:`Mechanism.assemble`) and of forward kinematics: the norm of the closure
+#: residual of :mod:`pkm_pin.solve` (world rotation vector from the tip to its target
+#: [rad], tip displacement divided by the leg's characteristic length;
+#: :func:`pkm_pin.solve.closure_error`).
 CLOSURE_TOL = 1e-12
 #: Closure tolerance of the legs in a sweep (same measure as :data:`CLOSURE_TOL`;
 #: ``sweep.SWEEP_TOL``).
@@ -75,8 +76,8 @@ SWEEP_CLOSURE_TOL = CLOSURE_TOL
 #: by the compiled sweep solver: Newton's next residual is ~TRUST² ≪
 #: :data:`SWEEP_CLOSURE_TOL`, and Pinocchio's closure check verifies it (``sweep.TRUST``).
 NEWTON_TRUST = 1e-7
-#: Levenberg–Marquardt damping of the leg solvers, added to the normal equations of the
-#: dimensionless unknowns (see :func:`damping`): the floor …
+#: Levenberg–Marquardt damping of the closure solver, added to the normal equations of
+#: its dimensionless unknowns (see :func:`damping`): the floor …
 DAMPING_FLOOR = 1e-10
 #: … and the factor of the squared relative residual.
 DAMPING_GAIN = 1e-2
@@ -150,8 +151,9 @@ def damping(r: float) -> float:
 
     It grows with the error and vanishes at the solution (quadratic convergence kept);
     it tames singular starts (UR5 from neutral: 48/60 first-try vs 5/60 undamped). The
-    compiled solvers of :mod:`pkm_pin.kernels` write the same expression inline (numba's
-    cache would not see a change made here); a test checks that they agree.
+    closure solver (:func:`pkm_pin.solve.lm_damping`) writes the same expression out for
+    its compiled code (numba's cache would not see a change made here); a test checks
+    that they agree.
     """
     return DAMPING_FLOOR + DAMPING_GAIN * r * r
 

@@ -27,12 +27,11 @@ from pkm_pin.kernels import (
     log3,
     mechanism_kernel,
     pose_error,
-    system_newton,
-    track,
     twist_exp,
 )
 from pkm_pin.leg import pose_error as leg_pose_error
 from pkm_pin.position import _actuated_scales
+from pkm_pin.solve import ACTUATED, solve_kernel, track
 
 TRUST = 1e-7  # as pkm_pin.sweep.TRUST
 
@@ -481,9 +480,8 @@ def _track(kernel, q0, targets, extrapolate, tol=1e-12, trust=TRUST):
     n = targets.shape[0]
     Q = np.full((n, kernel.nv), np.nan)
     res = np.full(n, np.nan)
-    misses = track(*kernel.args(), kernel.lower, kernel.upper, kernel.length, targets,
-                   q0.astype(float), np.asarray(extrapolate, dtype=np.bool_), tol, 50, trust,
-                   Q, res)
+    misses = track(*kernel.solver_args(), targets, q0.astype(float),
+                   np.asarray(extrapolate, dtype=np.bool_), tol, 50, trust, Q, res)
     # the count returned: targets neither converged nor trusted
     assert misses == np.count_nonzero(~(res <= tol))
     return Q, res
@@ -545,9 +543,10 @@ def test_mechanism_kernel_layout():
 
 
 @pytest.mark.parametrize("name", ["stewart", "rpr3"])
-def test_system_newton_from_home(name):
-    """system_newton from home to the actuated coordinates of a pose 2 cm / 2° away:
-    closure and actuated error ≤ 1e-12, the target pose to 1e-10, contracting steps."""
+def test_compiled_actuated_mask_from_home(name):
+    """The compiled closure solver (mask ACTUATED) from home to the actuated coordinates
+    of a pose 2 cm / 2° away: closure and actuated error ≤ 1e-12, the target pose to
+    1e-10, contracting steps."""
     m = mech(name)
     k = m._kernel
     home = m.home_assembly
@@ -558,8 +557,7 @@ def test_system_newton_from_home(name):
         target = m.assemble(target_pose)
         pose = home.pose.homogeneous.copy()
         Q = np.concatenate(home.leg_q).astype(float)
-        out = np.zeros(5)
-        system_newton(*k.args(), pose, Q, target.q_actuated, 1e-13, 50, out)
+        _, out = solve_kernel(k, ACTUATED, pose, Q, target.q_actuated, tol=1e-13, max_iter=50)
         assert out[0] <= 1e-12 and out[1] <= 1e-12
         assert 1 <= out[2] <= 10
         assert 0.0 < out[3] <= 1.0
@@ -575,13 +573,13 @@ def test_system_newton_from_home(name):
                                   m.characteristic_length) < 1e-11
 
 
-def test_system_newton_at_the_solution_takes_no_step():
+def test_compiled_actuated_mask_at_the_solution_takes_no_step():
     """From an assembled state with its own actuated coordinates: no iteration, out[2] = 0."""
     m = mech("stewart")
     home = m.home_assembly
     pose = home.pose.homogeneous.copy()
     Q = np.concatenate(home.leg_q).astype(float)
-    out = np.full(5, np.nan)
-    system_newton(*m._kernel.args(), pose, Q, home.q_actuated.copy(), 1e-12, 50, out)
+    _, out = solve_kernel(m._kernel, ACTUATED, pose, Q, home.q_actuated.copy(), tol=1e-12,
+                          max_iter=50)
     assert out[2] == 0 and out[0] <= 1e-12 and out[1] == 0.0
     np.testing.assert_array_equal(pose, home.pose.homogeneous)

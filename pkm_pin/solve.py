@@ -1,0 +1,814 @@
+"""The closure solver: damped Newton (Levenberg–Marquardt) on the closure residuals of a
+mechanism, the unknowns selected by a mask. Every position problem of pkm_pin uses it:
+:meth:`Leg.solve`, :meth:`Mechanism.assemble`, forward and inverse kinematics, the
+assembly modes, the sweeps (and, through them, sensitivity and calibration).
+
+Residual (the one definition, :func:`closure_error` = :func:`pkm_pin.kernels.pose_error`)
+-----------------------------------------------------------------------------------------
+Leg ``i``'s tip placement ``T`` (world) against its target ``W = pose · anchor_i``::
+
+    e_i = ( log3(R_W R_Tᵀ) ;  (p_W − p_T) / L_i )
+
+the world rotation vector from the tip's orientation to the target's [rad] and the tip
+displacement in units of the **leg's** characteristic length ``L_i``
+(:attr:`Leg.characteristic_length`), so dimensionless; ``|e_i|`` is the leg's relative
+closure error and ``closure = max_i |e_i|``. Forward kinematics adds one row per actuated
+coordinate, ``(target_a − q_a) / s_a`` (``s_a``: :attr:`Mechanism.actuated_scales`);
+``actuated = max_a |·|``. The solver stops when ``r = max(closure, actuated) ≤ tol``.
+
+Unknowns and mask
+-----------------
+Dimensionless unknowns: each leg's joint increments (prismatic ones divided by ``L_i``,
+revolute ones in rad; :attr:`Leg._velocity_units`) and the platform twist
+``ξ = (ω; v_O / L)`` (axis-first ``(ω; v_O)`` about the world origin as in
+:mod:`pkm_pin.screws`, ``L`` the mechanism's characteristic length; the platform moves to
+``exp(ξ) · pose``). The same mechanism in millimetres takes the same steps. The mask:
+
+* :data:`LEGS` (a): each leg's joints, the platform fixed; every leg is its own problem
+  (:meth:`Leg.solve`, :meth:`Mechanism.assemble`, inverse kinematics, sweeps);
+* :data:`PLATFORM` (b): all legs' joints and the platform twist;
+* :data:`ACTUATED` (c): (b) plus the actuated rows (forward kinematics, assembly modes).
+
+Step
+----
+A joint twist ``(ω; v_O)`` moves leg ``i``'s residual by the row ``(ω; (v_O + ω × p_T) /
+L_i)``, the platform twist moves its target by ``(ω; (L v' + ω × p_W) / L_i)``: rows
+``H_i Δq_i − X_i ξ = e_i``. The normal equations of the masked unknowns get the
+Levenberg–Marquardt damping ``λ = damping(r)`` (:func:`pkm_pin.tolerances.damping`,
+written out in :func:`lm_damping`) on every unknown; each leg's block is eliminated
+(Cholesky of its nv × nv block), then the 6 × 6 Schur complement gives ξ; the joint
+increments are projected onto the joint limits.
+
+Stopping rules (:mod:`pkm_pin.tolerances`): ``r ≤ tol``; ``max_iter`` steps;
+``NEWTON_SLOW_STEPS`` evaluations in a row not below ``(1 − NEWTON_SLOW_RTOL)`` times the
+best ``r`` (a least-squares minimum: out of reach); a step below ``NEWTON_STALL_RTOL``
+(stalled at a limit); a step that is not finite or a system not positive definite.
+
+Drivers
+-------
+The step is written once, as plain functions (``register_jitable``: compiled inside the
+drivers, callable from Python as they are). The compiled driver evaluates the legs with
+:func:`pkm_pin.kernels._fk` (:func:`solve_from`, :func:`track`, :func:`solve_system`);
+the Python driver evaluates them with Pinocchio (legs the kernels cannot represent:
+continuous or multi-DOF joints; one-off calls before the compiled code is ready) and runs
+:func:`closure_iteration` compiled (:data:`iteration_compiled`) or as Python.
+
+Restarts: :func:`start_configurations` (warm start, neutral, middle of the limits, N random
+configurations drawn with a seed).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections import namedtuple
+from dataclasses import dataclass
+from enum import IntEnum
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+from numba.core.errors import NumbaIRAssumptionWarning
+from numba.extending import register_jitable
+
+from . import screws
+from .compiling import prefer_compiled
+from .engine.linalg import jacobi
+from .kernels import _compose, _fk, twist_exp
+from .kernels import pose_error as closure_error
+from .tolerances import CLOSURE_TOL
+
+# numba's typed IR inlining (register_jitable(inline="always")) trips one of its own
+# pedantic checks on the first compilation ("variable '…' is not in scope": the inlined
+# variables are not registered in the caller's scope): harmless bookkeeping, not shown.
+warnings.filterwarnings("ignore", message=r"variable '.*' is not in scope",
+                        category=NumbaIRAssumptionWarning)
+
+__all__ = ["ACTUATED", "LEGS", "PLATFORM", "ClosureSolution", "LegSolution", "Mask",
+           "closure_error", "closure_iteration", "solve_closure", "solve_from",
+           "solve_kernel", "solve_leg", "solve_system", "start_configurations", "track"]
+
+
+class Mask(IntEnum):
+    """The unknowns of a solve (see the module docstring)."""
+
+    LEGS = 0  #: (a) each leg's joints, the platform fixed
+    PLATFORM = 1  #: (b) every leg's joints and the platform twist
+    ACTUATED = 2  #: (c) (b) plus rows pinning the actuated coordinates to targets
+
+
+LEGS, PLATFORM, ACTUATED = Mask.LEGS, Mask.PLATFORM, Mask.ACTUATED
+
+
+@dataclass
+class LegSolution:
+    """Result of :meth:`Leg.solve` / :func:`solve_leg`.
+
+    Attributes:
+        q: Joint configuration (inside the joint limits).
+        residual: Relative pose error left at ``q``: :func:`closure_error` (world rotation
+            vector [rad] and tip displacement / the leg's characteristic length), from
+            Pinocchio's tip placement.
+        iterations: Newton iterations spent, all restarts included.
+        converged: Whether ``residual <= tol``.
+    """
+
+    q: np.ndarray
+    residual: float
+    iterations: int
+    converged: bool
+
+
+@dataclass
+class ClosureSolution:
+    """Result of :func:`solve_closure`.
+
+    Attributes:
+        pose: Platform placement reached (``pin.SE3``, world).
+        leg_q: One configuration per leg.
+        residuals: (legs,) each leg's :func:`closure_error` at ``pose`` and ``leg_q``.
+        closure: Their largest value.
+        actuated: Largest scaled actuated error ``|target − q_a| / s_a`` (0 unless the
+            mask is :data:`ACTUATED`).
+        iterations: Newton steps taken (mask :data:`LEGS`: the most over the legs).
+        schur_ratio: λ_min / λ_max of the 6 × 6 Schur complement of the last step (its
+            platform system; 0 without a platform step).
+        contracted: Whether every step after the first was at most half the previous
+            (Newton's quadratic regime: no jump to another branch).
+    """
+
+    pose: pin.SE3
+    leg_q: list
+    residuals: np.ndarray
+    closure: float
+    actuated: float
+    iterations: int
+    schur_ratio: float = 0.0
+    contracted: bool = True
+
+
+# =================================================================== the step
+@register_jitable(inline="always")
+def lm_damping(r):
+    """:func:`pkm_pin.tolerances.damping` of the relative residual ``r``, written out for
+    the compiled code (numba's cache does not follow tolerances.py; a test checks that
+    the two agree)."""
+    lam = 1e-10 + 1e-2 * r * r
+    return lam
+
+
+@register_jitable(inline="always")
+def stop_rule(r, tol, it, max_iter, best, slow):
+    """Newton's stopping rules before a step, ``(stop, best, slow)``: ``r ≤ tol``, ``it ≥
+    max_iter``, or :data:`~pkm_pin.tolerances.NEWTON_SLOW_STEPS` (10) evaluations in a
+    row whose ``r`` is not below ``1 − NEWTON_SLOW_RTOL`` (1e-3) times the best so far."""
+    if r <= tol or it >= max_iter:
+        return True, best, slow
+    slow = slow + 1 if r > (1.0 - 1e-3) * best else 0
+    best = min(best, r)
+    return slow >= 10, best, slow
+
+
+@register_jitable(inline="always")
+def leg_rows(T, J, units, length, nv, H):
+    """Rows of a leg's residual per unit of its dimensionless unknowns: column ``c`` of
+    ``H`` (6 × nv) is ``(ω; (v_O + ω × p_T) / length)`` of the joint twist ``J[:, c]``
+    (axis-first world Jacobian, per unit of the coordinate) times ``units[c]``; ``p_T``
+    is the tip point ``T[:3, 3]`` [m]."""
+    il = 1.0 / length
+    px, py, pz = T[0, 3], T[1, 3], T[2, 3]
+    for c in range(nv):
+        u = units[c]
+        wx, wy, wz = u * J[0, c], u * J[1, c], u * J[2, c]
+        H[0, c], H[1, c], H[2, c] = wx, wy, wz
+        H[3, c] = (u * J[3, c] + wy * pz - wz * py) * il
+        H[4, c] = (u * J[4, c] + wz * px - wx * pz) * il
+        H[5, c] = (u * J[5, c] + wx * py - wy * px) * il
+
+
+@register_jitable
+def platform_rows(W, length, scale, X):
+    """``X`` (6 × 6): how the dimensionless platform twist ``ξ = (ω; v_O / scale)`` moves
+    a leg's target ``W``: ``(ω; (scale v' + ω × p_W) / length)``, ``length`` the leg's."""
+    qx, qy, qz = W[0, 3] / length, W[1, 3] / length, W[2, 3] / length
+    f = scale / length
+    for a in range(6):
+        for b in range(6):
+            X[a, b] = 0.0
+    for k in range(3):
+        X[k, k] = 1.0
+        X[3 + k, 3 + k] = f
+    X[3, 1], X[3, 2] = qz, -qy
+    X[4, 0], X[4, 2] = -qz, qx
+    X[5, 0], X[5, 1] = qy, -qx
+
+
+@register_jitable(inline="always")
+def normal_equations(H, e, nv, lam, N, g):
+    """Lower triangle of ``N = HᵀH + λ I`` and ``g = Hᵀ e`` for the first ``nv`` columns."""
+    for a in range(nv):
+        s = 0.0
+        for k in range(6):
+            s += H[k, a] * e[k]
+        g[a] = s
+        for b in range(a + 1):
+            s = 0.0
+            for k in range(6):
+                s += H[k, a] * H[k, b]
+            N[a, b] = s
+        N[a, a] += lam
+
+
+@register_jitable(inline="always")
+def cholesky(A, n, inv):
+    """Cholesky factor of the symmetric positive definite ``A[:n, :n]`` in place on its
+    lower triangle; ``inv`` receives the reciprocals of its diagonal. False if ``A`` is
+    not positive definite."""
+    for j in range(n):
+        s = A[j, j]
+        for k in range(j):
+            s -= A[j, k] * A[j, k]
+        if not 0.0 < s < np.inf:
+            return False
+        d = 1.0 / math.sqrt(s)
+        inv[j] = d
+        for i in range(j + 1, n):
+            s = A[i, j]
+            for k in range(j):
+                s -= A[i, k] * A[j, k]
+            A[i, j] = s * d
+    return True
+
+
+@register_jitable(inline="always")
+def substitute(A, n, inv, b, x):
+    """``x = A⁻¹ b`` from the factor of :func:`cholesky` (``x`` may be ``b``)."""
+    for i in range(n):
+        s = b[i]
+        for k in range(i):
+            s -= A[i, k] * x[k]
+        x[i] = s * inv[i]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= A[k, i] * x[k]
+        x[i] = s * inv[i]
+
+
+@register_jitable(inline="always")
+def leg_step(T, J, e, r, units, length, nv, H, N, g, dq, inv):
+    """One leg's damped Newton step (mask :data:`LEGS`): ``dq`` (dimensionless) from its
+    rows at ``T``, ``J`` and its residual ``e`` (norm ``r``). False if the normal
+    equations are not positive definite."""
+    leg_rows(T, J, units, length, nv, H)
+    normal_equations(H, e, nv, lm_damping(r), N, g)
+    if not cholesky(N, nv, inv):
+        return False
+    substitute(N, nv, inv, g, dq)
+    return True
+
+
+@register_jitable(inline="always")
+def project(q, dq, units, lower, upper):
+    """``q ← q + units · dq`` projected onto ``[lower, upper]`` (in place; nq = nv).
+    Returns ``(step², size², clipped)``: the squared dimensionless step taken, ``|q /
+    units|²`` before it, and whether a limit cut it."""
+    step = 0.0
+    size = 0.0
+    clipped = False
+    for a in range(q.shape[0]):
+        want = q[a] + units[a] * dq[a]
+        new = min(upper[a], max(lower[a], want))
+        clipped = clipped or new != want
+        iu = 1.0 / units[a]
+        d, v = (new - q[a]) * iu, q[a] * iu
+        step += d * d
+        size += v * v
+        q[a] = new
+    return step, size, clipped
+
+
+@register_jitable(inline="always")
+def all_finite(x):
+    """Whether every entry of the 1-D array ``x`` is finite."""
+    for a in range(x.shape[0]):
+        if not math.isfinite(x[a]):
+            return False
+    return True
+
+
+#: Work arrays of :func:`closure_iteration` (see :func:`system_workspace`).
+Work = namedtuple("Work", "Ts Js Ws e H X N G B S S_last rhs inv dq xi")
+
+
+@register_jitable
+def system_workspace(n, mv, ntot):
+    """:class:`Work` for ``n`` legs of at most ``mv`` velocity coordinates, ``ntot`` in
+    all: the legs' tip placements ``Ts``, Jacobians ``Js`` and targets ``Ws`` (filled by
+    the driver), then the step's arrays; ``dq`` (ntot) and ``xi`` (6) receive the step."""
+    return Work(np.zeros((n, 4, 4)), np.zeros((n, 6, mv)), np.zeros((n, 4, 4)),
+                np.zeros((n, 6)), np.zeros((n, 6, mv)), np.zeros((n, 6, 6)),
+                np.zeros((mv, mv)), np.zeros((n, mv, 7)), np.zeros((mv, 6)),
+                np.zeros((6, 6)), np.zeros((6, 6)), np.zeros(6), np.zeros(max(mv, 6)),
+                np.zeros(ntot), np.zeros(6))
+
+
+@register_jitable
+def _couple(H, X, nv, G, B):
+    """``G[:nv, :6] = B = −Hᵀ X``: the coupling of a leg's unknowns with the platform's."""
+    for a in range(nv):
+        for b in range(6):
+            s = 0.0
+            for k in range(6):
+                s += H[k, a] * X[k, b]
+            G[a, b] = -s
+            B[a, b] = -s
+
+
+@register_jitable
+def _schur_update(X, e, B, G, nv, S, rhs):
+    """``S += XᵀX − Bᵀ N⁻¹ B`` and ``rhs += −Xᵀe − Bᵀ N⁻¹ g`` (``G = N⁻¹ [B | g]``)."""
+    for a in range(6):
+        s = 0.0
+        for k in range(6):
+            s += X[k, a] * e[k]
+        for k in range(nv):
+            s += B[k, a] * G[k, 6]
+        rhs[a] -= s
+        for b in range(6):
+            s = 0.0
+            for k in range(6):
+                s += X[k, a] * X[k, b]
+            for k in range(nv):
+                s -= B[k, a] * G[k, b]
+            S[a, b] += s
+
+
+@register_jitable
+def system_step(coords, units, platform, act_v, qa, scales, target, lam, ws):
+    """The damped least-squares step of the rows in ``ws`` (``H``, ``e``, ``X``) and the
+    actuated rows ``(units_v / s_a) Δq'_v = (target_a − qa_a) / s_a``: each leg's block
+    eliminated, then the 6 × 6 Schur complement in ξ (with ``platform``). Fills
+    ``ws.dq`` (dimensionless joint increments) and ``ws.xi``; False if a block is not
+    positive definite."""
+    N, G, S, rhs, inv = ws.N, ws.G, ws.S, ws.rhs, ws.inv
+    first = 0 if platform else 6  # the columns of G solved: [B | g] or g
+    for a in range(6):
+        rhs[a] = 0.0
+        for b in range(6):
+            S[a, b] = 0.0
+    for i in range(coords.shape[0] - 1):
+        c0, nv = coords[i], coords[i + 1] - coords[i]
+        Gi = G[i]
+        normal_equations(ws.H[i], ws.e[i], nv, lam, N, Gi[:, 6])
+        for a in range(act_v.shape[0]):
+            k = act_v[a] - c0
+            if 0 <= k < nv:
+                w = units[act_v[a]] / scales[a]
+                N[k, k] += w * w
+                Gi[k, 6] += w * (target[a] - qa[a]) / scales[a]
+        if platform:
+            _couple(ws.H[i], ws.X[i], nv, Gi, ws.B)
+        if not cholesky(N, nv, inv):
+            return False
+        for c in range(first, 7):
+            substitute(N, nv, inv, Gi[:, c], Gi[:, c])
+        if platform:
+            _schur_update(ws.X[i], ws.e[i], ws.B, Gi, nv, S, rhs)
+    xi = ws.xi
+    for k in range(6):
+        xi[k] = 0.0
+    if platform:
+        for k in range(6):
+            S[k, k] += lam
+        ws.S_last[:, :] = S
+        if not cholesky(S, 6, inv):
+            return False
+        substitute(S, 6, inv, rhs, xi)
+    for i in range(coords.shape[0] - 1):
+        c0 = coords[i]
+        for k in range(coords[i + 1] - c0):
+            d = G[i, k, 6]
+            if platform:
+                for b in range(6):
+                    d -= G[i, k, b] * xi[b]
+            ws.dq[c0 + k] = d
+    return True
+
+
+@register_jitable
+def closure_iteration(coords, lengths, units, length, platform, act_v, qa, scales, target,
+                      tol, it, max_iter, best, slow, residual, ws):
+    """One iteration of either driver, after it has evaluated the legs into ``ws.Ts``
+    (tip placements), ``ws.Js`` (axis-first world Jacobians) and ``ws.Ws`` (targets):
+    the residuals (``residual[i]`` = leg i's :func:`closure_error`), the stopping rules
+    (:func:`stop_rule` on ``r = max(closure, actuated)``) and, unless they stop, the
+    step (:func:`system_step`, damping :func:`lm_damping` of ``r``) in ``ws.dq``,
+    ``ws.xi``. Returns ``(stop, closure, actuated, best, slow)``."""
+    closure = 0.0
+    for i in range(coords.shape[0] - 1):
+        c0, c1 = coords[i], coords[i + 1]
+        r = closure_error(ws.Ts[i], ws.Ws[i], lengths[i], ws.e[i])
+        residual[i] = r
+        closure = max(closure, r)
+        leg_rows(ws.Ts[i], ws.Js[i], units[c0:c1], lengths[i], c1 - c0, ws.H[i])
+        if platform:
+            platform_rows(ws.Ws[i], lengths[i], length, ws.X[i])
+    act = 0.0
+    for a in range(act_v.shape[0]):
+        act = max(act, abs(target[a] - qa[a]) / scales[a])
+    r = max(closure, act)
+    stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
+    if stop:
+        return True, closure, act, best, slow
+    ok = system_step(coords, units, platform, act_v, qa, scales, target, lm_damping(r), ws)
+    return not ok, closure, act, best, slow
+
+
+#: :func:`closure_iteration` compiled, for the Python driver once it is ready
+#: (:func:`pkm_pin.compiling.prefer_compiled`).
+iteration_compiled = njit(cache=True, nogil=True)(closure_iteration)
+
+
+# ============================================================ compiled drivers
+@register_jitable
+def leg_workspace(nv):
+    """Work arrays of :func:`leg_newton` for legs of at most ``nv`` coordinates: T, J, H,
+    e, N, g, dq, inv (``dq`` zero beyond a leg's own coordinates)."""
+    return (np.empty((4, 4)), np.empty((6, nv)), np.empty((6, nv)), np.empty(6),
+            np.empty((nv, nv)), np.empty(nv), np.zeros(nv), np.empty(nv))
+
+
+@register_jitable
+def leg_newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
+               units, target, q, tol, max_iter, trust, ws):
+    """Mask :data:`LEGS` for one leg in compiled code, in place on ``q`` (its tip to
+    ``target``, 4 × 4 world): evaluations by :func:`pkm_pin.kernels._fk`, the step
+    :func:`leg_step`, the rules of :func:`stop_rule`. Returns ``(residual, iterations)``;
+    the residual is that of the returned ``q``. With ``trust > 0`` a step taken from
+    ``r ≤ trust`` (Newton's quadratic regime: the next residual is ~r²) and not cut by a
+    limit ends the iteration unevaluated, and the residual returned is −r (the caller
+    verifies). The start ``q`` is projected onto the limits first."""
+    T, J, H, e, N, g, dq, inv = ws
+    for a in range(q.shape[0]):
+        q[a] = min(upper[a], max(lower[a], q[a]))
+    it = 0
+    best = np.inf
+    slow = 0
+    while True:
+        _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
+        r = closure_error(T, target, length, e)
+        stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
+        if stop:
+            return r, it
+        it += 1
+        if not leg_step(T, J, e, r, units, length, nv, H, N, g, dq, inv) \
+                or not all_finite(dq[:nv]):
+            return r, it
+        step, size, clipped = project(q, dq, units, lower, upper)
+        if step < 1e-30 * (1.0 + size):  # stalled (at a limit or a local minimum)
+            _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
+            return closure_error(T, target, length, e), it
+        if r <= trust and not clipped:
+            return -r, it
+
+
+#: :func:`leg_newton` inlined where it is called (numba's IR inlining): :func:`track`
+#: calls it once per pose and leg, where a call would cost ~15 % of the sweep's leg solve.
+_leg_newton_inlined = njit(inline="always")(leg_newton)
+
+
+@njit(cache=True, nogil=True)
+def solve_from(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
+               units, targets, starts, tol, max_iter, Q, residual, iterations):
+    """Each target (M, 4, 4) solved from each of ``starts`` (S, nq) in turn until one
+    converges (:func:`leg_newton`; the restarts of :meth:`Leg.solve` and of the sweeps):
+    fills ``Q`` (M, nq) and ``residual`` (M,) with the best attempt, ``iterations`` (M,)
+    with the steps of all attempts. The leg's arguments: :meth:`ChainKernel.solver_args`."""
+    ws = leg_workspace(nv)
+    q = np.empty(starts.shape[1])
+    for i in range(targets.shape[0]):
+        residual[i] = np.inf
+        iterations[i] = 0
+        for s in range(starts.shape[0]):
+            q[:] = starts[s]
+            r, it = leg_newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower,
+                               upper, length, units, targets[i], q, tol, max_iter, 0.0, ws)
+            iterations[i] += it
+            if s == 0 or r < residual[i]:
+                residual[i] = r
+                Q[i] = q
+            if r <= tol:
+                break
+
+
+@njit(cache=True, nogil=True)
+def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length, units,
+          targets, q_start, extrapolate, tol, max_iter, trust, Q, residual):
+    """Solve the leg at each target of an ordered path (N, 4, 4) with :func:`leg_newton`,
+    warm-started from the previous solution (extrapolated from the previous ones where
+    ``extrapolate[i]``: linearly from two, quadratically from three where the path was
+    smooth before too). Fills ``Q`` (N, nq) and ``residual`` (N,): the residual reached,
+    or −r when the last step was taken from ``r ≤ trust`` and not evaluated (the caller
+    verifies). A target that does not converge leaves the warm start unchanged for the
+    next one. Returns the number of targets missed (neither converged nor trusted)."""
+    ws = leg_workspace(nv)
+    nq = q_start.shape[0]
+    hist = np.empty((3, nq))  # the last three solutions, newest at row `head`
+    for k in range(3):
+        hist[k] = q_start
+    head = 0
+    known = 1  # how many of them are consecutive solutions of this path
+    q = np.empty(nq)
+    misses = 0
+    for i in range(targets.shape[0]):
+        q1 = hist[head]
+        if extrapolate[i] and i >= 1 and extrapolate[i - 1] and known >= 3:
+            q2, q3 = hist[(head + 2) % 3], hist[(head + 1) % 3]
+            for a in range(nq):  # quadratic through the last three
+                q[a] = min(upper[a], max(lower[a], 3.0 * (q1[a] - q2[a]) + q3[a]))
+        elif extrapolate[i] and known >= 2:
+            q2 = hist[(head + 2) % 3]
+            for a in range(nq):
+                q[a] = min(upper[a], max(lower[a], 2.0 * q1[a] - q2[a]))
+        else:
+            for a in range(nq):
+                q[a] = q1[a]
+        r, _ = _leg_newton_inlined(parent, post, kind, axis, rate, iq, iv, tip, base, nv,
+                                   lower, upper, length, units, targets[i], q, tol, max_iter,
+                                   trust, ws)
+        residual[i] = r
+        for a in range(nq):
+            Q[i, a] = q[a]
+        if r <= tol:  # converged, or trusted (a trusted r is negative)
+            head = (head + 1) % 3
+            for a in range(nq):
+                hist[head, a] = q[a]
+            known = known + 1 if i > 0 else 1
+        else:
+            misses += 1
+            known = 0
+    return misses
+
+
+@register_jitable
+def _legs_compiled(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases,
+                   anchors, lower, upper, lengths, units, pose, Q, tol, max_iter, residual):
+    """Mask :data:`LEGS` on a mechanism kernel: every leg's :func:`leg_newton` for its tip
+    at ``pose · anchor``, warm-started from ``Q``. Returns the most iterations of a leg."""
+    W = np.empty((4, 4))
+    most = 0
+    mv = 0
+    for i in range(joints.shape[0] - 1):
+        mv = max(mv, coords[i + 1] - coords[i])
+    ws = leg_workspace(mv)
+    for i in range(joints.shape[0] - 1):
+        j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
+        _compose(pose, anchors[i], W)
+        r, it = leg_newton(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
+                           iq[j0:j1], iv[j0:j1], tips[i], bases[i], c1 - c0, lower[c0:c1],
+                           upper[c0:c1], lengths[i], units[c0:c1], W, Q[c0:c1], tol,
+                           max_iter, 0.0, ws)
+        residual[i] = r
+        most = max(most, it)
+    return most
+
+
+@register_jitable
+def _move(Q, pose, coords, units, lower, upper, length, ws, E, tmp):
+    """Apply the step of ``ws`` (compiled driver): each leg's increments projected onto
+    its limits, the platform moved to ``exp(ξ) · pose``. Returns ``(step², size²)``
+    (dimensionless, as :func:`project`)."""
+    step = 0.0
+    size = 0.0
+    for i in range(coords.shape[0] - 1):
+        c0, c1 = coords[i], coords[i + 1]
+        s, z, _ = project(Q[c0:c1], ws.dq[c0:c1], units[c0:c1], lower[c0:c1], upper[c0:c1])
+        step += s
+        size += z
+    xi = ws.xi
+    for k in range(6):
+        step += xi[k] * xi[k]
+    for k in range(3, 6):
+        xi[k] *= length
+    twist_exp(xi, E)
+    _compose(E, pose, tmp)
+    pose[:, :] = tmp
+    return step, size
+
+
+@njit(cache=True, nogil=True)
+def solve_system(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases, anchors,
+                 lower, upper, lengths, units, actuated, scales, length, mask, pose, Q,
+                 target, tol, max_iter, residual, out):
+    """The compiled driver on a whole mechanism (:class:`~pkm_pin.kernels.MechanismKernel`
+    arrays, :meth:`~pkm_pin.kernels.MechanismKernel.solver_args`): the mask's unknowns
+    solved in place on ``pose`` (4 × 4) and ``Q`` (the legs' configurations one after
+    the other; the start projected onto the limits), ``target``: the actuated
+    coordinates (mask :data:`ACTUATED`).
+    ``residual`` (legs) receives each leg's :func:`closure_error`, ``out`` (closure,
+    actuated error, iterations, Schur ratio, contracted) as :class:`ClosureSolution`."""
+    n = joints.shape[0] - 1
+    if mask == 0:
+        most = _legs_compiled(joints, coords, parent, post, kind, axis, rate, iq, iv, tips,
+                              bases, anchors, lower, upper, lengths, units, pose, Q, tol,
+                              max_iter, residual)
+        out[0], out[1], out[2], out[3], out[4] = residual.max(), 0.0, most, 0.0, 1.0
+        return
+    mv = 0
+    for i in range(n):
+        mv = max(mv, coords[i + 1] - coords[i])
+    ws = system_workspace(n, mv, coords[n])
+    n_act = actuated.shape[0] if mask == 2 else 0
+    act_v, qa = actuated[:n_act], np.empty(n_act)
+    E, tmp = np.empty((4, 4)), np.empty((4, 4))
+    for a in range(Q.shape[0]):  # the start, projected onto the limits
+        Q[a] = min(upper[a], max(lower[a], Q[a]))
+    it, best, slow, stalled, prev, contracted = 0, np.inf, 0, False, np.inf, 1.0
+    while True:
+        for i in range(n):
+            j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
+            _compose(pose, anchors[i], ws.Ws[i])
+            _fk(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1], iq[j0:j1],
+                iv[j0:j1], tips[i], bases[i], c1 - c0, Q[c0:c1], ws.Ts[i], ws.Js[i])
+        for a in range(n_act):
+            qa[a] = Q[act_v[a]]
+        stop, closure, act, best, slow = closure_iteration(
+            coords, lengths, units, length, True, act_v, qa, scales, target, tol, it,
+            it if stalled else max_iter, best, slow, residual, ws)
+        if stop or not (all_finite(ws.dq) and all_finite(ws.xi)):
+            break
+        it += 1
+        step, size = _move(Q, pose, coords, units, lower, upper, length, ws, E, tmp)
+        stalled = step < 1e-30 * (1.0 + size)
+        step = math.sqrt(step)
+        if it > 1 and step > 0.5 * prev:
+            contracted = 0.0
+        prev = step
+    ratio = 0.0
+    if it > 0:  # λ_min / λ_max of the symmetric positive definite S: its singular values
+        sv = np.empty(6)
+        jacobi(ws.S_last, 6, 6, np.empty((6, 6)), np.eye(6), sv)
+        ratio = sv.min() / sv.max() if sv.max() > 0 else 0.0
+    out[0], out[1], out[2], out[3], out[4] = closure, act, it, ratio, contracted
+
+
+# =============================================================== Python driver
+def _evaluate(legs, anchors, pose, leg_q, ws) -> None:
+    """The Python driver's evaluation: one Pinocchio pass per leg (joint Jacobians and
+    tip frame) into ``ws.Ts`` (world tip placements) and ``ws.Js`` (axis-first world
+    Jacobians), and the targets ``pose · anchor`` into ``ws.Ws``."""
+    for i, (leg, anchor, q) in enumerate(zip(legs, anchors, leg_q)):
+        data = leg._jacobian_pass(q)
+        ws.Ts[i] = (leg.base * data.oMf[leg.tip_id]).homogeneous
+        ws.Js[i, :, :leg.nv] = leg._world_jacobian(data)
+        ws.Ws[i] = (pose * anchor).homogeneous
+
+
+def _newton_pinocchio(legs, anchors, pose: pin.SE3, leg_q, mask, target, scales, length,
+                      tol, max_iter) -> ClosureSolution:
+    """The Python driver: the legs evaluated by Pinocchio, the step of
+    :func:`closure_iteration` (compiled once ready), joint increments applied by
+    ``pin.integrate`` (any joint) and projected onto the limits. Mask :data:`PLATFORM` or
+    :data:`ACTUATED` on the legs together, or :data:`LEGS` for one leg. The starts are
+    projected onto the limits first."""
+    n = len(legs)
+    coords = np.r_[0, np.cumsum([leg.nv for leg in legs])].astype(np.int64)
+    lengths = np.array([leg.characteristic_length for leg in legs], dtype=float)
+    units = np.concatenate([leg._velocity_units for leg in legs])
+    platform = mask != LEGS
+    if mask == ACTUATED:
+        act_v = np.concatenate([c + leg.actuated_v for c, leg in zip(coords, legs)]
+                               ).astype(np.int64)
+        target, scales = np.asarray(target, dtype=float), np.asarray(scales, dtype=float)
+    else:
+        act_v, target, scales = np.empty(0, np.int64), np.empty(0), np.empty(0)
+    ws = system_workspace(n, int(max(np.diff(coords))), int(coords[-1]))
+    iterate = iteration_compiled if prefer_compiled(iteration_compiled) else closure_iteration
+    residual = np.empty(n)
+    leg_q = [leg.clip(np.array(q, dtype=float)) for leg, q in zip(legs, leg_q)]
+    it, best, slow, stalled, prev, contracted = 0, np.inf, 0, False, np.inf, True
+    while True:
+        _evaluate(legs, anchors, pose, leg_q, ws)
+        qa = np.array([q[k] for leg, q in zip(legs, leg_q) for k in leg.actuated_q]
+                      if mask == ACTUATED else [], dtype=float)
+        stop, closure, act, best, slow = iterate(
+            coords, lengths, units, length, platform, act_v, qa, scales, target, tol, it,
+            it if stalled else max_iter, best, slow, residual, ws)
+        if stop or not (np.all(np.isfinite(ws.dq)) and np.all(np.isfinite(ws.xi))):
+            break
+        it += 1
+        step, size = float(ws.xi @ ws.xi), 0.0
+        for i, leg in enumerate(legs):
+            u, q = units[coords[i]:coords[i + 1]], leg_q[i]
+            new = leg.clip(pin.integrate(leg.model, q, u * ws.dq[coords[i]:coords[i + 1]]))
+            d = pin.difference(leg.model, q, new) / u
+            step += float(d @ d)
+            size += float(q @ q) if leg.nq != leg.nv else float(np.sum((q / u) ** 2))
+            leg_q[i] = new
+        if platform:
+            pose = screws.exp(np.r_[ws.xi[:3], length * ws.xi[3:]]) * pose
+        stalled = step < 1e-30 * (1.0 + size)
+        contracted = contracted and not (it > 1 and math.sqrt(step) > 0.5 * prev)
+        prev = math.sqrt(step)
+    ratio = 0.0
+    if platform and it > 0:
+        sv = np.linalg.svd(ws.S_last, compute_uv=False)
+        ratio = float(sv[-1] / sv[0]) if sv[0] > 0 else 0.0
+    return ClosureSolution(pose, leg_q, residual.copy(), float(closure), float(act), it,
+                           ratio, contracted)
+
+
+# ==================================================================== the API
+def start_configurations(leg, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
+    """The restart recipe: (S, nq) start configurations of ``leg``, in this order: the
+    warm start ``warm`` (when given; projected onto the limits), the neutral
+    configuration (inside the limits), the middle of the limits (neutral where a limit
+    is infinite), and ``count`` configurations drawn uniformly inside the limits by
+    ``numpy.random.default_rng(seed)`` (:meth:`Leg.random_configuration`). The same
+    arguments give the same starts."""
+    lo, up = leg._bounds
+    middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
+    rng = np.random.default_rng(seed)
+    rows = [] if warm is None else [leg.clip(np.asarray(warm, dtype=float))]
+    rows += [leg.neutral(), middle] + [leg.random_configuration(rng) for _ in range(count)]
+    return np.ascontiguousarray(rows, dtype=float)
+
+
+def solve_leg(leg, target: pin.SE3, starts, *, tol: float = CLOSURE_TOL, max_iter: int = 100,
+              compiled: bool = False) -> LegSolution:
+    """Mask :data:`LEGS` for one leg: its tip to ``target`` (world), from each row of
+    ``starts`` (S, nq) in turn until one converges; the best attempt, its iterations
+    those of every attempt. ``compiled``: the compiled driver when the leg has a kernel
+    (every configuration it returns is evaluated again by Pinocchio, whose residual is
+    reported, and a near miss is polished by the Python driver); else the Python one."""
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    kernel = leg._kernel if compiled else None
+    if kernel is not None:
+        Q, res, its = np.empty((1, leg.nq)), np.empty(1), np.zeros(1, np.int64)
+        solve_from(*kernel.solver_args(), target.homogeneous[None], starts, tol, max_iter, Q,
+                   res, its)
+        sol = _solve_one(leg, target, Q[0], tol, max_iter if res[0] <= tol else 0)
+        sol.iterations += int(its[0])
+        return sol
+    best, iterations = None, 0
+    for q0 in starts:
+        sol = _solve_one(leg, target, q0, tol, max_iter)
+        iterations += sol.iterations
+        if best is None or sol.residual < best.residual:
+            best = sol
+        if best.converged:
+            break
+    best.iterations = iterations
+    return best
+
+
+def _solve_one(leg, target: pin.SE3, q0, tol: float, max_iter: int) -> LegSolution:
+    """The Python driver for one leg from ``q0``."""
+    s = _newton_pinocchio([leg], [pin.SE3.Identity()], target, [q0], LEGS, None, None,
+                          leg.characteristic_length, tol, max_iter)
+    return LegSolution(s.leg_q[0], s.closure, s.iterations, s.closure <= tol)
+
+
+def solve_kernel(kernel, mask: Mask, pose: np.ndarray, Q: np.ndarray, target=None, *,
+                 tol: float = CLOSURE_TOL, max_iter: int = 50) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`solve_system` on a :class:`~pkm_pin.kernels.MechanismKernel`, in place on
+    ``pose`` (4 × 4) and ``Q`` (concatenated leg configurations). Returns ``(residual,
+    out)``: each leg's closure error and (closure, actuated error, iterations, Schur
+    ratio, contracted)."""
+    residual, out = np.empty(len(kernel.lengths)), np.empty(5)
+    # without actuated targets any float array of their length will do (not read)
+    target = kernel.scales if target is None else np.asarray(target, dtype=float)
+    solve_system(*kernel.solver_args(), int(mask), pose, Q, target, tol, max_iter, residual,
+                 out)
+    return residual, out
+
+
+def solve_closure(mech, pose, leg_q, mask: Mask = LEGS, target=None, *,
+                  tol: float = CLOSURE_TOL, max_iter: int = 50,
+                  compiled: bool | None = None) -> ClosureSolution:
+    """The closure solver on a mechanism: the unknowns of ``mask`` from the platform pose
+    ``pose`` (``pin.SE3``) and the leg configurations ``leg_q``; ``target``: the actuated
+    coordinates (mask :data:`ACTUATED`). ``compiled``: the compiled driver when every
+    leg has a kernel (default: when its code is ready,
+    :func:`pkm_pin.compiling.prefer_compiled`); else the Python driver (Pinocchio)."""
+    if mask == ACTUATED and target is None:
+        raise ValueError("mask ACTUATED needs the target actuated coordinates")
+    kernel = mech._kernel if compiled is not False else None
+    if kernel is not None and (compiled or prefer_compiled(solve_system)):
+        M, Q = pose.homogeneous.copy(), np.concatenate(leg_q).astype(float)
+        residual, out = solve_kernel(kernel, mask, M, Q, target, tol=tol, max_iter=max_iter)
+        c = kernel.coords
+        return ClosureSolution(pin.SE3(M), [Q[c[i]:c[i + 1]].copy() for i in range(len(c) - 1)],
+                               residual, float(out[0]), float(out[1]), int(out[2]),
+                               float(out[3]), bool(out[4] == 1.0))
+    L = mech.characteristic_length
+    if mask != LEGS:
+        return _newton_pinocchio(mech.legs, mech.anchors, pose, leg_q, mask, target,
+                                 mech.actuated_scales, L, tol, max_iter)
+    sols = [_newton_pinocchio([leg], [pin.SE3.Identity()], pose * anchor, [q], LEGS, None,
+                              None, L, tol, max_iter)
+            for leg, anchor, q in zip(mech.legs, mech.anchors, leg_q)]
+    residuals = np.array([s.closure for s in sols])
+    return ClosureSolution(pose, [s.leg_q[0] for s in sols], residuals,
+                           float(residuals.max()), 0.0, max(s.iterations for s in sols))
