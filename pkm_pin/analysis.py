@@ -1,4 +1,5 @@
-"""Screw analysis of an assembled mechanism — seed 000, sections 3 and 4.
+"""Screw analysis of an assembled mechanism — seed 000, sections 3 and 4 (Michalková &
+Guldan; the source papers are listed in docs/references.md).
 
 Everything is derived from one Jacobian per leg (its columns are the joint twists):
 

@@ -247,16 +247,17 @@ class Mechanism:
         c = kernel.coords
         leg_q = [Q[c[i]:c[i + 1]] for i in range(len(self.legs))]
         J, errors = verified_twists(self, leg_q, M)
-        missed = np.flatnonzero(~(errors <= tol))
-        for i in missed:
-            leg = self.legs[i]
-            sol = leg.solve(pose * self.anchors[i], leg_q[i], tol=tol, restarts=restarts)
-            if not sol.converged:
-                raise AssemblyError(leg.name, sol.residual)
-            leg_q[i] = sol.q
-        if len(missed):
+        worst = float(errors.max())
+        if not worst <= tol:  # a leg Pinocchio does not confirm: Leg.solve, restarts
+            for i in np.flatnonzero(~(errors <= tol)):
+                leg = self.legs[i]
+                sol = leg.solve(pose * self.anchors[i], leg_q[i], tol=tol, restarts=restarts)
+                if not sol.converged:
+                    raise AssemblyError(leg.name, sol.residual)
+                leg_q[i] = sol.q
             J, errors = verified_twists(self, leg_q, M)
-        return Assembly(self, pose, leg_q, float(errors.max()), joint_twists=J)
+            worst = float(errors.max())
+        return Assembly(self, pose, leg_q, worst, joint_twists=J)
 
     def leg_starts(self, guess=None) -> list:
         """The leg configurations an assembly warm-starts from (one per leg; ``None``:

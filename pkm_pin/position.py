@@ -1,5 +1,5 @@
-"""Position problems (seed 003): forward kinematics by screw continuation, assembly
-modes, iterative inverse kinematics of a serial chain.
+"""Position problems (seed 003: Demidov 2025, see docs/references.md): forward kinematics
+by screw continuation, assembly modes, iterative inverse kinematics of a serial chain.
 
 Forward position problem (:func:`forward_kinematics`)
 ------------------------------------------------------
@@ -204,7 +204,6 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
         start = guess
     else:
         start = mech.assemble(guess)
-    scales = _actuated_scales(mech)
     _check_limits(mech, target)
     if method not in ("auto", "compiled", "euler"):
         raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")
@@ -218,99 +217,149 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
                 if method == "compiled":
                     raise
 
-    state = ClosureSolution(start.pose, [q.copy() for q in start.leg_q], np.empty(0),
-                            start.residual, np.inf, 0)
-    q0 = start.q_actuated
-    if steps is None:
-        steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
-    n_total, lam, h = steps, 0.0, 1.0 / steps
-    accepted = halvings = inertia_steps = 0
-    last_twist = None
-    budget = 20 * n_total + 200  # continuation steps, halvings and re-aims in all
-    while lam < 1.0 - 1e-15:
-        budget -= 1
-        if budget < 0:
+    return euler_continuation(mech, start, target, steps, tol=tol, inertia_tol=inertia_tol,
+                              max_newton=max_newton, max_inertia=max_inertia)
+
+
+@dataclass
+class _Euler:
+    """Where seed 003's continuation stands: the assembly reached (``state``), the path
+    parameter ``lam`` from the actuated coordinates ``q0`` to the target, the step ``h``
+    (a fraction of the path), the counters reported in ``info`` and the remaining budget
+    of steps, halvings and inertia moves."""
+
+    state: ClosureSolution
+    q0: np.ndarray
+    n_total: int
+    h: float
+    budget: int
+    lam: float = 0.0
+    accepted: int = 0
+    halvings: int = 0
+    inertia_steps: int = 0
+    last_twist: np.ndarray | None = None
+
+    def aim(self, q0: np.ndarray, n_total: int) -> None:
+        """Start a new path from ``q0`` in ``n_total`` steps."""
+        self.q0, self.n_total, self.lam, self.h = q0, n_total, 0.0, 1.0 / n_total
+
+
+def _steps_to(mech, q0: np.ndarray, target: np.ndarray) -> int:
+    """Continuation steps moving each actuated coordinate by at most :data:`STEP`."""
+    scales = _actuated_scales(mech)
+    return max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
+
+
+def euler_continuation(mech, start: Assembly, target: np.ndarray, steps: int | None = None,
+                       *, tol: float = CLOSURE_TOL, inertia_tol: float = INERTIA_TOL,
+                       max_newton: int = 50, max_inertia: int = 200) -> Assembly:
+    """Seed 003's forward kinematics as printed (``method="euler"`` of
+    :func:`forward_kinematics`, which documents the arguments): Euler steps of
+    ``A Δ t = B Δq`` whose legs are re-closed at the predicted pose, "motion by inertia"
+    where the type II index falls below ``inertia_tol``, then Newton's method on every
+    closure and the actuated coordinates (:func:`pkm_pin.solve.solve_closure`)."""
+    n_total = _steps_to(mech, start.q_actuated, target) if steps is None else steps
+    run = _Euler(ClosureSolution(start.pose, [q.copy() for q in start.leg_q], np.empty(0),
+                                 start.residual, np.inf, 0),
+                 start.q_actuated, n_total, 1.0 / n_total, 20 * n_total + 200)
+    while run.lam < 1.0 - 1e-15:
+        run.budget -= 1
+        if run.budget < 0:
             raise ForwardKinematicsError(
-                f"continuation did not reach the target (λ = {lam:.4g} after "
-                f"{accepted} steps, {halvings} halvings, {inertia_steps} inertia moves)",
-                _assembly_of(mech, state))
-        current = _assembly_of(mech, state)
-        an = Analysis(current)
-        index = an.indices["type_II"]
-        if index < inertia_tol:
-            if last_twist is None:
-                raise ForwardKinematicsError(
-                    f"the start assembly is at or near a type II singularity (index "
-                    f"{index:.3g} < {inertia_tol:g}): no twist to move by inertia",
-                    current)
-            moves = 0
-            L = mech.characteristic_length
-            size = max(float(np.linalg.norm(last_twist[:3])),
-                       float(np.linalg.norm(last_twist[3:])) / L)
-            last_twist = last_twist * (STEP / size)  # inertia moves of bounded size
-            while index < inertia_tol:
-                if moves >= max_inertia or budget < 0:
-                    raise ForwardKinematicsError(
-                        f"motion by inertia did not leave the type II singularity after "
-                        f"{moves} moves (index {index:.3g})", _assembly_of(mech, state))
-                pose = screws.exp(last_twist) * state.pose
-                legs = _predict_legs(mech, state.leg_q, last_twist)
-                new = solve_closure(mech, pose, legs, LEGS, tol=CONTINUATION_TOL, max_iter=10)
-                if new.closure > CONTINUATION_TOL:
-                    new = solve_closure(mech, pose, legs, PLATFORM, tol=CONTINUATION_TOL,
-                                        max_iter=10)
-                if new.closure > CONTINUATION_TOL:
-                    last_twist = 0.5 * last_twist  # a shorter inertia move
-                    if np.linalg.norm(last_twist[:3]) + np.linalg.norm(last_twist[3:]) / L \
-                            < CONTINUATION_MIN_STEP * STEP:
-                        raise ForwardKinematicsError(
-                            "motion by inertia left the workspace (the legs no longer "
-                            f"assemble: closure error {new.closure:.3g})",
-                            _assembly_of(mech, state))
-                    budget -= 1
-                    continue
-                state = new
-                moves += 1
-                budget -= 1
-                index = Analysis(_assembly_of(mech, state)).indices["type_II"]
-            inertia_steps += moves
-            # re-aim from the actuated coordinates reached
-            q0 = _q_actuated_of(mech, state.leg_q)
-            remaining = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales)) / STEP))
-            lam, h = 0.0, 1.0 / remaining
-            n_total = remaining
+                f"continuation did not reach the target (λ = {run.lam:.4g} after "
+                f"{run.accepted} steps, {run.halvings} halvings, {run.inertia_steps} inertia "
+                "moves)", _assembly_of(mech, run.state))
+        an = Analysis(_assembly_of(mech, run.state))
+        if an.indices["type_II"] < inertia_tol:
+            _move_by_inertia(mech, run, an, inertia_tol, max_inertia)
+            run.aim(_q_actuated_of(mech, run.state.leg_q),
+                    _steps_to(mech, _q_actuated_of(mech, run.state.leg_q), target))
             continue
-        lam_new = min(1.0, lam + h)
-        q_step = q0 + lam_new * (target - q0)
-        dq = (lam_new - lam) * (target - q0)
-        try:
-            t = an.forward_velocity(dq)
-        except SingularityError as e:  # pragma: no cover - guarded by inertia_tol
-            raise ForwardKinematicsError(str(e), current) from e
-        pose = screws.exp(t) * state.pose
-        legs = _predict_legs(mech, state.leg_q, t, an)
+        _euler_step(mech, run, an, target)
+    return _final_newton(mech, run, target, tol, max_newton)
+
+
+def _euler_step(mech, run: _Euler, an: Analysis, target: np.ndarray) -> None:
+    """One Euler step of the continuation from ``run.state`` (analysed in ``an``):
+    accepted (and the next step doubled, up to the planned size) or halved."""
+    lam_new = min(1.0, run.lam + run.h)
+    q_step = run.q0 + lam_new * (target - run.q0)
+    try:
+        t = an.forward_velocity((lam_new - run.lam) * (target - run.q0))
+    except SingularityError as e:  # pragma: no cover - guarded by inertia_tol
+        raise ForwardKinematicsError(str(e), an.assembly) from e
+    pose = screws.exp(t) * run.state.pose
+    legs = _predict_legs(mech, run.state.leg_q, t, an)
+    new = solve_closure(mech, pose, legs, LEGS, tol=CONTINUATION_TOL, max_iter=10)
+    if new.closure > CONTINUATION_TOL:
+        # off the constraint manifold (curved motion): project back, aiming at q_step
+        new = solve_closure(mech, pose, legs, ACTUATED, q_step, tol=CONTINUATION_TOL,
+                            max_iter=10)
+    if new.closure > CONTINUATION_TOL or not _in_limits(mech, new.leg_q):
+        if run.h < CONTINUATION_MIN_STEP:
+            raise ForwardKinematicsError(
+                f"continuation stalled at λ = {run.lam:.4g} (the legs do not re-assemble "
+                f"at the predicted pose: closure error {new.closure:.3g}); the target "
+                "may be out of reach", _assembly_of(mech, run.state))
+        run.h *= 0.5
+        run.halvings += 1
+        return
+    run.h = min(2 * run.h, 1.0 / run.n_total)
+    run.state, run.last_twist, run.lam = new, t, lam_new
+    run.accepted += 1
+
+
+def _move_by_inertia(mech, run: _Euler, an: Analysis, inertia_tol: float,
+                     max_inertia: int) -> None:
+    """Seed 003's motion by inertia: the platform keeps moving along the last twist
+    (legs re-closed, actuated coordinates free) until the type II index rises above
+    ``inertia_tol``; a move that does not re-assemble is halved."""
+    if run.last_twist is None:
+        raise ForwardKinematicsError(
+            f"the start assembly is at or near a type II singularity (index "
+            f"{an.indices['type_II']:.3g} < {inertia_tol:g}): no twist to move by inertia",
+            an.assembly)
+    L = mech.characteristic_length
+    size = max(float(np.linalg.norm(run.last_twist[:3])),
+               float(np.linalg.norm(run.last_twist[3:])) / L)
+    twist = run.last_twist * (STEP / size)  # inertia moves of bounded size
+    index, moves = an.indices["type_II"], 0
+    while index < inertia_tol:
+        if moves >= max_inertia or run.budget < 0:
+            raise ForwardKinematicsError(
+                f"motion by inertia did not leave the type II singularity after "
+                f"{moves} moves (index {index:.3g})", _assembly_of(mech, run.state))
+        pose = screws.exp(twist) * run.state.pose
+        legs = _predict_legs(mech, run.state.leg_q, twist)
         new = solve_closure(mech, pose, legs, LEGS, tol=CONTINUATION_TOL, max_iter=10)
         if new.closure > CONTINUATION_TOL:
-            # off the constraint manifold (curved motion): project back, aiming at q_step
-            new = solve_closure(mech, pose, legs, ACTUATED, q_step, tol=CONTINUATION_TOL,
+            new = solve_closure(mech, pose, legs, PLATFORM, tol=CONTINUATION_TOL,
                                 max_iter=10)
-        if new.closure > CONTINUATION_TOL or not _in_limits(mech, new.leg_q):
-            if h < CONTINUATION_MIN_STEP:
+        run.budget -= 1
+        if new.closure > CONTINUATION_TOL:
+            twist = 0.5 * twist  # a shorter inertia move
+            if np.linalg.norm(twist[:3]) + np.linalg.norm(twist[3:]) / L \
+                    < CONTINUATION_MIN_STEP * STEP:
                 raise ForwardKinematicsError(
-                    f"continuation stalled at λ = {lam:.4g} (the legs do not re-assemble "
-                    f"at the predicted pose: closure error {new.closure:.3g}); the target "
-                    "may be out of reach", _assembly_of(mech, state))
-            h *= 0.5
-            halvings += 1
+                    "motion by inertia left the workspace (the legs no longer "
+                    f"assemble: closure error {new.closure:.3g})",
+                    _assembly_of(mech, run.state))
             continue
-        h = min(2 * h, 1.0 / n_total)
-        state = new
-        last_twist = t
-        lam = lam_new
-        accepted += 1
-    qa = _q_actuated_of(mech, state.leg_q)
+        run.state = new
+        moves += 1
+        index = Analysis(_assembly_of(mech, run.state)).indices["type_II"]
+    run.last_twist = twist
+    run.inertia_steps += moves
+
+
+def _final_newton(mech, run: _Euler, target: np.ndarray, tol: float,
+                  max_newton: int) -> Assembly:
+    """The final Newton correction on every closure and the actuated coordinates, the
+    result assembled and checked against the target and the limits."""
+    scales = _actuated_scales(mech)
+    qa = _q_actuated_of(mech, run.state.leg_q)
     cont_err = float(np.max(np.abs(qa - target) / scales))
-    final = solve_closure(mech, state.pose, state.leg_q, ACTUATED, target, tol=tol,
+    final = solve_closure(mech, run.state.pose, run.state.leg_q, ACTUATED, target, tol=tol,
                           max_iter=max_newton)
     if final.closure > max(tol, FK_ACCEPT_FLOOR) or final.actuated > tol:
         raise ForwardKinematicsError(
@@ -327,10 +376,11 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
     if err > max(tol, FK_ACCEPT_FLOOR) or not _in_limits(mech, result.leg_q):
         raise ForwardKinematicsError(
             f"the final assembly misses the target by {err:.3g} (joint limits?)", result)
-    result.info.update(steps=accepted, halvings=halvings, newton_iterations=final.iterations,
-                       residual=err, continuation_error=cont_err,
-                       inertia=inertia_steps > 0, inertia_steps=inertia_steps,
-                       requested_steps=n_total, method="euler")
+    result.info.update(steps=run.accepted, halvings=run.halvings,
+                       newton_iterations=final.iterations, residual=err,
+                       continuation_error=cont_err, inertia=run.inertia_steps > 0,
+                       inertia_steps=run.inertia_steps, requested_steps=run.n_total,
+                       method="euler")
     return result
 
 

@@ -1,4 +1,5 @@
-"""Screw algebra in axis-first (Plücker) coordinates — seed 000, sections 1–2.
+"""Screw algebra in axis-first (Plücker) coordinates — seed 000, sections 1–2 (Michalková &
+Guldan; the source papers are listed in docs/references.md).
 
 Conventions (the papers'):
 

@@ -1,5 +1,6 @@
 """Serial-chain kinematics of a leg: link twists and screws, point velocities and
-accelerations, the serial Jacobian and its singularities (seed 000 §4, seed 002 §3–4).
+accelerations, the serial Jacobian and its singularities (seed 000 §4: Michalková &
+Guldan; seed 002 §3–4: the anonymous Polish paper of 1987; see docs/references.md).
 
 Everything here runs through Pinocchio; the hand-written recursive reduction of seed 002
 (:mod:`pkm_pin.formulas.serial_reduction`) is the independent witness the tests compare

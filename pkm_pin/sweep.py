@@ -306,8 +306,8 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts) -> dict:
     return out
 
 
-#: Mechanisms unpickled by :func:`_evaluate_shared`, per (digest, process, thread); the
-#: most recent last, at most :data:`_SHARED_MAX` kept.
+#: Mechanisms unpickled by :func:`_evaluate_shared`, per (digest, process); the most
+#: recent last, at most :data:`_SHARED_MAX` kept.
 _SHARED: dict = {}
 _SHARED_MAX = 32
 _SHARED_LOCK = threading.Lock()
@@ -316,17 +316,18 @@ _SHARED_LOCK = threading.Lock()
 def _evaluate_shared(blob: bytes, digest: str, *args) -> dict:
     """:func:`evaluate_chunk` on the mechanism pickled in ``blob`` (SHA-256 ``digest``).
 
-    Each worker thread unpickles it once and keeps its private copy for the next chunks
-    of the sweep (Pinocchio Data buffers are not shareable between threads): a task
-    then costs its poses, not a mechanism's deserialisation and set-up (~10 ms)."""
-    key = (digest, os.getpid(), threading.get_ident())
-    mech = _SHARED.get(key)
-    if mech is None:
-        if hashlib.sha256(blob).hexdigest() != digest:
-            raise RuntimeError("sweep task: the mechanism's bytes do not match their digest")
-        mech = pickle.loads(blob)
-        with _SHARED_LOCK:
-            _SHARED[key] = mech
+    Each worker process unpickles it once and its threads share that copy for the next
+    chunks of the sweep (each thread evaluates Pinocchio with its own ``Data``, see
+    :attr:`pkm_pin.Leg.data`): a task then costs its poses, not a mechanism's
+    deserialisation and set-up (~10 ms)."""
+    key = (digest, os.getpid())
+    with _SHARED_LOCK:
+        mech = _SHARED.get(key)
+        if mech is None:
+            if hashlib.sha256(blob).hexdigest() != digest:
+                raise RuntimeError("sweep task: the mechanism's bytes do not match their "
+                                   "digest")
+            mech = _SHARED[key] = pickle.loads(blob)
             while len(_SHARED) > _SHARED_MAX:
                 del _SHARED[next(iter(_SHARED))]
     return evaluate_chunk(mech, *args)

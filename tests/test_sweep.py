@@ -170,10 +170,10 @@ def test_thread_executor_gives_the_serial_results():
     np.testing.assert_allclose(threaded.q_actuated, serial.q_actuated, atol=1e-9)
 
 
-def test_executor_tasks_unpickle_the_mechanism_once_per_thread():
-    """A task gets the mechanism as bytes and its digest; each thread unpickles it once
-    and reuses its private copy (never the caller's object, never another thread's);
-    the results are those of evaluate_chunk; corrupted bytes are refused."""
+def test_executor_tasks_unpickle_the_mechanism_once_per_process():
+    """A task gets the mechanism as bytes and its digest; each process unpickles it once
+    and its threads share that copy (never the caller's object; Pinocchio Data is per
+    thread); the results are those of evaluate_chunk; corrupted bytes are refused."""
     import hashlib
     import pickle
 
@@ -192,12 +192,12 @@ def test_executor_tasks_unpickle_the_mechanism_once_per_thread():
     assert len(sweep._SHARED) == 1
     (here,) = sweep._SHARED.values()
     assert here is not mech
-    with ThreadPoolExecutor(1) as ex:
-        ex.submit(sweep._evaluate_shared, blob, digest, X, ref, RTOL,
-                  sweep.SINGULAR_TOL).result()
-    assert len(sweep._SHARED) == 2 and all(m is not mech for m in sweep._SHARED.values())
+    with ThreadPoolExecutor(2) as ex:
+        threaded = [f.result() for f in [ex.submit(sweep._evaluate_shared, blob, digest, X, ref,
+                                                   RTOL, sweep.SINGULAR_TOL) for _ in range(4)]]
+    assert len(sweep._SHARED) == 1 and next(iter(sweep._SHARED.values())) is here
     direct = sweep.evaluate_chunk(mech, X, ref, RTOL, sweep.SINGULAR_TOL)
-    for part in (first, again):
+    for part in (first, again, *threaded):
         np.testing.assert_array_equal(part["ok"], direct["ok"])
         np.testing.assert_allclose(part["type_II"], direct["type_II"], rtol=1e-12)
     with pytest.raises(RuntimeError, match="digest"):
