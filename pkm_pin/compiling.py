@@ -11,6 +11,12 @@ the time it took when it ends.
 has run in this process, or numba's cache holds it), which lets a caller take a
 plain-Python path for a one-off call rather than compile (see
 :func:`pkm_pin.engine.analyse`).
+
+For developers: numba's cache of a function is invalidated by changes to the file that
+defines it, not by changes to the files of the functions it compiles in. After editing
+``engine/stages.py`` or ``engine/linalg.py`` (compiled into ``engine/core.py``), or the
+``register_jitable`` steps of ``solve.py``'s callers, delete the caches
+(``find pkm_pin -name '*.nb[ic]' -delete``); a fresh installation (CI) has none.
 """
 
 from __future__ import annotations

@@ -283,16 +283,19 @@ class Mechanism:
         return as_vector(q_actuated, self.n_actuated, name, ", ".join(self.actuated_names))
 
     # ----------------------------------------------------------------- analysis
+    def assembly_at(self, pose_or_assembly=None) -> Assembly:
+        """The home assembly (``None``), an :class:`Assembly` as it is, or the assembly
+        at a pose (:meth:`assemble` from home)."""
+        if pose_or_assembly is None:
+            return self.home_assembly
+        if isinstance(pose_or_assembly, Assembly):
+            return pose_or_assembly
+        return self.assemble(pose_or_assembly)
+
     def analyze(self, pose_or_assembly=None, **options) -> Analysis:
         """Screw analysis (:class:`~pkm_pin.analysis.Analysis`) at a pose or assembly
         (default: home)."""
-        if pose_or_assembly is None:
-            assembly = self.home_assembly
-        elif isinstance(pose_or_assembly, Assembly):
-            assembly = pose_or_assembly
-        else:
-            assembly = self.assemble(pose_or_assembly)
-        return Analysis(assembly, **options)
+        return Analysis(self.assembly_at(pose_or_assembly), **options)
 
     # ------------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, steps: int | None = None,

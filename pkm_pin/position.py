@@ -198,12 +198,7 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
     target = mech.check_actuated(q_actuated)
     if steps is not None and (not isinstance(steps, (int, np.integer)) or steps < 1):
         raise InputError(f"steps must be a positive integer, got {steps!r}")
-    if guess is None:
-        start = mech.home_assembly
-    elif isinstance(guess, Assembly):
-        start = guess
-    else:
-        start = mech.assemble(guess)
+    start = mech.assembly_at(guess)
     _check_limits(mech, target)
     if method not in ("auto", "compiled", "euler"):
         raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")

@@ -25,6 +25,7 @@ from pkm_pin.engine.linalg import (
     jacobi,
 )
 from pkm_pin.engine.stages import (
+    SQUARE,
     actuation_wrench,
     leg_constraints,
     motion_twists,
@@ -267,9 +268,9 @@ def test_leg_stage_gives_the_reciprocal_system_and_its_rank():
             T = _random_twists(rng, k, rank)
             X, W, V, sv = np.empty((8, 6)), np.empty((48, 6)), np.eye(6), np.empty(6)
             C, Xi, work = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
-            r, m, square = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, Xi, work)
+            r, m, mode = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, Xi, work)
             assert r == rank and m == 6 - rank
-            assert square == (k == 6 and rank == 6)
+            assert (mode == SQUARE) == (k == 6 and rank == 6)
             np.testing.assert_allclose(T @ screws.DELTA @ C[:m].T, 0.0, atol=1e-12)
             np.testing.assert_allclose(C[:m] @ C[:m].T, np.eye(m), atol=1e-12)
 
@@ -292,9 +293,9 @@ def test_actuation_stage_is_reciprocal_to_the_other_joints_and_does_work():
         ka = k - 1
         X, W, V, sv = np.empty((8, 6)), np.empty((48, 6)), np.eye(6), np.empty(6)
         C, Xi, work = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
-        r, m, square = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, Xi, work)
+        r, m, mode = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, Xi, work)
         w = np.empty(6)
-        ok = actuation_wrench(T, 0, k, ka, r, square, Xi, RTOL, X, W, V, sv, C, 0, m,
+        ok = actuation_wrench(T, 0, k, ka, r, mode, Xi, RTOL, X, W, V, sv, C, 0, m,
                               np.empty((8, 6)), np.eye(6), np.empty(6), w)
         assert ok == independent
         products = T @ screws.DELTA @ w

@@ -23,6 +23,7 @@ from numba.extending import register_jitable
 from ..compiling import prefer_compiled
 from .linalg import reset
 from .stages import (
+    SQUARE,
     actuation_wrench,
     carried_determinant,
     leg_constraints,
@@ -142,7 +143,11 @@ def analyse(J: np.ndarray, layout: Layout, full: bool = True) -> Results:
 class Workspace(NamedTuple):
     """Work arrays of :func:`analyse_into`, made once per call (see the stages for what
     each holds). ``V_legs``, ``V_union`` and ``V_M`` carry the singular bases of the
-    legs, of the union and of ``A_h Δ Pᵀ`` from pose to pose (warm starts)."""
+    legs, of the union and of ``A_h Δ Pᵀ`` from pose to pose (warm starts).
+
+    :func:`analyse_into` unpacks it into local arrays at once: numba 0.68 miscompiled
+    writes through the attributes of this 32-array tuple inside the loop (tested: the
+    plain-Python engine and the compiled one agree to the last bit)."""
 
     T: np.ndarray
     X: np.ndarray
@@ -204,57 +209,59 @@ def analyse_into(J, layout, out, full):
     coords, act_col, act_leg = layout.coords, layout.act_col, layout.act_leg
     L, rtol = layout.length, layout.rtol
     n = act_col.shape[0]
-    ws = workspace(J.shape[1], coords.shape[0] - 1, n, layout.reference.shape[0])
-    T, C, W, sv, Ah = ws.T, ws.C, ws.W, ws.sv, ws.Ah
+    (T, X, W, W2, V2, sv, sv2, order, Xi, work6, C, V_legs, V_union, V_M, W3, V3, sv3, G, gb,
+     centre, wh, ok, Ah, A, t_h, B, cons, P, Pw, M, P_loc, work) = workspace(
+        J.shape[1], coords.shape[0] - 1, n, layout.reference.shape[0])
     d_prev = -1
     for i in range(J.shape[0]):
-        motion_twists(J[i], layout.groups, L, T, ws.G, ws.gb, ws.centre)
+        motion_twists(J[i], layout.groups, L, T, G, gb, centre)
         # stages 2, 3: each leg's constraint wrenches and its actuation wrenches
         m_c = 0
         for l in range(coords.shape[0] - 1):
             c0, k, first = coords[l], coords[l + 1] - coords[l], m_c
-            r, m_c, square = leg_constraints(T, c0, k, rtol, ws.X, W, ws.V_legs[l], sv, C,
-                                             m_c, ws.Xi, ws.work6)
+            r, m_c, mode = leg_constraints(T, c0, k, rtol, X, W, V_legs[l], sv, C,
+                                           m_c, Xi, work6)
             if full:
                 out.leg_dims[i, l] = m_c - first
                 out.leg_constraints[i, l, :m_c - first] = C[first:m_c]
             for a_i in range(n):
                 if act_leg[a_i] != l:
                     continue
-                if square:  # the wrench of a six-twist leg: a column of X⁻¹ (stage 3)
-                    ws.wh[a_i] = ws.Xi[:, act_col[a_i] - c0]
-                    ws.ok[a_i] = True
+                if mode == SQUARE:  # a six-twist leg's wrench: a column of X⁻¹ (stage 3)
+                    for a in range(6):
+                        wh[a_i, a] = Xi[a, act_col[a_i] - c0]
+                    ok[a_i] = True
                 else:
-                    ws.ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, square,
-                                                  ws.Xi, rtol, ws.X, W, ws.V_legs[l], sv, C,
-                                                  first, m_c, ws.W2, ws.V2, ws.sv2, ws.wh[a_i])
+                    ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, mode,
+                                                  Xi, rtol, X, W, V_legs[l], sv, C,
+                                                  first, m_c, W2, V2, sv2, wh[a_i])
         # stage 4: the platform twist system
-        rank_c, rotations = platform_system(C, m_c, rtol, layout.rot_tol, W, ws.V_union, sv,
-                                            ws.order, ws.cons, ws.P, ws.Pw, ws.W3, ws.V3,
-                                            ws.sv3)
+        rank_c, rotations = platform_system(C, m_c, rtol, layout.rot_tol, W, V_union, sv,
+                                            order, cons, P, Pw, W3, V3,
+                                            sv3)
         d = 6 - rank_c
         out.dof[i], out.translations[i], out.redundant[i] = d, d - rotations, m_c - rank_c
         # stage 5: actuation wrenches in world units, B, type I
         t1 = np.inf
         for a_i in range(n):
-            B, p = scale_actuation(ws.wh[a_i], J[i, act_col[a_i]], L, rtol, ws.A, Ah[a_i],
-                                   ws.t_h)
+            B, p = scale_actuation(wh[a_i], J[i, act_col[a_i]], L, rtol, A, Ah[a_i],
+                                   t_h)
             t1 = min(t1, p)
             if full:
-                out.B[i, a_i], out.independent[i, a_i] = B, ws.ok[a_i]
-                out.A[i, a_i] = ws.A
+                out.B[i, a_i], out.independent[i, a_i] = B, ok[a_i]
+                out.A[i, a_i] = A
                 out.A_h[i, a_i] = Ah[a_i]
         out.type_I[i] = t1
         # stage 6: A_h Δ Pᵀ, type II index, condition, carried determinant
         if d != d_prev:  # a new platform dimension: the warm start of V_M is void
-            reset(ws.V_M, 6)
+            reset(V_M, 6)
             d_prev = d
-        out.type_II[i], out.condition[i] = transmission(Ah, n, ws.P, d, ws.M, W, ws.V_M, sv,
-                                                        ws.order)
-        out.det[i] = carried_determinant(Ah, n, ws.P, d, layout.reference, ws.M, ws.P_loc,
-                                         ws.work)
+        out.type_II[i], out.condition[i] = transmission(Ah, n, P, d, M, W, V_M, sv,
+                                                        order)
+        out.det[i] = carried_determinant(Ah, n, P, d, layout.reference, M, P_loc,
+                                         work)
         if full:
             out.constraints[i] = 0.0
-            out.constraints[i, :rank_c] = ws.cons[:rank_c]
+            out.constraints[i, :rank_c] = cons[:rank_c]
             out.platform[i] = 0.0
-            out.platform[i, :d] = ws.P[:d]
+            out.platform[i, :d] = P[:d]

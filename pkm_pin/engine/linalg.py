@@ -137,7 +137,7 @@ def reset(V, n):
             V[a, b] = 1.0 if a == b else 0.0
 
 
-@register_jitable
+@register_jitable(inline="always")
 def pivot_row(A, j, n):
     """Partial pivoting: the row ``r ≥ j`` (among the first n) of the largest
     ``|A[r, j]|``."""

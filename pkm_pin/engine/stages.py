@@ -112,24 +112,31 @@ def motion_twists(J, groups, L, T, G, b, centre):
         unit_homogeneous(T[c], L, T[c])
 
 
+#: How :func:`leg_constraints` factorised a leg (read by :func:`actuation_wrench`): the
+#: Jacobi SVD of ``X``, or the inverse of a square ``X``.
+WIDE, SQUARE = 0, 1
+
+
 @register_jitable(inline="always")
 def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, Xi, work):
-    """Stage 2. One leg, twists ``T[c0:c0+k]``: the Jacobi SVD of ``X = T_h Δ`` (its
-    rows are the reciprocal products with a wrench). The right singular vectors of the
-    singular values ``≤ rtol · σ_max`` are an orthonormal basis of the wrenches
-    reciprocal to every joint twist: they are written as rows ``C[m_c:]``.
+    """Stage 2. One leg, twists ``T[c0:c0+k]``: the rank of ``X = T_h Δ`` (its rows are
+    the reciprocal products with a wrench) and an orthonormal basis of the wrenches
+    reciprocal to every joint twist (its null space), written as rows ``C[m_c:]``.
 
-    ``V`` is the leg's right singular basis (in/out: warm start). ``W`` keeps ``X V``
-    for :func:`actuation_wrench`. A leg with six joint twists whose full rank
-    :func:`~.linalg.certainly_invertible` certifies has no constraint and ``Xi = X⁻¹``
-    (the SVD is skipped: the decision is the same). Returns ``(rank, m_c + 6 − rank,
-    square)`` with ``square`` true in that case."""
+    * ``k == 6`` and a full rank :func:`~.linalg.certainly_invertible` certifies: no
+      constraint, ``Xi = X⁻¹`` (the decision the SVD would take) — ``SQUARE``;
+    * otherwise the Jacobi SVD of ``X`` (``W = X V``, k × 6): the constraints are the
+      right singular vectors of the singular values ``≤ rtol · σ_max`` — ``WIDE``.
+
+    ``V`` is the leg's singular basis (in/out: a warm start along a path); ``W`` and
+    ``sv`` are kept for :func:`actuation_wrench`. Returns ``(rank, m_c + 6 − rank,
+    mode)``."""
     for c in range(k):
         for a in range(3):
             X[c, a] = T[c0 + c, 3 + a]
             X[c, 3 + a] = T[c0 + c, a]
     if k == 6 and certainly_invertible(X, 6, Xi, work, rtol):
-        return 6, m_c, True
+        return 6, m_c, SQUARE
     jacobi(X, k, 6, W, V, sv)
     threshold = rtol * largest(sv, 6)
     r = 0
@@ -140,11 +147,11 @@ def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, Xi, work):
             for a in range(6):
                 C[m_c, a] = V[a, j]
             m_c += 1
-    return r, m_c, False
+    return r, m_c, WIDE
 
 
 @register_jitable
-def actuation_wrench(T, c0, k, ka, r, square, Xi, rtol, X, W, V, sv, C, c_first, c_last, W2, V2,
+def actuation_wrench(T, c0, k, ka, r, mode, Xi, rtol, X, W, V, sv, C, c_first, c_last, W2, V2,
                      sv2, w):
     """Stage 3. The actuation wrench ``w`` (homogenised, in/out of unit scale) of joint
     ``ka`` (0-based in its leg), defined as the wrench reciprocal to every other joint
@@ -153,23 +160,23 @@ def actuation_wrench(T, c0, k, ka, r, square, Xi, rtol, X, W, V, sv, C, c_first,
     independent of the others.
 
     When the leg's twists are independent (``r == k``) it is the minimum-norm solution
-    of ``(T_h Δ) w = e_ka``, read from the leg's SVD ``X = W Vᵀ`` of
-    :func:`leg_constraints`: ``w = Σ_j V_j W[ka, j] / σ_j²`` (column ``ka`` of
-    ``Xi = X⁻¹`` for a ``square`` leg). Otherwise the reciprocal
+    of ``(T_h Δ) w = e_ka``, read from the factorisation of :func:`leg_constraints`
+    (``mode``): column ``ka`` of ``Xi = X⁻¹`` (``SQUARE``), or ``w = Σ_j V_j W[ka, j] /
+    σ_j²`` from ``X = W Vᵀ`` (``WIDE``). Otherwise the reciprocal
     of the other joint twists is computed by a second SVD and its component orthogonal
     to the constraints taken; when the joint's twist depends on the others there is none
     (a type I singularity of the leg) and ``w`` is the first constraint wrench of the
     leg, which does no work on the joint: ``B_ii = 0``.
 
     Returns whether the joint's twist is independent of the others."""
-    if square:
+    if mode == SQUARE:
         for a in range(6):
             w[a] = Xi[a, ka]
         return True
-    threshold = rtol * largest(sv, 6)
     if r == k:
         for a in range(6):
             w[a] = 0.0
+        threshold = rtol * largest(sv, 6)
         for j in range(6):
             if sv[j] > threshold:
                 f = W[ka, j] / (sv[j] * sv[j])

@@ -445,16 +445,3 @@ def configuration(mech: Mechanism, assembly: Assembly) -> np.ndarray:
     qs = [leg.check_q(q, "assembly.leg_q") for leg, q in zip(mech.legs, leg_q)]
     return np.concatenate(qs + [pin.SE3ToXYZQUAT(assembly.pose)])
 
-
-__all__ = [
-    "Closure",
-    "ClosureModel",
-    "KINDS",
-    "PLATFORM",
-    "PLATFORM_JOINT",
-    "TreeFrameNotFound",
-    "TreeJointNotFound",
-    "configuration",
-    "from_mechanism",
-    "velocity_units",
-]
