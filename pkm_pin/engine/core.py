@@ -197,7 +197,7 @@ def workspace(nv, legs, n, n_ref):
         np.empty((max(nv, 6), 6)), np.empty((6, 6)), np.empty(6), np.empty(6),
         np.empty(6, np.int64), np.empty((6, 6)), np.empty((6, 6)),
         np.empty((max(6 * legs, 1), 6)), V_legs, np.eye(6), np.eye(6), np.empty((6, 3)),
-        np.empty((3, 3)), np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3),
+        np.eye(3), np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3),
         np.empty((nn, 6)), np.empty(nn, np.bool_), np.empty((nn, 6)), np.empty(6),
         np.empty(6), np.empty(nn), np.empty((6, 6)), np.zeros((6, 6)), np.empty((6, 3)),
         np.empty((nn, 6)), np.empty((max(n_ref, 1), 6)), np.empty((nn, nn)))

@@ -231,7 +231,7 @@ def platform_system(C, m_c, rtol, rot_tol, W, V, sv, order, constraints, P, Pw, 
     reciprocal, the platform twist system (rows ``P[:6 − rank]``, ``Δ`` times the right
     singular vectors of the small singular values). The number of rotations among the
     platform twists is the rank of their ω parts (absolute threshold ``rot_tol``: the
-    rows are orthonormal). Returns ``(rank, rotations)``."""
+    rows are orthonormal; ``V3`` in/out warm start). Returns ``(rank, rotations)``."""
     jacobi(C, m_c, 6, W, V, sv)
     threshold = rtol * largest(sv, 6)
     descending(sv, 6, order)
@@ -252,8 +252,7 @@ def platform_system(C, m_c, rtol, rot_tol, W, V, sv, order, constraints, P, Pw, 
     for j in range(d):
         for a in range(3):
             Pw[j, a] = P[j, a]
-    reset(V3, 3)
-    jacobi(Pw, d, 3, W3, V3, sv3)
+    jacobi(Pw, d, 3, W3, V3, sv3)  # V3: in/out warm start
     rotations = 0
     for j in range(3):
         if sv3[j] > rot_tol:
