@@ -148,7 +148,7 @@ class ClosureSolution:
 
 
 # =================================================================== the step
-@register_jitable(inline="always")
+@register_jitable
 def lm_damping(r):
     """:func:`pkm_pin.tolerances.damping` of the relative residual ``r``, written out for
     the compiled code (numba's cache does not follow tolerances.py; a test checks that
@@ -157,7 +157,7 @@ def lm_damping(r):
     return lam
 
 
-@register_jitable(inline="always")
+@register_jitable
 def stop_rule(r, tol, it, max_iter, best, slow):
     """Newton's stopping rules before a step, ``(stop, best, slow)``: ``r ≤ tol``, ``it ≥
     max_iter``, or :data:`~pkm_pin.tolerances.NEWTON_SLOW_STEPS` (10) evaluations in a
@@ -169,7 +169,7 @@ def stop_rule(r, tol, it, max_iter, best, slow):
     return slow >= 10, best, slow
 
 
-@register_jitable(inline="always")
+@register_jitable
 def leg_rows(T, J, units, length, nv, H):
     """Rows of a leg's residual per unit of its dimensionless unknowns: column ``c`` of
     ``H`` (6 × nv) is ``(ω; (v_O + ω × p_T) / length)`` of the joint twist ``J[:, c]``
@@ -203,7 +203,7 @@ def platform_rows(W, length, scale, X):
     X[5, 0], X[5, 1] = qy, -qx
 
 
-@register_jitable(inline="always")
+@register_jitable
 def normal_equations(H, e, nv, lam, N, g):
     """Lower triangle of ``N = HᵀH + λ I`` and ``g = Hᵀ e`` for the first ``nv`` columns."""
     for a in range(nv):
@@ -219,7 +219,7 @@ def normal_equations(H, e, nv, lam, N, g):
         N[a, a] += lam
 
 
-@register_jitable(inline="always")
+@register_jitable
 def cholesky(A, n, inv):
     """Cholesky factor of the symmetric positive definite ``A[:n, :n]`` in place on its
     lower triangle; ``inv`` receives the reciprocals of its diagonal. False if ``A`` is
@@ -240,7 +240,7 @@ def cholesky(A, n, inv):
     return True
 
 
-@register_jitable(inline="always")
+@register_jitable
 def substitute(A, n, inv, b, x):
     """``x = A⁻¹ b`` from the factor of :func:`cholesky` (``x`` may be ``b``)."""
     for i in range(n):
@@ -255,7 +255,7 @@ def substitute(A, n, inv, b, x):
         x[i] = s * inv[i]
 
 
-@register_jitable(inline="always")
+@register_jitable
 def leg_step(T, J, e, r, units, length, nv, H, N, g, dq, inv):
     """One leg's damped Newton step (mask :data:`LEGS`): ``dq`` (dimensionless) from its
     rows at ``T``, ``J`` and its residual ``e`` (norm ``r``). False if the normal
@@ -268,7 +268,7 @@ def leg_step(T, J, e, r, units, length, nv, H, N, g, dq, inv):
     return True
 
 
-@register_jitable(inline="always")
+@register_jitable
 def project(q, dq, units, lower, upper):
     """``q ← q + units · dq`` projected onto ``[lower, upper]`` (in place; nq = nv).
     Returns ``(step², size², clipped)``: the squared dimensionless step taken, ``|q /
@@ -288,7 +288,7 @@ def project(q, dq, units, lower, upper):
     return step, size, clipped
 
 
-@register_jitable(inline="always")
+@register_jitable
 def all_finite(x):
     """Whether every entry of the 1-D array ``x`` is finite."""
     for a in range(x.shape[0]):
