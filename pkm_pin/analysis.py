@@ -320,14 +320,15 @@ def classify(type_I, type_II, tol: float = SINGULAR_TOL):
     """Singularity class(es) from closeness indices: ``"none"``, ``"I"``, ``"II"``, ``"III"``.
 
     Works on scalars (returns a str) and on arrays (returns an array of str)."""
-    if np.ndim(type_I) == 0 and np.ndim(type_II) == 0:
-        return str(_CLASSES[int(type_I < tol) + 2 * int(type_II < tol)])
+    if isinstance(type_I, float) and isinstance(type_II, float):
+        return _CLASS_NAMES[(type_I < tol) + 2 * (type_II < tol)]
     code = (np.asarray(type_I) < tol).astype(np.int8) + 2 * (np.asarray(type_II) < tol)
     out = _CLASSES[code]
     return str(out) if out.ndim == 0 else out
 
 
-_CLASSES = np.array(["none", "I", "II", "III"])  # by (type I) + 2 (type II)
+_CLASS_NAMES = ("none", "I", "II", "III")  # by (type I) + 2 (type II)
+_CLASSES = np.array(_CLASS_NAMES)
 
 
 def _offsets(mechanism) -> np.ndarray:

@@ -246,8 +246,7 @@ class Mechanism:
         solve_kernel(kernel, LEGS, M, Q, tol=tol, max_iter=50)
         c = kernel.coords
         leg_q = [Q[c[i]:c[i + 1]] for i in range(len(self.legs))]
-        J, errors = verified_twists(self, leg_q, M)
-        worst = float(errors.max())
+        J, errors, worst = verified_twists(self, leg_q, M)
         if not worst <= tol:  # a leg Pinocchio does not confirm: Leg.solve, restarts
             for i in np.flatnonzero(~(errors <= tol)):
                 leg = self.legs[i]
@@ -255,8 +254,7 @@ class Mechanism:
                 if not sol.converged:
                     raise AssemblyError(leg.name, sol.residual)
                 leg_q[i] = sol.q
-            J, errors = verified_twists(self, leg_q, M)
-            worst = float(errors.max())
+            J, errors, worst = verified_twists(self, leg_q, M)
         return Assembly(self, pose, leg_q, worst, joint_twists=J)
 
     def leg_starts(self, guess=None) -> list:

@@ -449,8 +449,8 @@ def _state_of(mech, kernel, pose: np.ndarray, Q: np.ndarray) -> Assembly:
     evaluated by one Pinocchio pass per leg, whose joint twists it keeps."""
     offs = kernel.coords
     leg_q = [Q[offs[i]:offs[i + 1]].copy() for i in range(len(mech.legs))]
-    J, errors = verified_twists(mech, leg_q, pose)
-    return Assembly(mech, pin.SE3(pose), leg_q, float(errors.max()), joint_twists=J)
+    J, _, worst = verified_twists(mech, leg_q, pose)
+    return Assembly(mech, pin.SE3(pose), leg_q, worst, joint_twists=J)
 
 
 def _predict_legs(mech, leg_q, t, an=None) -> list:

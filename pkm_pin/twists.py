@@ -80,7 +80,8 @@ def verified_twists(mechanism, leg_q, pose: np.ndarray) -> tuple[np.ndarray, np.
     closure error against the platform pose (4×4): :func:`pkm_pin.kernels.pose_error`
     of Pinocchio's tip placement from ``pose · anchor``, from the same single pass.
 
-    Returns ``(J, errors)``: (nv, 6) rows and (legs,) errors."""
+    Returns ``(J, errors, worst)``: (nv, 6) rows, (legs,) errors and the largest (nan
+    when one is)."""
     legs = mechanism.legs
     f = mechanism.leg_frames
     # Pinocchio's Jacobian and tip placement of each leg, one after the other, copied
@@ -99,8 +100,8 @@ def verified_twists(mechanism, leg_q, pose: np.ndarray) -> tuple[np.ndarray, np.
         raise RuntimeError("Pinocchio's Jacobians and placements do not add up to the legs'")
     J = np.empty((f.coords[-1], 6))
     errors = np.empty(len(legs))
-    pose_outputs(flat, f.bases, f.anchors, f.coords, f.lengths, pose, J, errors)
-    return J, errors
+    worst = pose_outputs(flat, f.bases, f.anchors, f.coords, f.lengths, pose, J, errors)
+    return J, errors, worst
 
 
 @njit(cache=True, nogil=True)
@@ -108,7 +109,9 @@ def pose_outputs(flat, bases, anchors, coords, lengths, pose, J_out, errors):
     """:func:`verified_twists` in compiled code. ``flat`` holds, leg after leg,
     Pinocchio's WORLD Jacobian (6 × nv, C order) and tip placement (4 × 4) in the leg's
     root frame. ``J_out`` (nv × 6) receives the axis-first world twists, ``errors[k]``
-    leg k's :func:`~pkm_pin.kernels.pose_error` from ``pose · anchors[k]``."""
+    leg k's :func:`~pkm_pin.kernels.pose_error` from ``pose · anchors[k]``; returns the
+    largest error (nan if one is nan)."""
+    worst = 0.0
     tip = np.empty((4, 4))
     target = np.empty((4, 4))
     e = np.empty(6)
@@ -122,7 +125,10 @@ def pose_outputs(flat, bases, anchors, coords, lengths, pose, J_out, errors):
         _compose(bases[k], H, tip)
         _compose(pose, anchors[k], target)
         errors[k] = pose_error(tip, target, lengths[k], e)
+        if errors[k] > worst or errors[k] != errors[k]:  # a nan stays the worst
+            worst = errors[k]
         world_twist_rows(Jp, bases[k], J_out[c0:c1])
+    return worst
 
 
 def sweep_pass(mechanism, Qs, targets, idx, tol: float):
