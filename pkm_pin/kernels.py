@@ -469,7 +469,7 @@ class MechanismKernel:
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
     """Kernel of every leg of ``mech`` (``None`` if one leg has none)."""
-    legs = [leg._kernel for leg in mech.legs]  # built once per leg
+    legs = [leg.kernel for leg in mech.legs]  # built once per leg
     if any(k is None for k in legs):
         return None
     joints = np.r_[0, np.cumsum([len(k.kind) for k in legs])].astype(np.int64)

@@ -438,7 +438,7 @@ class Leg(SerialChain):
             raise InputError(f"the target of leg {self.name!r} must be finite, got\n{target}")
         warm = self.neutral() if q0 is None else self.clip(self.check_q(q0, "q0"))
         if compiled is None:
-            compiled = self._kernel is not None and prefer_compiled(solve.solve_from)
+            compiled = self.kernel is not None and prefer_compiled(solve.solve_from)
         best = solve.solve_leg(self, target, warm, tol=tol, max_iter=max_iter,
                                compiled=compiled)
         if best.converged:
@@ -455,7 +455,7 @@ class Leg(SerialChain):
         return best
 
     @cached_property
-    def _kernel(self):
+    def kernel(self):
         """Compiled kinematics of the chain (:mod:`pkm_pin.kernels`), or None."""
         from .kernels import chain_kernel
 

@@ -69,7 +69,7 @@ class Mechanism:
 
     The description (legs, anchors, home) is set once; what is computed from it is
     cached in the properties declared below (:attr:`characteristic_length`,
-    :attr:`actuated_scales`, :attr:`home_assembly`, :attr:`home_analysis`, ``_kernel``).
+    :attr:`actuated_scales`, :attr:`home_assembly`, :attr:`home_analysis`, :attr:`kernel`).
     The position problems, the sensitivity and the sweeps are functions of
     :mod:`pkm_pin.position`, :mod:`pkm_pin.sensitivity` and :mod:`pkm_pin.sweep` taking
     the mechanism first; the methods of the same names call them.
@@ -157,7 +157,7 @@ class Mechanism:
         return np.array(out, dtype=float)
 
     @cached_property
-    def _kernel(self):
+    def kernel(self):
         """The mechanism's compiled kinematics (:class:`pkm_pin.kernels.MechanismKernel`,
         read-only arrays for the compiled solvers; cached and pickled with the
         mechanism), or ``None`` when a leg has a joint the kernels do not represent."""
@@ -221,7 +221,7 @@ class Mechanism:
         """
         pose = as_pose(pose)
         starts = self.leg_starts(guess)
-        kernel = self._kernel
+        kernel = self.kernel
         if kernel is not None and all(q is not None for q in starts) \
                 and prefer_compiled(solve_system):
             return self._assemble_compiled(kernel, pose, starts, tol, restarts)

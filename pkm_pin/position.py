@@ -203,7 +203,7 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
     if method not in ("auto", "compiled", "euler"):
         raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")
     if method != "euler":
-        kernel = mech._kernel if method == "auto" else _require_kernel(mech)
+        kernel = mech.kernel if method == "auto" else _require_kernel(mech)
         if kernel is not None:
             try:
                 return _forward_compiled(mech, kernel, target, start, steps, tol,
@@ -383,7 +383,7 @@ def _final_newton(mech, run: _Euler, target: np.ndarray, tol: float,
 def _require_kernel(mech):
     """The mechanism's compiled kinematics, or an :class:`InputError` saying why there
     are none."""
-    kernel = mech._kernel
+    kernel = mech.kernel
     if kernel is None:
         raise InputError(
             f"{mech.name}: a leg has a joint the compiled kinematics do not represent "
@@ -587,7 +587,7 @@ def inverse_kinematics_all(mech, pose, *, starts: int = 16, seed: int = 0,
     pose = as_pose(pose)
     per_leg = []
     home_q = mech.leg_starts(None)
-    compiled = mech._kernel is not None and prefer_compiled(solve_from)
+    compiled = mech.kernel is not None and prefer_compiled(solve_from)
     for leg, anchor, qh in zip(mech.legs, mech.anchors, home_q):
         want = pose * anchor
         sols, worst = [], np.inf

@@ -743,7 +743,7 @@ def solve_leg(leg, target: pin.SE3, starts, *, tol: float = CLOSURE_TOL, max_ite
     (every configuration it returns is evaluated again by Pinocchio, whose residual is
     reported, and a near miss is polished by the Python driver); else the Python one."""
     starts = np.atleast_2d(np.asarray(starts, dtype=float))
-    kernel = leg._kernel if compiled else None
+    kernel = leg.kernel if compiled else None
     if kernel is not None:
         Q, res, its = np.empty((1, leg.nq)), np.empty(1), np.zeros(1, np.int64)
         solve_from(*kernel.solver_args(), target.homogeneous[None], starts, tol, max_iter, Q,
@@ -794,7 +794,7 @@ def solve_closure(mech, pose, leg_q, mask: Mask = LEGS, target=None, *,
     :func:`pkm_pin.compiling.prefer_compiled`); else the Python driver (Pinocchio)."""
     if mask == ACTUATED and target is None:
         raise ValueError("mask ACTUATED needs the target actuated coordinates")
-    kernel = mech._kernel if compiled is not False else None
+    kernel = mech.kernel if compiled is not False else None
     if kernel is not None and (compiled or prefer_compiled(solve_system)):
         M, Q = pose.homogeneous.copy(), np.concatenate(leg_q).astype(float)
         residual, out = solve_kernel(kernel, mask, M, Q, target, tol=tol, max_iter=max_iter)

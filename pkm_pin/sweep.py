@@ -173,7 +173,7 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
     """Assemble and analyse the poses of one chunk (rows of X, already ordered).
 
     Module-level so that process-based executors can pickle it."""
-    kernel = mech._kernel
+    kernel = mech.kernel
     layout = layout_of(mech, rtol, reference)
     if kernel is None:
         return _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts)

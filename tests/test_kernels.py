@@ -228,7 +228,7 @@ def test_mechanism_without_kernel_falls_back_to_euler():
     m = _continuous_rpr3()
     assert all(chain_kernel(leg) is None for leg in m.legs)
     assert mechanism_kernel(m, _actuated_scales(m)) is None
-    assert m._kernel is None
+    assert m.kernel is None
     home = m.home_assembly
     assert home.residual <= 1e-12
     pose = screws.exp(np.array([0.0, np.radians(2.0), 0.0, 0.02, 0.0, -0.01])) * home.pose
@@ -249,7 +249,7 @@ def test_sweep_without_kernel_equals_the_compiled_sweep():
     gives the DOF, indices and actuated coordinates of the compiled sweep of the
     ordinary 3-RPR at the same poses."""
     m, ref = _continuous_rpr3(), mech("rpr3")
-    assert m._kernel is None and ref._kernel is not None
+    assert m.kernel is None and ref.kernel is not None
     home = ref.home_assembly.pose
     poses = [screws.exp(np.array([0.0, a, 0.0, x, 0.0, z])) * home
              for a in (-0.03, 0.0, 0.03) for x in (-0.02, 0.02) for z in (-0.01, 0.01)]
@@ -525,7 +525,7 @@ def test_track_survives_an_unreachable_target():
 def test_mechanism_kernel_layout():
     """mechanism_kernel flattens the legs' kernels: offsets, actuated indices, anchors."""
     m = mech("delta")
-    k = m._kernel
+    k = m.kernel
     assert k is not None and len(k.legs) == len(m.legs)
     for i, leg in enumerate(m.legs):
         lk = chain_kernel(leg)
@@ -548,7 +548,7 @@ def test_compiled_actuated_mask_from_home(name):
     of a pose 2 cm / 2° away: closure and actuated error ≤ 1e-12, the target pose to
     1e-10, contracting steps."""
     m = mech(name)
-    k = m._kernel
+    k = m.kernel
     home = m.home_assembly
     rng = np.random.default_rng(14)
     for _ in range(3):
@@ -579,7 +579,7 @@ def test_compiled_actuated_mask_at_the_solution_takes_no_step():
     home = m.home_assembly
     pose = home.pose.homogeneous.copy()
     Q = np.concatenate(home.leg_q).astype(float)
-    _, out = solve_kernel(m._kernel, ACTUATED, pose, Q, home.q_actuated.copy(), tol=1e-12,
+    _, out = solve_kernel(m.kernel, ACTUATED, pose, Q, home.q_actuated.copy(), tol=1e-12,
                           max_iter=50)
     assert out[2] == 0 and out[0] <= 1e-12 and out[1] == 0.0
     np.testing.assert_array_equal(pose, home.pose.homogeneous)

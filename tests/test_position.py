@@ -70,7 +70,7 @@ def test_compiled_and_euler_continuations_agree(name):
         np.testing.assert_allclose(qa_leg, qb_leg, atol=1e-9)
     np.testing.assert_allclose(a.q_actuated, qa, atol=1e-12 * max(1.0, L))
     mm = MECHANISMS[name](scale=1000.0).build()
-    scales = np.where([s > 1.0 for s in mm._kernel.scales], 1000.0, 1.0)  # prismatic: mm
+    scales = np.where([s > 1.0 for s in mm.kernel.scales], 1000.0, 1.0)  # prismatic: mm
     c = mm.forward_kinematics(qa * scales, method="compiled")
     np.testing.assert_allclose(c.pose.translation, 1000.0 * a.pose.translation, atol=1e-7)
     np.testing.assert_allclose(c.pose.rotation, a.pose.rotation, atol=1e-10)

@@ -21,7 +21,7 @@ POSES_PER_THREAD = 4
 def mech(request):
     """A shipped mechanism with its home assembly and analysis already computed."""
     m = MECHANISMS[request.param]().build()
-    _ = m.home_analysis, m._kernel  # the caches every thread reads
+    _ = m.home_analysis, m.kernel  # the caches every thread reads
     return m
 
 
