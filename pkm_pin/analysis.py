@@ -54,26 +54,6 @@ class LegScrews:
     constraint_wrenches: np.ndarray
 
 
-def dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
-    """Copy of homogenised screws ``H`` (…, 6) with the moment part times ``length``."""
-    S = np.array(H, dtype=float, copy=True)
-    S[..., 3:] *= length
-    return S
-
-
-def homogenise(S: np.ndarray, length: float) -> np.ndarray:
-    """Copy of screws ``S`` (…, 6) with the moment part divided by ``length``."""
-    H = np.array(S, dtype=float, copy=True)
-    H[..., 3:] /= length
-    return H
-
-
-def unit_rows(H: np.ndarray) -> np.ndarray:
-    """Rows scaled to unit norm (zero rows stay zero)."""
-    n = np.linalg.norm(H, axis=-1, keepdims=True)
-    return np.where(n > 0, H / np.where(n > 0, n, 1.0), 0.0)
-
-
 class Analysis:
     """Mobility, Jacobians and singularity classes of a mechanism at an assembly.
 
@@ -110,9 +90,9 @@ class Analysis:
     @cached_property
     def legs(self) -> list[LegScrews]:
         """Per leg: its Jacobian and its constraint wrenches."""
-        r, offs = self._results, _offsets(self.mechanism)
-        return [LegScrews(self.joint_twists[a:b].T,
-                          dehomogenise(r.leg_constraints[0, k, :r.leg_dims[0, k]], self.length))
+        r, offs = self._results, self.mechanism.leg_frames.coords
+        W = screws.dehomogenise(r.leg_constraints[0], self.length)
+        return [LegScrews(self.joint_twists[a:b].T, W[k, :r.leg_dims[0, k]])
                 for k, (a, b) in enumerate(zip(offs[:-1], offs[1:]))]
 
     # ------------------------------------------------------------------ mobility
@@ -125,14 +105,14 @@ class Analysis:
     def constraint_wrenches(self) -> np.ndarray:
         """Basis of the mechanism's constraint wrench system (union over the legs, eq. 37)."""
         r = self._results
-        return dehomogenise(r.constraints[0, :6 - r.dof[0]], self.length)
+        return screws.dehomogenise(r.constraints[0, :6 - r.dof[0]], self.length)
 
     @cached_property
     def platform_twists(self) -> np.ndarray:
         """Basis (dof × 6) of the platform's twist system: reciprocal of the constraints.
 
         Orthonormal once the linear parts are divided by the characteristic length."""
-        return dehomogenise(self._results.platform[0, :self.dof], self.length)
+        return screws.dehomogenise(self._results.platform[0, :self.dof], self.length)
 
     @property
     def dof(self) -> int:
@@ -232,7 +212,7 @@ class Analysis:
         P = self._results.platform[0, :self.dof]
         M = self._results.A_h[0] @ screws.DELTA @ P.T
         _, _, Vt = np.linalg.svd(M, full_matrices=True)
-        return dehomogenise(Vt[-1] @ P, self.length)
+        return screws.dehomogenise(Vt[-1] @ P, self.length)
 
     @cached_property
     def unresisted_wrench(self) -> np.ndarray | None:
@@ -240,9 +220,9 @@ class Analysis:
         actuation and constraint wrenches balances; ``None`` elsewhere."""
         if self.indices["type_II"] >= self.singular_tol:
             return None
-        H = unit_rows(homogenise(self.full_jacobian, self.length))
+        H = screws.normalised_rows(self.full_jacobian, self.length)
         _, _, Vt = np.linalg.svd(H, full_matrices=True)
-        return dehomogenise(Vt[-1], self.length)
+        return screws.dehomogenise(Vt[-1], self.length)
 
     @cached_property
     def lost_actuated_rates(self) -> np.ndarray | None:
@@ -331,15 +311,10 @@ _CLASS_NAMES = ("none", "I", "II", "III")  # by (type I) + 2 (type II)
 _CLASSES = np.array(_CLASS_NAMES)
 
 
-def _offsets(mechanism) -> np.ndarray:
-    """Row offsets of the legs among the joint twists."""
-    return np.r_[0, np.cumsum([leg.nv for leg in mechanism.legs])].astype(np.int64)
-
-
 def layout_of(mechanism, rtol: float = screws.RTOL, reference=None) -> engine.Layout:
     """The engine's :class:`~pkm_pin.engine.Layout` of a mechanism (legs one after the
     other; ``reference``: homogenised platform basis for the carried determinant)."""
-    offs = _offsets(mechanism)
+    offs = mechanism.leg_frames.coords
     legs = mechanism.legs
     groups = np.array([offs[i] + np.array(g) for i, leg in enumerate(legs)
                        for g in leg.spherical_groups], dtype=np.int64).reshape(-1, 3)

@@ -454,9 +454,6 @@ class MechanismKernel:
     actuated: np.ndarray  # global indices of the actuated coordinates in Q
     scales: np.ndarray  # unit of each actuated coordinate
     length: float
-    groups: np.ndarray  # (G, 3) columns of the spherical groups (Leg.spherical_groups)
-    act_col: np.ndarray  # column of each actuated joint in the legs' Jacobians side by side
-    act_leg: np.ndarray  # its leg
     lengths: np.ndarray  # characteristic length of each leg
     units: np.ndarray  # unit of each coordinate of Q: its leg's length (prismatic) or 1 rad
 
@@ -485,12 +482,6 @@ def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
         np.stack([a.homogeneous for a in mech.anchors]),
         cat([k.lower for k in legs]), cat([k.upper for k in legs]), actuated,
         np.asarray(scales, dtype=float), float(mech.characteristic_length),
-        np.array([coords[i] + np.array(g) for i, leg in enumerate(mech.legs)
-                  for g in leg.spherical_groups], dtype=np.int64).reshape(-1, 3),
-        np.concatenate([coords[i] + leg.actuated_v for i, leg in enumerate(mech.legs)]
-                       ).astype(np.int64),
-        np.concatenate([np.full(len(leg.actuated_v), i) for i, leg in enumerate(mech.legs)]
-                       ).astype(np.int64),
         np.array([k.length for k in legs], dtype=float), cat([k.units for k in legs]))
 
 

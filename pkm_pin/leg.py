@@ -26,6 +26,7 @@ import pinocchio as pin
 
 from . import screws, solve, urdf
 from .compiling import prefer_compiled
+from .engine.stages import spherical_lines
 from .errors import FrameNotFound, InputError, JointNotFound
 from .serial import SerialChain
 from .solve import LegSolution, closure_error
@@ -63,8 +64,6 @@ class Leg(SerialChain):
     tip_id: int = field(init=False, repr=False)
     #: Per-thread working state: ``_local.data`` is the thread's Pinocchio data.
     _local: threading.local = field(init=False, repr=False)
-    #: ``(base, matrix)`` of :meth:`_world_map` for the current :attr:`base` object.
-    _world_map_cache: tuple | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not self.model.existFrame(self.tip):
@@ -289,7 +288,9 @@ class Leg(SerialChain):
         """The tip's 6×nv axis-first world Jacobian from ``data`` filled by
         :meth:`_jacobian_pass`."""
         J = pin.getFrameJacobian(self.model, data, self.tip_id, pin.WORLD).reshape(6, -1)
-        return self._world_map() @ J
+        rows = np.empty((self.nv, 6))
+        screws.world_twist_rows(J, self.base.homogeneous, rows)
+        return rows.T
 
     def tip_placement(self, q) -> pin.SE3:
         """World placement of the tip frame (base placement included)."""
@@ -302,17 +303,6 @@ class Leg(SerialChain):
         """Tip placement and the 6×nv axis-first world Jacobian, from one Pinocchio pass."""
         data = self._jacobian_pass(self.check_q(q))
         return self.base * data.oMf[self.tip_id], self._world_jacobian(data)
-
-    def _world_map(self) -> np.ndarray:
-        """6×6 map from Pinocchio's WORLD Jacobian of the URDF root frame to axis-first
-        twists about the world origin (base placement included), cached per base
-        object in :attr:`_world_map_cache`."""
-        cached = self._world_map_cache
-        if cached is None or cached[0] is not self.base:
-            matrix = screws.adjoint(self.base) @ screws.from_pinocchio(np.eye(6))
-            cached = (self.base, matrix)
-            self._world_map_cache = cached
-        return cached[1]
 
     def jacobian(self, q) -> np.ndarray:
         """Spatial Jacobian, 6×nv, axis-first: column k is the twist (ω; v_O) of joint k."""
@@ -376,29 +366,23 @@ class Leg(SerialChain):
         ``q`` from a single Pinocchio pass."""
         data = self._jacobian_pass(self.check_q(q))
         J = self._world_jacobian(data)
-        T = J.T.copy()
-        for group, j in zip(self.spherical_groups, self._group_joints):
-            centre = self.base.act(data.oMi[j].translation)
-            # rows (e_k; centre × e_k): lines through the centre along the world axes
-            T[list(group)] = np.hstack([np.eye(3), -pin.skew(centre)])
+        T = np.empty((self.nv, 6))
+        groups = np.array(self.spherical_groups, dtype=np.int64).reshape(-1, 3)
+        spherical_lines(np.ascontiguousarray(J.T), groups, T, np.empty((3, 3)), np.empty(3),
+                        np.empty(3))
         return J, T
-
-    @cached_property
-    def _group_joints(self) -> list[int]:
-        return [_joint_of_v(self.model, group[0]) for group in self.spherical_groups]
 
     # -------------------------------------------------------------------- pickle
     def __getstate__(self) -> dict:
         """The description only: no Pinocchio data, no cached values."""
         state = {k: v for k, v in self.__dict__.items()
-                 if k not in ("_local", "_world_map_cache")
+                 if k != "_local"
                  and not isinstance(getattr(type(self), k, None), cached_property)}
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
         self._local = threading.local()
-        self._world_map_cache = None
 
     # ----------------------------------------------------------------------- IK
     def solve(

@@ -200,16 +200,20 @@ def characteristic_length(S) -> float:
     return float(np.median(d)) if d.size else 1.0
 
 
-def _homogenise(S: np.ndarray, length: float) -> np.ndarray:
-    """Divide the moment part by ``length`` (twists and wrenches alike)."""
-    H = S.copy()
-    H[:, 3:] /= length
+def homogenise(S, length: float) -> np.ndarray:
+    """Copy of screws ``S`` (…, 6) with the moment part divided by ``length`` [m]
+    (twists and wrenches alike): dimensionless, and reciprocity is kept up to the factor
+    ``1 / length``."""
+    H = np.array(S, dtype=float, copy=True)
+    H[..., 3:] /= length
     return H
 
 
-def _dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
-    S = H.copy()
-    S[:, 3:] *= length
+def dehomogenise(H, length: float) -> np.ndarray:
+    """Copy of homogenised screws ``H`` (…, 6) back in world units (the moment part
+    times ``length``)."""
+    S = np.array(H, dtype=float, copy=True)
+    S[..., 3:] *= length
     return S
 
 
@@ -218,9 +222,10 @@ def _dehomogenise(H: np.ndarray, length: float) -> np.ndarray:
 _ZERO_ROW = ZERO_SCREW_RTOL
 
 
-def _normalised_rows(S: np.ndarray, length: float) -> np.ndarray:
-    """Homogenised rows scaled to unit norm; (numerically) zero rows dropped."""
-    H = _homogenise(S, length)
+def normalised_rows(S, length: float) -> np.ndarray:
+    """Homogenised rows (k × 6) scaled to unit norm; (numerically) zero rows dropped."""
+    S = np.atleast_2d(np.asarray(S, dtype=float))
+    H = homogenise(S, length)
     n = np.linalg.norm(H, axis=1)
     keep = n > _ZERO_ROW * n.max() if n.size else n > 0
     return H[keep] / n[keep, None]
@@ -248,7 +253,7 @@ def rank(S, length: float | None = None, rtol: float = RTOL) -> int:
     """Number of linearly independent screws among the rows of ``S``."""
     S = as_screws(S)
     L = _length(S, length)
-    return _svd(_normalised_rows(S, L), rtol)[0]
+    return _svd(normalised_rows(S, L), rtol)[0]
 
 
 def basis(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
@@ -258,8 +263,8 @@ def basis(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
     """
     S = as_screws(S)
     L = _length(S, length)
-    r, Vt = _svd(_normalised_rows(S, L), rtol)
-    return _dehomogenise(Vt[:r], L)
+    r, Vt = _svd(normalised_rows(S, L), rtol)
+    return dehomogenise(Vt[:r], L)
 
 
 def reciprocal(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
@@ -270,10 +275,10 @@ def reciprocal(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray
     """
     S = as_screws(S)
     L = _length(S, length)
-    H = _normalised_rows(S, L)
+    H = normalised_rows(S, L)
     # a_h Δ b_h = (a Δ b) / L for homogenised a_h, b_h: reciprocity is preserved.
     r, Vt = _svd(H @ DELTA, rtol)
-    return _dehomogenise(Vt[r:], L)
+    return dehomogenise(Vt[r:], L)
 
 
 def union(*systems, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
@@ -301,8 +306,8 @@ def contains(S, x, length: float | None = None,
     S = as_screws(S)
     X = as_screws(x, "x")
     L = _length(np.vstack([S, X]), length)
-    B = _normalised_rows(basis(S, L), L) if S.shape[0] else np.zeros((0, 6))
-    H = _homogenise(X, L)
+    B = normalised_rows(basis(S, L), L) if S.shape[0] else np.zeros((0, 6))
+    H = homogenise(X, L)
     n = np.linalg.norm(H, axis=1)
     resid = H - (H @ B.T) @ B if B.shape[0] else H
     out = np.linalg.norm(resid, axis=1) <= rtol * np.where(n > 0, n, 1.0)

@@ -36,9 +36,9 @@ import numpy as np
 import pinocchio as pin
 
 from . import engine
-from .analysis import SINGULAR_TOL, classify, homogenise, layout_of
+from .analysis import SINGULAR_TOL, classify, layout_of
 from .errors import AssemblyError, InputError
-from .screws import as_float_array
+from .screws import as_float_array, homogenise
 from .tolerances import RANK_RTOL
 from .twists import joint_twists, sweep_pass
 

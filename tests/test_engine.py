@@ -14,7 +14,7 @@ import pytest
 from test_analysis import mechanism  # built mechanisms, cached per (name, scale)
 
 from pkm_pin import engine, screws
-from pkm_pin.analysis import SINGULAR_TOL, homogenise, layout_of
+from pkm_pin.analysis import SINGULAR_TOL, layout_of
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
 from pkm_pin.engine.linalg import (
@@ -31,7 +31,7 @@ from pkm_pin.engine.stages import (
     motion_twists,
     platform_system,
 )
-from pkm_pin.screws import RTOL
+from pkm_pin.screws import RTOL, homogenise
 from pkm_pin.sweep import _evaluate_chunk_pinocchio, evaluate_chunk, pose_array
 from pkm_pin.twists import joint_twists, sweep_pass
 

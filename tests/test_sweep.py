@@ -178,8 +178,7 @@ def test_executor_tasks_unpickle_the_mechanism_once_per_process():
     import pickle
 
     from pkm_pin import sweep
-    from pkm_pin.analysis import homogenise
-    from pkm_pin.screws import RTOL
+    from pkm_pin.screws import RTOL, homogenise
 
     mech = mechanism("rpr3")
     X = grid_around_home(mech, n=3)

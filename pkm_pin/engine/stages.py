@@ -89,14 +89,14 @@ def unit_homogeneous(x, L, out):
             out[k] *= f
 
 
-@register_jitable(inline="always")
-def motion_twists(J, groups, L, T, G, b, centre):
-    """Stage 1. ``T`` (nv × 6): the joint twists ``J`` (rows, axis-first, world units)
-    with every spherical group (rows of ``groups``) replaced by the three lines through
-    its centre along the world axes (the true span of a spherical joint, also at the
-    gimbal lock of its three revolutes), homogenised, rows of unit norm."""
-    nv = J.shape[0]
-    for c in range(nv):
+@register_jitable
+def spherical_lines(J, groups, T, G, b, centre):
+    """``T`` (nv × 6, world units): the joint twists ``J`` (rows, axis-first) with every
+    spherical group (rows of ``groups``) replaced by the three lines through its centre
+    (:func:`group_centre`) along the world axes — the true span of a spherical joint,
+    also at the gimbal lock of its three revolutes. The one definition of the motion
+    twists (:meth:`pkm_pin.Leg.motion_twists` calls it too)."""
+    for c in range(J.shape[0]):
         for k in range(6):
             T[c, k] = J[c, k]
     for g in range(groups.shape[0]):
@@ -108,7 +108,14 @@ def motion_twists(J, groups, L, T, G, b, centre):
             T[row, t] = 1.0
             T[row, 3 + (t + 2) % 3] = -centre[(t + 1) % 3]
             T[row, 3 + (t + 1) % 3] = centre[(t + 2) % 3]
-    for c in range(nv):
+
+
+@register_jitable(inline="always")
+def motion_twists(J, groups, L, T, G, b, centre):
+    """Stage 1. ``T`` (nv × 6): the motion twists of :func:`spherical_lines`,
+    homogenised, rows of unit norm."""
+    spherical_lines(J, groups, T, G, b, centre)
+    for c in range(J.shape[0]):
         unit_homogeneous(T[c], L, T[c])
 
 

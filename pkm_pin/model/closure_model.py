@@ -322,19 +322,14 @@ def _orthonormal_span(T: np.ndarray, oMo: pin.SE3, length: float, rtol: float) -
     orthonormal in the world-origin homogenised coordinates."""
     if T.shape[0] == 0:
         return np.zeros((0, 6))
-    local = screws.transform(T, oMo.inverse())
-    local[:, 3:] /= length
+    local = screws.homogenise(screws.transform(T, oMo.inverse()), length)
     _, sv, Vt = np.linalg.svd(local, full_matrices=False)
     rank = int(np.sum(sv > rtol * sv[0])) if sv[0] > 0 else 0
     if rank == 0:
         return np.zeros((0, 6))
-    basis = Vt[:rank].copy()
-    basis[:, 3:] *= length
-    world = screws.transform(basis, oMo).reshape(rank, 6)
-    world[:, 3:] /= length
-    Q = np.linalg.qr(world.T)[0].T
-    Q[:, 3:] *= length
-    return Q
+    basis = screws.dehomogenise(Vt[:rank], length)
+    world = screws.homogenise(screws.transform(basis, oMo).reshape(rank, 6), length)
+    return screws.dehomogenise(np.linalg.qr(world.T)[0].T, length)
 
 
 # ------------------------------------------------------------------- validation
