@@ -299,7 +299,9 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts) -> dict:
            "condition": np.full(N, np.nan), "det": np.full(N, np.nan)}
     if not solved:
         return out
-    r = engine.analyse(np.stack([joint_twists(mech, asm.leg_q) for asm in solved]), layout,
+    J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
+         for asm in solved]  # the assembly's verifying pass gave them, when it ran
+    r = engine.analyse(np.stack(J), layout,
                        full=False)
     for key in ("dof", "type_I", "type_II", "condition", "det"):
         out[key][ok] = getattr(r, key)

@@ -111,16 +111,6 @@ def descending(sv, n, order):
 
 
 @register_jitable
-def rank(sv, n, threshold):
-    """Number of ``sv[:n]`` above ``threshold``."""
-    r = 0
-    for j in range(n):
-        if sv[j] > threshold:
-            r += 1
-    return r
-
-
-@register_jitable
 def largest(sv, n):
     """``max(sv[:n])`` (0 for n = 0)."""
     top = 0.0
