@@ -123,6 +123,9 @@ class ClosureModel:
         length: Characteristic length [m] of the residuals and rank decisions; default:
             the sum of the offsets between the tree's joints (not the root placements)
             and of the closures' placements, 1.0 when that is zero.
+        reference: Reference configuration of the tree (nq,), the one assembly starts
+            from (a file's ``q = 0`` or MJCF ``qpos0``; it need not satisfy the
+            closures); default ``pinocchio.neutral(tree)``. Read-only.
     """
 
     tree: pin.Model = field(repr=False)
@@ -131,6 +134,7 @@ class ClosureModel:
     output: str
     name: str = ""
     length: float | None = None
+    reference: np.ndarray | None = field(default=None, repr=False)
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
 
@@ -151,6 +155,11 @@ class ClosureModel:
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_actuated(tree, self.actuated, self.name)
         set_(self, "length", _length(tree, closures, self.length))
+        reference = pin.neutral(tree) if self.reference is None else screws.as_vector(
+            self.reference, tree.nq, f"the reference configuration of {self.name or 'the tree'}",
+            "the tree's configuration vector").copy()
+        reference.setflags(write=False)
+        set_(self, "reference", reference)
         units = velocity_units(tree, self.length)
         units.setflags(write=False)
         set_(self, "_units", units)
@@ -159,6 +168,7 @@ class ClosureModel:
         """Unpickle: the description as pickled, its arrays read-only again."""
         self.__dict__.update(state)
         self._units.setflags(write=False)
+        self.reference.setflags(write=False)
 
     # ------------------------------------------------------------------- sizes
     @property
