@@ -76,7 +76,7 @@ from .compiling import prefer_compiled
 from .engine.linalg import jacobi
 from .kernels import _compose, _fk, twist_exp
 from .kernels import pose_error as closure_error
-from .tolerances import CLOSURE_TOL
+from .tolerances import CLOSURE_TOL, NEWTON_STALL_RTOL
 
 # numba's typed IR inlining (register_jitable(inline="always")) trips one of its own
 # pedantic checks on the first compilation ("variable '…' is not in scope": the inlined
@@ -812,3 +812,207 @@ def solve_closure(mech, pose, leg_q, mask: Mask = LEGS, target=None, *,
     residuals = np.array([s.closure for s in sols])
     return ClosureSolution(pose, [s.leg_q[0] for s in sols], residuals,
                            float(residuals.max()), 0.0, max(s.iterations for s in sols))
+
+
+# ============================================================ the tree solver
+# The closure solver of a general closed-loop mechanism (pkm_pin.model.ClosureModel):
+# one kinematic tree, its closures, optional rows pinning the actuated joints and the
+# output frame. Same damping (lm_damping) and stopping rules (stop_rule, the stall test)
+# as the per-leg solver above; plain numpy + Pinocchio, one Pinocchio pass a step.
+
+#: Largest dimensionless step of the tree solver (infinity norm: rad, or lengths ``L``
+#: for translations): a longer Newton step is shortened to it, which keeps a start far
+#: from closure (published models open by up to ~1 L) from jumping between branches.
+TREE_MAX_STEP = 0.5
+
+
+@dataclass(frozen=True)
+class TreeSolution:
+    """Result of :func:`solve_tree`.
+
+    Attributes:
+        q: Configuration of the tree (nq,), inside the limits of its 1-DOF joints.
+        residual: ``max(closure, actuated, pose)``: the quantity compared with ``tol``.
+        closure: Largest norm of one closure's residual rows (dimensionless, as
+            :meth:`ClosureModel.closure_residual`).
+        actuated: Largest ``|q_a − target_a| / s_a`` (0 without targets).
+        pose: Norm of the (selected) output pose error rows (0 without a pose target).
+        iterations: Newton steps taken.
+        converged: Whether ``residual <= tol``.
+    """
+
+    q: np.ndarray
+    residual: float
+    closure: float
+    actuated: float
+    pose: float
+    iterations: int
+    converged: bool
+
+
+def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper limits (nq,) of the tree's coordinates that :func:`solve_tree`
+    enforces: a 1-DOF joint's (nq = nv = 1) finite position limits; ±inf elsewhere."""
+    tree = model.tree
+    lo, up = np.full(tree.nq, -np.inf), np.full(tree.nq, np.inf)
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        if joint.nq == 1 and joint.nv == 1:
+            i = joint.idx_q
+            a, b = tree.lowerPositionLimit[i], tree.upperPositionLimit[i]
+            if np.isfinite(a) and np.isfinite(b) and a <= b:
+                lo[i], up[i] = a, b
+    return lo, up
+
+
+def _tree_rows(model, kin, targets, pose, pose_rows):
+    """Residual vector, its Jacobian (per unit of v) and ``(closure, actuated, pose)``."""
+    e, H = [kin.residual], [kin.closure_jacobian]
+    closure = max((float(np.linalg.norm(kin.residual[s])) for s in model.closure_slices()),
+                  default=0.0)
+    actuated = pose_err = 0.0
+    if targets is not None:
+        scales = model.velocity_units[list(model.actuated_v)]
+        ea = (model.actuated_values(kin.q) - targets) / scales
+        Ha = np.zeros((len(ea), model.nv))
+        Ha[np.arange(len(ea)), list(model.actuated_v)] = 1.0 / scales
+        e.append(ea)
+        H.append(Ha)
+        actuated = float(np.abs(ea).max(initial=0.0))
+    if pose is not None:
+        ep, Hp = pose_error_rows(model, kin, pose)
+        e.append(pose_rows @ ep)
+        H.append(pose_rows @ Hp)
+        pose_err = float(np.linalg.norm(e[-1]))
+    return np.concatenate(e), np.vstack(H), (closure, actuated, pose_err)
+
+
+def pose_error_rows(model, kin, target: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
+    """The output frame's pose error against ``target`` and its Jacobian (per unit of
+    v): ``log6(target⁻¹ · oMo)`` axis-first ``(θ [rad]; ρ / L)``, in the target's axes
+    (so frame-invariant), ``L`` = :attr:`ClosureModel.length`."""
+    M = target.actInv(kin.output_placement)
+    e = screws.log(M)
+    local = screws.adjoint(kin.output_placement.inverse()) @ kin.output_jacobian
+    H = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(local))
+    e[3:] /= model.length
+    H[3:] /= model.length
+    return e, H
+
+
+def _tree_step(model, q, e, H, free, r, lo, up):
+    """One damped Newton step on the free coordinates (columns scaled by the velocity
+    units), at most :data:`TREE_MAX_STEP`; returns ``(q_new, dimensionless step²)``."""
+    units = model.velocity_units[free]
+    Hf = H[:, free] * units
+    lam = lm_damping(r)
+    N = Hf.T @ Hf + lam * np.eye(Hf.shape[1])
+    dx = -np.linalg.solve(N, Hf.T @ e)
+    big = np.abs(dx).max(initial=0.0)
+    if big > TREE_MAX_STEP:
+        dx *= TREE_MAX_STEP / big
+    dv = np.zeros(model.nv)
+    dv[free] = units * dx
+    return np.clip(pin.integrate(model.tree, q, dv), lo, up), float(dx @ dx)
+
+
+def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, *,
+               pose_rows=None, tol: float = CLOSURE_TOL, max_iter: int = 100) -> TreeSolution:
+    """Damped Newton (Levenberg–Marquardt) on a closure model's residual from ``q0``.
+
+    Unknowns: the velocity coordinates selected by the boolean mask ``free`` (nv,;
+    default all), in dimensionless units (``v / velocity_units``); a step is integrated
+    with ``pin.integrate`` and 1-DOF joints are clipped to their finite limits
+    (:func:`tree_limits`). Rows: every closure (:meth:`ClosureModel.closure_residual`);
+    with ``targets`` (one value per actuated joint [rad or m]) the rows ``(q_a −
+    target_a) / s_a`` (``s_a`` the joint's velocity unit); with ``pose`` the output
+    frame's :func:`pose_error_rows`, multiplied by ``pose_rows`` (k × 6, default the
+    identity: the components of the pose that are targeted). Damping :func:`lm_damping`
+    of ``r = max(closure, actuated, pose)``; stops on :func:`stop_rule` (``r ≤ tol``,
+    ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled)."""
+    q = model.check_q(q0).copy()
+    free = np.ones(model.nv, bool) if free is None else np.asarray(free, bool)
+    pose_rows = np.eye(6) if pose_rows is None else np.asarray(pose_rows, float)
+    lo, up = tree_limits(model)
+    q = np.clip(q, lo, up)
+    best, slow, it = np.inf, 0, 0
+    while True:
+        e, H, parts = _tree_rows(model, model.kinematics(q), targets, pose, pose_rows)
+        r = max(parts)
+        stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
+        if stop or not free.any():
+            break
+        q_new, step = _tree_step(model, q, e, H, free, r, lo, up)
+        if not np.all(np.isfinite(q_new)):
+            break
+        it += 1
+        moved = pin.difference(model.tree, q, q_new) / model.velocity_units
+        q = q_new
+        if float(moved @ moved) < NEWTON_STALL_RTOL * (1.0 + step):
+            break
+    return TreeSolution(q, r, parts[0], parts[1], parts[2], it, bool(r <= tol))
+
+
+def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
+    """Restart configurations (S, nq) of a closure model's tree, in this order: the warm
+    start (when given), ``model.reference``, ``pinocchio.neutral``, the middle of the
+    limits (the reference where a limit is infinite), and ``count`` configurations drawn
+    by ``numpy.random.default_rng(seed)``: each 1-DOF joint uniformly in its finite
+    limits (a revolute without limits in [−π, π]), other coordinates as in the
+    reference. All clipped to :func:`tree_limits`."""
+    lo, up = tree_limits(model)
+    ref = np.array(model.reference)
+    middle = np.where(np.isfinite(lo), 0.5 * (lo + up), ref)
+    rows = [] if warm is None else [model.check_q(warm)]
+    rows += [ref, pin.neutral(model.tree), middle]
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        rows.append(_random_tree_q(model, rng, lo, up))
+    return np.clip(np.array(rows, dtype=float), lo, up)
+
+
+def _random_tree_q(model, rng, lo, up) -> np.ndarray:
+    """One random configuration of :func:`tree_starts`."""
+    q = np.array(model.reference)
+    tree = model.tree
+    for j in range(1, tree.njoints):
+        joint, i = tree.joints[j], tree.joints[j].idx_q
+        if joint.nv != 1:
+            continue
+        if joint.nq == 1 and np.isfinite(lo[i]):
+            q[i] = rng.uniform(lo[i], up[i])
+        elif joint.nq == 1 and model.velocity_units[joint.idx_v] == 1.0:
+            q[i] = rng.uniform(-np.pi, np.pi)
+        elif joint.nq == 2:
+            a = rng.uniform(-np.pi, np.pi)
+            q[i], q[i + 1] = np.cos(a), np.sin(a)
+    return q
+
+
+def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose_rows=None,
+                      nearest=None, tol: float = CLOSURE_TOL, max_iter: int = 100
+                      ) -> tuple[TreeSolution, int]:
+    """:func:`solve_tree` from each row of ``starts`` in turn. The first start's
+    solution is kept when it converges (the branch continued from a warm start);
+    otherwise every start is solved and, among those that converge, the one nearest
+    ``nearest`` (default the first start; distance ``|pin.difference / velocity_units|``)
+    is kept; none converging: the smallest residual. Returns ``(solution, total
+    iterations)``."""
+    starts = np.atleast_2d(np.asarray(starts, dtype=float))
+    ref = starts[0] if nearest is None else model.check_q(nearest)
+    found, total = [], 0
+    for k, q0 in enumerate(starts):
+        sol = solve_tree(model, q0, free, targets, pose, pose_rows=pose_rows, tol=tol,
+                         max_iter=max_iter)
+        total += sol.iterations
+        found.append(sol)
+        if k == 0 and sol.converged:
+            return sol, total
+    good = [s for s in found if s.converged]
+    if not good:
+        return min(found, key=lambda s: s.residual), total
+
+    def distance(s):
+        d = pin.difference(model.tree, ref, s.q) / model.velocity_units
+        return float(d @ d)
+    return min(good, key=distance), total

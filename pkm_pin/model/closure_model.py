@@ -194,6 +194,26 @@ class ClosureModel:
         dimensionless matrix whose rank is decided."""
         return self._units
 
+    @property
+    def actuated_v(self) -> tuple[int, ...]:
+        """Velocity index of each actuated joint (its first coordinate)."""
+        return tuple(self.tree.joints[self.tree.getJointId(a)].idx_v for a in self.actuated)
+
+    def actuated_values(self, q) -> np.ndarray:
+        """Values [rad or m] of the actuated joints at ``q``: the coordinate of a 1-DOF
+        joint, the angle ``atan2(sin, cos)`` of a continuous (unbounded) revolute; an
+        :class:`InputError` for an actuated joint with several degrees of freedom."""
+        q = self.check_q(q)
+        out = np.empty(len(self.actuated))
+        for k, name in enumerate(self.actuated):
+            joint = self.tree.joints[self.tree.getJointId(name)]
+            if joint.nv != 1 or joint.nq not in (1, 2):
+                raise InputError(f"actuated joint {name!r} has {joint.nv} degrees of freedom "
+                                 "and no single actuated value")
+            i = joint.idx_q
+            out[k] = q[i] if joint.nq == 1 else np.arctan2(q[i + 1], q[i])
+        return out
+
     def check_q(self, q) -> np.ndarray:
         """``q`` as a finite array of shape (nq,), or an :class:`InputError`."""
         return screws.as_vector(q, self.nq, f"the configuration of {self.name or 'the tree'}",
@@ -241,6 +261,25 @@ class ClosureModel:
         T = (self._output_jacobian(data) @ (self._units[:, None] * N)).T
         return _orthonormal_span(T, data.oMf[self._frame_ids[self.output]], self.length, rtol)
 
+    def kinematics(self, q) -> TreeKinematics:
+        """Everything first-order at ``q`` from one Pinocchio pass (:class:`TreeKinematics`)."""
+        q = self.check_q(q)
+        data = self._jacobians(q)
+        rows = [_residual(c.kind, self._relative(data, c), self.length) for c in self.closures]
+        return TreeKinematics(
+            q=q, residual=np.concatenate(rows) if rows else np.zeros(0),
+            closure_jacobian=self._closure_jacobian(data),
+            output_jacobian=self._output_jacobian(data),
+            output_placement=data.oMf[self._frame_ids[self.output]].copy(),
+            **_joint_twists(self.tree, data),
+            joint_placements=tuple(M.copy() for M in data.oMi),
+            frame_placements=tuple(M.copy() for M in data.oMf))
+
+    def closure_slices(self) -> tuple[slice, ...]:
+        """Rows of each closure in :meth:`closure_residual` (closure order)."""
+        ends = np.cumsum([0] + [c.dim for c in self.closures])
+        return tuple(slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:]))
+
     # ---------------------------------------------------------- Pinocchio passes
     def _placements(self, q: np.ndarray) -> pin.Data:
         """A fresh ``Data`` with every frame placement at ``q``."""
@@ -283,6 +322,56 @@ class ClosureModel:
         """The output Jacobian from a ``data`` filled by :meth:`_jacobians`."""
         fid = self._frame_ids[self.output]
         return screws.from_pinocchio(pin.getFrameJacobian(self.tree, data, fid, pin.WORLD))
+
+
+@dataclass(frozen=True, eq=False)
+class TreeKinematics:
+    """The first-order kinematics of a :class:`ClosureModel` at one configuration, from
+    one Pinocchio pass (:meth:`ClosureModel.kinematics`).
+
+    Attributes:
+        q: The configuration (nq,).
+        residual: :meth:`ClosureModel.closure_residual` (dimensionless).
+        closure_jacobian: :meth:`ClosureModel.closure_jacobian` (n_rows × nv).
+        output_jacobian: :meth:`ClosureModel.output_jacobian` (6 × nv, axis-first
+            ``(ω; v_O)`` about the world origin).
+        output_placement: World placement of the output frame.
+        joint_twists: (nv × 6) row k: the axis-first twist ``(ω; v_O)`` [per unit rate]
+            about the world origin of velocity coordinate k's joint motion (the child
+            body relative to the parent body; a mimicking joint's motion is not in it).
+        body_jacobians: Per joint j (index 0 the universe), 6 × nv: column k the world
+            twist (axis-first, world origin) of joint j's child body per unit rate of
+            velocity coordinate k (mimicking joints included).
+        joint_placements: World placement of every joint (``data.oMi``, index 0 the
+            universe).
+        frame_placements: World placement of every frame (``data.oMf``).
+    """
+
+    q: np.ndarray
+    residual: np.ndarray
+    closure_jacobian: np.ndarray
+    output_jacobian: np.ndarray
+    output_placement: pin.SE3
+    joint_twists: np.ndarray
+    body_jacobians: tuple
+    joint_placements: tuple
+    frame_placements: tuple
+
+
+def _joint_twists(tree: pin.Model, data: pin.Data) -> dict:
+    """``joint_twists`` and ``body_jacobians`` of :class:`TreeKinematics` from a ``data``
+    filled by :meth:`ClosureModel._jacobians` (``data.J`` itself is not used: mimicking
+    joints share their columns)."""
+    bodies = [np.zeros((6, tree.nv))]
+    twists = np.zeros((tree.nv, 6))
+    for j in range(1, tree.njoints):
+        J = screws.from_pinocchio(pin.getJointJacobian(tree, data, j, pin.WORLD))
+        bodies.append(J)
+        joint = tree.joints[j]
+        if joint.shortname() != "JointModelMimic":
+            cols = slice(joint.idx_v, joint.idx_v + joint.nv)
+            twists[cols] = J[:, cols].T
+    return {"joint_twists": twists, "body_jacobians": tuple(bodies)}
 
 
 # ------------------------------------------------------------------- residuals
