@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -36,6 +38,66 @@ REVOLUTE, PRISMATIC = 0, 1
 HAS_POST = 2
 #: Added to ``kind`` when the joint's placement in its parent frame is the identity.
 AT_PARENT = 4
+
+
+class Chain(NamedTuple):
+    """A serial chain as the compiled functions take it (one argument): the constants
+    of :class:`ChainKernel` (``parent`` … ``nv``: the forward kinematics of :func:`_fk`;
+    ``lower`` … ``units``: the limits and scales the closure solver reads)."""
+
+    parent: np.ndarray
+    post: np.ndarray
+    kind: np.ndarray
+    axis: np.ndarray
+    rate: np.ndarray
+    iq: np.ndarray
+    iv: np.ndarray
+    tip: np.ndarray
+    base: np.ndarray
+    nv: int
+    lower: np.ndarray
+    upper: np.ndarray
+    length: float
+    units: np.ndarray
+
+
+class Chains(NamedTuple):
+    """Every leg of a mechanism as one argument of the compiled functions: the legs'
+    :class:`Chain` arrays one after the other (leg ``i`` owns joints
+    ``joints[i]:joints[i+1]`` and coordinates ``coords[i]:coords[i+1]`` of the
+    concatenated configuration ``Q``; :func:`chain_of` reads one leg back), the
+    platform anchors, the actuated coordinates and their units, the mechanism's length."""
+
+    joints: np.ndarray
+    coords: np.ndarray
+    parent: np.ndarray
+    post: np.ndarray
+    kind: np.ndarray
+    axis: np.ndarray
+    rate: np.ndarray
+    iq: np.ndarray
+    iv: np.ndarray
+    tips: np.ndarray
+    bases: np.ndarray
+    anchors: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    lengths: np.ndarray
+    units: np.ndarray
+    actuated: np.ndarray  # global indices of the actuated coordinates in Q
+    scales: np.ndarray  # unit of each actuated coordinate
+    length: float
+
+
+@register_jitable
+def chain_of(chains, i):
+    """Leg ``i`` of :class:`Chains` as a :class:`Chain` (views, no copies)."""
+    j0, j1 = chains.joints[i], chains.joints[i + 1]
+    c0, c1 = chains.coords[i], chains.coords[i + 1]
+    return Chain(chains.parent[j0:j1], chains.post[j0:j1], chains.kind[j0:j1],
+                 chains.axis[j0:j1], chains.rate[j0:j1], chains.iq[j0:j1], chains.iv[j0:j1],
+                 chains.tips[i], chains.bases[i], c1 - c0, chains.lower[c0:c1],
+                 chains.upper[c0:c1], chains.lengths[i], chains.units[c0:c1])
 
 
 @dataclass(frozen=True)
@@ -65,21 +127,18 @@ class ChainKernel:
     units: np.ndarray  # (nv,) unit of each coordinate: length (prismatic) or 1 rad
 
 
-    def args(self) -> tuple:
-        """The arrays in the order the compiled functions take them."""
-        return (self.parent, self.post, self.kind, self.axis, self.rate, self.iq, self.iv,
-                self.tip, self.base, self.nv)
-
-    def solver_args(self) -> tuple:
-        """:meth:`args` plus the limits, the length and the units of the coordinates, as
-        the leg solvers of :mod:`pkm_pin.solve` take them."""
-        return (*self.args(), self.lower, self.upper, self.length, self.units)
+    @cached_property
+    def chain(self) -> Chain:
+        """The constants as the compiled functions take them."""
+        return Chain(self.parent, self.post, self.kind, self.axis, self.rate, self.iq,
+                     self.iv, self.tip, self.base, self.nv, self.lower, self.upper,
+                     self.length, self.units)
 
     def kinematics(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Tip placement (4×4, world) and 6×nv axis-first world Jacobian at ``q``."""
         T = np.empty((4, 4))
         J = np.empty((6, self.nv))
-        fk_jacobian(*self.args(), np.asarray(q, dtype=float), T, J)
+        fk_jacobian(self.chain, np.asarray(q, dtype=float), T, J)
         return T, J
 
     def solve(self, target: np.ndarray, q0, tol: float = 1e-12, max_iter: int = 50):
@@ -88,7 +147,7 @@ class ChainKernel:
         from .solve import solve_from
 
         Q, res, its = np.empty((1, self.nv)), np.empty(1), np.zeros(1, np.int64)
-        solve_from(*self.solver_args(), np.ascontiguousarray(target, dtype=float)[None],
+        solve_from(self.chain, np.ascontiguousarray(target, dtype=float)[None],
                    np.array(q0, dtype=float)[None], tol, max_iter, Q, res, its)
         return Q[0], float(res[0]), int(its[0])
 
@@ -172,10 +231,11 @@ def _compose(A, B, out):
 
 
 @njit(cache=True, nogil=True)
-def fk_jacobian(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
+def fk_jacobian(chain, q, T_out, J_out):
     """Tip placement ``T_out`` (4×4, world) and axis-first world Jacobian ``J_out``
-    (6×nv, columns ``(ω; v_O)``; a mimic joint adds its twist to its primary's column)."""
-    _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out)
+    (6×nv, columns ``(ω; v_O)``; a mimic joint adds its twist to its primary's column)
+    of the :class:`Chain` at ``q``."""
+    _fk(chain, q, T_out, J_out)
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -196,9 +256,11 @@ def _times(r00, r01, r02, r10, r11, r12, r20, r21, r22, px, py, pz, P):
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T_out, J_out):
+def _fk(chain, q, T_out, J_out):
     """:func:`fk_jacobian`. The running placement (R, p) lives in twelve scalars, which
     the compiler keeps in registers (2–3× faster than 4×4 work arrays)."""
+    parent, post, kind, axis = chain.parent, chain.post, chain.kind, chain.axis
+    rate, iq, iv, tip, base, nv = chain.rate, chain.iq, chain.iv, chain.tip, chain.base, chain.nv
     r00, r01, r02, px = base[0, 0], base[0, 1], base[0, 2], base[0, 3]
     r10, r11, r12, py = base[1, 0], base[1, 1], base[1, 2], base[1, 3]
     r20, r21, r22, pz = base[2, 0], base[2, 1], base[2, 2], base[2, 3]
@@ -457,11 +519,13 @@ class MechanismKernel:
     lengths: np.ndarray  # characteristic length of each leg
     units: np.ndarray  # unit of each coordinate of Q: its leg's length (prismatic) or 1 rad
 
-    def solver_args(self) -> tuple:
-        """The arrays in the order :func:`pkm_pin.solve.solve_system` takes them."""
-        return (self.joints, self.coords, self.parent, self.post, self.kind, self.axis,
-                self.rate, self.iq, self.iv, self.tips, self.bases, self.anchors, self.lower,
-                self.upper, self.lengths, self.units, self.actuated, self.scales, self.length)
+    @cached_property
+    def chains(self) -> Chains:
+        """The arrays as the compiled functions take them."""
+        return Chains(self.joints, self.coords, self.parent, self.post, self.kind,
+                      self.axis, self.rate, self.iq, self.iv, self.tips, self.bases,
+                      self.anchors, self.lower, self.upper, self.lengths, self.units,
+                      self.actuated, self.scales, self.length)
 
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:

@@ -74,7 +74,7 @@ from numba.extending import register_jitable
 from . import screws
 from .compiling import prefer_compiled
 from .engine.linalg import jacobi
-from .kernels import _compose, _fk, twist_exp
+from .kernels import _compose, _fk, chain_of, twist_exp
 from .kernels import pose_error as closure_error
 from .tolerances import CLOSURE_TOL, NEWTON_STALL_RTOL
 
@@ -440,23 +440,24 @@ def leg_workspace(nv):
 
 
 @register_jitable
-def leg_newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-               units, target, q, tol, max_iter, trust, ws):
-    """Mask :data:`LEGS` for one leg in compiled code, in place on ``q`` (its tip to
-    ``target``, 4 × 4 world): evaluations by :func:`pkm_pin.kernels._fk`, the step
-    :func:`leg_step`, the rules of :func:`stop_rule`. Returns ``(residual, iterations)``;
-    the residual is that of the returned ``q``. With ``trust > 0`` a step taken from
-    ``r ≤ trust`` (Newton's quadratic regime: the next residual is ~r²) and not cut by a
-    limit ends the iteration unevaluated, and the residual returned is −r (the caller
-    verifies). The start ``q`` is projected onto the limits first."""
+def leg_newton(chain, target, q, tol, max_iter, trust, ws):
+    """Mask :data:`LEGS` for one leg (a :class:`~pkm_pin.kernels.Chain`) in compiled
+    code, in place on ``q`` (its tip to ``target``, 4 × 4 world): evaluations by
+    :func:`pkm_pin.kernels._fk`, the step :func:`leg_step`, the rules of
+    :func:`stop_rule`. Returns ``(residual, iterations)``; the residual is that of the
+    returned ``q``. With ``trust > 0`` a step taken from ``r ≤ trust`` (Newton's
+    quadratic regime: the next residual is ~r²) and not cut by a limit ends the iteration
+    unevaluated, and the residual returned is −r (the caller verifies). The start ``q``
+    is projected onto the limits first."""
     T, J, H, e, N, g, dq, inv = ws
+    lower, upper, length, units, nv = chain.lower, chain.upper, chain.length, chain.units, chain.nv
     for a in range(q.shape[0]):
         q[a] = min(upper[a], max(lower[a], q[a]))
     it = 0
     best = np.inf
     slow = 0
     while True:
-        _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
+        _fk(chain, q, T, J)
         r = closure_error(T, target, length, e)
         stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
         if stop:
@@ -467,7 +468,7 @@ def leg_newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upp
             return r, it
         step, size, clipped = project(q, dq, units, lower, upper)
         if step < 1e-30 * (1.0 + size):  # stalled (at a limit or a local minimum)
-            _fk(parent, post, kind, axis, rate, iq, iv, tip, base, nv, q, T, J)
+            _fk(chain, q, T, J)
             return closure_error(T, target, length, e), it
         if r <= trust and not clipped:
             return -r, it
@@ -479,21 +480,19 @@ _leg_newton_inlined = njit(inline="always")(leg_newton)
 
 
 @njit(cache=True, nogil=True)
-def solve_from(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length,
-               units, targets, starts, tol, max_iter, Q, residual, iterations):
+def solve_from(chain, targets, starts, tol, max_iter, Q, residual, iterations):
     """Each target (M, 4, 4) solved from each of ``starts`` (S, nq) in turn until one
     converges (:func:`leg_newton`; the restarts of :meth:`Leg.solve` and of the sweeps):
     fills ``Q`` (M, nq) and ``residual`` (M,) with the best attempt, ``iterations`` (M,)
-    with the steps of all attempts. The leg's arguments: :meth:`ChainKernel.solver_args`."""
-    ws = leg_workspace(nv)
+    with the steps of all attempts. ``chain``: :attr:`ChainKernel.chain`."""
+    ws = leg_workspace(chain.nv)
     q = np.empty(starts.shape[1])
     for i in range(targets.shape[0]):
         residual[i] = np.inf
         iterations[i] = 0
         for s in range(starts.shape[0]):
             q[:] = starts[s]
-            r, it = leg_newton(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower,
-                               upper, length, units, targets[i], q, tol, max_iter, 0.0, ws)
+            r, it = leg_newton(chain, targets[i], q, tol, max_iter, 0.0, ws)
             iterations[i] += it
             if s == 0 or r < residual[i]:
                 residual[i] = r
@@ -503,16 +502,17 @@ def solve_from(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upp
 
 
 @njit(cache=True, nogil=True)
-def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, length, units,
-          targets, q_start, extrapolate, tol, max_iter, trust, Q, residual):
+def track(chain, targets, q_start, extrapolate, tol, max_iter, trust, Q, residual):
     """Solve the leg at each target of an ordered path (N, 4, 4) with :func:`leg_newton`,
     warm-started from the previous solution (extrapolated from the previous ones where
     ``extrapolate[i]``: linearly from two, quadratically from three where the path was
     smooth before too). Fills ``Q`` (N, nq) and ``residual`` (N,): the residual reached,
     or −r when the last step was taken from ``r ≤ trust`` and not evaluated (the caller
     verifies). A target that does not converge leaves the warm start unchanged for the
-    next one. Returns the number of targets missed (neither converged nor trusted)."""
-    ws = leg_workspace(nv)
+    next one. Returns the number of targets missed (neither converged nor trusted).
+    ``chain``: :attr:`ChainKernel.chain`."""
+    ws = leg_workspace(chain.nv)
+    lower, upper = chain.lower, chain.upper
     nq = q_start.shape[0]
     hist = np.empty((3, nq))  # the last three solutions, newest at row `head`
     for k in range(3):
@@ -534,9 +534,7 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
         else:
             for a in range(nq):
                 q[a] = q1[a]
-        r, _ = _leg_newton_inlined(parent, post, kind, axis, rate, iq, iv, tip, base, nv,
-                                   lower, upper, length, units, targets[i], q, tol, max_iter,
-                                   trust, ws)
+        r, _ = _leg_newton_inlined(chain, targets[i], q, tol, max_iter, trust, ws)
         residual[i] = r
         for a in range(nq):
             Q[i, a] = q[a]
@@ -552,23 +550,21 @@ def track(parent, post, kind, axis, rate, iq, iv, tip, base, nv, lower, upper, l
 
 
 @register_jitable
-def _legs_compiled(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases,
-                   anchors, lower, upper, lengths, units, pose, Q, tol, max_iter, residual):
-    """Mask :data:`LEGS` on a mechanism kernel: every leg's :func:`leg_newton` for its tip
-    at ``pose · anchor``, warm-started from ``Q``. Returns the most iterations of a leg."""
+def _legs_compiled(chains, pose, Q, tol, max_iter, residual):
+    """Mask :data:`LEGS` on a mechanism's :class:`~pkm_pin.kernels.Chains`: every leg's
+    :func:`leg_newton` for its tip at ``pose · anchor``, warm-started from ``Q``.
+    Returns the most iterations of a leg."""
     W = np.empty((4, 4))
     most = 0
     mv = 0
-    for i in range(joints.shape[0] - 1):
+    coords = chains.coords
+    for i in range(coords.shape[0] - 1):
         mv = max(mv, coords[i + 1] - coords[i])
     ws = leg_workspace(mv)
-    for i in range(joints.shape[0] - 1):
-        j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
-        _compose(pose, anchors[i], W)
-        r, it = leg_newton(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1],
-                           iq[j0:j1], iv[j0:j1], tips[i], bases[i], c1 - c0, lower[c0:c1],
-                           upper[c0:c1], lengths[i], units[c0:c1], W, Q[c0:c1], tol,
-                           max_iter, 0.0, ws)
+    for i in range(coords.shape[0] - 1):
+        _compose(pose, chains.anchors[i], W)
+        r, it = leg_newton(chain_of(chains, i), W, Q[coords[i]:coords[i + 1]], tol, max_iter,
+                           0.0, ws)
         residual[i] = r
         most = max(most, it)
     return most
@@ -598,39 +594,35 @@ def _move(Q, pose, coords, units, lower, upper, length, ws, E, tmp):
 
 
 @njit(cache=True, nogil=True)
-def solve_system(joints, coords, parent, post, kind, axis, rate, iq, iv, tips, bases, anchors,
-                 lower, upper, lengths, units, actuated, scales, length, mask, pose, Q,
-                 target, tol, max_iter, residual, out):
-    """The compiled driver on a whole mechanism (:class:`~pkm_pin.kernels.MechanismKernel`
-    arrays, :meth:`~pkm_pin.kernels.MechanismKernel.solver_args`): the mask's unknowns
+def solve_system(chains, mask, pose, Q, target, tol, max_iter, residual, out):
+    """The compiled driver on a whole mechanism (its :class:`~pkm_pin.kernels.Chains`,
+    :attr:`~pkm_pin.kernels.MechanismKernel.chains`): the mask's unknowns
     solved in place on ``pose`` (4 × 4) and ``Q`` (the legs' configurations one after
     the other; the start projected onto the limits), ``target``: the actuated
     coordinates (mask :data:`ACTUATED`).
     ``residual`` (legs) receives each leg's :func:`closure_error`, ``out`` (closure,
     actuated error, iterations, Schur ratio, contracted) as :class:`ClosureSolution`."""
-    n = joints.shape[0] - 1
+    coords, units, lower, upper = chains.coords, chains.units, chains.lower, chains.upper
+    lengths, length, scales = chains.lengths, chains.length, chains.scales
+    n = coords.shape[0] - 1
     if mask == 0:
-        most = _legs_compiled(joints, coords, parent, post, kind, axis, rate, iq, iv, tips,
-                              bases, anchors, lower, upper, lengths, units, pose, Q, tol,
-                              max_iter, residual)
+        most = _legs_compiled(chains, pose, Q, tol, max_iter, residual)
         out[0], out[1], out[2], out[3], out[4] = residual.max(), 0.0, most, 0.0, 1.0
         return
     mv = 0
     for i in range(n):
         mv = max(mv, coords[i + 1] - coords[i])
     ws = system_workspace(n, mv, coords[n])
-    n_act = actuated.shape[0] if mask == 2 else 0
-    act_v, qa = actuated[:n_act], np.empty(n_act)
+    n_act = chains.actuated.shape[0] if mask == 2 else 0
+    act_v, qa = chains.actuated[:n_act], np.empty(n_act)
     E, tmp = np.empty((4, 4)), np.empty((4, 4))
     for a in range(Q.shape[0]):  # the start, projected onto the limits
         Q[a] = min(upper[a], max(lower[a], Q[a]))
     it, best, slow, stalled, prev, contracted = 0, np.inf, 0, False, np.inf, 1.0
     while True:
         for i in range(n):
-            j0, j1, c0, c1 = joints[i], joints[i + 1], coords[i], coords[i + 1]
-            _compose(pose, anchors[i], ws.Ws[i])
-            _fk(parent[j0:j1], post[j0:j1], kind[j0:j1], axis[j0:j1], rate[j0:j1], iq[j0:j1],
-                iv[j0:j1], tips[i], bases[i], c1 - c0, Q[c0:c1], ws.Ts[i], ws.Js[i])
+            _compose(pose, chains.anchors[i], ws.Ws[i])
+            _fk(chain_of(chains, i), Q[coords[i]:coords[i + 1]], ws.Ts[i], ws.Js[i])
         for a in range(n_act):
             qa[a] = Q[act_v[a]]
         stop, closure, act, best, slow = closure_iteration(
@@ -746,7 +738,7 @@ def solve_leg(leg, target: pin.SE3, starts, *, tol: float = CLOSURE_TOL, max_ite
     kernel = leg.kernel if compiled else None
     if kernel is not None:
         Q, res, its = np.empty((1, leg.nq)), np.empty(1), np.zeros(1, np.int64)
-        solve_from(*kernel.solver_args(), target.homogeneous[None], starts, tol, max_iter, Q,
+        solve_from(kernel.chain, target.homogeneous[None], starts, tol, max_iter, Q,
                    res, its)
         sol = _solve_one(leg, target, Q[0], tol, max_iter if res[0] <= tol else 0)
         sol.iterations += int(its[0])
@@ -779,7 +771,7 @@ def solve_kernel(kernel, mask: Mask, pose: np.ndarray, Q: np.ndarray, target=Non
     residual, out = np.empty(len(kernel.lengths)), np.empty(5)
     # without actuated targets any float array of their length will do (not read)
     target = kernel.scales if target is None else np.asarray(target, dtype=float)
-    solve_system(*kernel.solver_args(), int(mask), pose, Q, target, tol, max_iter, residual,
+    solve_system(kernel.chains, int(mask), pose, Q, target, tol, max_iter, residual,
                  out)
     return residual, out
 

@@ -206,13 +206,13 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dic
         Q = np.empty((N, leg.nq))
         res = np.empty(N)
         # a last Newton step taken from a residual below TRUST is checked by Pinocchio
-        misses = track(*lk.solver_args(), targets, q_home.astype(float), along, SWEEP_TOL, 50,
+        misses = track(lk.chain, targets, q_home.astype(float), along, SWEEP_TOL, 50,
                        TRUST, Q, res)
         # a miss: neither converged (0 ≤ r ≤ tol) nor trusted (r < 0), as track counts
         miss = np.flatnonzero(~(res <= SWEEP_TOL) & ok) if misses else ()
         if len(miss):
             Qm, rm = np.empty((len(miss), leg.nq)), np.empty(len(miss))
-            solve_from(*lk.solver_args(), np.ascontiguousarray(targets[miss]),
+            solve_from(lk.chain, np.ascontiguousarray(targets[miss]),
                        start_configurations(leg, q_home, restarts, seed=0), SWEEP_TOL, 100,
                        Qm, rm, np.zeros(len(miss), np.int64))
             Q[miss] = Qm

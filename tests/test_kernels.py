@@ -480,7 +480,7 @@ def _track(kernel, q0, targets, extrapolate, tol=1e-12, trust=TRUST):
     n = targets.shape[0]
     Q = np.full((n, kernel.nv), np.nan)
     res = np.full(n, np.nan)
-    misses = track(*kernel.solver_args(), targets, q0.astype(float),
+    misses = track(kernel.chain, targets, q0.astype(float),
                    np.asarray(extrapolate, dtype=np.bool_), tol, 50, trust, Q, res)
     # the count returned: targets neither converged nor trusted
     assert misses == np.count_nonzero(~(res <= tol))
