@@ -157,3 +157,15 @@ class ForwardKinematicsError(PkmError):
     def __init__(self, message: str, reached=None):
         self.reached = reached
         super().__init__(message)
+
+
+class ClosureFileError(MechanismFileError):
+    """A closed-loop description (Extended-URDF closures YAML/TOML, or an MJCF file with
+    ``<equality>`` closures) is wrong.
+
+    Attributes:
+        path: The file.
+        where: The key or element in the file (e.g. ``closed_loop[1][0]``,
+            ``equality/connect[2]``).
+        reason: What is wrong and how to fix it.
+    """

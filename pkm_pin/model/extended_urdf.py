@@ -1,0 +1,334 @@
+"""Extended URDF: a URDF tree plus a closures file, as in Gepetto's example-parallel-robots.
+
+A closed-loop robot of Gepetto's ``example-parallel-robots`` is a folder with
+``robot.urdf`` (the loops cut open: a spanning tree) and ``robot.yaml``::
+
+    closed_loop: [['closedloop1_A', 'closedloop1_B']]   # pairs of frame names
+    type: ['6d']                                         # one per pair: 3d/3D or 6d/6D
+    name_mot: ['mot1', 'mot2']                           # actuated joints
+    joint_name: ['spherical_1']                          # optional: joints to replace,
+    joint_type: ['SPHERICAL']                            #   and by what
+
+:func:`read_extended_urdf` turns the pair into a :class:`~pkm_pin.model.ClosureModel`,
+following the toolbox's loader (``completeRobotLoader`` in
+``example_parallel_robots/loader_tools.py`` and ``ActuationModel`` in
+``actuation_model.py``) so that its models load unchanged:
+
+* The URDF is read by Pinocchio's parser with ``<mimic>`` ignored (every joint is its own
+  coordinate, as ``RobotWrapper.BuildFromURDF`` does); ``free_flyer=True`` puts a
+  free-flyer joint ``root_joint`` under the root link, as the toolbox's ``freeflyer``.
+* ``joint_type`` replaces the joint of the same name, at the same placement:
+  ``SPHERICAL`` by a spherical joint; ``UJOINT_XY`` (``_YZ``, ``_ZX``; ``CARDAN`` is the
+  older ``UJOINT_XY``) by a revolute about the first axis named ``<joint>_X`` followed by
+  one about the second named ``<joint>_Y``, which carries the joint's body and frames (any
+  two distinct axes are accepted, e.g. ``UJOINT_ZY``); ``FIXED`` locks the joint at
+  ``q = 0`` (its frames stay). Children of a replaced universal joint hang on its second
+  revolute (the toolbox loses them).
+* Each ``closed_loop`` pair ``[A, B]`` closes frame ``A`` (joint, link or fixed-joint frame:
+  Pinocchio's first frame of that name) on frame ``B`` at their own placements: ``3d``/``3D``
+  a point closure, ``6d``/``6D`` a weld; the closure is named ``A + "C" + B``.
+* ``name_mot`` entries match every movable joint whose name *contains* them (the toolbox's
+  ``motname in name``), in the tree's joint order: that is the actuated order.
+
+Deliberate differences: a closure type other than 3d/6d, lists of different lengths, a
+frame, joint or motor name that matches nothing are errors (the toolbox falls back to 6D,
+truncates, or fails later); keys other than those listed here are errors (typos); the
+toolbox's ``simplifyModel`` (three massless revolutes with concurrent axes merged into a
+spherical joint) is not applied: the tree keeps the URDF's joints.
+
+Two keys of our own (the toolbox ignores extra keys, so such files still load there):
+``output``, the output frame. The same keys are accepted in a TOML file. ``reference`` is
+``q = 0`` of the tree (``pinocchio.neutral``): published models are usually not closed
+there. The output frame is ``output=`` if given, else the file's ``output``, else a frame
+named ``effector`` (the toolbox's robots name their end-effector link so), else the last
+link (body frame) of the tree that no closure uses.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pinocchio as pin
+
+from ..errors import ClosureFileError, UrdfError, _listing
+from ..urdf import _captured_stderr, read
+from .closure_model import Closure, ClosureModel
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+#: Closure types of the closures file and the :class:`Closure` kind they give.
+CLOSURE_TYPES = {"3d": "point", "3D": "point", "6d": "weld", "6D": "weld"}
+
+#: Joint replacements of ``joint_type`` (``UJOINT_`` + two distinct axes of XYZ as well).
+JOINT_TYPES = ("SPHERICAL", "FIXED", "CARDAN", "UJOINT_XY", "UJOINT_YZ", "UJOINT_ZX")
+
+#: Keys of a closures file: required, then optional.
+REQUIRED_KEYS = ("closed_loop", "type", "name_mot")
+OPTIONAL_KEYS = ("joint_name", "joint_type", "output")
+
+_REVOLUTE = {"X": pin.JointModelRX, "Y": pin.JointModelRY, "Z": pin.JointModelRZ}
+
+
+@dataclass(frozen=True)
+class ClosureSpec:
+    """The validated content of a closures file (names only; nothing checked against a URDF).
+
+    Attributes:
+        path: The file.
+        closed_loop: Pairs of frame names.
+        types: One closure type per pair (``"3d"``, ``"6D"`` …).
+        name_mot: Actuated joint names (or parts of names).
+        joint_name: Joints to replace.
+        joint_type: What replaces each (``"SPHERICAL"``, ``"UJOINT_XY"``, ``"FIXED"`` …).
+        output: The output frame, or None.
+    """
+
+    path: str
+    closed_loop: tuple[tuple[str, str], ...]
+    types: tuple[str, ...]
+    name_mot: tuple[str, ...]
+    joint_name: tuple[str, ...] = ()
+    joint_type: tuple[str, ...] = ()
+    output: str | None = None
+
+
+# --------------------------------------------------------------------------- entry point
+def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.PathLike | None
+                       = None, *, output: str | None = None,
+                       free_flyer: bool = False) -> ClosureModel:
+    """The closure model of a URDF and its closures file (module docstring).
+
+    Args:
+        urdf_path: The URDF file.
+        closures_path: The closures file (YAML, or TOML by its ``.toml`` suffix); default:
+            :func:`find_closures_file`.
+        output: Output frame (overrides the file's ``output`` and the default).
+        free_flyer: Put a free-flyer joint ``root_joint`` under the root link.
+
+    Raises:
+        ClosureFileError: a missing or wrong file; the message names the file, the entry
+            and how to fix it.
+    """
+    urdf = Path(urdf_path)
+    path = Path(closures_path) if closures_path is not None else find_closures_file(urdf)
+    spec = read_closures_file(path)
+    tree = _build_tree(urdf, spec, free_flyer)
+    closures = _closures(tree, spec)
+    out = output if output is not None else _output_frame(tree, spec)
+    return ClosureModel(tree, closures, _actuated(tree, spec), out, name=tree.name)
+
+
+def find_closures_file(urdf_path: str | os.PathLike) -> Path:
+    """The closures file of ``urdf_path``: the same stem with ``.yaml``, ``.yml`` or
+    ``.toml``, else ``robot.yaml`` in the same folder (the toolbox's name)."""
+    urdf = Path(urdf_path)
+    candidates = [urdf.with_suffix(s) for s in (".yaml", ".yml", ".toml")]
+    candidates.append(urdf.parent / "robot.yaml")
+    for c in candidates:
+        if c.is_file():
+            return c
+    raise ClosureFileError(str(urdf), "", "no closures file beside it (looked for "
+                           + ", ".join(c.name for c in candidates)
+                           + "); write one or pass closures_path=")
+
+
+# ----------------------------------------------------------------------- closures file
+def read_closures_file(path: str | os.PathLike) -> ClosureSpec:
+    """Read and check a closures file (YAML, or TOML by suffix) without its URDF."""
+    path = Path(path)
+    label = str(path)
+    if not path.is_file():
+        raise ClosureFileError(label, "", "no such closures file; check the path")
+    try:
+        text = path.read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise ClosureFileError(label, "", f"cannot be read: {e}") from e
+    content = _parse(text, label, toml=path.suffix.lower() == ".toml")
+    if not isinstance(content, dict):
+        raise ClosureFileError(label, "", "must be a mapping with the keys "
+                               f"{list(REQUIRED_KEYS)} (optional: {list(OPTIONAL_KEYS)})")
+    unknown = sorted(set(content) - set(REQUIRED_KEYS) - set(OPTIONAL_KEYS))
+    if unknown:
+        raise ClosureFileError(label, str(unknown[0]), "unknown key; the keys are "
+                               f"{list(REQUIRED_KEYS + OPTIONAL_KEYS)}")
+    for key in REQUIRED_KEYS:
+        if key not in content:
+            raise ClosureFileError(label, key, "is missing (give [] when there is none)")
+    loops = tuple(_pair(p, label, f"closed_loop[{i}]")
+                  for i, p in enumerate(_names(content, "closed_loop", label, str_items=False)))
+    types = _names(content, "type", label)
+    _same_length(label, "closed_loop", loops, "type", types)
+    for i, t in enumerate(types):
+        if t not in CLOSURE_TYPES:
+            raise ClosureFileError(label, f"type[{i}]", f"unknown closure type {t!r}; use "
+                                   "'3d' (point contact) or '6d' (weld)")
+    names, kinds = _names(content, "joint_name", label), _names(content, "joint_type", label)
+    _same_length(label, "joint_name", names, "joint_type", kinds)
+    for i, k in enumerate(kinds):
+        if _ujoint_axes(k) is None and k not in JOINT_TYPES:
+            raise ClosureFileError(label, f"joint_type[{i}]", f"unknown joint type {k!r}; "
+                                   f"use one of {list(JOINT_TYPES)} or UJOINT_ + two axes")
+    output = content.get("output")
+    if output is not None and not isinstance(output, str):
+        raise ClosureFileError(label, "output", f"must be a frame name, got {output!r}")
+    return ClosureSpec(label, loops, types, _names(content, "name_mot", label), names, kinds,
+                       output)
+
+
+def _parse(text: str, label: str, toml: bool):
+    """The file's content as Python objects, or a :class:`ClosureFileError`."""
+    if toml:
+        try:
+            return tomllib.loads(text)
+        except tomllib.TOMLDecodeError as e:
+            raise ClosureFileError(label, "", f"not valid TOML: {e}") from e
+    import yaml
+
+    try:
+        return yaml.safe_load(text)
+    except yaml.YAMLError as e:
+        where = getattr(e, "problem_mark", None)
+        at = f" at line {where.line + 1}, column {where.column + 1}" if where else ""
+        problem = getattr(e, "problem", None) or str(e).splitlines()[0]
+        raise ClosureFileError(label, "", f"not valid YAML{at}: {problem}") from e
+
+
+def _names(content: dict, key: str, label: str, str_items: bool = True) -> tuple:
+    """``content[key]`` as a tuple (missing or null: empty); items must be strings."""
+    value = content.get(key)
+    if value is None:
+        return ()
+    if not isinstance(value, list):
+        raise ClosureFileError(label, key, f"must be a list, got {value!r}")
+    for i, item in enumerate(value):
+        if str_items and not isinstance(item, str):
+            raise ClosureFileError(label, f"{key}[{i}]", f"must be a name (string), got "
+                                   f"{item!r}")
+    return tuple(value)
+
+
+def _pair(value, label: str, where: str) -> tuple[str, str]:
+    if not (isinstance(value, list) and len(value) == 2
+            and all(isinstance(v, str) for v in value)):
+        raise ClosureFileError(label, where, f"must be a pair [frameA, frameB] of frame "
+                               f"names, got {value!r}")
+    return value[0], value[1]
+
+
+def _same_length(label: str, key_a: str, a: tuple, key_b: str, b: tuple) -> None:
+    if len(a) != len(b):
+        raise ClosureFileError(label, key_b, f"has {len(b)} entries but {key_a} has {len(a)};"
+                               f" give one {key_b} per {key_a} entry")
+
+
+def _ujoint_axes(kind: str) -> str | None:
+    """The two axes of a universal-joint type (``"XY"`` for ``UJOINT_XY`` and ``CARDAN``)."""
+    if kind == "CARDAN":
+        return "XY"
+    axes = kind[len("UJOINT_"):] if kind.startswith("UJOINT_") else ""
+    if len(axes) == 2 and set(axes) <= set("XYZ") and axes[0] != axes[1]:
+        return axes
+    return None
+
+
+# -------------------------------------------------------------------------------- tree
+def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool) -> pin.Model:
+    """Pinocchio's tree of the URDF (mimic ignored), joints replaced as ``spec`` says."""
+    try:
+        src = read(urdf)
+    except UrdfError as e:
+        raise ClosureFileError(e.source, "URDF", e.reason + (f". {e.hint}" if e.hint else "")
+                               ) from e
+    with _captured_stderr():
+        try:
+            model = (pin.buildModelFromXML(src.xml, pin.JointModelFreeFlyer(), mimic=False)
+                     if free_flyer else pin.buildModelFromXML(src.xml, mimic=False))
+        except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
+            raise ClosureFileError(src.label, "URDF", f"Pinocchio cannot build it: {e}") from e
+    movable = [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0]
+    for i, name in enumerate(spec.joint_name):
+        if name not in movable:
+            raise ClosureFileError(spec.path, f"joint_name[{i}]", f"{name!r} is not a movable "
+                                   f"joint of {src.label}; its joints: {_listing(movable)}")
+    if spec.joint_name:
+        model = _replace_joints(model, dict(zip(spec.joint_name, spec.joint_type)))
+    return model
+
+
+def _replace_joints(model: pin.Model, kinds: dict) -> pin.Model:
+    """A copy of ``model`` with the joints named in ``kinds`` replaced (module docstring)."""
+    new = pin.Model()
+    new.name = model.name
+    ids, locked = {0: 0}, []
+    for j in range(1, model.njoints):
+        parent, name = ids[model.parents[j]], model.names[j]
+        kind, place = kinds.get(name), model.jointPlacements[j]
+        axes = _ujoint_axes(kind) if kind else None
+        if axes:
+            first = new.addJoint(parent, _REVOLUTE[axes[0]](), place, f"{name}_{axes[0]}")
+            jid = new.addJoint(first, _REVOLUTE[axes[1]](), pin.SE3.Identity(),
+                               f"{name}_{axes[1]}")
+        elif kind == "SPHERICAL":
+            jid = new.addJoint(parent, pin.JointModelSpherical(), place, name)
+        else:
+            jid = new.addJoint(parent, model.joints[j], place, name, *_limits(model, j))
+            if kind == "FIXED":
+                locked.append(jid)
+        new.appendBodyToJoint(jid, model.inertias[j], pin.SE3.Identity())
+        ids[j] = jid
+    for f in list(model.frames)[1:]:  # same order: the parent frame indices stay valid
+        new.addFrame(pin.Frame(f.name, ids[f.parentJoint], f.parentFrame, f.placement, f.type,
+                               f.inertia), False)
+    return pin.buildReducedModel(new, locked, pin.neutral(new)) if locked else new
+
+
+def _limits(model: pin.Model, j: int) -> tuple:
+    """Effort, velocity and position limits of joint ``j`` (for ``Model.addJoint``)."""
+    joint = model.joints[j]
+    v = slice(joint.idx_v, joint.idx_v + joint.nv)
+    q = slice(joint.idx_q, joint.idx_q + joint.nq)
+    return (model.effortLimit[v], model.velocityLimit[v], model.lowerPositionLimit[q],
+            model.upperPositionLimit[q])
+
+
+# -------------------------------------------------------------------- closures, motors
+def _closures(tree: pin.Model, spec: ClosureSpec) -> tuple[Closure, ...]:
+    """One closure per ``closed_loop`` pair, at the frames' own placements."""
+    frames = [f.name for f in tree.frames]
+    for i, pair in enumerate(spec.closed_loop):
+        for k, name in enumerate(pair):
+            if not tree.existFrame(name):
+                raise ClosureFileError(spec.path, f"closed_loop[{i}][{k}]", f"frame {name!r} "
+                                       f"is not in the URDF; its frames: {_listing(frames)}")
+    return tuple(Closure(CLOSURE_TYPES[t], a, b, name=f"{a}C{b}")
+                 for (a, b), t in zip(spec.closed_loop, spec.types))
+
+
+def _actuated(tree: pin.Model, spec: ClosureSpec) -> tuple[str, ...]:
+    """The movable joints whose names contain a ``name_mot`` entry, in tree order."""
+    movable = [tree.names[j] for j in range(1, tree.njoints) if tree.joints[j].nv > 0]
+    for i, mot in enumerate(spec.name_mot):
+        if not any(mot in name for name in movable):
+            raise ClosureFileError(spec.path, f"name_mot[{i}]", f"{mot!r} matches no movable "
+                                   f"joint of the URDF; its joints: {_listing(movable)}")
+    return tuple(name for name in movable if any(mot in name for mot in spec.name_mot))
+
+
+def _output_frame(tree: pin.Model, spec: ClosureSpec) -> str:
+    """The file's ``output``, else ``effector``, else the last body frame no closure uses."""
+    if spec.output is not None:
+        if not tree.existFrame(spec.output):
+            raise ClosureFileError(spec.path, "output", f"frame {spec.output!r} is not in the "
+                                   f"URDF; its frames: {_listing(f.name for f in tree.frames)}")
+        return spec.output
+    if tree.existFrame("effector"):
+        return "effector"
+    used = {name for pair in spec.closed_loop for name in pair}
+    bodies = [f.name for f in tree.frames if f.type == pin.FrameType.BODY and f.name not in used]
+    return bodies[-1] if bodies else tree.frames[0].name
