@@ -842,9 +842,13 @@ class TreeSolution:
     converged: bool
 
 
+_NO_LIMIT = 0.5 * np.finfo(float).max
+
+
 def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper limits (nq,) of the tree's coordinates that :func:`solve_tree`
-    enforces: a 1-DOF joint's (nq = nv = 1) finite position limits; ±inf elsewhere."""
+    enforces: a 1-DOF joint's (nq = nv = 1) finite position limits; ±inf elsewhere
+    (Pinocchio's default "no limit", the largest float, counts as none)."""
     tree = model.tree
     lo, up = np.full(tree.nq, -np.inf), np.full(tree.nq, np.inf)
     for j in range(1, tree.njoints):
@@ -852,7 +856,7 @@ def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
         if joint.nq == 1 and joint.nv == 1:
             i = joint.idx_q
             a, b = tree.lowerPositionLimit[i], tree.upperPositionLimit[i]
-            if np.isfinite(a) and np.isfinite(b) and a <= b:
+            if max(abs(a), abs(b)) < _NO_LIMIT and a <= b:
                 lo[i], up[i] = a, b
     return lo, up
 
@@ -954,7 +958,7 @@ def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
     reference. All clipped to :func:`tree_limits`."""
     lo, up = tree_limits(model)
     ref = np.array(model.reference)
-    middle = np.where(np.isfinite(lo), 0.5 * (lo + up), ref)
+    middle = np.where(np.isfinite(lo), 0.5 * (np.nan_to_num(lo) + np.nan_to_num(up)), ref)
     rows = [] if warm is None else [model.check_q(warm)]
     rows += [ref, pin.neutral(model.tree), middle]
     rng = np.random.default_rng(seed)
