@@ -357,7 +357,9 @@ class Mechanism:
 
 # --------------------------------------------------------------------- TOML files
 _LEG_KEYS = {"name", "urdf", "tip", "actuated", "base", "anchor", "home_q"}
-_TOP_KEYS = {"name", "description", "legs", "home"}
+_TOP_KEYS = {"name", "description", "legs", "home", "closure"}
+#: Values of the top-level ``closure`` key: a rigid platform, or a pin.
+_CLOSURES = ("weld", "spherical", "revolute")
 _POSE_KEYS = {"xyz", "rpy"}
 
 
@@ -395,6 +397,12 @@ def load_mechanism(path: str | os.PathLike) -> Mechanism:
         legs.append(leg)
         anchors.append(anchor)
         home_q.append(q)
+    closure = _typed(doc, "closure", str, label, "", default="weld")
+    if closure not in _CLOSURES:
+        raise MechanismFileError(label, "closure", f"unknown closure {closure!r}: write one of "
+                                 f"{', '.join(repr(c) for c in _CLOSURES)}")
+    if closure != "weld":
+        return _pinned(legs, anchors, home_q, closure, name, doc, label)
     home = _pose_table(doc.get("home", {}), label, "home")
     try:
         return Mechanism(legs, anchors, name=name, home=home,
@@ -402,6 +410,22 @@ def load_mechanism(path: str | os.PathLike) -> Mechanism:
                          description=description)
     except InputError as e:
         raise MechanismFileError(label, "", str(e)) from e
+
+
+def _pinned(legs, anchors, home_q, closure: str, name: str, doc: dict, label: str):
+    """The :class:`~pkm_pin.linkage.Linkage` of legs meeting at a pin
+    (:func:`pkm_pin.model.pinned.pinned_legs`)."""
+    from .linkage import Linkage
+    from .model.pinned import pinned_legs
+
+    if "home" in doc:
+        raise MechanismFileError(label, "home", f"legs meeting at a {closure} pin have no "
+                                 "platform pose: remove [home] and give each leg's home_q "
+                                 "(the configuration assembly starts from)")
+    try:
+        return Linkage(pinned_legs(legs, anchors, closure, name=name, home_q=home_q))
+    except InputError as e:
+        raise MechanismFileError(label, "closure", str(e)) from e
 
 
 def _load_leg(entry, i: int, path: Path):

@@ -7,6 +7,7 @@ Regenerate the committed models with ``python -m pkm_pin.builders``.
 
 from .design import LegDesign, MechanismDesign
 from .orthoglide import orthoglide, orthoglide_quasi
+from .pinned import delta_point, five_bar
 from .planar import (
     rpr3,
     rpr3_type2_pose,
@@ -55,6 +56,9 @@ __all__ = [
     "JointSpec",
     "LegDesign",
     "MECHANISMS",
+    "PINNED",
+    "delta_point",
+    "five_bar",
     "MechanismDesign",
     "chain_robot",
     "chain_urdf",
@@ -74,3 +78,10 @@ __all__ = [
     "upu3",
     "upu3_constraint_singular_pose",
 ]
+
+#: Builders of the mechanisms whose legs meet at a pin (``models/pinned/``; each builds a
+#: :class:`~pkm_pin.linkage.Linkage`).
+PINNED = {
+    "five_bar": five_bar,
+    "delta_point": delta_point,
+}

@@ -88,6 +88,10 @@ class MechanismDesign:
         home_q: Joint values of each leg at home (``legs[i]`` has ``home_q[i]``).
         slug: File stem of the mechanism file (``models/mechanisms/<slug>.toml``);
             derived from ``name`` when empty.
+        closure: How the legs meet: ``"weld"`` (a rigid platform: a
+            :class:`~pkm_pin.Mechanism`) or a pin, ``"spherical"`` / ``"revolute"``
+            (:mod:`pkm_pin.model.pinned`: a :class:`~pkm_pin.linkage.Linkage`; ``home``
+            is then the pin's placement).
     """
 
     name: str
@@ -96,6 +100,7 @@ class MechanismDesign:
     home: pin.SE3
     home_q: list[np.ndarray]
     slug: str = field(default="")
+    closure: str = "weld"
 
     def __post_init__(self) -> None:
         if len(self.home_q) != len(self.legs):
@@ -109,8 +114,16 @@ class MechanismDesign:
         return [leg.leg() for leg in self.legs]
 
     def build(self):
-        """The :class:`~pkm_pin.mechanism.Mechanism` of this design."""
+        """The :class:`~pkm_pin.mechanism.Mechanism` of this design (a
+        :class:`~pkm_pin.linkage.Linkage` when the legs meet at a pin)."""
         from ..mechanism import Mechanism
+
+        if self.closure != "weld":
+            from ..linkage import Linkage
+            from ..model.pinned import pinned_legs
+
+            return Linkage(pinned_legs(self.legs_built(), [leg.anchor for leg in self.legs],
+                                       self.closure, name=self.name, home_q=self.home_q))
 
         return Mechanism(
             legs=self.legs_built(),
@@ -135,6 +148,8 @@ class MechanismDesign:
         Each leg's ``home_q`` is written too: it selects the working mode at home.
         """
         lines = [f"name = {_string(self.name)}", f"description = {_string(self.description)}"]
+        if self.closure != "weld":
+            lines.append(f"closure = {_string(self.closure)}")
         for leg, q in zip(self.legs, self.home_q):
             lines += [
                 "",
@@ -147,25 +162,29 @@ class MechanismDesign:
                 f"anchor = {_inline_placement(leg.anchor)}",
                 f"home_q = {_numbers(q)}",
             ]
+        if self.closure != "weld":  # legs meeting at a pin: home_q is the reference
+            return "\n".join(lines + [""])
         xyz, rpy = _xyz_rpy(self.home)
         lines += ["", "[home]", f"xyz = {xyz}", f"rpy = {rpy}", ""]
         return "\n".join(lines)
 
     def write(self, models_dir: str | Path) -> list[Path]:
-        """Write the URDFs to ``models_dir/urdf/`` and the TOML to ``models_dir/mechanisms/``.
+        """Write the URDFs to ``models_dir/urdf/`` and the TOML to ``models_dir/mechanisms/``
+        (``models_dir/pinned/`` for legs meeting at a pin).
 
         Returns:
             The paths written.
         """
         models_dir = Path(models_dir)
+        folder = models_dir / ("mechanisms" if self.closure == "weld" else "pinned")
         (models_dir / "urdf").mkdir(parents=True, exist_ok=True)
-        (models_dir / "mechanisms").mkdir(parents=True, exist_ok=True)
+        folder.mkdir(parents=True, exist_ok=True)
         written = []
         for file_name, text in self.urdf_files().items():
             path = models_dir / "urdf" / file_name
             path.write_text(text)
             written.append(path)
-        path = models_dir / "mechanisms" / f"{self.slug}.toml"
+        path = folder / f"{self.slug}.toml"
         path.write_text(self.toml())
         written.append(path)
         return written
