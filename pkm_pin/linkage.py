@@ -637,12 +637,12 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
     A_h = homogenised_about(A, p, L) if len(A) else np.zeros((0, 6))
     norms = np.linalg.norm(A_h, axis=1)
     A_n = A_h / np.where(norms > 0, norms, 1.0)[:, None]
-    type_II, cond = _transmission(A_n, P_h, d)
+    type_II, cond = _transmission(A_n, P_h, d) if np.all(norms > 0) else (np.nan, np.nan)
     Xr, Yr, M, forward, inverse = _generalised(ns, Yh, rtol)
     idx = {"type_I": type_I, "type_II": type_II, "condition_A": cond, "forward": forward,
            "inverse": inverse}
-    singularity = classify(float(min(type_I, inverse)), float(min(type_II, forward)),
-                           singular_tol)
+    singularity = classify(float(np.nanmin([type_I, inverse])),
+                           float(np.nanmin([type_II, forward])), singular_tol)
     csing = None if generic is None else bool(mob.dof != generic.dof
                                               or d != generic.output_dof)
     return LinkageAnalysis(kin.q, mob, d, d - rotations, from_homogenised(P_h, p, L),
@@ -721,7 +721,7 @@ def _actuation_row(G: np.ndarray, col: int, rtol: float) -> np.ndarray | None:
     y0 = b / (b @ b)
     _, _, Vb = np.linalg.svd(b[None], full_matrices=True)
     Nb = Vb[1:].T
-    z = np.linalg.lstsq(Z.T @ Nb, -Z.T @ y0, rcond=None)[0] if Nb.size else np.zeros(0)
+    z = np.linalg.lstsq(Z.T @ Nb, -Z.T @ y0, rcond=rtol)[0] if Nb.size else np.zeros(0)
     return Z.T @ (y0 + Nb @ z)
 
 
