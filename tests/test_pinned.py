@@ -12,7 +12,7 @@ import pinocchio as pin
 import pytest
 
 from pkm_pin import InputError, MechanismFileError, load_mechanism
-from pkm_pin.builders import PINNED, delta_point, five_bar
+from pkm_pin.builders import PINNED, five_bar
 from pkm_pin.linkage import Linkage
 from pkm_pin.model.pinned import PIN, pinned_legs
 
