@@ -175,13 +175,19 @@ class Linkage:
     Args:
         model: The closure model (immutable; kept as :attr:`model`).
         output: Another frame of the tree to analyse instead of ``model.output``.
+        point: Analyse the output frame's origin as a point (its translations only,
+            :attr:`ClosureModel.output_point`), or as a body (``False``); default: as
+            ``model`` says.
     """
 
-    def __init__(self, model: ClosureModel, output: str | None = None):
+    def __init__(self, model: ClosureModel, output: str | None = None,
+                 point: bool | None = None):
         if not isinstance(model, ClosureModel):
             raise InputError(f"model must be a ClosureModel, got {type(model).__name__}")
         if output is not None and output != model.output:
             model = replace(model, output=output)
+        if point is not None and bool(point) != model.output_point:
+            model = replace(model, output_point=bool(point))
         self._model = model
         self._loops = _loops_of_actuators(model)
 
@@ -388,8 +394,9 @@ def _pose_rows(model: ClosureModel, kin: TreeKinematics) -> np.ndarray:
     can realise: an orthonormal basis of its twist system, homogenised, in its own axes
     and about its origin (the identity when d = 6)."""
     ns = _NullSpace(model, kin, RANK_RTOL)
-    local = screws.homogenise(screws.transform(ns.Y_world.T, kin.output_placement.inverse()),
-                              model.length)
+    M = kin.output_placement  # a point's error is in world axes (solve.pose_error_rows)
+    M = pin.SE3(np.eye(3), M.translation) if model.output_point else M
+    local = screws.homogenise(screws.transform(ns.Y_world.T, M.inverse()), model.length)
     rank, _, _, Vt = _svd_rank(local, RANK_RTOL)
     return np.eye(6) if rank == 6 else Vt[:rank]
 

@@ -886,7 +886,12 @@ def _tree_rows(model, kin, targets, pose, pose_rows):
 def pose_error_rows(model, kin, target: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
     """The output frame's pose error against ``target`` and its Jacobian (per unit of
     v): ``log6(target⁻¹ · oMo)`` axis-first ``(θ [rad]; ρ / L)``, in the target's axes
-    (so frame-invariant), ``L`` = :attr:`ClosureModel.length`."""
+    (so frame-invariant), ``L`` = :attr:`ClosureModel.length`. For a point output
+    (:attr:`ClosureModel.output_point`) the rotation rows are zero and the linear rows
+    the position error ``(p − p_target) / L`` in world axes."""
+    if model.output_point:
+        e = np.r_[np.zeros(3), kin.output_placement.translation - target.translation]
+        return e / np.r_[1.0, 1.0, 1.0, [model.length] * 3], kin.output_jacobian / model.length
     M = target.actInv(kin.output_placement)
     e = screws.log(M)
     local = screws.adjoint(kin.output_placement.inverse()) @ kin.output_jacobian

@@ -82,14 +82,37 @@ def test_five_bar_mobility_and_redundancy(five):
     assert m.independent_actuators == ("L/R1", "R/R1")
 
 
+def test_five_bar_output_is_the_pin_point_with_two_translations(five):
+    an = five.analyze(five.assemble().q)
+    # the pin is a point: 2T, not the "1T1R" of the first leg's distal link
+    assert (an.motion_type, an.output_dof, an.translations) == ("2T", 2, 2)
+    np.testing.assert_allclose(an.platform_twists[:, :3], 0.0, atol=1e-15)
+    np.testing.assert_allclose(np.abs(an.platform_twists[:, 5]), 0.0, atol=1e-15)
+
+
+def test_five_bar_actuation_wrenches_are_the_distal_links_through_the_pin(five):
+    q = five.assemble().q
+    an = five.analyze(q)
+    _, elbows, tips = _five_bar_points(q)
+    p = np.r_[tips[0], 0.0]
+    for row, e in zip(an.A, elbows):
+        f, m = row[:3], row[3:]
+        d = np.r_[tips[0] - e, 0.0]
+        assert np.linalg.norm(np.cross(f, d)) < 1e-12 * np.linalg.norm(d)  # along the link
+        np.testing.assert_allclose(m, np.cross(p, f), atol=1e-12)  # a line through the pin
+
+
 def test_five_bar_forward_and_inverse_velocity_match_the_closed_form(five):
     q = five.assemble().q
     an = five.analyze(q)
     Am, Bm, p = _five_bar_velocity_equation(q)
     for qd in (np.array([1.0, 0.0]), np.array([0.3, -0.7])):
-        v = _point_velocity(an.forward_velocity(qd), np.r_[p, 0.0])
+        t = an.forward_velocity(qd)
+        np.testing.assert_allclose(t[:3], 0.0, atol=1e-15)  # a point: no rotation
+        v = _point_velocity(t, np.r_[p, 0.0])
         np.testing.assert_allclose(v[:2], np.linalg.solve(Am, Bm @ qd), atol=1e-12)
         assert abs(v[2]) < 1e-12
+        np.testing.assert_allclose(an.inverse_velocity(t), qd, atol=1e-12)
 
 
 def test_five_bar_velocity_against_finite_differences_of_forward_kinematics(five):
@@ -138,6 +161,15 @@ def test_delta_point_assembles_with_three_dof_and_no_idle_motion(delta):
     assert a.residual < 1e-12
     m = delta.mobility(a.q)
     assert (m.dof, m.redundant_constraints, m.idle_dof, delta.grubler) == (3, 0, 0, 3)
+    assert delta.analyze(a.q).motion_type == "3T"
+
+
+def test_pinned_inverse_kinematics_reaches_the_point(five, delta):
+    for link, shift in ((five, [0.01, 0.02, 0.0]), (delta, [0.02, -0.01, 0.03])):
+        a = link.assemble()
+        target = pin.SE3(pin.rpy.rpyToMatrix(0.3, 0.2, 0.1), a.output_pose.translation + shift)
+        b = link.inverse_kinematics(target, guess=a)  # the point: the rotation is free
+        np.testing.assert_allclose(b.output_pose.translation, target.translation, atol=1e-10)
 
 
 def test_delta_point_velocity_against_finite_differences(delta):

@@ -123,6 +123,10 @@ class ClosureModel:
         length: Characteristic length [m] of the residuals and rank decisions; default:
             the sum of the offsets between the tree's joints (not the root placements)
             and of the closures' placements, 1.0 when that is zero.
+        output_point: The output is a **point**, the output frame's origin (legs meeting
+            at a pin, a point "platform"): its rotation is not analysed, the output
+            Jacobian's columns are pure translations ``(0; v_p)``
+            (:meth:`output_jacobian`), and its pose is its position.
         reference: Reference configuration of the tree (nq,), the one assembly starts
             from (a file's ``q = 0`` or MJCF ``qpos0``; it need not satisfy the
             closures); default ``pinocchio.neutral(tree)``. Read-only.
@@ -135,6 +139,7 @@ class ClosureModel:
     name: str = ""
     length: float | None = None
     reference: np.ndarray | None = field(default=None, repr=False)
+    output_point: bool = False
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
 
@@ -232,7 +237,8 @@ class ClosureModel:
 
     def output_jacobian(self, q) -> np.ndarray:
         """6 × nv: column k is the axis-first twist ``(ω; v_O)`` of the output frame,
-        about the world origin, for a unit rate of velocity coordinate k."""
+        about the world origin, for a unit rate of velocity coordinate k; with
+        :attr:`output_point`, the translation ``(0; v_p)`` at the velocity of its origin."""
         return self._output_jacobian(self._jacobians(self.check_q(q)))
 
     # ----------------------------------------------------------------- mobility
@@ -321,6 +327,9 @@ class ClosureModel:
     def _output_jacobian(self, data: pin.Data) -> np.ndarray:
         """The output Jacobian from a ``data`` filled by :meth:`_jacobians`."""
         fid = self._frame_ids[self.output]
+        if self.output_point:  # the origin's velocity: LOCAL_WORLD_ALIGNED's linear rows
+            J = pin.getFrameJacobian(self.tree, data, fid, pin.LOCAL_WORLD_ALIGNED)
+            return np.vstack([np.zeros((3, self.nv)), J[:3]])
         return screws.from_pinocchio(pin.getFrameJacobian(self.tree, data, fid, pin.WORLD))
 
 

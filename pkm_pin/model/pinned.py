@@ -12,8 +12,9 @@ the general :class:`~pkm_pin.model.closure_model.ClosureModel`:
 * one closure per other leg ``i`` between :data:`PIN` and the constraint frame
   ``tip_i · anchor_i⁻¹``, of kind ``"point"`` (a spherical pin: the origins coincide) or
   ``"revolute"`` (a revolute pin: the origins and the z axes coincide);
-* actuated: ``"leg/joint"``; output: :data:`PIN`; reference configuration: the legs'
-  home configurations (neutral where none is given).
+* actuated: ``"leg/joint"``; output: the point :data:`PIN` (``output_point``: its
+  translations are analysed, not the turning of the first leg's last link); reference
+  configuration: the legs' home configurations (neutral where none is given).
 
 ``anchor_i`` is, as for a platform, the placement of leg ``i``'s tip frame in the pin
 frame; with a spherical pin only its translation matters, with a revolute pin the pin's
@@ -77,4 +78,5 @@ def pinned_legs(legs: Sequence, anchors: Sequence[pin.SE3] | None, kind: str, *,
                                 leg.check_q(q, f"home_q of leg {leg.name!r}")
                                 for leg, q in zip(legs, home_q)])
     actuated = tuple(f"{leg.name}/{a}" for leg in legs for a in leg.actuated)
-    return ClosureModel(tree, closures, actuated, PIN, name, reference=reference)
+    return ClosureModel(tree, closures, actuated, PIN, name, reference=reference,
+                        output_point=True)
