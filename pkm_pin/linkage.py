@@ -71,11 +71,16 @@ import pinocchio as pin
 
 from . import screws
 from .analysis import classify
-from .errors import AssemblyError, InputError, PkmError, SingularityError
+from .errors import AssemblyError, InputError, SingularityError
 from .model.closure_model import ClosureModel, TreeKinematics
 from .solve import solve_tree_starts, tree_starts
-from .tolerances import (CLOSENESS_SINGULAR_TOL, CLOSURE_TOL, RANK_RTOL,
-                         ROTATION_COUNT_TOL, SPAN_RTOL)
+from .tolerances import (
+    CLOSENESS_SINGULAR_TOL,
+    CLOSURE_TOL,
+    RANK_RTOL,
+    ROTATION_COUNT_TOL,
+    SPAN_RTOL,
+)
 
 __all__ = ["Linkage", "LinkageAnalysis", "LinkageAssembly", "LinkageSweep", "LoopClosureError",
            "Mobility"]

@@ -17,8 +17,18 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from linkage_models import (COUPLER, CRANK, GROUND, ROCKER, five_bar, five_bar_q, four_bar,
-                            four_bar_angles, four_bar_q, spherical_rod)
+from linkage_models import (
+    COUPLER,
+    CRANK,
+    GROUND,
+    ROCKER,
+    five_bar,
+    five_bar_q,
+    four_bar,
+    four_bar_angles,
+    four_bar_q,
+    spherical_rod,
+)
 
 import pkm_pin
 from pkm_pin import screws

@@ -8,8 +8,14 @@ import numpy as np
 import pinocchio as pin
 from linkage_models import four_bar, four_bar_q, spherical_rod
 
-from pkm_pin.solve import (lm_damping, pose_error_rows, solve_tree, solve_tree_starts,
-                           tree_limits, tree_starts)
+from pkm_pin.solve import (
+    lm_damping,
+    pose_error_rows,
+    solve_tree,
+    solve_tree_starts,
+    tree_limits,
+    tree_starts,
+)
 from pkm_pin.tolerances import CLOSURE_TOL, damping
 
 
