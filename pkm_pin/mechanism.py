@@ -363,12 +363,30 @@ _CLOSURES = ("weld", "spherical", "revolute")
 _POSE_KEYS = {"xyz", "rpy"}
 
 
-def load_mechanism(path: str | os.PathLike) -> Mechanism:
-    """Read a mechanism file (TOML, format in this module's docstring).
+def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | None = None,
+                   output: str | None = None, point: bool | None = None):
+    """Read a mechanism file, by its suffix:
+
+    * ``.toml``: our format (this module's docstring): legs fixed to a platform give a
+      :class:`Mechanism`; legs meeting at a pin (``closure = "spherical"`` or
+      ``"revolute"``, :mod:`pkm_pin.model.pinned`) a :class:`~pkm_pin.linkage.Linkage`;
+    * ``.urdf``: Extended URDF, the URDF tree plus its closures file (YAML or TOML with
+      the keys of Gepetto's example-parallel-robots; beside the URDF, or ``closures``),
+      :func:`pkm_pin.model.read_extended_urdf`: a :class:`~pkm_pin.linkage.Linkage`;
+    * ``.xml`` / ``.mjcf``: MJCF with ``<equality>`` closures,
+      :func:`pkm_pin.model.read_mjcf`: a :class:`~pkm_pin.linkage.Linkage` (a tree
+      without closures when it has none).
+
+    Args:
+        closures: The closures file of a URDF (default: found beside it).
+        output: For a :class:`~pkm_pin.linkage.Linkage`, the frame whose motion is
+            analysed (default: the file's).
+        point: For a :class:`~pkm_pin.linkage.Linkage`, analyse the output frame's origin
+            as a point (``True``) or as a body (``False``; default: the file's).
 
     Raises:
         MechanismFileError: the file is missing or wrong; the message names the file,
-            the leg and the key.
+            the entry (leg, key, closure) and how to fix it.
     """
     path = Path(path)
     label = str(path)
@@ -378,6 +396,52 @@ def load_mechanism(path: str | os.PathLike) -> Mechanism:
         raise MechanismFileError(label[:80], "", f"not a usable file name: {e.strerror}") from e
     if not exists:
         raise MechanismFileError(label, "", "no such file")
+    suffix = path.suffix.lower()
+    if suffix in (".urdf", ".xml", ".mjcf"):
+        return _linkage_file(path, suffix, closures, output, point)
+    if closures is not None:
+        raise MechanismFileError(label, "", "closures= names the closures file of a .urdf; "
+                                 "a TOML mechanism file holds its own closures")
+    mech = _load_toml(path)
+    if isinstance(mech, Mechanism):
+        if output is not None or point is not None:
+            raise MechanismFileError(label, "", "output=/point= choose the output of a "
+                                     "linkage (.urdf, .xml, pinned legs); the output of "
+                                     "legs fixed to a platform is the platform")
+        return mech
+    try:
+        return type(mech)(mech.model, output=output, point=point)
+    except InputError as e:
+        raise MechanismFileError(label, "output", str(e)) from e
+
+
+def _linkage_file(path: Path, suffix: str, closures, output, point):
+    """The :class:`~pkm_pin.linkage.Linkage` of an Extended URDF or an MJCF file."""
+    from .linkage import Linkage
+    from .model import read_extended_urdf, read_mjcf
+
+    label = str(path)
+    try:
+        if suffix == ".urdf":
+            model = read_extended_urdf(path, closures, output=output)
+        else:
+            if closures is not None:
+                raise MechanismFileError(label, "", "an MJCF file holds its closures "
+                                         "(<equality>): closures= is for a .urdf")
+            model = read_mjcf(path, output=output)
+        return Linkage(model, point=point)
+    except MechanismFileError:
+        raise
+    except (FrameNotFound, JointNotFound) as e:
+        raise MechanismFileError(label, "output" if isinstance(e, FrameNotFound) else
+                                 "actuated joints", str(e)) from e
+    except InputError as e:
+        raise MechanismFileError(label, "", str(e)) from e
+
+
+def _load_toml(path: Path):
+    """:func:`load_mechanism` for a TOML file."""
+    label = str(path)
     try:
         with path.open("rb") as f:
             doc = tomllib.load(f)

@@ -847,8 +847,11 @@ _NO_LIMIT = 0.5 * np.finfo(float).max
 
 def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
     """Lower and upper limits (nq,) of the tree's coordinates that :func:`solve_tree`
-    enforces: a 1-DOF joint's (nq = nv = 1) finite position limits; ±inf elsewhere
-    (Pinocchio's default "no limit", the largest float, counts as none)."""
+    enforces: a 1-DOF joint's (nq = nv = 1) finite position limits; ±inf elsewhere.
+    Pinocchio's default "no limit" (the largest float) counts as none, and so does an
+    empty range ``lower == upper``: a URDF ``<limit>`` without ``lower``/``upper`` (as
+    CAD exporters write, e.g. Gepetto's published models) reads as [0, 0], and a joint
+    that may not move would have been written ``fixed``."""
     tree = model.tree
     lo, up = np.full(tree.nq, -np.inf), np.full(tree.nq, np.inf)
     for j in range(1, tree.njoints):
@@ -856,7 +859,7 @@ def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
         if joint.nq == 1 and joint.nv == 1:
             i = joint.idx_q
             a, b = tree.lowerPositionLimit[i], tree.upperPositionLimit[i]
-            if max(abs(a), abs(b)) < _NO_LIMIT and a <= b:
+            if max(abs(a), abs(b)) < _NO_LIMIT and a < b:
                 lo[i], up[i] = a, b
     return lo, up
 
