@@ -13,6 +13,16 @@
 ``MECHANISM`` is a mechanism file (``.toml``) or the name of a shipped model
 (``pkm-pin list``). Poses are x, y, z [m] and URDF roll, pitch, yaw [rad].
 
+General linkages (:class:`~pkm_pin.linkage.Linkage`: an Extended URDF ``.urdf`` with its
+closures file, an MJCF ``.xml`` / ``.mjcf``, or a ``.toml`` whose legs meet at a pin) work
+with every command; ``--output FRAME`` chooses the frame whose motion is analysed,
+``--point`` / ``--body`` analyse its origin as a point or the frame as a body,
+``--closures FILE`` names the closures file of a URDF. ``analyze``, ``check`` and
+``view`` assemble from the file's reference configuration (``--q``: the actuated values,
+forward kinematics first; ``--pose``: the output pose, inverse kinematics); ``map``
+sweeps two actuated coordinates (``--actuated NAME NAME``, ``--range A B C D``) in a snake
+so that each point is warm-started from its neighbour.
+
 User mistakes print one line ``pkm-pin: error: …`` on stderr and exit with status 2; no
 Python traceback. ``check`` exits with 1 when the file loads but has warnings.
 """
@@ -35,6 +45,8 @@ from .tolerances import CROSSCHECK_TOL
 POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
 #: Varied coordinates of each ``map --plane``.
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+#: File suffixes read as general linkages (besides pinned ``.toml`` files).
+LINKAGE_SUFFIXES = (".urdf", ".xml", ".mjcf")
 
 
 # ----------------------------------------------------------------- mechanisms
@@ -66,27 +78,40 @@ def shipped_models() -> dict[str, dict]:
     return models
 
 
-def load(spec: str | None):
+def load(spec: str | None, closures: str | None = None, output: str | None = None,
+         point: bool | None = None):
     """The mechanism named by ``spec``: a file path, a shipped model name, or ``None``
     (the 3-RPR of seed 000, Michalková & Guldan, see docs/references.md).
 
+    Args:
+        closures, output, point: For a linkage file, as :func:`pkm_pin.load_mechanism`.
+
+    Returns:
+        A :class:`~pkm_pin.Mechanism`, or a :class:`~pkm_pin.linkage.Linkage` for a
+        ``.urdf``, ``.xml`` / ``.mjcf`` or pinned ``.toml`` file.
+
     Raises:
-        MechanismFileError: the file is missing or wrong.
+        MechanismFileError: the file is missing or wrong (or the options do not apply).
         InputError: ``spec`` is neither a file nor a shipped model.
     """
     from .builders import MECHANISMS
     from .mechanism import load_mechanism
 
-    if spec is None:
-        return MECHANISMS["rpr3"]().build()
+    options = {"closures": closures, "output": output, "point": point}
+    given = [f"--{k}" if k != "point" else ("--point" if v else "--body")
+             for k, v in options.items() if v is not None]
+    if spec is None or (spec in MECHANISMS and not _is_file(Path(spec))):
+        if given:
+            raise InputError(f"{', '.join(given)}: for a linkage file (.urdf, .xml, pinned "
+                             ".toml); a shipped platform mechanism's output is its platform")
+        return MECHANISMS["rpr3" if spec is None else spec]().build()
     path = Path(spec)
-    if _is_file(path) or spec.endswith(".toml") or "/" in spec or "\\" in spec:
-        return load_mechanism(path)
-    if spec in MECHANISMS:
-        return MECHANISMS[spec]().build()
+    if _is_file(path) or spec.endswith(LINKAGE_SUFFIXES + (".toml",)) or "/" in spec \
+            or "\\" in spec:
+        return load_mechanism(path, **options)
     shipped = models_dir() / f"{spec}.toml"
     if _is_file(shipped):
-        return load_mechanism(shipped)
+        return load_mechanism(shipped, **options)
     shown = spec if len(spec) <= 80 else spec[:77] + "..."
     raise InputError(f"{shown!r} is neither a mechanism file nor a shipped model; the shipped "
                      f"models are: {', '.join(sorted(shipped_models()))} (see 'pkm-pin list')")
@@ -98,6 +123,33 @@ def _is_file(path: Path) -> bool:
         return path.is_file()
     except (OSError, ValueError):
         return False
+
+
+def _load(args, spec: str | None = None):
+    """:func:`load` of ``spec`` (default ``args.mechanism``) with the linkage options."""
+    return load(args.mechanism if spec is None else spec, getattr(args, "closures", None),
+                getattr(args, "output", None), getattr(args, "point", None))
+
+
+def _is_linkage(mech) -> bool:
+    from .linkage import Linkage
+
+    return isinstance(mech, Linkage)
+
+
+def _linkage_assembly(args, link):
+    """The linkage assembled as the options say: ``--q`` (forward kinematics), ``--pose``
+    (inverse kinematics of the output), else from the reference configuration."""
+    from .assembly import as_pose
+
+    q, pose = getattr(args, "q", None), getattr(args, "pose", None)
+    if q is not None and pose is not None:
+        raise InputError("give --q (actuated values) or --pose (output pose), not both")
+    if q is not None:
+        return link.forward_kinematics(link.check_actuated(q, "--q"))
+    if pose is not None:
+        return link.inverse_kinematics(as_pose(pose))
+    return link.assemble()
 
 
 def _pose_dict(pose) -> dict:
@@ -139,8 +191,15 @@ def cmd_analyze(args) -> int:
     """Report of one pose (default: home) as text or JSON, optionally as Markdown."""
     from . import report
 
-    mech = load(args.mechanism)
-    analysis = mech.analyze(None if args.pose is None else args.pose)
+    mech = _load(args)
+    if _is_linkage(mech):
+        return _analyze_linkage(args, mech)
+    if args.q is not None:
+        if args.pose is not None:
+            raise InputError("give --q (actuated values) or --pose, not both")
+        analysis = mech.analyze(mech.forward_kinematics(mech.check_actuated(args.q)))
+    else:
+        analysis = mech.analyze(None if args.pose is None else args.pose)
     data = report.report_data(analysis, plots=args.plots or ())
     if args.markdown:
         _write_text(args.markdown, report.markdown(analysis, data=data))
@@ -148,6 +207,24 @@ def cmd_analyze(args) -> int:
         print(json.dumps(data, indent=2, default=float))
     else:
         print(report.text(data))
+        if args.markdown:
+            print(f"markdown           {args.markdown}")
+    return 0
+
+
+def _analyze_linkage(args, link) -> int:
+    """``analyze`` of a linkage: assembled (``--q``, ``--pose`` or the reference), then
+    the report of :mod:`pkm_pin.report_linkage`."""
+    from . import report_linkage as rl
+
+    assembly = _linkage_assembly(args, link)
+    data = rl.linkage_report_data(link, assembly, plots=args.plots or ())
+    if args.markdown:
+        _write_text(args.markdown, rl.linkage_markdown(data))
+    if args.json:
+        print(json.dumps(data, indent=2))
+    else:
+        print(rl.linkage_text(data, rl.body_frames(link.model)))
         if args.markdown:
             print(f"markdown           {args.markdown}")
     return 0
@@ -161,7 +238,9 @@ def cmd_check(args) -> int:
     path = Path(args.file)
     if not _is_file(path) and _is_file(models_dir() / f"{args.file}.toml"):
         path = models_dir() / f"{args.file}.toml"
-    mech = load_mechanism(path)
+    mech = load_mechanism(path, closures=args.closures, output=args.output, point=args.point)
+    if _is_linkage(mech):
+        return _check_linkage(path, mech)
     print(f"ok    loads: {mech.name!r}, {len(mech.legs)} legs "
           f"({', '.join(f'{leg.name}: {leg.nv} joints' for leg in mech.legs)}), "
           f"{mech.n_actuated} actuated ({', '.join(mech.actuated_names)})")
@@ -193,9 +272,53 @@ def cmd_check(args) -> int:
     return 1 if warnings else 0
 
 
+def _check_linkage(path: Path, link) -> int:
+    """``check`` of a linkage: loads, assembles from the reference configuration (the
+    loop that does not close and its residual otherwise), mobility and singularity."""
+    from .linkage import LoopClosureError
+
+    model = link.model
+    closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or "none"
+    print(f"ok    loads: {link.name!r}, {model.tree.njoints - 1} joints (nq {model.nq}, "
+          f"nv {model.nv}), {len(model.closures)} closures ({closures}), "
+          f"{len(link.actuated)} actuated ({', '.join(link.actuated) or 'none'}), output "
+          f"{link.output!r} ({'point' if model.output_point else 'body'})")
+    try:
+        asm = link.assemble()
+    except LoopClosureError as e:
+        raise InputError(f"{path}: {e}") from e
+    print(f"ok    assembles from the reference configuration (closure residual "
+          f"{asm.residual:.2g}); output at {_pose_text(asm.output_pose)}")
+    an = link.analyze(asm)
+    print(f"ok    mobility: DOF {an.dof}, idle DOF {an.idle_dof}, Grübler count "
+          f"{link.grubler}, redundant closure equations {an.redundant_constraints}, "
+          f"output motion {an.motion_type}, singularity {an.singularity}")
+    for motion in an.mobility.idle_motions:
+        print(f"info  idle motion (actuators locked): {motion}")
+    warnings = []
+    if an.dof == 0:
+        warnings.append("the linkage cannot move here (DOF 0)")
+    if not link.actuated:
+        warnings.append("no actuated joint")
+    dependent = [a for a in link.actuated if a not in an.mobility.independent_actuators]
+    if dependent:
+        warnings.append(f"actuated joints {', '.join(dependent)} depend on the others "
+                        "(redundant actuation)")
+    if an.singularity != "none":
+        warnings.append(f"the reference assembly is a type {an.singularity} singularity "
+                        "(indices " + ", ".join(f"{k} {v:.2g}" for k, v in an.indices.items())
+                        + ")")
+    for w in warnings:
+        print(f"warn  {w}")
+    print(f"{path}: " + (f"{len(warnings)} warning(s)" if warnings else "fine"))
+    return 1 if warnings else 0
+
+
 def cmd_fk(args) -> int:
     """Forward kinematics: pose(s) for the actuated coordinates."""
-    mech = load(args.mechanism)
+    mech = _load(args)
+    if _is_linkage(mech):
+        return _fk_linkage(args, mech)
     q = mech.check_actuated(args.q)
     if args.all:
         found = mech.forward_kinematics_all(q, starts=args.starts, seed=args.seed)
@@ -218,9 +341,28 @@ def cmd_fk(args) -> int:
     return 0
 
 
+def _fk_linkage(args, link) -> int:
+    """``fk`` of a linkage: every joint and the output pose (branch nearest the reference
+    configuration)."""
+    from .report_linkage import assembly_data, fk_text
+
+    _no_all(args)
+    data = assembly_data(link, link.forward_kinematics(link.check_actuated(args.q)))
+    print(json.dumps(data, indent=2) if args.json else fk_text(data))
+    return 0
+
+
+def _no_all(args) -> None:
+    if args.all:
+        raise InputError("--all (every assembly mode) is for platform mechanisms; for a "
+                         "linkage fk/ik give the branch nearest the reference configuration")
+
+
 def cmd_ik(args) -> int:
     """Inverse kinematics: actuated coordinates at a pose (every working mode with --all)."""
-    mech = load(args.mechanism)
+    mech = _load(args)
+    if _is_linkage(mech):
+        return _ik_linkage(args, mech)
     pose = mech.home if args.pose is None else args.pose
     if args.all:
         modes = [a.q_actuated for a in mech.inverse_kinematics_all(pose)]
@@ -239,6 +381,24 @@ def cmd_ik(args) -> int:
     print(f"actuated   {', '.join(mech.actuated_names)}")
     for i, m in enumerate(modes):
         print(f"{f'mode {i + 1}' if args.all else 'q':<10} {_fmt(m)}")
+    return 0
+
+
+def _ik_linkage(args, link) -> int:
+    """``ik`` of a linkage: the assembly whose output reaches the pose (default: the
+    output pose of the reference assembly), as far as the output can move."""
+    from .assembly import as_pose
+    from .report_linkage import assembly_data, fk_text, pose_dict
+
+    _no_all(args)
+    target = link.assemble().output_pose if args.pose is None else as_pose(args.pose)
+    data = assembly_data(link, link.inverse_kinematics(target))
+    data["target"] = pose_dict(target)
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    print(f"target     xyz {_fmt(data['target']['xyz'])}  rpy {_fmt(data['target']['rpy'])}")
+    print(fk_text(data))
     return 0
 
 
@@ -295,12 +455,15 @@ def cmd_map(args) -> int:
     """Sweep a workspace slice; write PREFIX.npz and the two PNG maps."""
     from .plots import save_maps
 
-    prefix = Path(args.out if args.out else f"map_{_slug(args.mechanism)}_{args.plane}")
-    if not prefix.parent.is_dir():
-        raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
-    mech = load(args.mechanism)
-    u, v, poses = map_slice(mech, args.plane, args.range, args.n, args.fixed)
-    i, j = PLANES[args.plane]
+    mech = _load(args)
+    if _is_linkage(mech):
+        return _map_linkage(args, mech)
+    plane = args.plane or "xy"
+    prefix = _map_prefix(args, plane)
+    if args.range is not None and len(args.range) != 4:
+        raise InputError(f"--range takes 4 bounds A B C D for a plane, got {len(args.range)}")
+    u, v, poses = map_slice(mech, plane, args.range, args.n, args.fixed)
+    i, j = PLANES[plane]
     executor = None
     if args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
@@ -315,7 +478,7 @@ def cmd_map(args) -> int:
     shape = (v.size, u.size)
     data = {k: a.reshape(shape + a.shape[1:]) for k, a in result.arrays().items()}
     units = ["m"] * 3 + ["rad"] * 3
-    data.update(u=u, v=v, plane=np.array(args.plane),
+    data.update(u=u, v=v, plane=np.array(plane),
                 labels=np.array([f"{POSE_NAMES[i]} [{units[i]}]", f"{POSE_NAMES[j]} [{units[j]}]"]),
                 mechanism=np.array(mech.name), actuated=np.array(mech.actuated_names),
                 failure_index=np.array([f[0] for f in result.failures], dtype=int),
@@ -329,13 +492,137 @@ def cmd_map(args) -> int:
     n_ok = int(result.ok.sum())
     counts = {c: int(np.sum(result.singularity == c)) for c in ("I", "II", "III")}
     print(f"mechanism  {mech.name}")
-    print(f"slice      {args.plane}: {POSE_NAMES[i]} in [{u[0]:g}, {u[-1]:g}], "
+    print(f"slice      {plane}: {POSE_NAMES[i]} in [{u[0]:g}, {u[-1]:g}], "
           f"{POSE_NAMES[j]} in [{v[0]:g}, {v[-1]:g}], {u.size} × {v.size} poses")
     print(f"assembled  {n_ok} of {len(poses)}; singular grid points: "
           + ", ".join(f"type {k} {c}" for k, c in counts.items()))
     for path in [npz, *pngs]:
         print(f"wrote      {path}")
     return 0
+
+
+def _map_prefix(args, tag: str) -> Path:
+    """The output prefix of ``map`` (default ``map_NAME_TAG``), its folder checked."""
+    prefix = Path(args.out if args.out else f"map_{_slug(args.mechanism)}_{tag}")
+    if not prefix.parent.is_dir():
+        raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
+    return prefix
+
+
+def _map_axes(args, link) -> tuple[list[int], np.ndarray, list[np.ndarray]]:
+    """The varied actuated coordinates of a linkage map (``--actuated``, default the first
+    two), the values of all (reference assembly, ``--fixed`` NAME=VALUE) and the grid
+    of each varied one (``--range``; default its joint limits, or the reference value
+    ± π [rad] / ± the characteristic length [m] without limits)."""
+    names = list(link.actuated)
+    chosen = args.actuated or names[:2]
+    unknown = [a for a in chosen if a not in names]
+    if unknown or not chosen or len(set(chosen)) != len(chosen) or len(chosen) > 2:
+        raise InputError(f"--actuated takes one or two distinct actuated joints of "
+                         f"{', '.join(names) or '(none)'}; got {', '.join(chosen) or 'none'}")
+    varied = [names.index(a) for a in chosen]
+    base = link.assemble().q_actuated.copy()
+    for item in args.fixed or ():
+        name, _, text = item.partition("=")
+        if name.strip() not in names or names.index(name.strip()) in varied:
+            raise InputError(f"--fixed takes NAME=VALUE with NAME an actuated joint that is "
+                             f"not varied ({', '.join(names)}); got {item!r}")
+        base[names.index(name.strip())] = _number(text, f"--fixed {name.strip()}")
+    if args.range is not None and len(args.range) != 2 * len(varied):
+        raise InputError(f"--range takes {2 * len(varied)} bounds for "
+                         f"{', '.join(chosen)}, got {len(args.range)}")
+    if not 2 <= args.n <= 2000:
+        raise InputError(f"--n must be between 2 and 2000, got {args.n}")
+    grids = []
+    for k, a in enumerate(varied):
+        lo, hi = args.range[2 * k:2 * k + 2] if args.range else _default_range(link, a, base[a])
+        if not np.isfinite([lo, hi]).all() or lo == hi:
+            raise InputError(f"--range needs finite bounds with A != B, got {lo}, {hi}")
+        grids.append(np.linspace(lo, hi, args.n))
+    return varied, base, grids
+
+
+def _number(text: str, what: str) -> float:
+    try:
+        value = float(text)
+    except ValueError as e:
+        raise InputError(f"{what}: {text!r} is not a number") from e
+    if not np.isfinite(value):
+        raise InputError(f"{what}: the value must be finite, got {text!r}")
+    return value
+
+
+def _default_range(link, k: int, value: float) -> tuple[float, float]:
+    """Joint limits of actuated joint ``k`` when finite, else ``value`` ± π or ± L."""
+    model = link.model
+    joint = model.tree.joints[model.tree.getJointId(link.actuated[k])]
+    lo = float(model.tree.lowerPositionLimit[joint.idx_q])
+    hi = float(model.tree.upperPositionLimit[joint.idx_q])
+    if joint.nq == 1 and np.isfinite([lo, hi]).all() and 0 < hi - lo < 1e6 * model.length:
+        return lo, hi
+    half = np.pi if model.velocity_units[joint.idx_v] == 1.0 else model.length
+    return value - half, value + half
+
+
+def _snake(n_u: int, n_v: int) -> np.ndarray:
+    """Flat grid indices (row-major, row ``j`` at ``v[j]``) in snake order: each row
+    walked the other way from the previous, so that neighbours follow each other."""
+    rows = [np.arange(j * n_u, (j + 1) * n_u) for j in range(n_v)]
+    return np.concatenate([r if j % 2 == 0 else r[::-1] for j, r in enumerate(rows)])
+
+
+def _map_linkage(args, link) -> int:
+    """``map`` of a linkage over one or two actuated coordinates (grid walked in a snake,
+    :meth:`Linkage.sweep`); writes PREFIX.npz and the PNG maps."""
+    from .report_linkage import save_linkage_maps
+
+    if args.plane is not None:
+        raise InputError("--plane is for platform mechanisms; a linkage is mapped over "
+                         "actuated coordinates (--actuated NAME [NAME], --range)")
+    prefix = _map_prefix(args, "q")
+    varied, base, grids = _map_axes(args, link)
+    u, v = grids[0], grids[1] if len(grids) == 2 else np.zeros(1)
+    shape = (v.size, u.size)
+    V, U = np.meshgrid(v, u, indexing="ij")
+    Q = np.tile(base, (U.size, 1))
+    Q[:, varied[0]] = U.ravel()
+    if len(varied) == 2:
+        Q[:, varied[1]] = V.ravel()
+    order = _snake(u.size, v.size)
+    swept = link.sweep(Q[order])
+    data = {}
+    for key in ("q_actuated", "converged", "q", "output_poses", "dof", "output_dof",
+                "singularity", "condition", "forward", "inverse"):
+        a = getattr(swept, key)
+        grid = np.empty_like(a)
+        grid[order] = a
+        data[key] = grid.reshape(shape + a.shape[1:]) if len(varied) == 2 else grid
+    names = [link.actuated[k] for k in varied]
+    data.update(u=u, labels=np.array([f"{n} [{_unit(link, k)}]" for n, k in zip(names, varied)]),
+                mechanism=np.array(link.name), actuated=np.array(link.actuated),
+                varied=np.array(names), output=np.array(link.output))
+    if len(varied) == 2:
+        data["v"] = v
+    npz = prefix.with_name(prefix.name + ".npz")
+    try:
+        np.savez_compressed(npz, **data)
+    except OSError as e:
+        raise InputError(f"cannot write {npz}: {e.strerror or e}") from e
+    pngs = save_linkage_maps(data, prefix, title=link.name)
+    ok, cls = data["converged"], data["singularity"]
+    print(f"mechanism  {link.name}  (output {link.output})")
+    print("grid       " + ", ".join(f"{n} in [{g[0]:g}, {g[-1]:g}]" for n, g in zip(names, grids))
+          + f", {Q.shape[0]} points (snake order)")
+    print(f"assembled  {int(ok.sum())} of {ok.size}; singular grid points: "
+          + ", ".join(f"class {c} {int(np.sum(ok & (cls == c)))}" for c in ("I", "II", "III")))
+    for path in [npz, *pngs]:
+        print(f"wrote      {path}")
+    return 0
+
+
+def _unit(link, k: int) -> str:
+    joint = link.model.tree.joints[link.model.tree.getJointId(link.actuated[k])]
+    return "rad" if link.model.velocity_units[joint.idx_v] == 1.0 else "m"
 
 
 def _slug(spec: str) -> str:
@@ -349,8 +636,14 @@ def cmd_view(args) -> int:
 
     if args.html is not None and not Path(args.html).parent.is_dir():
         raise InputError(f"--html {args.html}: the folder {Path(args.html).parent} does not exist")
-    mech = load(args.mechanism)
-    scene = view(mech, args.pose, html=args.html, open=args.html is None or args.open,
+    mech = _load(args)
+    if _is_linkage(mech):
+        where = _linkage_assembly(args, mech)
+    elif args.q is not None:
+        where = mech.forward_kinematics(mech.check_actuated(args.q))
+    else:
+        where = args.pose
+    scene = view(mech, where, html=args.html, open=args.html is None or args.open,
                  show_screws=not args.no_screws, show_wrenches=not args.no_wrenches)
     if args.html is not None:
         print(f"wrote      {args.html}")
@@ -358,6 +651,8 @@ def cmd_view(args) -> int:
         print(f"opened     {mech.name} in the browser")
     if scene.animated:
         print("animated   the uncontrolled motion of this singular pose")
+    for motion in getattr(scene, "idle_motions", ()):
+        print(f"idle       {motion}")
     return 0
 
 
@@ -378,17 +673,39 @@ class _Parser(argparse.ArgumentParser):
 
 def _pose_option(p, default: str = "the home pose") -> None:
     p.add_argument("--pose", nargs=6, type=float, metavar=("X", "Y", "Z", "ROLL", "PITCH", "YAW"),
-                   help=f"platform pose: x, y, z [m], roll, pitch, yaw [rad] (default: {default})")
+                   help=f"platform (linkage: output) pose: x, y, z [m], roll, pitch, yaw [rad] "
+                   f"(default: {default})")
 
 
-_MECH_HELP = "mechanism file (.toml) or shipped model name (see 'pkm-pin list')"
+def _linkage_options(p, q: bool = False) -> None:
+    """``--output``, ``--point`` / ``--body``, ``--closures`` (and ``--q``) of a linkage."""
+    g = p.add_argument_group("general linkages (.urdf, .xml, .mjcf, pinned .toml)")
+    g.add_argument("--output", metavar="FRAME",
+                   help="frame whose motion is analysed (default: the file's output)")
+    how = g.add_mutually_exclusive_group()
+    how.add_argument("--point", dest="point", action="store_const", const=True,
+                     help="analyse the output frame's origin as a point")
+    how.add_argument("--body", dest="point", action="store_const", const=False,
+                     help="analyse the output frame as a body")
+    g.add_argument("--closures", metavar="FILE",
+                   help="closures file (.yaml / .toml) of a .urdf (default: found beside it)")
+    if q:
+        g.add_argument("--q", nargs="+", type=float, metavar="Q",
+                       help="actuated values [rad or m]: forward kinematics first (also for "
+                       "platform mechanisms)")
+
+
+_MECH_HELP = ("mechanism file (.toml, or a linkage: .urdf, .xml, .mjcf) or shipped model "
+              "name (see 'pkm-pin list')")
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The ``pkm-pin`` argument parser (every sub-command has ``--help``)."""
     parser = _Parser(prog="pkm-pin",
                      description="Screw-theory analysis of parallel kinematic machines "
-                     "(Pinocchio). MECHANISM is a .toml file or a shipped model name.")
+                     "and closed-loop linkages (Pinocchio). MECHANISM is a .toml file, a "
+                     ".urdf (with its closures file) or .xml / .mjcf linkage, or a shipped "
+                     "model name.")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("list", help="shipped models with one-line descriptions",
@@ -406,13 +723,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--markdown", metavar="FILE", help="also write a Markdown report to FILE")
     p.add_argument("--plots", nargs="+", metavar="PNG",
                    help="image files to link in the report (e.g. from 'pkm-pin map')")
+    _linkage_options(p, q=True)
     p.set_defaults(func=cmd_analyze)
 
     p = sub.add_parser("check", help="validate a mechanism file and its URDFs",
                        description="Load a mechanism file (and its URDFs), assemble it at home "
                        "and analyse it; say what is wrong. Exit status 0: fine, 1: warnings, "
                        "2: error.")
-    p.add_argument("file", metavar="FILE", help="mechanism file (.toml)")
+    p.add_argument("file", metavar="FILE", help="mechanism file (.toml, .urdf, .xml, .mjcf)")
+    _linkage_options(p)
     p.set_defaults(func=cmd_check)
 
     p = sub.add_parser("fk", help="forward kinematics: actuated coordinates -> pose",
@@ -425,6 +744,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--starts", type=int, default=32, help="start assemblies of --all (32)")
     p.add_argument("--seed", type=int, default=0, help="random seed of --all (0)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    _linkage_options(p)
     p.set_defaults(func=cmd_fk)
 
     p = sub.add_parser("ik", help="inverse kinematics: pose -> actuated coordinates",
@@ -434,6 +754,7 @@ def build_parser() -> argparse.ArgumentParser:
     _pose_option(p)
     p.add_argument("--all", action="store_true", help="every working mode")
     p.add_argument("--json", action="store_true", help="print JSON")
+    _linkage_options(p)
     p.set_defaults(func=cmd_ik)
 
     p = sub.add_parser("map", help="singularity and conditioning maps of a workspace slice",
@@ -441,18 +762,23 @@ def build_parser() -> argparse.ArgumentParser:
                        "or --fixed); write PREFIX.npz (every array), PREFIX_singularity.png and "
                        "PREFIX_conditioning.png.")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
-    p.add_argument("--plane", choices=sorted(PLANES), default="xy",
-                   help="the two varied coordinates (default xy)")
-    p.add_argument("--range", nargs=4, type=float, metavar=("A", "B", "C", "D"),
-                   help="first coordinate from A to B, second from C to D "
-                   "(default: home ± the characteristic length)")
+    p.add_argument("--plane", choices=sorted(PLANES),
+                   help="the two varied coordinates (default xy; platform mechanisms)")
+    p.add_argument("--range", nargs="+", type=float, metavar="BOUND",
+                   help="A B C D: first coordinate from A to B, second from C to D "
+                   "(default: home ± the characteristic length; for a linkage: the joint "
+                   "limits of the varied actuated joints, or ± π rad)")
     p.add_argument("--n", type=int, default=50, help="grid points per coordinate (default 50)")
     p.add_argument("--fixed", nargs="+", metavar="NAME=VALUE",
-                   help="values of the other coordinates (x y z roll pitch yaw; default home)")
+                   help="values of the other coordinates (x y z roll pitch yaw; default home; "
+                   "for a linkage: the other actuated joints, default their reference values)")
+    p.add_argument("--actuated", nargs="+", metavar="NAME",
+                   help="linkage: the one or two varied actuated joints (default the first two)")
     p.add_argument("--out", metavar="PREFIX", help="output prefix (default map_NAME_PLANE)")
     p.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     p.add_argument("--chunk-size", type=int, default=500, help="poses per worker task (500)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _linkage_options(p)
     p.set_defaults(func=cmd_map)
 
     p = sub.add_parser("view", help="browser preview (meshcat)",
@@ -465,6 +791,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--open", action="store_true", help="with --html: open it too")
     p.add_argument("--no-screws", action="store_true", help="do not draw the joint screws")
     p.add_argument("--no-wrenches", action="store_true", help="do not draw the wrenches")
+    _linkage_options(p, q=True)
     p.set_defaults(func=cmd_view)
     return parser
 

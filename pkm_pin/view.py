@@ -316,7 +316,8 @@ def view(
     """Draw a mechanism at a pose or assembly in a meshcat scene (see the module doc).
 
     Args:
-        mech: The mechanism.
+        mech: The mechanism (a :class:`~pkm_pin.linkage.Linkage` is drawn by
+            :func:`pkm_pin.view_linkage.view_linkage`).
         pose_or_assembly: An :class:`~pkm_pin.mechanism.Assembly`, or a platform pose
             (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw) to assemble at;
             default: the home assembly.
@@ -333,8 +334,16 @@ def view(
         InputError: ``mech`` is not a mechanism or the pose is malformed.
         AssemblyError: the mechanism does not assemble at the pose given.
     """
+    from .linkage import Linkage
+
+    if isinstance(mech, Linkage):  # a general linkage: pkm_pin.view_linkage
+        from .view_linkage import view_linkage
+
+        return view_linkage(mech, pose_or_assembly, visualizer=visualizer, open=open,
+                            html=html, show_screws=show_screws, show_wrenches=show_wrenches)
     if not isinstance(mech, Mechanism):
-        raise InputError(f"view() takes a pkm_pin.Mechanism, got {type(mech).__name__}")
+        raise InputError(f"view() takes a pkm_pin.Mechanism or a Linkage, got "
+                         f"{type(mech).__name__}")
     if pose_or_assembly is None:
         assembly = mech.home_assembly
     elif isinstance(pose_or_assembly, Assembly):
@@ -406,6 +415,10 @@ class _Painter:
 
     def size(self, key: str) -> float:
         return _SIZE[key] * self.L
+
+    def centre(self) -> np.ndarray:
+        """The point wrench arrows start nearest to: the platform origin."""
+        return self.scene.assembly.pose.translation
 
     def material(self, colour: int, opacity: float = 1.0):
         return self.g.MeshPhongMaterial(color=colour, opacity=opacity,
@@ -592,7 +605,7 @@ class _Painter:
         """An arrow along a wrench's axis (a double arrow for a couple)."""
         if not np.any(wrench):
             return
-        c = self.scene.assembly.pose.translation
+        c = self.centre()
         point, u = screws.axis(wrench, length=self.L)
         couple = np.isinf(screws.pitch(wrench, length=self.L))
         length, head = self.size("arrow"), self.size("head")

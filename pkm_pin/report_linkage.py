@@ -1,0 +1,303 @@
+"""Reports of a general linkage (:class:`~pkm_pin.linkage.Linkage`) at one configuration:
+plain data (JSON), text and Markdown; and the maps of ``pkm-pin map`` over two actuated
+coordinates.
+
+A linkage report holds what :class:`~pkm_pin.linkage.LinkageAnalysis` knows about one
+assembly: the whole tree's configuration (joint by joint), the output frame and its pose,
+the mobility (DOF, idle DOF with each idle motion in words, redundant closure equations,
+Grübler's count, the actuated joints that can be driven independently), the output's
+motion type with a readable basis of its twists and of its constraint wrenches (see
+:func:`pkm_pin.report.readable_basis`, about the output frame's origin), ``A`` and ``B``
+of ``A Δ t = B q̇_a``, the singularity class and the indices.
+
+Conventions as :mod:`pkm_pin.report`: screws axis-first about the world origin, twists
+``(ω; v_O)``, wrenches ``(f; m_O)``; lengths [m], angles [rad]. Poses are the output
+frame's placement: ``xyz`` [m] and URDF ``rpy`` [rad]. In the plain data, an index that
+is undefined (NaN) or infinite is ``None`` (JSON ``null``), so the JSON is standard.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .report import _list, _num, _row, _vec, readable_basis
+
+#: Colours of the singularity classes in the maps.
+CLASS_COLOURS = {"none": "#ffffff", "I": "#f4a582", "II": "#92c5de", "III": "#b2abd2"}
+#: Level of the forward and inverse indices drawn as iso-lines on the class map.
+ISO_LEVEL = 0.05
+
+
+# ------------------------------------------------------------------- plain data
+def pose_dict(pose: pin.SE3) -> dict:
+    """``{"xyz": [m], "rpy": [rad]}`` of a placement (URDF roll, pitch, yaw)."""
+    return {"xyz": pose.translation.tolist(), "rpy": pin.rpy.matrixToRpy(pose.rotation).tolist()}
+
+
+def joint_values(model, q) -> dict:
+    """The configuration ``q`` joint by joint: name → its coordinates (a list of
+    ``nq`` numbers, e.g. a quaternion ``x, y, z, w`` for a spherical joint)."""
+    tree = model.tree
+    q = np.asarray(q, dtype=float)
+    return {tree.names[j]: q[tree.joints[j].idx_q:tree.joints[j].idx_q + tree.joints[j].nq]
+            .tolist() for j in range(1, tree.njoints) if tree.joints[j].nq}
+
+
+def body_frames(model) -> list[str]:
+    """Names of the tree's body frames (the choices of ``--output``), in tree order."""
+    return [f.name for f in model.tree.frames if f.type == pin.FrameType.BODY
+            and f.name != "universe"]
+
+
+def assembly_data(link, assembly) -> dict:
+    """Plain data of a :class:`~pkm_pin.linkage.LinkageAssembly`: ``mechanism``,
+    ``output``, ``output_is_point``, ``pose`` (the output frame's), ``actuated``,
+    ``q_actuated``, ``q`` (the whole tree, Pinocchio's joint order, full precision),
+    ``joint_names``, ``joints`` (:func:`joint_values`), ``residual`` and ``closures``
+    (name, kind, frames and residual of each)."""
+    model = link.model
+    return {
+        "kind": "linkage",
+        "mechanism": link.name,
+        "output": link.output,
+        "output_is_point": bool(model.output_point),
+        "pose": pose_dict(assembly.output_pose),
+        "actuated": list(link.actuated),
+        "q_actuated": assembly.q_actuated.tolist(),
+        "q": assembly.q.tolist(),
+        "joint_names": list(model.tree.names[1:]),
+        "joints": joint_values(model, assembly.q),
+        "residual": float(assembly.residual),
+        "closures": [{"name": name, "kind": c.kind, "frame_a": c.frame_a,
+                      "frame_b": c.frame_b, "residual": res}
+                     for c, (name, res) in zip(model.closures,
+                                                assembly.closure_residuals.items())],
+    }
+
+
+def _finite_or_none(x: float):
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Path] = ()) -> dict:
+    """Plain-data summary (JSON-ready) of a linkage at an assembly.
+
+    Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``dof``,
+    ``idle_dof``, ``idle_motions`` (sentences), ``redundant_constraints``, ``grubler``,
+    ``independent_actuators``, ``output_dof``, ``motion_type``, ``platform_twists`` (the
+    analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
+    (readable bases about the output origin, with ``words``), ``A``, ``B``,
+    ``singularity``, ``constraint_singular`` (``None``: not decided), ``indices``
+    (``None`` where undefined), and, as in the platform report, ``uncontrolled_twist``,
+    ``crosscheck``, ``crosscheck_max_error`` (``None``: no hand-written formulas) and
+    ``plots``.
+    """
+    an = analysis if analysis is not None else link.analyze(assembly)
+    centre = assembly.output_pose.translation
+    motion = readable_basis(an.platform_twists, centre, an.length, an.translations)
+    constraints = readable_basis(an.constraint_wrenches, centre, an.length)
+    mob = an.mobility
+    data = assembly_data(link, assembly)
+    data.update({
+        "description": "",
+        "dof": an.dof,
+        "idle_dof": an.idle_dof,
+        "idle_motions": list(mob.idle_motions),
+        "redundant_constraints": an.redundant_constraints,
+        "grubler": mob.grubler,
+        "independent_actuators": list(mob.independent_actuators),
+        "output_dof": an.output_dof,
+        "motion_type": an.motion_type,
+        "platform_twists": an.platform_twists.tolist(),
+        "motion_basis": [b.as_dict() for b in motion],
+        "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
+        "A": an.A.tolist(),
+        "B": an.B.tolist(),
+        "singularity": an.singularity,
+        "constraint_singular": an.constraint_singular,
+        "indices": {k: _finite_or_none(v) for k, v in an.indices.items()},
+        "uncontrolled_twist": None,
+        "crosscheck": None,
+        "crosscheck_max_error": None,
+        "plots": [str(p) for p in plots],
+    })
+    return data
+
+
+# ------------------------------------------------------------------------- text
+def output_line(r: dict, frames: Sequence[str] = ()) -> str:
+    """The output frame, how it is analysed, and how to choose another."""
+    how, other = (("its origin as a point", "--body: as a body") if r["output_is_point"]
+                  else ("as a body", "--point: its origin as a point"))
+    shown = ", ".join(frames[:8]) + (", …" if len(frames) > 8 else "")
+    choices = f" (frames: {shown})" if frames else ""
+    return (f"output             {r['output']}, {how}  [another frame: --output FRAME"
+            f"{choices}; {other}]")
+
+
+def joints_lines(r: dict) -> list[str]:
+    """One line per joint: name and coordinates."""
+    width = max((len(n) for n in r["joints"]), default=0)
+    return [f"    {n:<{width}}  {_list(v)}" for n, v in r["joints"].items()]
+
+
+def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
+    """Plain-text report (the output of ``pkm-pin analyze`` for a linkage) from
+    :func:`linkage_report_data`; ``frames``: the choices of ``--output`` to suggest."""
+    idx = ", ".join(f"{k} = {'undefined' if v is None else f'{v:.6g}'}"
+                    for k, v in r["indices"].items())
+    out = [f"mechanism          {r['mechanism']}  (linkage: {len(r['joints'])} joints, "
+           f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''})",
+           output_line(r, frames),
+           f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
+           "joints (q):"] + joints_lines(r)
+    out += [f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "
+            f"{r['motion_type']})",
+            "idle motions       " + ("none" if not r["idle_motions"] else
+                                     f"{r['idle_dof']} (with every actuated joint locked):")]
+    out += [f"    {m}" for m in r["idle_motions"]]
+    out += [f"Grübler count      {r['grubler']}  (redundant closure equations: "
+            f"{r['redundant_constraints']})",
+            f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
+            f"independent        {', '.join(r['independent_actuators']) or 'none'}",
+            f"output twists ({r['output']}; ω; v_O):"]
+    out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]] or ["    none"]
+    out += ["constraint wrenches on the output (f; m_O):"]
+    out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["constraint_basis"]] or ["    none"]
+    out += ["A (actuation wrenches (f; m_O), A Δ t = B q̇_a):"]
+    out += [f"    {_row(row)}" for row in r["A"]]
+    out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
+    out += [f"singularity        {r['singularity']}", f"indices            {idx}"]
+    out += [f"plot               {p}" for p in r.get("plots", [])]
+    return "\n".join(out)
+
+
+def linkage_markdown(r: dict) -> str:
+    """Markdown report of a linkage from :func:`linkage_report_data`."""
+    how = "its origin, as a point" if r["output_is_point"] else "as a body"
+    lines = [f"# {r['mechanism']}", "", "## Configuration", "",
+             f"Output frame `{r['output']}` ({how}) at xyz {_vec(r['pose']['xyz'])} m, "
+             f"rpy {_vec(r['pose']['rpy'])} rad.", "", "| joint | q |", "|---|---|"]
+    lines += [f"| {n} | {_vec(v)} |" for n, v in r["joints"].items()]
+    lines += ["", "## Mobility", "",
+              f"- degree of freedom: **{r['dof']}**, output motion {r['motion_type']}",
+              f"- idle degrees of freedom: {r['idle_dof']}"]
+    lines += [f"  - {m}" for m in r["idle_motions"]]
+    lines += [f"- Grübler–Kutzbach count: {r['grubler']}",
+              f"- redundant closure equations: {r['redundant_constraints']}",
+              f"- independent actuators: {', '.join(r['independent_actuators']) or 'none'}",
+              "", "Output twists (ω; v_O) about the world origin:", "",
+              "| # | twist (ω; v_O) | in words |", "|---|---|---|"]
+    lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
+              for i, b in enumerate(r["motion_basis"])]
+    lines += ["", "Constraint wrenches (f; m_O) on the output:", "",
+              "| # | wrench (f; m_O) | in words |", "|---|---|---|"]
+    lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
+              for i, b in enumerate(r["constraint_basis"])]
+    lines += ["", "## Actuation: A Δ t = B q̇_a", "", "| joint | A row (f; m_O) | B |",
+              "|---|---|---|"]
+    lines += [f"| {n} | {_vec(a)} | {_num(b[k])} |"
+              for k, (n, a, b) in enumerate(zip(r["actuated"], r["A"], r["B"]))]
+    lines += ["", "## Singularity", "", f"- class: **{r['singularity']}**", "",
+              "| index | value |", "|---|---|"]
+    lines += [f"| {k} | {'undefined' if v is None else _num(v)} |"
+              for k, v in r["indices"].items()]
+    if r["plots"]:
+        lines += ["", "## Plots", ""] + [f"![{Path(p).stem}]({p})" for p in r["plots"]]
+    return "\n".join(lines) + "\n"
+
+
+def fk_text(r: dict) -> str:
+    """Text of ``pkm-pin fk`` / ``ik`` for a linkage from :func:`assembly_data`."""
+    out = [f"mechanism  {r['mechanism']}",
+           f"actuated   {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
+           f"output     {r['output']}{' (point)' if r['output_is_point'] else ''}: "
+           f"xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
+           "joints (q):"]
+    return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"])
+
+
+# ------------------------------------------------------------------------- maps
+def save_linkage_maps(data: Mapping, prefix: str | Path, title: str = "") -> list[Path]:
+    """PNG maps of a sweep over actuated coordinates (``pkm-pin map`` of a linkage).
+
+    Two varied coordinates (``u``, ``v`` and arrays shaped (n_v, n_u)): writes
+    ``PREFIX_singularity.png`` (the class of each grid point, grey where it does not
+    assemble, with the iso-lines :data:`ISO_LEVEL` of the forward and inverse indices) and
+    ``PREFIX_indices.png`` (the forward and inverse indices). One coordinate (``u`` and
+    arrays (n_u,)): ``PREFIX_indices.png`` only, the two indices along it.
+
+    Returns:
+        The paths written.
+    """
+    from .plots import _figure
+
+    prefix = Path(prefix)
+    labels = [str(x) for x in data["labels"]]
+    head = f"{title}: " if title else ""
+    indices = prefix.with_name(prefix.name + "_indices.png")
+    if "v" not in data:
+        fig, ax = _figure(f"{head}forward and inverse indices", [labels[0], "index"])
+        ax.set_facecolor("white")
+        for key, colour in (("forward", "#2166ac"), ("inverse", "#b2182b")):
+            ax.plot(data["u"], data[key], color=colour, label=f"{key} index")
+        ax.legend(fontsize=8)
+        fig.savefig(indices)
+        return [indices]
+    sing = prefix.with_name(prefix.name + "_singularity.png")
+    _class_map(data, labels, f"{head}singularity classes", sing)
+    _index_maps(data, labels, head, indices)
+    return [sing, indices]
+
+
+def _class_map(data: Mapping, labels: list, title: str, path: Path) -> None:
+    from matplotlib.colors import ListedColormap
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
+    from .plots import _contour, _figure
+
+    u, v, ok = data["u"], data["v"], np.asarray(data["converged"], bool)
+    cls = np.asarray(data["singularity"]).astype(str)
+    names = list(CLASS_COLOURS)
+    codes = np.full(cls.shape, np.nan)
+    for k, name in enumerate(names):
+        codes[ok & (cls == name)] = k
+    fig, ax = _figure(title, labels)
+    ax.pcolormesh(u, v, np.ma.masked_invalid(codes), cmap=ListedColormap(list(
+        CLASS_COLOURS.values())), vmin=-0.5, vmax=len(names) - 0.5, shading="nearest")
+    handles = [Patch(facecolor=c, edgecolor="0.5", label=f"class {n}")
+               for n, c in CLASS_COLOURS.items() if np.any(ok & (cls == n))]
+    for key, colour in (("forward", "k"), ("inverse", "#b2182b")):
+        if _contour(ax, u, v, np.where(ok, data[key], np.nan), ISO_LEVEL, colors=colour,
+                    linewidths=1.2):
+            handles.append(Line2D([], [], color=colour, lw=1.2,
+                                  label=f"{key} index = {ISO_LEVEL:g}"))
+    handles.append(Patch(color="0.82", label="does not assemble"))
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
+    fig.savefig(path)
+
+
+def _index_maps(data: Mapping, labels: list, head: str, path: Path) -> None:
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(11.0, 4.8), dpi=110, layout="constrained")
+    FigureCanvasAgg(fig)
+    ok = np.asarray(data["converged"], bool)
+    for k, key in enumerate(("forward", "inverse")):
+        ax = fig.add_subplot(1, 2, k + 1)
+        ax.set_facecolor("0.82")
+        mesh = ax.pcolormesh(data["u"], data["v"],
+                             np.ma.masked_invalid(np.where(ok, data[key], np.nan)),
+                             vmin=0.0, vmax=1.0, cmap="viridis", shading="nearest")
+        fig.colorbar(mesh, ax=ax)
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
+        ax.set_title(f"{head}{key} index (0: singular)")
+    fig.savefig(path)

@@ -1,0 +1,371 @@
+"""Browser preview of a general linkage (:class:`~pkm_pin.linkage.Linkage`): its tree,
+its closures, its output frame and its idle motions in a meshcat scene.
+
+:func:`view_linkage` (also reached through :func:`pkm_pin.view.view`) draws, in the
+scene and page machinery of :mod:`pkm_pin.view`:
+
+* the tree as a skeleton: a bar from each joint's parent joint origin to its origin
+  (grey from the world origin: the ground), and from a body's joint to the closure and
+  output frames it carries; each joint as a ball (several degrees of freedom), a cylinder
+  along its axis (revolute) or a cube (prismatic); actuated joints in orange. Bars are
+  coloured by branch (the subtree of one joint under the universe);
+* each closure: a translucent ring of thick bars along the loop (the tree path between
+  its two frames, through their common ancestor) in :data:`CLOSURE_COLOUR`, a marker at
+  its constraint frame (a ball for a point closure, a disc across the revolute axis, a
+  cube for a weld) and a bar between the two frames when they do not meet;
+* the output frame: a ball, and for a body its x, y, z axes (red, green, blue);
+* each idle motion (a motion left with every actuated joint locked, see
+  :class:`~pkm_pin.linkage.Mobility`): when one body moves, its instantaneous screw axis
+  as a bar in :data:`IDLE_COLOUR` spanning the body's joints (the rod's spin axis of an
+  S–S rod), else a halo on each joint that moves;
+* the joint screw axes (``show_screws``) and the actuation and constraint wrenches on the
+  output (``show_wrenches``), as :func:`pkm_pin.view.view` draws them; for a point
+  output only the forces among the constraint wrenches.
+
+Scene layout (meshcat paths; ``<m>`` is :func:`~pkm_pin.view.node_name` of the name)::
+
+    pkm/<m>/links/<joint or frame>       skeleton bars
+    pkm/<m>/joints/<joint>               joint markers
+    pkm/<m>/closures/<closure>/ring/<k>  the loop's ring, marker, gap
+    pkm/<m>/output/ball, output/x|y|z
+    pkm/<m>/idle/<k>/axis, idle/<k>/joints/<joint>
+    pkm/<m>/screws/<joint>
+    pkm/<m>/wrenches/actuation/<joint>, wrenches/constraint/<k>
+
+Sizes are fractions of the drawing's size (half the diagonal of the box around the
+joints, at least :attr:`ClosureModel.length`), so millimetres and metres look the same.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pinocchio as pin
+
+from . import screws
+from .errors import InputError
+from .linkage import Linkage, LinkageAssembly, _body_points, _NullSpace, _svd_rank
+from .report import readable_basis
+from .tolerances import RANK_RTOL
+from .view import (
+    ACTUATED_SCREW_COLOUR,
+    ACTUATION_WRENCH_COLOUR,
+    CONSTRAINT_WRENCH_COLOUR,
+    LEG_COLOURS,
+    PASSIVE_SCREW_COLOUR,
+    PLATFORM_COLOUR,
+    Scene,
+    SceneRecorder,
+    _meshcat,
+    _Painter,
+    _segment_matrix,
+    _translation,
+    node_name,
+)
+
+CLOSURE_COLOUR = 0xE7298A
+IDLE_COLOUR = 0x00CC66
+GROUND_COLOUR = 0x808080
+OUTPUT_AXIS_COLOURS = (0xE41A1C, 0x4DAF4A, 0x377EB8)
+
+
+class LinkageScene(Scene):
+    """A linkage drawn in a meshcat scene (returned by :func:`view_linkage`).
+
+    Attributes:
+        linkage: The linkage (also :attr:`mechanism`, for the page title).
+        assembly: The :class:`~pkm_pin.linkage.LinkageAssembly` drawn.
+        analysis: Its :class:`~pkm_pin.linkage.LinkageAnalysis`.
+        idle_motions: The idle motions drawn, in words.
+        visualizer, recorder, root, animated: As :class:`pkm_pin.view.Scene`
+            (``animated`` is False: nothing is animated).
+    """
+
+    def __init__(self, visualizer, recorder: SceneRecorder, link: Linkage,  # noqa: D107
+                 assembly: LinkageAssembly, analysis, root: str):
+        self.visualizer = visualizer
+        self.recorder = recorder
+        self.linkage = self.mechanism = link
+        self.assembly = assembly
+        self.analysis = analysis
+        self.idle_motions = tuple(analysis.mobility.idle_motions)
+        self.root = root
+        self.animated = False
+
+
+def idle_velocities(link: Linkage, q) -> np.ndarray:
+    """A basis (k × nv, rows) of the idle motions at ``q``: the tree velocities the
+    closures allow with every actuated joint locked (the basis that
+    :attr:`Mobility.idle_motions` describes, same rank decisions)."""
+    model = link.model
+    ns = _NullSpace(model, model.kinematics(q), RANK_RTOL)
+    dof = ns.N.shape[1]
+    rank_x, _, _, Vt = _svd_rank(ns.X, RANK_RTOL) if ns.X.size else (0, None, None, np.eye(dof))
+    idle = ns.N @ Vt[rank_x:].T if dof else np.zeros((model.nv, 0))
+    return (ns.units[:, None] * idle).T
+
+
+def _assembly(link: Linkage, where) -> LinkageAssembly:
+    if where is None:
+        return link.assemble()
+    if isinstance(where, LinkageAssembly):
+        return where
+    from .assembly import as_pose
+
+    return link.inverse_kinematics(as_pose(where))
+
+
+def view_linkage(link: Linkage, where=None, *, visualizer=None,
+                 open: bool = False,  # noqa: A002 - the name meshcat and Pinocchio use
+                 html: str | os.PathLike | None = None, show_screws: bool = True,
+                 show_wrenches: bool = True) -> LinkageScene:
+    """Draw a linkage in a meshcat scene (see the module docstring).
+
+    Args:
+        link: The linkage.
+        where: A :class:`~pkm_pin.linkage.LinkageAssembly`, or an output pose
+            (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw: inverse kinematics);
+            default: assembled from the reference configuration.
+        visualizer, open, html: As :func:`pkm_pin.view.view`.
+        show_screws: Draw the joint screw axes.
+        show_wrenches: Draw the actuation and constraint wrenches on the output.
+
+    Raises:
+        InputError: ``link`` is not a linkage or the pose is malformed.
+        LoopClosureError: the linkage does not assemble.
+    """
+    if not isinstance(link, Linkage):
+        raise InputError(f"view_linkage() takes a pkm_pin Linkage, got {type(link).__name__}")
+    assembly = _assembly(link, where)
+    analysis = link.analyze(assembly)
+    meshcat = _meshcat()[0]
+    recorder = SceneRecorder(forward=None if visualizer is None else visualizer.window)
+    vis = meshcat.Visualizer(window=recorder)
+    if visualizer is not None:
+        vis.path = visualizer.path
+    scene = LinkageScene(vis, recorder, link, assembly, analysis, f"pkm/{node_name(link.name)}")
+    painter = _LinkagePainter(scene)
+    painter.settings()
+    painter.tree()
+    painter.closures()
+    painter.output()
+    painter.idle()
+    if show_screws:
+        painter.screws()
+    if show_wrenches:
+        painter.wrenches()
+    if html is not None:
+        scene.to_html(html)
+    if open:
+        scene.open()
+    return scene
+
+
+class _LinkagePainter(_Painter):
+    """Draws one linkage scene; sizes relative to the drawing's size."""
+
+    def __init__(self, scene: LinkageScene):  # noqa: D107 - no super(): no mechanism
+        _, self.g, self.anim, _, _ = _meshcat()
+        self.scene = scene
+        self.vis = scene.visualizer
+        self.mech = scene.linkage
+        self.model = scene.linkage.model
+        self.tree_ = self.model.tree
+        self.kin = self.model.kinematics(scene.assembly.q)
+        self.root = scene.root
+        self.legs_drawn = []
+        P = self.mech_points()
+        self.L = max(0.5 * float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))),
+                     float(self.model.length))
+
+    def centre(self) -> np.ndarray:
+        """Wrench arrows start nearest to the output frame's origin."""
+        return self.kin.output_placement.translation
+
+    # ------------------------------------------------------------------ geometry
+    def frame_point(self, frame: str, placement: pin.SE3 | None = None) -> np.ndarray:
+        fid = self.tree_.getFrameId(frame)
+        M = self.kin.frame_placements[fid]
+        return (M if placement is None else M * placement).translation.copy()
+
+    def joint_origin(self, j: int) -> np.ndarray:
+        return self.kin.joint_placements[j].translation.copy()
+
+    def carried_frames(self) -> list[tuple[str, np.ndarray, int]]:
+        """(name, world point, parent joint) of each closure frame and the output."""
+        out = []
+        for c in self.model.closures:
+            for frame, P in ((c.frame_a, c.placement_a), (c.frame_b, c.placement_b)):
+                out.append((frame, self.frame_point(frame, P),
+                            self.tree_.frames[self.tree_.getFrameId(frame)].parentJoint))
+        fid = self.tree_.getFrameId(self.mech.output)
+        out.append((self.mech.output, self.frame_point(self.mech.output),
+                    self.tree_.frames[fid].parentJoint))
+        return out
+
+    def mech_points(self) -> np.ndarray:
+        """World points that the view must frame: the joints, the world origin, the
+        closure and output frames."""
+        pts = [np.zeros(3)] + [self.joint_origin(j) for j in range(1, self.tree_.njoints)]
+        return np.vstack(pts + [p for _, p, _ in self.carried_frames()])
+
+    def colour(self, j: int) -> int:
+        """Colour of joint ``j``'s branch (grey for the universe)."""
+        if j == 0:
+            return GROUND_COLOUR
+        roots = [k for k in range(1, self.tree_.njoints) if self.tree_.parents[k] == 0]
+        return LEG_COLOURS[roots.index(list(self.tree_.supports[j])[1]) % len(LEG_COLOURS)]
+
+    def bar(self, path: str, a, b, colour: int, radius: float, opacity: float = 1.0) -> None:
+        if np.linalg.norm(np.asarray(b) - a) <= 1e-9 * self.L:
+            return
+        self.vis[path].set_object(self.g.Cylinder(1.0, radius), self.material(colour, opacity))
+        self.vis[path].set_transform(_segment_matrix(np.asarray(a), np.asarray(b)))
+
+    # ----------------------------------------------------------------------- tree
+    def tree(self) -> None:
+        """Skeleton bars and joint markers."""
+        tree, r = self.tree_, self.size("link")
+        for j in range(1, tree.njoints):
+            parent = tree.parents[j]
+            colour = GROUND_COLOUR if parent == 0 else self.colour(parent)
+            self.bar(f"{self.root}/links/{node_name(tree.names[j])}", self.joint_origin(parent),
+                     self.joint_origin(j), colour, r)
+            self.joint(j)
+        for name, p, j in self.carried_frames():
+            self.bar(f"{self.root}/links/{node_name(name)}", self.joint_origin(j), p,
+                     self.colour(j), r)
+
+    def joint(self, j: int) -> None:
+        """A joint's marker: cylinder along a revolute axis, cube, or ball."""
+        joint, name = self.tree_.joints[j], self.tree_.names[j]
+        if joint.nv == 0 or joint.nv == 6:  # mimic or free flyer: no physical joint
+            return
+        colour = ACTUATED_SCREW_COLOUR if name in self.mech.actuated else self.colour(j)
+        node = self.vis[f"{self.root}/joints/{node_name(name)}"]
+        c, s = self.joint_origin(j), self.size("joint")
+        twist = self.kin.joint_twists[joint.idx_v]
+        if joint.nv == 1 and np.linalg.norm(twist[:3]) > 0:
+            u = twist[:3] / np.linalg.norm(twist[:3])
+            node.set_object(self.g.Cylinder(1.0, s), self.material(colour))
+            node.set_transform(_segment_matrix(c - 1.4 * s * u, c + 1.4 * s * u))
+        elif joint.nv == 1:
+            node.set_object(self.g.Box([2 * s] * 3), self.material(colour))
+            node.set_transform(_translation(c))
+        else:
+            node.set_object(self.g.Sphere(1.2 * s), self.material(colour))
+            node.set_transform(_translation(c))
+
+    # ------------------------------------------------------------------- closures
+    def loop_points(self, c) -> list[np.ndarray]:
+        """Constraint point a, the joints up to the common ancestor and down to b's,
+        constraint point b."""
+        tree = self.tree_
+        ja = tree.frames[tree.getFrameId(c.frame_a)].parentJoint
+        jb = tree.frames[tree.getFrameId(c.frame_b)].parentJoint
+        sa, sb = list(tree.supports[ja]), list(tree.supports[jb])
+        m = next((k for k, (x, y) in enumerate(zip(sa, sb)) if x != y), min(len(sa), len(sb)))
+        joints = sa[m - 1:][::-1] + sb[m:]
+        return ([self.frame_point(c.frame_a, c.placement_a)]
+                + [self.joint_origin(j) for j in joints]
+                + [self.frame_point(c.frame_b, c.placement_b)])
+
+    def closures(self) -> None:
+        """Each loop's ring, its constraint-frame marker and the gap, if any."""
+        for k, c in enumerate(self.model.closures):
+            path = f"{self.root}/closures/{node_name(c.name or f'closure_{k}')}"
+            pts = self.loop_points(c)
+            for i, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
+                self.bar(f"{path}/ring/{i}", a, b, CLOSURE_COLOUR, 2.2 * self.size("link"),
+                         opacity=0.45)
+            self.vis[f"{path}/line"].set_object(self.g.LineLoop(
+                self.g.PointsGeometry(np.array(pts, dtype=np.float32).T),
+                self.g.LineBasicMaterial(color=CLOSURE_COLOUR, linewidth=2.0)))
+            Ca = self.kin.frame_placements[self.tree_.getFrameId(c.frame_a)] * c.placement_a
+            s = 1.6 * self.size("joint")
+            marker = self.vis[f"{path}/marker"]
+            if c.kind == "revolute":  # a disc across the common z axis
+                z = Ca.rotation[:, 2]
+                marker.set_object(self.g.Cylinder(1.0, 1.3 * s), self.material(CLOSURE_COLOUR))
+                marker.set_transform(_segment_matrix(Ca.translation - 0.15 * s * z,
+                                                     Ca.translation + 0.15 * s * z))
+            else:
+                shape = self.g.Sphere(s) if c.kind == "point" else self.g.Box([1.6 * s] * 3)
+                marker.set_object(shape, self.material(CLOSURE_COLOUR, 0.8))
+                T = Ca.homogeneous.copy() if c.kind == "weld" else _translation(Ca.translation)
+                marker.set_transform(T)
+            self.bar(f"{path}/gap", pts[0], pts[-1], CLOSURE_COLOUR, self.size("link"))
+
+    # --------------------------------------------------------------------- output
+    def output(self) -> None:
+        """A ball at the output frame's origin; its axes for a body."""
+        M = self.kin.output_placement
+        path = f"{self.root}/output"
+        self.vis[f"{path}/ball"].set_object(self.g.Sphere(1.4 * self.size("anchor")),
+                                            self.material(PLATFORM_COLOUR))
+        self.vis[f"{path}/ball"].set_transform(_translation(M.translation))
+        if self.model.output_point:
+            return
+        for axis, colour, label in zip(M.rotation.T, OUTPUT_AXIS_COLOURS, "xyz"):
+            self.bar(f"{path}/{label}", M.translation,
+                     M.translation + 0.25 * self.L * axis, colour, self.size("shaft"))
+
+    # ---------------------------------------------------------------------- idle
+    def idle(self) -> None:
+        """Each idle motion: the moving body's screw axis, or halos on moving joints."""
+        tree = self.tree_
+        for k, v in enumerate(idle_velocities(self.mech, self.scene.assembly.q)):
+            path = f"{self.root}/idle/{k}"
+            T = np.array([J @ v for J in self.kin.body_jacobians])
+            size = np.linalg.norm(screws.homogenise(T, self.model.length), axis=1)
+            bodies = [j for j in range(1, tree.njoints) if size[j] > 1e-9 * size.max()]
+            if len(bodies) == 1:
+                j = bodies[0]
+                point, u = screws.axis(T[j], length=self.model.length)
+                if np.isinf(screws.pitch(T[j], length=self.model.length)):
+                    point = self.joint_origin(j)
+                P = np.array(_body_points(self.model, self.kin, j))
+                t = (P - point) @ u
+                pad = 0.15 * max(float(np.ptp(t)), self.L)
+                a, b = point + (t.min() - pad) * u, point + (t.max() + pad) * u
+                self.bar(f"{path}/axis", a, b, IDLE_COLOUR, 1.8 * self.size("link"))
+                continue
+            x = v / self.model.velocity_units
+            for j in range(1, tree.njoints):
+                sl = slice(tree.joints[j].idx_v, tree.joints[j].idx_v + tree.joints[j].nv)
+                if np.abs(x[sl]).max(initial=0.0) > 1e-9 * np.abs(x).max():
+                    node = self.vis[f"{path}/joints/{node_name(tree.names[j])}"]
+                    node.set_object(self.g.Sphere(2.2 * self.size("joint")),
+                                    self.material(IDLE_COLOUR, 0.5))
+                    node.set_transform(_translation(self.joint_origin(j)))
+
+    # ------------------------------------------------------------- screws, wrenches
+    def screws(self) -> None:
+        """The screw axis of every 1-DOF joint, centred at the joint."""
+        tree, half = self.tree_, self.size("screw_half")
+        for j in range(1, tree.njoints):
+            joint = tree.joints[j]
+            if joint.nv != 1:
+                continue
+            twist = self.kin.joint_twists[joint.idx_v]
+            point, u = screws.axis(twist, length=self.model.length)
+            centre = self.joint_origin(j)
+            if np.isfinite(screws.pitch(twist, length=self.model.length)):
+                centre = point + ((centre - point) @ u) * u
+            colour = ACTUATED_SCREW_COLOUR if tree.names[j] in self.mech.actuated \
+                else PASSIVE_SCREW_COLOUR
+            self.bar(f"{self.root}/screws/{node_name(tree.names[j])}", centre - half * u,
+                     centre + half * u, colour, self.size("screw"))
+
+    def wrenches(self) -> None:
+        """Actuation wrenches (rows of ``A``) and the constraint wrenches on the output
+        (a readable basis; forces only for a point output)."""
+        analysis = self.scene.analysis
+        for name, w in zip(self.mech.actuated, analysis.A):
+            self.arrow(f"actuation/{node_name(name.replace('/', '.'))}", w,
+                       ACTUATION_WRENCH_COLOUR)
+        basis = readable_basis(analysis.constraint_wrenches, self.centre(), self.model.length)
+        for k, b in enumerate(basis):
+            if not (self.model.output_point and b.kind == "couple"):
+                self.arrow(f"constraint/{k}", b.screw, CONSTRAINT_WRENCH_COLOUR)
