@@ -17,9 +17,10 @@ Everything is derived from one Jacobian per leg (its columns are the joint twist
   the constraint system loses rank (the platform gains a motion).
 
 Conventions: twists ``(ω; v_O)`` and wrenches ``(f; m_O)`` axis-first about the world
-origin. Every rank and singularity decision is made on unit-homogenised screws (moment
-parts divided by the mechanism's characteristic length, then rows normalised), so the
-same mechanism in millimetres or metres gives the same DOF and classes. Actuation
+origin. Every rank and singularity decision is made on unit-homogenised screws about the
+platform's centre (the pose's origin; moment parts divided by the mechanism's
+characteristic length, then rows normalised), so the same mechanism in millimetres or
+metres, or moved anywhere in the world, gives the same DOF, indices and classes. Actuation
 wrenches are scaled to a unit force (or, for a pure moment, a unit moment) and signed so
 that ``B_ii >= 0``.
 """
@@ -30,6 +31,7 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
+import pinocchio as pin
 
 from . import engine, screws
 from .errors import InputError, SingularityError
@@ -85,13 +87,26 @@ class Analysis:
         if self.joint_twists is None:
             self.joint_twists = joint_twists(mech, assembly.leg_q)
         layout = mech.engine_layout if rtol == screws.RTOL else layout_of(mech, rtol)
-        self._results = engine.analyse(self.joint_twists[None], layout)
+        #: The platform's centre [m]: screws are homogenised about it for every decision.
+        self.centre = assembly.pose.translation.copy()
+        self._results = engine.analyse(self.joint_twists[None], layout,
+                                       centres=self.centre[None])
+
+    def _to_origin(self, H: np.ndarray) -> np.ndarray:
+        """Screws homogenised about :attr:`centre` (the engine's) in world units about
+        the world origin."""
+        return screws.transform(screws.dehomogenise(H, self.length),
+                                pin.SE3(np.eye(3), self.centre)).reshape(np.shape(H))
+
+    def _about_centre(self, S: np.ndarray) -> np.ndarray:
+        """Screws about the world origin written about :attr:`centre`."""
+        return screws.transform(S, pin.SE3(np.eye(3), -self.centre)).reshape(np.shape(S))
 
     @cached_property
     def legs(self) -> list[LegScrews]:
         """Per leg: its Jacobian and its constraint wrenches."""
         r, offs = self._results, self.mechanism.leg_frames.coords
-        W = screws.dehomogenise(r.leg_constraints[0], self.length)
+        W = self._to_origin(r.leg_constraints[0].reshape(-1, 6)).reshape(-1, 6, 6)
         return [LegScrews(self.joint_twists[a:b].T, W[k, :r.leg_dims[0, k]])
                 for k, (a, b) in enumerate(zip(offs[:-1], offs[1:]))]
 
@@ -105,14 +120,15 @@ class Analysis:
     def constraint_wrenches(self) -> np.ndarray:
         """Basis of the mechanism's constraint wrench system (union over the legs, eq. 37)."""
         r = self._results
-        return screws.dehomogenise(r.constraints[0, :6 - r.dof[0]], self.length)
+        return self._to_origin(r.constraints[0, :6 - r.dof[0]])
 
     @cached_property
     def platform_twists(self) -> np.ndarray:
         """Basis (dof × 6) of the platform's twist system: reciprocal of the constraints.
 
-        Orthonormal once the linear parts are divided by the characteristic length."""
-        return screws.dehomogenise(self._results.platform[0, :self.dof], self.length)
+        Orthonormal once written about :attr:`centre` with the linear parts divided by
+        the characteristic length."""
+        return self._to_origin(self._results.platform[0, :self.dof])
 
     @property
     def dof(self) -> int:
@@ -212,7 +228,7 @@ class Analysis:
         P = self._results.platform[0, :self.dof]
         M = self._results.A_h[0] @ screws.DELTA @ P.T
         _, _, Vt = np.linalg.svd(M, full_matrices=True)
-        return screws.dehomogenise(Vt[-1] @ P, self.length)
+        return self._to_origin(Vt[-1] @ P)
 
     @cached_property
     def unresisted_wrench(self) -> np.ndarray | None:
@@ -220,9 +236,9 @@ class Analysis:
         actuation and constraint wrenches balances; ``None`` elsewhere."""
         if self.indices["type_II"] >= self.singular_tol:
             return None
-        H = screws.normalised_rows(self.full_jacobian, self.length)
+        H = screws.normalised_rows(self._about_centre(self.full_jacobian), self.length)
         _, _, Vt = np.linalg.svd(H, full_matrices=True)
-        return screws.dehomogenise(Vt[-1], self.length)
+        return self._to_origin(Vt[-1])
 
     @cached_property
     def lost_actuated_rates(self) -> np.ndarray | None:
@@ -239,6 +255,11 @@ class Analysis:
         if t.shape[0] != 1:
             raise InputError(f"twist must have shape (6,), got {np.shape(twist)}")
         return t[0]
+
+    def _admissible(self, t: np.ndarray) -> bool:
+        """Whether ``t`` lies in the platform twist system (decided about :attr:`centre`)."""
+        return screws.contains(self._about_centre(self.platform_twists),
+                               self._about_centre(t), self.length)
 
     def forward_velocity(self, qdot_actuated) -> np.ndarray:
         """Platform twist (6,) axis-first about the world origin from the actuated rates.
@@ -272,7 +293,7 @@ class Analysis:
             SingularityError: at or near a type I singularity.
         """
         t = self._check_twist(twist)
-        if not screws.contains(self.platform_twists, t, self.length):
+        if not self._admissible(t):
             raise InputError(
                 f"twist {np.round(t, 6)} is not a motion of the platform here "
                 f"(motion type {self.motion_type}); project it onto platform_twists first"
@@ -287,7 +308,7 @@ class Analysis:
     def passive_rates(self, twist) -> list[np.ndarray]:
         """Every leg's joint rates (all joints, velocity order) for a platform twist."""
         t = self._check_twist(twist)
-        if not screws.contains(self.platform_twists, t, self.length):
+        if not self._admissible(t):
             raise InputError(f"twist {np.round(t, 6)} is not a motion of the platform here")
         out = []
         for leg, ls in zip(self.mechanism.legs, self.legs):
@@ -313,7 +334,8 @@ _CLASSES = np.array(_CLASS_NAMES)
 
 def layout_of(mechanism, rtol: float = screws.RTOL, reference=None) -> engine.Layout:
     """The engine's :class:`~pkm_pin.engine.Layout` of a mechanism (legs one after the
-    other; ``reference``: homogenised platform basis for the carried determinant)."""
+    other; ``reference``: platform basis for the carried determinant, homogenised about
+    its pose's centre)."""
     offs = mechanism.leg_frames.coords
     legs = mechanism.legs
     groups = np.array([offs[i] + np.array(g) for i, leg in enumerate(legs)

@@ -30,7 +30,12 @@ from .engine.stages import spherical_lines
 from .errors import FrameNotFound, InputError, JointNotFound
 from .serial import SerialChain
 from .solve import LegSolution, closure_error
-from .tolerances import CLOSURE_TOL, JOINT_LIMIT_SLACK, SPHERICAL_OFFSET_RTOL
+from .tolerances import (
+    CLOSURE_TOL,
+    JOINT_LIMIT_SLACK,
+    SPHERICAL_AXES_SIN,
+    SPHERICAL_OFFSET_RTOL,
+)
 
 __all__ = ["Leg", "LegSolution", "pose_error"]
 
@@ -324,20 +329,31 @@ class Leg(SerialChain):
     def spherical_groups(self) -> list[tuple[int, int, int]]:
         """Velocity indices of runs of three revolutes that form a spherical joint.
 
-        Three consecutive 1-DOF revolute joints (none of them mimic-coupled) whose frames
-        coincide (zero offsets between them) have concurrent axes: written as a
-        spherical joint, they lose rank only because of the parametrisation (gimbal
-        lock). The analysis replaces their twists by three orthogonal lines through the
-        centre.
+        Three consecutive 1-DOF revolute joints whose frames coincide (zero offsets
+        between them: concurrent axes) are a spherical joint written with three
+        coordinates when they are also
+
+        * passive (none actuated, none mimic-coupled): an actuated revolute among
+          concurrent ones is a joint of its own (the agile eye's base revolutes), and
+          replacing its twist would change the actuation wrench;
+        * independent: consecutive axes are not parallel (the angle between consecutive
+          axes is fixed by the joint placement), so the three axes span space away from
+          the gimbal lock.
+
+        Such a spherical joint loses rank only through its parametrisation (the gimbal
+        lock); the analysis replaces its twists by three orthogonal lines through the
+        centre. Other concurrent revolutes keep their own twists.
         """
         m = self.model
         coupled = {m.joints[j].idx_v for j in range(1, m.njoints) if m.joints[j].nv == 0}
+        actuated = set(np.atleast_1d(self.actuated_v).tolist())
+        axes = self._joint_axes()
         rev = []
         for j in range(1, m.njoints):
             jm = m.joints[j]
             short = jm.shortname()
             rev.append(jm.nv == 1 and short.startswith("JointModelR") and "UB" not in short
-                       and jm.idx_v not in coupled)
+                       and jm.idx_v not in coupled and jm.idx_v not in actuated)
         L = self.characteristic_length
         groups, j = [], 1
         while j + 2 < m.njoints:
@@ -345,6 +361,8 @@ class Leg(SerialChain):
             if all(rev[k - 1] for k in trio) and all(
                 m.parents[k] == k - 1
                 and np.linalg.norm(m.jointPlacements[k].translation) <= SPHERICAL_OFFSET_RTOL * L
+                and np.linalg.norm(np.cross(axes[k - 1], m.jointPlacements[k].rotation
+                                            @ axes[k])) > SPHERICAL_AXES_SIN
                 for k in trio[1:]
             ):
                 groups.append(tuple(m.joints[k].idx_v for k in trio))
@@ -352,6 +370,21 @@ class Leg(SerialChain):
             else:
                 j += 1
         return groups
+
+    def _joint_axes(self) -> dict[int, np.ndarray]:
+        """Axis (unit, in the joint's own frame) of every 1-DOF joint, from its motion
+        subspace in Pinocchio (the angular part for a revolute)."""
+        m = self.model
+        data = m.createData()
+        pin.computeJointJacobians(m, data, pin.neutral(m))
+        axes = {}
+        for j in range(1, m.njoints):
+            jm = m.joints[j]
+            if jm.nv == 1:
+                S = pin.getJointJacobian(m, data, j, pin.LOCAL)[:, jm.idx_v]
+                w = S[3:]
+                axes[j] = w / np.linalg.norm(w) if np.linalg.norm(w) > 0 else w
+        return axes
 
     def motion_twists(self, q) -> np.ndarray:
         """Joint twists (nv × 6) with spherical groups replaced by 3 orthogonal lines.

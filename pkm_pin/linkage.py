@@ -45,7 +45,7 @@ to those with ``β = 0`` is the actuation wrench, scaled to a unit force (a unit
 for a couple), ``B_aa ≥ 0``. For a base–legs–platform tree this is seed 000's actuation
 wrench of the leg (reciprocal to the leg's other joint twists, orthogonal to the leg's
 constraint wrenches), so ``A``, ``B`` and the indices equal :class:`pkm_pin.Analysis`'s
-with ``about="world"`` (the analysis homogenises about the world origin).
+(both homogenise about the platform's origin, the default ``about="output"``).
 
 Indices and classes
 -------------------

@@ -246,7 +246,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dic
     out["q_actuated"][idx] = np.concatenate(
         [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
     # 3. the analysis engine (compiled screw algebra) on every assembled pose
-    r = engine.analyse(Js, layout, full=False)
+    r = engine.analyse(Js, layout, full=False, centres=X[idx, :3])
     for key in ("dof", "type_I", "type_II", "condition", "det"):
         out[key][idx] = getattr(r, key)
     return out
@@ -301,8 +301,8 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts) -> dict:
         return out
     J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
          for asm in solved]  # the assembly's verifying pass gave them, when it ran
-    r = engine.analyse(np.stack(J), layout,
-                       full=False)
+    r = engine.analyse(np.stack(J), layout, full=False,
+                       centres=np.array([asm.pose.translation for asm in solved]))
     for key in ("dof", "type_I", "type_II", "condition", "det"):
         out[key][ok] = getattr(r, key)
     return out
@@ -361,7 +361,8 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
         raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
     rtol = RANK_RTOL if rtol is None else rtol
     order = visiting_order(X, mech.characteristic_length)
-    reference = homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+    home = mech.home_analysis
+    reference = homogenise(home._about_centre(home.platform_twists), mech.characteristic_length)
     chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
     bar = _progress_bar(len(X)) if progress else None
     if executor is None:

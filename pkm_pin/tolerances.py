@@ -100,6 +100,8 @@ TARGET_LIMIT_SLACK = 1e-12
 #: Three revolute joint frames form a spherical joint when the offsets between them are
 #: at most this fraction of the leg's characteristic length.
 SPHERICAL_OFFSET_RTOL = 1e-9
+#: … and when consecutive axes are not parallel: the sine of their angle is above this.
+SPHERICAL_AXES_SIN = 1e-6
 #: A 4×4 pose is accepted when ``R Rᵀ`` differs from the identity by at most this
 #: (absolute, on a dimensionless rotation matrix).
 ROTATION_MATRIX_ATOL = 1e-9
@@ -135,6 +137,13 @@ SAME_CONFIGURATION_TOL = 1e-7
 #: Two actuated-coordinate vectors are the same when they differ by at most this
 #: (absolute [rad or m], after the legs' own :data:`SAME_CONFIGURATION_TOL` test).
 SAME_ACTUATED_ATOL = 1e-9
+#: A nonsingular end of the assembly-mode homotopy (:mod:`pkm_pin.modes`), scaled so its
+#: largest Study coordinate is 1, is real when the norm of its imaginary part is at
+#: most this fraction of the norm of its real part (the closure solver polishes it next).
+HOMOTOPY_REAL_TOL = 1e-6
+#: The multistart of :func:`pkm_pin.modes.assembly_modes` stops after this many batches
+#: in a row that find no new assembly mode.
+MODES_PATIENCE = 3
 
 # ======================================================================== reports
 #: Components of a unit direction below this are printed as 0; coordinates of points

@@ -47,15 +47,25 @@ def path(mech, n=40, size=0.25):
     return pose_array([screws.exp(s * size * c) * mech.home for s in np.linspace(-1, 1, n)])
 
 
+def centres(assemblies) -> np.ndarray:
+    """The platform centres of the assemblies (the engine homogenises about them)."""
+    return np.array([a.pose.translation for a in assemblies])
+
+
 def oracle(mech, assemblies, rtol=RTOL):
-    """The numpy oracle on the legs' Jacobians and motion twists (Leg.screws)."""
+    """The numpy oracle on the legs' Jacobians and motion twists (Leg.screws), written
+    about each assembly's platform centre as the engine does; its A rows are moved back
+    about the world origin (the engine's A)."""
     Js, Ts = [], []
+    moves = [pin.SE3(np.eye(3), -a.pose.translation) for a in assemblies]
     for k, leg in enumerate(mech.legs):
         pairs = [leg.screws(a.leg_q[k]) for a in assemblies]
-        Js.append(np.stack([J for J, _ in pairs]))
-        Ts.append(np.stack([T for _, T in pairs]))
-    return oracle_batch.analyse(Js, Ts, [leg.actuated_v for leg in mech.legs],
-                                mech.characteristic_length, rtol)
+        Js.append(np.stack([screws.adjoint(M) @ J for (J, _), M in zip(pairs, moves)]))
+        Ts.append(np.stack([screws.transform(T, M) for (_, T), M in zip(pairs, moves)]))
+    b = oracle_batch.analyse(Js, Ts, [leg.actuated_v for leg in mech.legs],
+                             mech.characteristic_length, rtol)
+    b.A[:] = [screws.transform(A, M.inverse()) for A, M in zip(b.A, moves)]
+    return b
 
 
 def same_span(A, B, atol=1e-9):
@@ -100,7 +110,7 @@ def test_engine_equals_the_numpy_oracle_along_a_path(name):
     X = path(mech, n=12)
     assemblies = [mech.assemble(x) for x in X]
     J = np.stack([joint_twists(mech, a.leg_q) for a in assemblies])
-    r = engine.analyse(J, layout_of(mech))
+    r = engine.analyse(J, layout_of(mech), centres=centres(assemblies))
     assert_equals_oracle(mech, assemblies, r)
 
 
@@ -124,7 +134,8 @@ def test_compiled_and_pinocchio_chunks_agree():
     for name in ("rpr3", "stewart", "orthoglide_quasi"):
         mech = mechanism(name)
         X = path(mech, n=20)
-        ref = homogenise(mech.home_analysis.platform_twists, mech.characteristic_length)
+        home = mech.home_analysis
+        ref = homogenise(home._about_centre(home.platform_twists), mech.characteristic_length)
         fast = evaluate_chunk(mech, X, ref, RTOL, SINGULAR_TOL)
         slow = _evaluate_chunk_pinocchio(mech, X, layout_of(mech, RTOL, ref), None, 4)
         np.testing.assert_array_equal(fast["ok"], slow["ok"])
@@ -166,7 +177,7 @@ def test_near_constraint_singular_poses():
     X = pose_array([pin.SE3(base.rotation, base.translation + [0, 0, h]) for h in heights])
     assemblies = [mech.assemble(x) for x in X]
     J = np.stack([joint_twists(mech, a.leg_q) for a in assemblies])
-    r = engine.analyse(J, layout_of(mech))
+    r = engine.analyse(J, layout_of(mech), centres=centres(assemblies))
     b = oracle(mech, assemblies)
     np.testing.assert_array_equal(r.dof, b.dof)
     np.testing.assert_array_equal(r.redundant, b.redundant)
@@ -338,8 +349,8 @@ def test_spherical_groups_become_three_lines_through_their_centre():
                   np.r_[0, 0, 0, 1.0, 0, 0]])
     T = np.empty((4, 6))
     L = 2.0
-    motion_twists(J, np.array([[0, 1, 2]], np.int64), L, T, np.empty((3, 3)), np.empty(3),
-                  np.empty(3))
+    motion_twists(J, np.array([[0, 1, 2]], np.int64), L, np.zeros(3), T, np.empty((3, 3)),
+                  np.empty(3), np.empty(3))
     for t in range(3):
         e = np.eye(3)[t]
         expected = np.r_[e, np.cross(c, e) / L]
@@ -417,8 +428,9 @@ def test_plain_python_engine_gives_the_compiled_numbers_bit_for_bit(name):
     layout = layout_of(mech)
     for i in range(len(X)):
         a, b = core.allocate(1, layout), core.allocate(1, layout)
-        core.analyse_into.py_func(J[i:i + 1], layout, a, True)
-        core.analyse_into(J[i:i + 1], layout, b, True)
+        p = np.array([X[i, :3]])
+        core.analyse_into.py_func(J[i:i + 1], p, layout, a, True)
+        core.analyse_into(J[i:i + 1], p, layout, b, True)
         for field, x, y in zip(core.Results._fields, a, b):
             np.testing.assert_array_equal(x, y, err_msg=field)
 

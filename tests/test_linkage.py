@@ -31,7 +31,7 @@ from linkage_models import (
 )
 
 import pkm_pin
-from pkm_pin import screws
+from pkm_pin import engine, screws
 from pkm_pin.errors import AssemblyError, InputError, SingularityError, TreeFrameNotFound
 from pkm_pin.linkage import Linkage, LoopClosureError
 from pkm_pin.model.closure_model import configuration, from_mechanism
@@ -228,11 +228,12 @@ def test_idle_motion_invariance():
 @pytest.mark.parametrize("path", TOML, ids=[p.stem for p in TOML])
 def test_equals_seed_000_reading(path):
     """On every shipped mechanism the linkage reading equals pkm_pin.Analysis: dof,
-    motion type, class, forward and inverse velocity maps, indices (about the world
-    origin), A and B, and the constraint wrench span."""
+    motion type, class, forward and inverse velocity maps, indices (both homogenise
+    about the platform's origin), A and B, and the constraint wrench span; about the
+    world origin too (the engine analysing screws about the world origin)."""
     mech, link, q = shipped(path)
     ref = mech.home_analysis
-    an = link.analyze(q, about="world")
+    an = link.analyze(q)
     assert (an.dof, an.output_dof, an.idle_dof) == (ref.dof, ref.dof, 0)
     assert an.motion_type == ref.motion_type and an.singularity == ref.singularity
     for k in ("type_I", "type_II", "condition_A"):
@@ -249,6 +250,13 @@ def test_equals_seed_000_reading(path):
     proj = [screws.homogenise(C, L) for C in (an.constraint_wrenches, ref.constraint_wrenches)]
     proj = [np.linalg.pinv(C) @ C if len(C) else np.zeros((6, 6)) for C in proj]
     np.testing.assert_allclose(proj[0], proj[1], atol=1e-9)
+    # about the world origin: the engine on the same twists with the centre at the origin
+    world = link.analyze(q, about="world")
+    r = engine.analyse(ref.joint_twists[None], mech.engine_layout)
+    for k, key in (("type_I", "type_I"), ("type_II", "type_II"), ("condition_A", "condition")):
+        assert world.indices[k] == pytest.approx(float(getattr(r, key)[0]), abs=1e-9,
+                                                 rel=1e-9)
+    np.testing.assert_allclose(world.A, r.A[0], atol=1e-9)
 
 
 @pytest.mark.parametrize("path", TOML[-3:], ids=[p.stem for p in TOML[-3:]])

@@ -324,3 +324,41 @@ def rps3(
         name="3-RPS",
         description="3-RPS parallel mechanism; prismatic actuators; 1T2R",
         legs=legs, home=home, home_q=home_q, slug="rps3")
+
+
+# ========================================================================== agile eye
+def agile_eye(scale: float = 1.0, *, centred: bool = True, radius: float = 0.1,
+              centre: tuple[float, float, float] = (0.0, 0.0, 0.5)) -> MechanismDesign:
+    """Agile eye (Gosselin's spherical 3-RRR): three R-R-R legs whose nine joint axes
+    all pass through one centre, actuated base revolutes; 3R.
+
+    Leg i's axes at home are ``(u, v, w) = (e_i, e_{i+1}, e_{i+2})`` (cyclic): the base
+    axes are the world axes, the platform axes too, and every proximal and distal link
+    spans 90°: the isotropic home (A's rows: unit couples along the base axes, B = I).
+    The platform frame is at the centre with the world's orientation; ``home_q = 0``.
+
+    ``centred=True`` writes every joint frame at the centre (zero offsets between the
+    three revolutes: the natural way, and three concurrent revolutes that are *not* a
+    spherical joint since one is actuated); ``centred=False`` puts joint k's frame at
+    ``radius`` along its axis (the same lines). Both describe the same mechanism.
+    """
+    c = scale * np.asarray(centre, dtype=float)
+    r = 0.0 if centred else scale * radius
+    legs, home_q = [], []
+    home = pin.SE3(np.eye(3), c)
+    for i in range(3):
+        u, v, w = (np.eye(3)[(i + k) % 3] for k in range(3))
+        joints = [JointSpec("R1", "revolute", xyz=tuple(r * u), axis=tuple(u)),
+                  JointSpec("R2", "revolute", xyz=tuple(r * (v - u)), axis=tuple(v)),
+                  JointSpec("R3", "revolute", xyz=tuple(r * (w - v)), axis=tuple(w))]
+        name = f"agile_eye_leg{i + 1}" + ("" if centred else "_offset")
+        xml = chain_urdf(name, joints, tip="tip", tip_xyz=tuple(-r * w))
+        q = np.zeros(3)
+        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("R1",), pin.SE3(np.eye(3), c),
+                                        q, home, f"{name}.urdf"))
+        home_q.append(q)
+    return MechanismDesign(
+        name="Agile eye" + ("" if centred else " (offset frames)"),
+        description="Spherical 3-RRR (agile eye): nine revolute axes through one centre; "
+        "actuated base revolutes; 3R", legs=legs, home=home, home_q=home_q,
+        slug="agile_eye" + ("" if centred else "_offset"))

@@ -30,7 +30,9 @@ from .stages import (
     motion_twists,
     platform_system,
     scale_actuation,
+    shift_twist,
     transmission,
+    wrench_about_origin,
 )
 
 
@@ -43,8 +45,8 @@ class Layout(NamedTuple):
         groups: (G, 3) rows of the spherical groups (three concurrent revolutes).
         act_col: (n,) row of each actuated joint, in actuated-coordinate order.
         act_leg: (n,) its leg.
-        reference: (n_ref, 6) homogenised platform basis of the reference (home) pose,
-            for the carried determinant; (0, 6) for none.
+        reference: (n_ref, 6) platform basis of the reference (home) pose, homogenised
+            about its centre, for the carried determinant; (0, 6) for none.
         length: Characteristic length L of the mechanism [m]: moments are divided by it.
         rtol: Relative tolerance of the rank decisions (``σ > rtol · σ_max``).
         rot_tol: Absolute tolerance on the singular values of the ω parts of the
@@ -64,7 +66,9 @@ class Layout(NamedTuple):
 class Results(NamedTuple):
     """The engine's output for N poses (first axis: the pose).
 
-    Homogenised bases are orthonormal, masked: rows beyond their dimension are zero.
+    Homogenised bases are about the pose's centre ``p`` (:func:`analyse`'s ``centres``:
+    moment parts about ``p`` divided by ``L``), orthonormal, masked: rows beyond their
+    dimension are zero.
 
     Attributes:
         dof: (N,) degrees of freedom of the platform (dimension of its twist system).
@@ -77,9 +81,11 @@ class Results(NamedTuple):
         leg_constraints: (N, legs, 6, 6) their homogenised orthonormal bases.
         constraints: (N, 6, 6) homogenised orthonormal basis of their union (rows).
         platform: (N, 6, 6) homogenised orthonormal basis of the platform twists.
-        A: (N, n, 6) actuation wrenches (world units: unit force, or unit moment).
+        A: (N, n, 6) actuation wrenches (world units: unit force, or unit moment),
+            about the world origin.
         B: (N, n) diagonal of B, ``B_ii = A_i ∘ $_a,i``.
-        A_h: (N, n, 6) the actuation wrenches homogenised, rows of unit norm.
+        A_h: (N, n, 6) the actuation wrenches homogenised (about ``p``), rows of unit
+            norm.
     """
 
     dof: np.ndarray
@@ -114,7 +120,8 @@ def allocate(N: int, layout: Layout, full: bool = True) -> Results:
         e((F, 6, 6)), e((F, n, 6)), e((F, n)), e((F, n, 6)))
 
 
-def analyse(J: np.ndarray, layout: Layout, full: bool = True) -> Results:
+def analyse(J: np.ndarray, layout: Layout, full: bool = True,
+            centres: np.ndarray | None = None) -> Results:
     """Screw analysis of N assembled poses.
 
     The compiled engine runs for more than one pose, and for one pose when
@@ -127,16 +134,23 @@ def analyse(J: np.ndarray, layout: Layout, full: bool = True) -> Results:
             world units, about the world origin).
         layout: The mechanism's :class:`Layout`.
         full: Keep the bases and Jacobians (else the scalars only).
+        centres: (N, 3) the mechanism's centre at each pose [m] (the platform's origin):
+            every screw is homogenised about it (:mod:`.stages`), so the results do not
+            depend on where the mechanism stands in the world; default: the world origin.
     """
     J = np.ascontiguousarray(J, dtype=float)
     if J.ndim != 3 or J.shape[2] != 6 or J.shape[1] != int(layout.coords[-1]):
         raise ValueError(f"joint twists of shape {J.shape}: expected (N, "
                          f"{int(layout.coords[-1])}, 6)")
+    centres = (np.zeros((len(J), 3)) if centres is None
+               else np.ascontiguousarray(centres, dtype=float))
+    if centres.shape != (len(J), 3):
+        raise ValueError(f"centres of shape {centres.shape}: expected ({len(J)}, 3)")
     out = allocate(len(J), layout, full)
     if len(J) > 1 or prefer_compiled(analyse_into):
-        analyse_into(J, layout, out, full)
+        analyse_into(J, centres, layout, out, full)
     else:
-        analyse_into.py_func(J, layout, out, full)
+        analyse_into.py_func(J, centres, layout, out, full)
     return out
 
 
@@ -204,7 +218,7 @@ def workspace(nv, legs, n, n_ref):
 
 
 @njit(cache=True, nogil=True)
-def analyse_into(J, layout, out, full):
+def analyse_into(J, centres, layout, out, full):
     """:func:`analyse` in compiled code: fills ``out`` (see :func:`allocate`)."""
     coords, act_col, act_leg = layout.coords, layout.act_col, layout.act_leg
     L, rtol = layout.length, layout.rtol
@@ -213,8 +227,10 @@ def analyse_into(J, layout, out, full):
      centre, wh, ok, Ah, A, t_h, B, cons, P, Pw, M, P_loc, work) = workspace(
         J.shape[1], coords.shape[0] - 1, n, layout.reference.shape[0])
     d_prev = -1
+    tw = np.empty(6)
     for i in range(J.shape[0]):
-        motion_twists(J[i], layout.groups, L, T, G, gb, centre)
+        p = centres[i]
+        motion_twists(J[i], layout.groups, L, p, T, G, gb, centre)
         # stages 2, 3: each leg's constraint wrenches and its actuation wrenches
         m_c = 0
         for l in range(coords.shape[0] - 1):
@@ -244,12 +260,12 @@ def analyse_into(J, layout, out, full):
         # stage 5: actuation wrenches in world units, B, type I
         t1 = np.inf
         for a_i in range(n):
-            B, p = scale_actuation(wh[a_i], J[i, act_col[a_i]], L, rtol, A, Ah[a_i],
-                                   t_h)
-            t1 = min(t1, p)
+            shift_twist(J[i, act_col[a_i]], p, tw)
+            B, index = scale_actuation(wh[a_i], tw, L, rtol, A, Ah[a_i], t_h)
+            t1 = min(t1, index)
             if full:
                 out.B[i, a_i], out.independent[i, a_i] = B, ok[a_i]
-                out.A[i, a_i] = A
+                wrench_about_origin(A, p, out.A[i, a_i])
                 out.A_h[i, a_i] = Ah[a_i]
         out.type_I[i] = t1
         # stage 6: A_h Δ Pᵀ, type II index, condition, carried determinant

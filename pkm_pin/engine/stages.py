@@ -4,14 +4,20 @@ Plain Python functions on numpy arrays, compiled by numba inside the engine's lo
 (:func:`~pkm_pin.engine.core.analyse_into`, ``register_jitable``): each can be called
 and tested from Python as it is.
 
-Every stage works on *homogenised* screws: the moment part divided by the mechanism's
-characteristic length ``L`` (reciprocity is kept: ``a_h Δ b_h = (a Δ b) / L``), so that
-every rank decision is unit-invariant. Twists ``(ω; v_O)`` and wrenches ``(f; m_O)`` are
-axis-first, about the world origin. Rank decisions are ``σ > rtol · σ_max`` on the
-singular values of rows normalised to unit length (:func:`~.linalg.jacobi`).
+Every stage works on *homogenised* screws about the mechanism's **centre** ``p`` (the
+platform's origin at the pose analysed): twists ``(ω; v_p)`` and wrenches ``(f; m_p)``,
+axis-first, with the moment part divided by the mechanism's characteristic length ``L``
+(reciprocity is kept: ``a_h Δ b_h = (a Δ b) / L``). Every rank decision and every index
+is therefore invariant under the units (``L`` scales with them) and under a rigid motion
+of the whole mechanism (``p`` moves with it; rotations keep every norm), which the world
+origin would not give: about a far origin every moment is large and the rows of
+:func:`leg_constraints` or :func:`transmission` lose their conditioning. Rank decisions
+are ``σ > rtol · σ_max`` on the singular values of rows normalised to unit length
+(:func:`~.linalg.jacobi`). Joint twists come in about the world origin and actuation
+wrenches go out about it (:func:`shift_twist`, :func:`wrench_about_origin`).
 
 1. :func:`motion_twists` — the joint twists, spherical groups replaced by three lines
-   through their centre, homogenised, rows normalised.
+   through their centre, about ``p``, homogenised, rows normalised.
 2. :func:`leg_constraints` — one leg: the rank of its twist system and an orthonormal
    basis of its reciprocal (the leg's constraint wrenches).
 3. :func:`actuation_wrench` — one actuated joint: the wrench reciprocal to every other
@@ -110,12 +116,36 @@ def spherical_lines(J, groups, T, G, b, centre):
             T[row, 3 + (t + 1) % 3] = centre[(t + 2) % 3]
 
 
+@register_jitable
+def shift_twist(x, p, out):
+    """``out``: the twist ``x = (ω; v_O)`` written about the point ``p``: ``(ω; v_O + ω ×
+    p)`` (the velocity of the body point at ``p``); ``out`` may be ``x``."""
+    w0, w1, w2 = x[0], x[1], x[2]
+    out[0], out[1], out[2] = w0, w1, w2
+    out[3] = x[3] + w1 * p[2] - w2 * p[1]
+    out[4] = x[4] + w2 * p[0] - w0 * p[2]
+    out[5] = x[5] + w0 * p[1] - w1 * p[0]
+
+
+@register_jitable
+def wrench_about_origin(x, p, out):
+    """``out``: the wrench ``x = (f; m_p)`` given about the point ``p``, written about the
+    world origin: ``(f; m_p + p × f)``; ``out`` may be ``x``."""
+    f0, f1, f2 = x[0], x[1], x[2]
+    out[0], out[1], out[2] = f0, f1, f2
+    out[3] = x[3] + p[1] * f2 - p[2] * f1
+    out[4] = x[4] + p[2] * f0 - p[0] * f2
+    out[5] = x[5] + p[0] * f1 - p[1] * f0
+
+
 @register_jitable(inline="always")
-def motion_twists(J, groups, L, T, G, b, centre):
-    """Stage 1. ``T`` (nv × 6): the motion twists of :func:`spherical_lines`,
-    homogenised, rows of unit norm."""
+def motion_twists(J, groups, L, p, T, G, b, centre):
+    """Stage 1. ``T`` (nv × 6): the motion twists of :func:`spherical_lines`, written
+    about the mechanism's centre ``p`` (:func:`shift_twist`), homogenised, rows of unit
+    norm."""
     spherical_lines(J, groups, T, G, b, centre)
     for c in range(J.shape[0]):
+        shift_twist(T[c], p, T[c])
         unit_homogeneous(T[c], L, T[c])
 
 
