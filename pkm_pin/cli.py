@@ -280,7 +280,8 @@ def _check_linkage(path: Path, link) -> int:
     model = link.model
     closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or "none"
     print(f"ok    loads: {link.name!r}, {model.tree.njoints - 1} joints (nq {model.nq}, "
-          f"nv {model.nv}), {len(model.closures)} closures ({closures}), "
+          f"nv {model.nv}), {len(model.closures)} closure{'s' * (len(model.closures) != 1)} "
+          f"({closures}), "
           f"{len(link.actuated)} actuated ({', '.join(link.actuated) or 'none'}), output "
           f"{link.output!r} ({'point' if model.output_point else 'body'})")
     try:
