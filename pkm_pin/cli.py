@@ -146,7 +146,7 @@ def _linkage_assembly(args, link):
     if q is not None and pose is not None:
         raise InputError("give --q (actuated values) or --pose (output pose), not both")
     if q is not None:
-        return link.forward_kinematics(link.check_actuated(q, "--q"))
+        return link.forward_kinematics(link.check_actuated(q, "--q"), guess=link.assemble())
     if pose is not None:
         return link.inverse_kinematics(as_pose(pose))
     return link.assemble()
@@ -213,7 +213,8 @@ def cmd_analyze(args) -> int:
 
 
 def _analyze_linkage(args, link) -> int:
-    """``analyze`` of a linkage: assembled (``--q``, ``--pose`` or the reference), then
+    """``analyze`` of a linkage: assembled (``--q``, ``--pose`` or the reference; the
+    position problems on the branch of the reference assembly), then
     the report of :mod:`pkm_pin.report_linkage`."""
     from . import report_linkage as rl
 
@@ -343,12 +344,13 @@ def cmd_fk(args) -> int:
 
 
 def _fk_linkage(args, link) -> int:
-    """``fk`` of a linkage: every joint and the output pose (branch nearest the reference
-    configuration)."""
+    """``fk`` of a linkage: every joint and the output pose (the branch nearest the
+    reference assembly, as ``ik`` and ``analyze --q``)."""
     from .report_linkage import assembly_data, fk_text
 
     _no_all(args)
-    data = assembly_data(link, link.forward_kinematics(link.check_actuated(args.q)))
+    q = link.check_actuated(args.q)
+    data = assembly_data(link, link.forward_kinematics(q, guess=link.assemble()))
     print(json.dumps(data, indent=2) if args.json else fk_text(data))
     return 0
 
@@ -356,7 +358,7 @@ def _fk_linkage(args, link) -> int:
 def _no_all(args) -> None:
     if args.all:
         raise InputError("--all (every assembly mode) is for platform mechanisms; for a "
-                         "linkage fk/ik give the branch nearest the reference configuration")
+                         "linkage fk/ik give the branch nearest the reference assembly")
 
 
 def cmd_ik(args) -> int:
@@ -512,7 +514,8 @@ def _map_prefix(args, tag: str) -> Path:
 
 def _map_axes(args, link) -> tuple[list[int], np.ndarray, list[np.ndarray]]:
     """The varied actuated coordinates of a linkage map (``--actuated``, default the first
-    two), the values of all (reference assembly, ``--fixed`` NAME=VALUE) and the grid
+    two), the values of all (``args.reference``, the reference assembly, and ``--fixed``
+    NAME=VALUE) and the grid
     of each varied one (``--range``; default its joint limits, or the reference value
     ± π [rad] / ± the characteristic length [m] without limits)."""
     names = list(link.actuated)
@@ -522,7 +525,7 @@ def _map_axes(args, link) -> tuple[list[int], np.ndarray, list[np.ndarray]]:
         raise InputError(f"--actuated takes one or two distinct actuated joints of "
                          f"{', '.join(names) or '(none)'}; got {', '.join(chosen) or 'none'}")
     varied = [names.index(a) for a in chosen]
-    base = link.assemble().q_actuated.copy()
+    base = args.reference.q_actuated.copy()
     for item in args.fixed or ():
         name, _, text = item.partition("=")
         if name.strip() not in names or names.index(name.strip()) in varied:
@@ -573,14 +576,16 @@ def _snake(n_u: int, n_v: int) -> np.ndarray:
 
 
 def _map_linkage(args, link) -> int:
-    """``map`` of a linkage over one or two actuated coordinates (grid walked in a snake,
-    :meth:`Linkage.sweep`); writes PREFIX.npz and the PNG maps."""
+    """``map`` of a linkage over one or two actuated coordinates (grid walked in a snake
+    from the reference assembly's branch, :meth:`Linkage.sweep`); writes PREFIX.npz and
+    the PNG maps."""
     from .report_linkage import save_linkage_maps
 
     if args.plane is not None:
         raise InputError("--plane is for platform mechanisms; a linkage is mapped over "
                          "actuated coordinates (--actuated NAME [NAME], --range)")
     prefix = _map_prefix(args, "q")
+    args.reference = link.assemble()
     varied, base, grids = _map_axes(args, link)
     u, v = grids[0], grids[1] if len(grids) == 2 else np.zeros(1)
     shape = (v.size, u.size)
@@ -590,7 +595,7 @@ def _map_linkage(args, link) -> int:
     if len(varied) == 2:
         Q[:, varied[1]] = V.ravel()
     order = _snake(u.size, v.size)
-    swept = link.sweep(Q[order])
+    swept = link.sweep(Q[order], guess=args.reference)
     data = {}
     for key in ("q_actuated", "converged", "q", "output_poses", "dof", "output_dof",
                 "singularity", "condition", "forward", "inverse"):

@@ -111,7 +111,7 @@ def test_analyze_at_actuated_values(capsys):
     """--q assembles by forward kinematics first; the report is at those values."""
     report = _json(capsys, ["analyze", str(FIVE_BAR_XML), "--q", "0.1", "0.2", "--json"])
     link = load_mechanism(FIVE_BAR_XML)
-    assembly = link.forward_kinematics([0.1, 0.2])
+    assembly = link.forward_kinematics([0.1, 0.2], guess=link.assemble())
     assert report["q_actuated"] == pytest.approx([0.1, 0.2], abs=1e-12)
     assert report["q"] == pytest.approx(assembly.q.tolist(), abs=1e-12)
     assert report["indices"]["forward"] == pytest.approx(
@@ -176,7 +176,7 @@ def test_fk_then_ik_round_trip(path, capsys):
     q = Q_ACTUATED[path]
     found = _json(capsys, ["fk", str(path), *map(str, q), "--json"])
     link = load_mechanism(path)
-    assembly = link.forward_kinematics(q)
+    assembly = link.forward_kinematics(q, guess=link.assemble())
     assert found["q"] == pytest.approx(assembly.q.tolist(), abs=1e-12)
     assert found["q_actuated"] == pytest.approx(q, abs=1e-12)
     assert found["pose"]["xyz"] == pytest.approx(assembly.output_pose.translation, abs=1e-12)
@@ -185,6 +185,14 @@ def test_fk_then_ik_round_trip(path, capsys):
     assert back["q_actuated"] == pytest.approx(q, abs=1e-7)
     assert len(back["q"]) == link.model.nq
     assert back["pose"]["xyz"] == pytest.approx(found["pose"]["xyz"], abs=1e-9)
+
+
+def test_fk_stays_on_the_branch_of_the_reference_assembly(capsys):
+    """The four-bar's crank at 0.3: the rocker stays on the reference assembly's side
+    (negative angle), not on the other assembly mode."""
+    found = _json(capsys, ["fk", str(FOUR_BAR), "0.3", "--json"])
+    reference = _json(capsys, ["analyze", str(FOUR_BAR), "--json"])
+    assert reference["joints"]["rocker_joint"][0] < 0 and found["joints"]["rocker_joint"][0] < 0
 
 
 def test_fk_text_lists_every_joint(capsys):
