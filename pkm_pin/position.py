@@ -50,7 +50,7 @@ from .analysis import Analysis
 from .assembly import Assembly, as_pose
 from .compiling import prefer_compiled
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
-from .leg import pose_error
+from .modes import AssemblyModes, assembly_modes
 from .solve import (
     ACTUATED,
     LEGS,
@@ -74,7 +74,6 @@ from .tolerances import (
     LINES_SINGULAR_TOL,
     SAME_ACTUATED_ATOL,
     SAME_CONFIGURATION_TOL,
-    SAME_POSE_TOL,
     TARGET_LIMIT_SLACK,
 )
 from .twists import verified_twists
@@ -129,6 +128,33 @@ def _actuated_scales(mech) -> np.ndarray:
     return mech.actuated_scales.copy()
 
 
+def _progress(mech, q_start: np.ndarray, q_now: np.ndarray, target: np.ndarray) -> float:
+    """How far the actuated coordinates got from ``q_start`` to ``target``: ``λ = 1 −
+    |target − q_now| / |target − q_start|`` (largest scaled component; 1 at the target,
+    0 at the start, negative when it moved away)."""
+    scales = _actuated_scales(mech)
+    total = float(np.max(np.abs(target - q_start) / scales, initial=0.0))
+    if total == 0.0:
+        return 1.0
+    return 1.0 - float(np.max(np.abs(target - q_now) / scales, initial=0.0)) / total
+
+
+def _stopped(message: str, reached, lam: float) -> ForwardKinematicsError:
+    """A :class:`ForwardKinematicsError` whose ``lam`` attribute is the fraction of the
+    way from the start to the target that was reached (:func:`_progress`)."""
+    err = ForwardKinematicsError(message, reached)
+    err.lam = lam
+    return err
+
+
+def _inertia_needed(inertia_tol: float, step: float, full_step: float) -> float:
+    """The type II index below which a continuation step of scaled size ``step`` is not
+    trusted: ``inertia_tol`` for a full step (``full_step``: :data:`STEP` or
+    :data:`COMPILED_STEP`), proportionally less for a shorter one (the platform moves
+    by about step / index, so a small step tolerates a small index)."""
+    return inertia_tol * min(1.0, step / full_step)
+
+
 # ========================================================================= Newton
 def _q_actuated_of(mech, leg_q) -> np.ndarray:
     """The actuated coordinates of leg configurations ``leg_q`` (mechanism order)."""
@@ -136,8 +162,12 @@ def _q_actuated_of(mech, leg_q) -> np.ndarray:
 
 
 def _assembly_of(mech, state: ClosureSolution) -> Assembly:
-    """The assembly of a Newton state (leg configurations copied)."""
-    return Assembly(mech, state.pose, [q.copy() for q in state.leg_q], state.closure)
+    """The assembly of a Newton state (leg configurations copied), with its joint
+    twists from one Pinocchio pass: a continuation state closes only to
+    :data:`CONTINUATION_TOL`, which the analysis of a hand-made assembly would refuse."""
+    leg_q = [q.copy() for q in state.leg_q]
+    J, _, worst = verified_twists(mech, leg_q, state.pose.homogeneous)
+    return Assembly(mech, state.pose, leg_q, worst, joint_twists=J)
 
 
 # ================================================================ forward problem
@@ -233,6 +263,8 @@ class _Euler:
     halvings: int = 0
     inertia_steps: int = 0
     last_twist: np.ndarray | None = None
+    start: np.ndarray | None = None  #: actuated coordinates of the start assembly
+    target: np.ndarray | None = None
 
     def aim(self, q0: np.ndarray, n_total: int) -> None:
         """Start a new path from ``q0`` in ``n_total`` steps."""
@@ -257,15 +289,19 @@ def euler_continuation(mech, start: Assembly, target: np.ndarray, steps: int | N
     run = _Euler(ClosureSolution(start.pose, [q.copy() for q in start.leg_q], np.empty(0),
                                  start.residual, np.inf, 0),
                  start.q_actuated, n_total, 1.0 / n_total, 20 * n_total + 200)
+    run.start, run.target = start.q_actuated.copy(), target
     while run.lam < 1.0 - 1e-15:
         run.budget -= 1
         if run.budget < 0:
-            raise ForwardKinematicsError(
-                f"continuation did not reach the target (λ = {run.lam:.4g} after "
-                f"{run.accepted} steps, {run.halvings} halvings, {run.inertia_steps} inertia "
-                "moves)", _assembly_of(mech, run.state))
+            lam = _progress(mech, run.start, _q_actuated_of(mech, run.state.leg_q), target)
+            raise _stopped(
+                f"continuation stopped at λ = {lam:.4g} of the way to the target: out of "
+                f"its step budget after {run.accepted} steps, {run.halvings} halvings and "
+                f"{run.inertia_steps} inertia moves", _assembly_of(mech, run.state), lam)
         an = Analysis(_assembly_of(mech, run.state))
-        if an.indices["type_II"] < inertia_tol:
+        # seed 003: below eps the platform moves by inertia along its last twist; a
+        # start below eps has none, and its first steps are Euler steps halved as needed
+        if an.indices["type_II"] < inertia_tol and run.last_twist is not None:
             _move_by_inertia(mech, run, an, inertia_tol, max_inertia)
             run.aim(_q_actuated_of(mech, run.state.leg_q),
                     _steps_to(mech, _q_actuated_of(mech, run.state.leg_q), target))
@@ -292,10 +328,13 @@ def _euler_step(mech, run: _Euler, an: Analysis, target: np.ndarray) -> None:
                             max_iter=10)
     if new.closure > CONTINUATION_TOL or not _in_limits(mech, new.leg_q):
         if run.h < CONTINUATION_MIN_STEP:
-            raise ForwardKinematicsError(
-                f"continuation stalled at λ = {run.lam:.4g} (the legs do not re-assemble "
-                f"at the predicted pose: closure error {new.closure:.3g}); the target "
-                "may be out of reach", _assembly_of(mech, run.state))
+            lam = _progress(mech, run.start, _q_actuated_of(mech, run.state.leg_q), target)
+            why = ("a joint limit" if new.closure <= CONTINUATION_TOL else
+                   f"the legs do not re-assemble at the predicted pose: closure error "
+                   f"{new.closure:.3g}, type II index {an.indices['type_II']:.3g}")
+            raise _stopped(
+                f"continuation stalled at λ = {lam:.4g} of the way to the target ({why}); "
+                "the target may be out of reach", _assembly_of(mech, run.state), lam)
         run.h *= 0.5
         run.halvings += 1
         return
@@ -309,11 +348,6 @@ def _move_by_inertia(mech, run: _Euler, an: Analysis, inertia_tol: float,
     """Seed 003's motion by inertia: the platform keeps moving along the last twist
     (legs re-closed, actuated coordinates free) until the type II index rises above
     ``inertia_tol``; a move that does not re-assemble is halved."""
-    if run.last_twist is None:
-        raise ForwardKinematicsError(
-            f"the start assembly is at or near a type II singularity (index "
-            f"{an.indices['type_II']:.3g} < {inertia_tol:g}): no twist to move by inertia",
-            an.assembly)
     L = mech.characteristic_length
     size = max(float(np.linalg.norm(run.last_twist[:3])),
                float(np.linalg.norm(run.last_twist[3:])) / L)
@@ -321,9 +355,11 @@ def _move_by_inertia(mech, run: _Euler, an: Analysis, inertia_tol: float,
     index, moves = an.indices["type_II"], 0
     while index < inertia_tol:
         if moves >= max_inertia or run.budget < 0:
-            raise ForwardKinematicsError(
-                f"motion by inertia did not leave the type II singularity after "
-                f"{moves} moves (index {index:.3g})", _assembly_of(mech, run.state))
+            lam = _progress(mech, run.start, _q_actuated_of(mech, run.state.leg_q), run.target)
+            raise _stopped(
+                f"continuation stopped at λ = {lam:.4g} of the way to the target: motion by "
+                f"inertia did not leave the type II singularity after {moves} moves (index "
+                f"{index:.3g})", _assembly_of(mech, run.state), lam)
         pose = screws.exp(twist) * run.state.pose
         legs = _predict_legs(mech, run.state.leg_q, twist)
         new = solve_closure(mech, pose, legs, LEGS, tol=CONTINUATION_TOL, max_iter=10)
@@ -335,10 +371,12 @@ def _move_by_inertia(mech, run: _Euler, an: Analysis, inertia_tol: float,
             twist = 0.5 * twist  # a shorter inertia move
             if np.linalg.norm(twist[:3]) + np.linalg.norm(twist[3:]) / L \
                     < CONTINUATION_MIN_STEP * STEP:
-                raise ForwardKinematicsError(
-                    "motion by inertia left the workspace (the legs no longer "
-                    f"assemble: closure error {new.closure:.3g})",
-                    _assembly_of(mech, run.state))
+                lam = _progress(mech, run.start, _q_actuated_of(mech, run.state.leg_q),
+                                run.target)
+                raise _stopped(
+                    f"continuation stopped at λ = {lam:.4g} of the way to the target: motion "
+                    "by inertia left the workspace (the legs no longer assemble: closure "
+                    f"error {new.closure:.3g})", _assembly_of(mech, run.state), lam)
             continue
         run.state = new
         moves += 1
@@ -357,11 +395,12 @@ def _final_newton(mech, run: _Euler, target: np.ndarray, tol: float,
     final = solve_closure(mech, run.state.pose, run.state.leg_q, ACTUATED, target, tol=tol,
                           max_iter=max_newton)
     if final.closure > max(tol, FK_ACCEPT_FLOOR) or final.actuated > tol:
-        raise ForwardKinematicsError(
-            f"Newton correction did not converge after {final.iterations} iterations: "
-            f"actuated error {final.actuated:.3g}, closure error {final.closure:.3g} "
-            f"(tol {tol:g}); the target may be out of reach or singular",
-            _assembly_of(mech, final))
+        lam = _progress(mech, run.start, qa, target)
+        raise _stopped(
+            f"the continuation reached λ = {lam:.4g} of the way to the target, then Newton's "
+            f"correction did not converge after {final.iterations} iterations: actuated "
+            f"error {final.actuated:.3g}, closure error {final.closure:.3g} (tol {tol:g}); "
+            "the target may be out of reach or singular", _assembly_of(mech, final), lam)
     try:
         result = mech.assemble(final.pose, final.leg_q, tol=max(tol, CLOSURE_TOL))
     except AssemblyError as e:
@@ -394,52 +433,79 @@ def _require_kernel(mech):
 def _forward_compiled(mech, kernel, target, start, steps, tol, inertia_tol,
                       max_newton) -> Assembly:
     """Predictor–corrector continuation in compiled code (see
-    :func:`forward_kinematics`) with the mechanism's ``kernel``."""
+    :func:`forward_kinematics`) with the mechanism's ``kernel``; without ``steps`` the
+    whole way is tried first in one step (damped Newton from the start, kept when it
+    converges in Newton's contracting regime)."""
     scales = kernel.scales
     pose = start.pose.homogeneous.copy()
     Q = np.concatenate(start.leg_q).astype(float)
     q0 = Q[kernel.actuated].copy()
+    span = float(np.max(np.abs(target - q0) / scales, initial=0.0))
+    final_tol = 0.1 * min(tol, CLOSURE_TOL)
     if steps is None:
-        steps = max(1, math.ceil(float(np.max(np.abs(target - q0) / scales,
-                                              initial=0.0)) / COMPILED_STEP))
+        P, Qn = pose.copy(), Q.copy()
+        # contraction judged down to the continuation tolerance (below it round-off
+        # steps need not halve), then polished
+        _, out = solve_kernel(kernel, ACTUATED, P, Qn, target, tol=CONTINUATION_TOL,
+                              max_iter=max_newton)
+        if out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1:
+            n_iter = int(out[2])
+            _, out = solve_kernel(kernel, ACTUATED, P, Qn, target, tol=final_tol,
+                                  max_iter=max_newton)
+            try:
+                return _compiled_result(mech, kernel, target, P, Qn, tol, dict(
+                    steps=1, halvings=0, newton_iterations=n_iter + int(out[2]),
+                    continuation_error=0.0, requested_steps=1, direct_newton=True))
+            except ForwardKinematicsError:
+                pass  # a joint limit: continue instead
+        steps = max(1, math.ceil(span / COMPILED_STEP))
     lam, h = 0.0, 1.0 / steps
     accepted = halvings = iterations = 0
+    closeness = np.inf
     while lam < 1.0 - 1e-15:
         lam_new = min(1.0, lam + h)
         P, Qn = pose.copy(), Q.copy()
         _, out = solve_kernel(kernel, ACTUATED, P, Qn, q0 + lam_new * (target - q0),
                               tol=CONTINUATION_TOL, max_iter=10)
         iterations += int(out[2])
-        if not (out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1):
+        ok = out[0] <= CONTINUATION_TOL and out[1] <= CONTINUATION_TOL and out[4] == 1
+        if ok:
+            closeness = math.sqrt(out[3])
+        if not ok or closeness < _inertia_needed(inertia_tol, (lam_new - lam) * span,
+                                                 COMPILED_STEP):
             if h < CONTINUATION_MIN_STEP:
-                raise ForwardKinematicsError(f"compiled continuation stalled at λ = {lam:.4g}",
-                                             _state_of(mech, kernel, P, Qn))
+                why = (f"near a singularity: Schur closeness {closeness:.3g}" if ok else
+                       "Newton's corrections do not contract (a singularity, a joint limit "
+                       "or the edge of the workspace ahead)")
+                raise _stopped(f"compiled continuation stopped at λ = {lam:.4g} of the way "
+                               f"to the target ({why})", _state_of(mech, kernel, pose, Q), lam)
             h *= 0.5
             halvings += 1
             continue
-        if math.sqrt(out[3]) < inertia_tol:
-            raise ForwardKinematicsError(
-                f"compiled continuation stopped near a singularity at λ = {lam_new:.4g} "
-                f"(Schur closeness {math.sqrt(out[3]):.3g} < {inertia_tol:g})",
-                _state_of(mech, kernel, P, Qn))
         pose, Q, lam = P, Qn, lam_new
         h = min(2 * h, 1.0 / steps)
         accepted += 1
     cont_err = float(np.max(np.abs(Q[kernel.actuated] - target) / scales, initial=0.0))
-    _, out = solve_kernel(kernel, ACTUATED, pose, Q, target, tol=0.1 * min(tol, CLOSURE_TOL),
-                          max_iter=max_newton)
+    _, out = solve_kernel(kernel, ACTUATED, pose, Q, target, tol=final_tol, max_iter=max_newton)
     iterations += int(out[2])
+    return _compiled_result(mech, kernel, target, pose, Q, tol, dict(
+        steps=accepted, halvings=halvings, newton_iterations=iterations,
+        continuation_error=cont_err, requested_steps=steps, direct_newton=False))
+
+
+def _compiled_result(mech, kernel, target, pose, Q, tol, info) -> Assembly:
+    """The assembly reached by the compiled solver, checked by Pinocchio against the
+    target and the limits (a :class:`ForwardKinematicsError` otherwise)."""
     final = _state_of(mech, kernel, pose, Q)
-    err = float(np.max(np.abs(final.q_actuated - target) / scales, initial=0.0))
+    err = float(np.max(np.abs(final.q_actuated - target) / kernel.scales, initial=0.0))
     inside = bool(np.all(Q >= kernel.lower - JOINT_LIMIT_SLACK)
                   and np.all(Q <= kernel.upper + JOINT_LIMIT_SLACK))
     if final.residual > max(tol, CLOSURE_TOL) or err > max(tol, FK_ACCEPT_FLOOR) or not inside:
-        raise ForwardKinematicsError(
-            f"compiled Newton correction did not converge: actuated error {err:.3g}, "
-            f"closure error {final.residual:.3g} (tol {tol:g})", final)
-    final.info.update(steps=accepted, halvings=halvings, newton_iterations=iterations,
-                      residual=err, continuation_error=cont_err, inertia=False,
-                      inertia_steps=0, requested_steps=steps, method="compiled")
+        raise _stopped(
+            f"the continuation reached the target, but Newton's correction did not converge "
+            f"there: actuated error {err:.3g}, closure error {final.residual:.3g} (tol "
+            f"{tol:g}){'' if inside else ', outside the joint limits'}", final, 1.0)
+    final.info.update(residual=err, inertia=False, inertia_steps=0, method="compiled", **info)
     return final
 
 
@@ -486,72 +552,39 @@ def _check_limits(mech, target: np.ndarray) -> None:
 # ================================================================= assembly modes
 def forward_kinematics_all(mech, q_actuated, *, starts: int = 32, seed: int = 0,
                            tol: float = CLOSURE_TOL, max_iter: int = 100,
-                           method: str = "auto") -> list[Assembly]:
-    """Every assembly mode found for ``q_actuated``: deduplicated by pose, each valid.
+                           method: str = "auto") -> AssemblyModes:
+    """Every assembly mode for ``q_actuated`` (:func:`pkm_pin.modes.assembly_modes`).
 
-    The continuation from home comes first (when it succeeds); then the continuation
-    (:func:`forward_kinematics`) from ``starts`` deterministic start assemblies drawn
-    with ``seed`` (seed 003: "several start positions give several solutions"):
-    alternately the home pose moved by a random twist of the platform twist system
-    (homogenised size 0.2–1.5) and the assembly reached from random actuated
-    coordinates (home ± 0.4 units). Each result is checked (closure, actuated
-    coordinates, joint limits) by :func:`forward_kinematics`, which uses ``method``
-    (see there: ``"compiled"`` is much faster and may find fewer modes than
-    ``"auto"``, which falls back to the Euler continuation where it stops).
+    Mechanisms whose six legs are distance constraints (6-SPS, 6-UPS) are solved by
+    polynomial homotopy in Study parameters (all real postures, ``complete=True`` when
+    every path was tracked to its end); every other mechanism by a multistart of the
+    closure solver that stops after :data:`~pkm_pin.tolerances.MODES_PATIENCE` batches
+    of ``starts`` starts find nothing new (``complete=False``).
 
     Args:
         mech: The :class:`~pkm_pin.mechanism.Mechanism`.
         q_actuated: Target actuated coordinates.
-        starts: Number of start assemblies besides home.
-        seed: Seed of the random start assemblies.
-        tol: Tolerance of each continuation (see :func:`forward_kinematics`).
-        method: Continuation method (see :func:`forward_kinematics`).
+        starts: Starts per batch of the multistart.
+        seed: Seed of the random starts (and of the homotopy).
+        tol: Closure and scaled actuated tolerance of each mode.
+        max_iter: Newton iterations of one start.
+        method: ``"auto"``, ``"homotopy"`` or ``"multistart"`` (the continuation
+            methods ``"compiled"`` and ``"euler"`` of earlier versions mean ``"auto"``).
 
     Returns:
-        A list of :class:`Assembly`, continuation result first, the others in the
-        order found.
+        An :class:`~pkm_pin.modes.AssemblyModes`: a list of assemblies, each valid
+        (closure, actuated coordinates, joint limits), sorted by their distance from
+        the home pose, with ``complete``, ``method`` and ``counts``.
+
+    Raises:
+        ForwardKinematicsError: no assembly mode (the target is unreachable).
     """
-    target = mech.check_actuated(q_actuated)
-    _check_limits(mech, target)
+    if method in ("compiled", "euler"):
+        method = "auto"
     if not isinstance(starts, (int, np.integer)) or starts < 0:
         raise InputError(f"starts must be a non-negative integer, got {starts!r}")
-    found = []
-    try:
-        found.append(forward_kinematics(mech, target, tol=tol, method=method))
-    except ForwardKinematicsError:
-        pass
-    rng = np.random.default_rng(seed)
-    L = mech.characteristic_length
-    home = mech.home_assembly
-    P = mech.analyze(home).platform_twists
-    scales = _actuated_scales(mech)
-    lo = np.concatenate([leg._bounds[0][leg.actuated_q] for leg in mech.legs])
-    up = np.concatenate([leg._bounds[1][leg.actuated_q] for leg in mech.legs])
-    for k in range(starts):
-        start = None
-        if k % 2 == 0:  # a random pose reached by a twist of the platform twist system
-            c = rng.normal(size=P.shape[0]) @ P
-            size = max(float(np.linalg.norm(c[:3])), float(np.linalg.norm(c[3:])) / L)
-            pose = screws.exp(c * rng.uniform(0.2, 1.5) / size) * home.pose
-            try:
-                start = mech.assemble(pose, home)
-            except AssemblyError:
-                start = None
-        if start is None:  # the continuation to random actuated coordinates
-            qa = np.clip(home.q_actuated + rng.uniform(-0.4, 0.4, len(scales)) * scales,
-                         lo, up)
-            try:
-                start = forward_kinematics(mech, qa, tol=1e-9, method=method)
-            except ForwardKinematicsError:
-                continue
-        try:
-            a = forward_kinematics(mech, target, start, tol=tol, method=method)
-        except ForwardKinematicsError:
-            continue
-        if any(pose_error(a.pose, b.pose, L) < SAME_POSE_TOL for b in found):
-            continue
-        found.append(a)
-    return found
+    return assembly_modes(mech, q_actuated, starts=max(int(starts), 1), seed=seed, tol=tol,
+                          max_iter=max_iter, method=method)
 
 
 # ================================================================ inverse problem

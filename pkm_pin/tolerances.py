@@ -143,7 +143,7 @@ SAME_ACTUATED_ATOL = 1e-9
 HOMOTOPY_REAL_TOL = 1e-6
 #: The multistart of :func:`pkm_pin.modes.assembly_modes` stops after this many batches
 #: in a row that find no new assembly mode.
-MODES_PATIENCE = 3
+MODES_PATIENCE = 5
 
 # ======================================================================== reports
 #: Components of a unit direction below this are printed as 0; coordinates of points

@@ -92,7 +92,8 @@ def test_compiled_continuation_steps_guess_and_bad_method():
 
 
 def test_continuation_near_rpr3_type2_pose():
-    """The continuation follows the home mode up to 5 cm short of the type II pose."""
+    """The continuation follows the home mode up to 5 cm short of the type II pose
+    (direct Newton from home does not converge there: the continuation takes steps)."""
     m = mech("rpr3")
     P2 = rpr3_type2_pose()
     pose = pin.SE3(P2.rotation, P2.translation + np.array([-0.05, 0.0, 0.0]))
@@ -101,12 +102,13 @@ def test_continuation_near_rpr3_type2_pose():
     assert 0.01 < index < 0.1  # near, not at, the singularity
     a = m.forward_kinematics(target.q_actuated)
     assert pose_error(a.pose, pose, m.characteristic_length) < 1e-10
-    assert a.info["steps"] >= 10
+    assert a.info["steps"] >= 5 and not a.info.get("direct_newton")
 
 
 def test_motion_by_inertia_crosses_rpr3_type2_pose():
-    """With a type II threshold of 0.035 the continuation moves by inertia across the
-    3-RPR singularity and reaches the pose 5 cm beyond it (plain continuation does not)."""
+    """With a type II threshold of 0.035 seed 003's continuation (method "euler") moves
+    by inertia across the 3-RPR singularity and reaches the pose 5 cm beyond it (the
+    default FK does not cross it)."""
     m = mech("rpr3")
     P2 = rpr3_type2_pose()
     pose = pin.SE3(P2.rotation, P2.translation + np.array([0.05, 0.0, 0.0]))
@@ -116,7 +118,7 @@ def test_motion_by_inertia_crosses_rpr3_type2_pose():
     assert plain.info["inertia"] is False
     assert pose_error(plain.pose, pose, L) > 1e-2  # the other assembly mode, also valid
     np.testing.assert_allclose(plain.q_actuated, qa, atol=1e-12)
-    a = m.forward_kinematics(qa, inertia_tol=0.035)
+    a = m.forward_kinematics(qa, inertia_tol=0.035, method="euler")  # seed 003's method
     assert a.info["inertia"] is True and a.info["inertia_steps"] >= 1
     assert pose_error(a.pose, pose, L) < 1e-10
     np.testing.assert_allclose(a.q_actuated, qa, atol=1e-12)
@@ -257,3 +259,35 @@ def test_iterative_ik_6r_seed003():
     reaimed = iterative_ik(leg, target, q0, max_angle_step=np.radians(2),
                            max_translation_step=0.02, reaim=True)
     assert reaimed.error_after_steps[0] < 0.2 * pos
+
+
+def test_fk_starts_at_any_index_and_small_steps():
+    """A start whose type II index is below the threshold no longer blocks FK: with
+    inertia_tol = 0.99 (above the index of any pose) the quasi-orthogonal Orthoglide
+    still solves a 1e-6, a 1e-3 and a 5 % step from home, by direct Newton; the Euler
+    continuation too (no twist yet: plain Euler steps)."""
+    m = mech("orthoglide_quasi")
+    home = m.home_assembly
+    L = m.characteristic_length
+    for d in (1e-6, 1e-3, 0.05):
+        qa = home.q_actuated + d * L * np.array([1.0, -0.5, 0.3])
+        a = m.forward_kinematics(qa, inertia_tol=0.99)
+        assert a.info["direct_newton"] is True
+        np.testing.assert_allclose(a.q_actuated, qa, atol=1e-12 * L)
+        b = m.forward_kinematics(qa, inertia_tol=0.99, method="euler")
+        assert pose_error(a.pose, b.pose, L) < 1e-10
+
+
+def test_fk_error_says_how_far_it_got():
+    """An out-of-reach target: the error carries λ (the fraction of the way reached,
+    between 0 and 1) and says it in its message."""
+    m = mech("stewart")
+    far = m.home_assembly.q_actuated.copy()
+    far[0] = 0.95 * m.legs[0]._bounds[1][2]
+    far[1] = 0.35 * m.legs[1]._bounds[1][2]
+    with pytest.raises(ForwardKinematicsError, match="λ = ") as err:
+        m.forward_kinematics(far, method="euler")
+    assert 0.0 < err.value.lam < 1.0
+    assert f"{err.value.lam:.4g}" in str(err.value)
+    with pytest.raises(ForwardKinematicsError, match="λ = "):
+        m.forward_kinematics(far, method="compiled")
