@@ -34,9 +34,9 @@ import numpy as np
 import pinocchio as pin
 
 from . import engine, screws
+from .assembly import checked_twists
 from .errors import InputError, SingularityError
 from .tolerances import CLOSENESS_SINGULAR_TOL, ROTATION_COUNT_TOL
-from .twists import joint_twists
 
 #: Dimensionless threshold below which a closeness index counts as singular (alias of
 #: :data:`pkm_pin.tolerances.CLOSENESS_SINGULAR_TOL`).
@@ -84,8 +84,8 @@ class Analysis:
         self.length = mech.characteristic_length
         #: (nv × 6) joint twists of every leg, one after the other.
         self.joint_twists = assembly.joint_twists
-        if self.joint_twists is None:
-            self.joint_twists = joint_twists(mech, assembly.leg_q)
+        if self.joint_twists is None:  # not verified by the solver's pass: check it
+            self.joint_twists = checked_twists(assembly)
         layout = mech.engine_layout if rtol == screws.RTOL else layout_of(mech, rtol)
         #: The platform's centre [m]: screws are homogenised about it for every decision.
         self.centre = assembly.pose.translation.copy()
@@ -142,9 +142,10 @@ class Analysis:
 
     @property
     def motion_type(self) -> str:
-        """``"3T"``, ``"2T1R"``, ``"1T2R"``, ``"3R"``, ``"3T3R"``…; ``"0"`` when rigid."""
-        t, r = self.translations, self.dof - self.translations
-        return (f"{t}T" if t else "") + (f"{r}R" if r else "") or "0"
+        """``"3T"``, ``"2T1R"``, ``"1T2R"``, ``"3R"``, ``"3T3R"``…, ``"1H"`` for a helical
+        motion; ``"0"`` when rigid (:func:`pkm_pin.screws.motion_type`)."""
+        return screws.motion_type(self._about_centre(self.platform_twists), self.translations,
+                                  self.length)
 
     @property
     def grubler(self) -> int:

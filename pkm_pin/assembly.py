@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError
+from .errors import InputError, InvalidAssembly
 from .screws import as_float_array
-from .tolerances import ROTATION_MATRIX_ATOL
+from .tolerances import ASSEMBLY_CHECK_RTOL, JOINT_LIMIT_SLACK, ROTATION_MATRIX_ATOL
 
 if TYPE_CHECKING:  # pragma: no cover
     from .mechanism import Mechanism
@@ -91,4 +91,38 @@ class Assembly:
         ) if self.leg_q else np.zeros(0)
 
 
-__all__ = ["Assembly", "as_pose", "placement"]
+def checked_twists(assembly: Assembly, tol: float = ASSEMBLY_CHECK_RTOL) -> np.ndarray:
+    """The joint twists of an assembly that did not come with them (one made by hand, or
+    by the Pinocchio path of the solver), after checking that it is one: every leg
+    within its joint limits and closing on the platform pose to ``tol`` (relative pose
+    error, :func:`pkm_pin.kernels.pose_error`), from the same Pinocchio pass.
+
+    Raises:
+        InvalidAssembly: naming the leg (and joint) and how to make a valid assembly.
+    """
+    from .twists import verified_twists
+
+    mech = assembly.mechanism
+    leg_q = list(assembly.leg_q)
+    if len(leg_q) != len(mech.legs):
+        raise InvalidAssembly(f"the assembly has {len(leg_q)} leg configurations for the "
+                              f"{len(mech.legs)} legs of {mech.name!r}")
+    leg_q = [leg.check_q(q, "assembly.leg_q") for leg, q in zip(mech.legs, leg_q)]
+    for leg, q in zip(mech.legs, leg_q):
+        if not leg.within_limits(q):
+            lo, up = leg._bounds
+            k = int(np.argmax((q < lo - JOINT_LIMIT_SLACK) | (q > up + JOINT_LIMIT_SLACK)))
+            raise InvalidAssembly(
+                f"leg {leg.name!r}: coordinate {k} ({q[k]:.6g}) is outside its joint limits "
+                f"[{lo[k]:.6g}, {up[k]:.6g}]; make the assembly with Mechanism.assemble")
+    J, errors, worst = verified_twists(mech, leg_q, as_pose(assembly.pose).homogeneous)
+    if not worst <= tol:
+        k = int(np.nanargmax(np.where(np.isnan(errors), np.inf, errors)))
+        raise InvalidAssembly(
+            f"leg {mech.legs[k].name!r} does not close on the platform pose (relative pose "
+            f"error {errors[k]:.3g} > {tol:g}); make the assembly with "
+            "Mechanism.assemble(pose, guess=...)")
+    return J
+
+
+__all__ = ["Assembly", "as_pose", "checked_twists", "placement"]

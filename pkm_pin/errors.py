@@ -137,6 +137,11 @@ class AssemblyError(PkmError):
         super().__init__(message)
 
 
+class InvalidAssembly(InputError):
+    """An :class:`~pkm_pin.Assembly` made by hand is not one: a leg does not close on the
+    platform pose, or a joint is outside its limits."""
+
+
 class SingularityError(PkmError):
     """A velocity map was asked for at or too close to a singular configuration.
 

@@ -83,6 +83,16 @@ class Leg(SerialChain):
             raise InputError(f"leg {self.name!r}: an actuated joint is listed twice")
         if not isinstance(self.base, pin.SE3):
             raise InputError(f"leg {self.name!r}: base must be a pinocchio.SE3")
+        for j in range(1, self.model.njoints):
+            jm = self.model.joints[j]
+            if jm.nv > 1:
+                raise InputError(
+                    f"leg {self.name!r}: joint {self.model.names[j]!r} is a "
+                    f"{jm.shortname().removeprefix('JointModel')} joint ({jm.nv} DOF): a "
+                    "leg's joints move along one coordinate each (revolute, continuous, "
+                    "prismatic; a spherical joint as three revolutes). A floating body is "
+                    "the platform (pkm_pin.Mechanism) or a tree with closures "
+                    "(pkm_pin.load_mechanism of an Extended URDF)")
 
     # ------------------------------------------------------------------ builders
     @classmethod
@@ -381,7 +391,7 @@ class Leg(SerialChain):
         for j in range(1, m.njoints):
             jm = m.joints[j]
             if jm.nv == 1:
-                S = pin.getJointJacobian(m, data, j, pin.LOCAL)[:, jm.idx_v]
+                S = np.reshape(pin.getJointJacobian(m, data, j, pin.LOCAL), (6, -1))[:, jm.idx_v]
                 w = S[3:]
                 axes[j] = w / np.linalg.norm(w) if np.linalg.norm(w) > 0 else w
         return axes

@@ -53,7 +53,7 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
-from .screws import as_vector
+from .screws import as_fraction, as_vector
 from .solve import LEGS, solve_kernel, solve_system
 from .tolerances import CLOSENESS_SINGULAR_TOL, CLOSURE_TOL, INERTIA_TOL
 from .twists import LegFrames, leg_frames, verified_twists
@@ -220,6 +220,10 @@ class Mechanism:
             AssemblyError: a leg cannot reach the pose within its joint limits.
         """
         pose = as_pose(pose)
+        tol = as_fraction(tol, "tol")
+        if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) \
+                or restarts < 0:
+            raise InputError(f"restarts must be a non-negative integer, got {restarts!r}")
         starts = self.leg_starts(guess)
         kernel = self.kernel
         if kernel is not None and all(q is not None for q in starts) \

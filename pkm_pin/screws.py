@@ -35,7 +35,7 @@ import pinocchio as pin
 from numba import njit
 
 from .errors import InputError
-from .tolerances import RANK_RTOL, SPAN_RTOL, ZERO_SCREW_RTOL
+from .tolerances import HELICAL_PITCH_RTOL, RANK_RTOL, SPAN_RTOL, ZERO_SCREW_RTOL
 
 #: Matrix of the reciprocal product: ``a ∘ b = a @ DELTA @ b``.
 DELTA = np.block([[np.zeros((3, 3)), np.eye(3)], [np.eye(3), np.zeros((3, 3))]])
@@ -56,6 +56,15 @@ def as_float_array(x, name: str = "value") -> np.ndarray:
         return np.asarray(x, dtype=float)
     except (TypeError, ValueError) as e:
         raise InputError(f"{name} must be numbers, got {type(x).__name__} {x!r:.60}") from e
+
+
+def as_fraction(value, name: str) -> float:
+    """``value`` as a float in (0, 1) — a relative tolerance or a dimensionless
+    threshold — or an :class:`InputError` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
+            or not (np.isfinite(value) and 0 < value < 1):
+        raise InputError(f"{name} must be a number between 0 and 1 (exclusive), got {value!r}")
+    return float(value)
 
 
 def as_vector(x, n: int, name: str = "vector", what: str = "", noun: str = "values"
@@ -401,3 +410,32 @@ def exp(twist) -> pin.SE3:
 def log(displacement: pin.SE3) -> np.ndarray:
     """Axis-first twist (ω; v_O) whose :func:`exp` is the world displacement given."""
     return from_pinocchio(pin.log6(displacement).vector)
+
+
+def motion_type(twists, translations: int, length: float) -> str:
+    """Name of a twist system (rows, axis-first): ``"3T"``, ``"2T1R"``, ``"3R"``… from
+    its ``translations`` pure translations and the other ``r`` directions, ``"0"`` when
+    empty.
+
+    With one direction besides the translations (r = 1), the twist system may be
+    *helical*: its rotation ``(ω; v)`` has a pitch ``h = ω·v / |ω|²`` that no translation
+    of the system cancels (they are all normal to ω). It is named ``"H"`` then (a
+    Bennett linkage's coupler: ``"1H"``), decided on ``|h| / length`` above
+    :data:`~pkm_pin.tolerances.HELICAL_PITCH_RTOL` and the translations' component
+    along ω below it. With r ≥ 2 the directions are counted as rotations.
+    """
+    P = np.atleast_2d(np.asarray(twists, dtype=float)).reshape(-1, 6)
+    t, r = int(translations), P.shape[0] - int(translations)
+    name = f"{t}T" if t else ""
+    if r == 1 and P.shape[0]:
+        _, sv, Vt = np.linalg.svd(P[:, :3].T, full_matrices=True)  # combos: ω-parts
+        rot = Vt[0] @ P  # the combination with the largest rotation
+        w, v = rot[:3], rot[3:]
+        trans = Vt[1:] @ P  # ω ≈ 0: the translations
+        pitch = abs(w @ v) / (w @ w) / length
+        axis = w / np.linalg.norm(w)
+        along = np.linalg.norm(np.linalg.lstsq(trans[:, 3:].T, axis, rcond=None)[0]
+                               @ trans[:, 3:]) if t else 0.0
+        if pitch > HELICAL_PITCH_RTOL and along < HELICAL_PITCH_RTOL:
+            return name + "1H"
+    return name + (f"{r}R" if r else "") or "0"

@@ -29,6 +29,10 @@ SPAN_RTOL = 1e-7
 #: Singular values of the ω parts of an orthonormal (homogenised) platform twist basis
 #: below this count as zero when counting rotations of the platform twist system.
 ROTATION_COUNT_TOL = 1e-7
+#: A one-rotation twist system is helical when its rotation's pitch (relative to the
+#: characteristic length) is above this and no translation of the system can cancel it
+#: (:func:`pkm_pin.screws.motion_type`).
+HELICAL_PITCH_RTOL = 1e-7
 
 # ================================================================= singularities
 #: Closeness indices (type I, type II, constraint; each a ratio of singular values of
@@ -102,6 +106,10 @@ TARGET_LIMIT_SLACK = 1e-12
 SPHERICAL_OFFSET_RTOL = 1e-9
 #: … and when consecutive axes are not parallel: the sine of their angle is above this.
 SPHERICAL_AXES_SIN = 1e-6
+#: An assembly made by hand (not by the closure solver) is analysed when every leg closes
+#: to this relative pose error (:func:`pkm_pin.assembly.checked_twists`): printed values
+#: of about 10 significant digits pass, a leg off by a micrometre per metre does not.
+ASSEMBLY_CHECK_RTOL = 1e-8
 #: A 4×4 pose is accepted when ``R Rᵀ`` differs from the identity by at most this
 #: (absolute, on a dimensionless rotation matrix).
 ROTATION_MATRIX_ATOL = 1e-9

@@ -27,6 +27,12 @@ from .errors import UrdfError
 
 _MOVABLE = ("revolute", "continuous", "prismatic", "floating", "planar")
 _TYPES = ("fixed",) + _MOVABLE
+#: Largest URDF accepted (links; joints likewise): mechanisms and legged robots have tens
+#: to a few hundred; beyond, Pinocchio's and urdfdom's recursive parsers exhaust memory
+#: (about 1000) or the stack (about 20 000) instead of failing cleanly.
+MAX_LINKS = 500
+#: Largest URDF text accepted [bytes] (checked before parsing).
+MAX_BYTES = 16_000_000
 
 
 @dataclass(frozen=True)
@@ -82,6 +88,10 @@ def read(source: str | os.PathLike) -> UrdfSource:
         xml, label, directory = source, "<string>", None
     else:
         raise UrdfError(repr(type(source).__name__), "a URDF source must be a path or XML text")
+    if len(xml) > MAX_BYTES:
+        raise UrdfError(label, f"the URDF is {len(xml) / 1e6:.1f} MB, more than the "
+                        f"{MAX_BYTES / 1e6:g} MB pkm_pin reads",
+                        "split it or remove meshes inlined")
     root = _parse_xml(xml, label)
     if label == "<string>":
         label = f"<string: robot {root.get('name', '?')!r}>"
@@ -118,6 +128,11 @@ def _check_structure(root: ET.Element, label: str) -> None:
     links = [l.get("name") for l in root.findall("link")]
     if not links:
         raise UrdfError(label, "the robot has no <link>")
+    if max(len(links), len(root.findall("joint"))) > MAX_LINKS:
+        raise UrdfError(label, f"the robot has {len(links)} links and "
+                        f"{len(root.findall('joint'))} joints, more than the {MAX_LINKS} "
+                        "pkm_pin reads", "model the mechanism with fewer bodies (a leg, "
+                        "a linkage), or split the URDF")
     if None in links:
         raise UrdfError(label, "a <link> has no name attribute")
     dup = {n for n in links if links.count(n) > 1}

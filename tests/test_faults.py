@@ -1,0 +1,65 @@
+"""Faults found by auditing (issue 17, items 6 and 7), each pinned by a test."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+from test_analysis import mechanism  # built mechanisms, cached per (name, scale)
+
+from pkm_pin import Assembly, InputError, InvalidAssembly, Leg, UrdfError
+from pkm_pin.urdf import MAX_LINKS
+
+REVOLUTE = ('<joint name="{n}" type="revolute"><parent link="{p}"/><child link="{c}"/>'
+            '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>')
+
+
+def test_analysis_refuses_a_hand_made_assembly_whose_leg_does_not_close():
+    mech = mechanism("stewart")
+    a = mech.home_assembly
+    assert mech.analyze(Assembly(mech, a.pose, a.leg_q)).dof == 6  # a true one is analysed
+    q = [x.copy() for x in a.leg_q]
+    q[2][1] += 1e-3
+    with pytest.raises(InvalidAssembly, match=r"leg '3' does not close.*Mechanism.assemble"):
+        mech.analyze(Assembly(mech, a.pose, q))
+
+
+def test_analysis_refuses_a_hand_made_assembly_outside_the_joint_limits():
+    mech = mechanism("stewart")
+    a = mech.home_assembly
+    q = [x.copy() for x in a.leg_q]
+    q[0][0] = 3.0  # beyond the ±π/2 of the universal joint
+    with pytest.raises(InvalidAssembly, match=r"leg '1': coordinate 0 \(3\) is outside"):
+        mech.analyze(Assembly(mech, a.pose, q))
+
+
+@pytest.mark.parametrize("kind", ["floating", "planar"])
+def test_a_leg_with_a_floating_or_planar_joint_is_refused(kind):
+    xml = ('<robot name="f"><link name="a"/><link name="b"/><link name="c"/>'
+           f'<joint name="j" type="{kind}"><parent link="a"/><child link="b"/></joint>'
+           + REVOLUTE.format(n="k", p="b", c="c") + "</robot>")
+    with pytest.raises(InputError, match=r"joint 'j' is a .* joint \([36] DOF\).*one coordinate"):
+        Leg.from_urdf(xml, "c")
+
+
+def test_a_urdf_beyond_the_size_limit_is_refused_at_once():
+    n = 2 * MAX_LINKS
+    links = "".join(f'<link name="l{i}"/>' for i in range(n + 1))
+    joints = "".join(REVOLUTE.format(n=f"j{i}", p=f"l{i}", c=f"l{i + 1}") for i in range(n))
+    t = time.perf_counter()
+    with pytest.raises(UrdfError, match=rf"{n + 1} links and {n} joints, more than the "
+                                        rf"{MAX_LINKS}"):
+        Leg.from_urdf(f'<robot name="big">{links}{joints}</robot>', f"l{n}")
+    assert time.perf_counter() - t < 5.0  # a clean error, not minutes of parsing
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"tol": -1.0}, "tol must be a number between 0 and 1"),
+    ({"tol": float("nan")}, "tol must be a number between 0 and 1"),
+    ({"tol": 2.0}, "tol must be a number between 0 and 1"),
+    ({"restarts": -1}, "restarts must be a non-negative integer"),
+])
+def test_assemble_checks_its_tolerances_before_running(kwargs, message):
+    mech = mechanism("rpr3")
+    with pytest.raises(InputError, match=message):
+        mech.assemble(mech.home, **kwargs)
