@@ -106,9 +106,11 @@ def test_continuation_near_rpr3_type2_pose():
 
 
 def test_motion_by_inertia_crosses_rpr3_type2_pose():
-    """With a type II threshold of 0.035 seed 003's continuation (method "euler") moves
+    """With a type II threshold of 0.09 seed 003's continuation (method "euler") moves
     by inertia across the 3-RPR singularity and reaches the pose 5 cm beyond it (the
-    default FK does not cross it)."""
+    default FK does not cross it). The index is homogenised about the platform centre
+    (frame-invariant): it is about 2.5 times the world-origin one of the seed's example,
+    whose threshold was 0.035; along this path it falls to 0.058 in the home mode."""
     m = mech("rpr3")
     P2 = rpr3_type2_pose()
     pose = pin.SE3(P2.rotation, P2.translation + np.array([0.05, 0.0, 0.0]))
@@ -118,7 +120,7 @@ def test_motion_by_inertia_crosses_rpr3_type2_pose():
     assert plain.info["inertia"] is False
     assert pose_error(plain.pose, pose, L) > 1e-2  # the other assembly mode, also valid
     np.testing.assert_allclose(plain.q_actuated, qa, atol=1e-12)
-    a = m.forward_kinematics(qa, inertia_tol=0.035, method="euler")  # seed 003's method
+    a = m.forward_kinematics(qa, inertia_tol=0.09, method="euler")  # seed 003's method
     assert a.info["inertia"] is True and a.info["inertia_steps"] >= 1
     assert pose_error(a.pose, pose, L) < 1e-10
     np.testing.assert_allclose(a.q_actuated, qa, atol=1e-12)
