@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from pkm_pin.builders.loops import four_bar_home
 from pkm_pin.cli import main
 from pkm_pin.mechanism import load_mechanism
 
@@ -188,11 +189,14 @@ def test_fk_then_ik_round_trip(path, capsys):
 
 
 def test_fk_stays_on_the_branch_of_the_reference_assembly(capsys):
-    """The four-bar's crank at 0.3: the rocker stays on the reference assembly's side
-    (negative angle), not on the other assembly mode."""
+    """The four-bar's crank at 0.3 from home: the rocker stays on the reference assembly's
+    mode (elbow up, its closed form), not on the other assembly mode."""
     found = _json(capsys, ["fk", str(FOUR_BAR), "0.3", "--json"])
     reference = _json(capsys, ["analyze", str(FOUR_BAR), "--json"])
-    assert reference["joints"]["rocker_joint"][0] < 0 and found["joints"]["rocker_joint"][0] < 0
+    home = four_bar_home()
+    assert reference["joints"]["rocker_joint"][0] == pytest.approx(0.0, abs=1e-12)
+    assert found["joints"]["rocker_joint"][0] == pytest.approx(
+        four_bar_home(crank_angle=home[0] + 0.3)[2] - home[2], abs=1e-9)
 
 
 def test_fk_text_lists_every_joint(capsys):

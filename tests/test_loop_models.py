@@ -1,5 +1,10 @@
 """The closed-loop models of models/loops/: closed-form assemblies checked through the
-ClosureModel API (residual, Jacobian, mobility, redundancy, output twists)."""
+ClosureModel API (residual, Jacobian, mobility, redundancy, output twists); every model
+is assembled at q = 0 in its intended mode, and ``LinkageAssembly.q`` is a configuration
+of Pinocchio's own model of the file.
+
+The models write their home pose into the joint origins, so a joint's value is its angle
+from home: the closed forms below give absolute angles and subtract the home's."""
 
 from __future__ import annotations
 
@@ -11,9 +16,11 @@ import pinocchio as pin
 import pytest
 
 from pkm_pin.builders.loops import CASSIE_POINTS, LOOP_MODELS, five_bar, four_bar
+from pkm_pin.mechanism import load_mechanism
 from pkm_pin.model import read_extended_urdf, read_mjcf
 
 LOOPS = Path(__file__).resolve().parents[1] / "models" / "loops"
+GEPETTO = Path(__file__).resolve().parents[1] / "tests" / "data" / "gepetto"
 
 
 def load(name: str):
@@ -72,14 +79,25 @@ def four_bar_closed_form(theta2: float) -> tuple[float, float, float]:
     return theta3, theta4, mu
 
 
+FOUR_BAR_HOME = math.pi / 3  # crank angle of q = 0
+
+
+def four_bar_q(theta2: float) -> np.ndarray:
+    """The configuration (crank, coupler, rocker values from home) at crank angle θ2."""
+    def absolute(t2):
+        t3, t4, _ = four_bar_closed_form(t2)
+        return np.array([t2, t3 - t2, t4])
+    return absolute(theta2) - absolute(FOUR_BAR_HOME)
+
+
 @pytest.mark.parametrize("theta2", [0.0, 0.7, 2.0, 3.5, 5.5])
 def test_four_bar_closes_at_the_closed_form_angles(theta2):
     """Residual 0, mobility 1, one redundant row (planar point), transmission angle."""
     model = load("four_bar")
     assert min(A, B, C, D) + max(A, B, C, D) < sum((A, B, C, D)) - min(A, B, C, D) - max(
         A, B, C, D)  # Grashof, crank shortest: crank-rocker
-    theta3, theta4, mu = four_bar_closed_form(theta2)
-    q = np.array([theta2, theta3 - theta2, theta4])
+    _, _, mu = four_bar_closed_form(theta2)
+    q = four_bar_q(theta2)
     assert np.abs(model.closure_residual(q)).max() < 1e-12
     assert model.mobility(q) == 1 and model.redundant_constraints(q) == 1
     assert_jacobian_matches_fd(model, q)
@@ -95,7 +113,7 @@ def test_four_bar_rocker_rate_and_output_twist():
     model = load("four_bar")
     theta2 = 1.1
     theta3, theta4, _ = four_bar_closed_form(theta2)
-    q = np.array([theta2, theta3 - theta2, theta4])
+    q = four_bar_q(theta2)
     null = np.linalg.svd(model.closure_jacobian(q))[2][-1]
     ratio = null[2] / null[0]
     assert ratio == pytest.approx(A * math.sin(theta3 - theta2) / (C * math.sin(theta3 - theta4)),
@@ -106,18 +124,15 @@ def test_four_bar_rocker_rate_and_output_twist():
 
 
 def test_four_bar_mjcf_is_the_urdf_model():
-    """The MJCF (assembled at qpos0 = 0) closes at the URDF's closed form, shifted by its pose."""
+    """The MJCF (assembled at qpos0 = 0, the URDF's home) closes at the same closed form."""
     urdf, mjcf = load("four_bar"), read_mjcf(LOOPS / "four_bar.xml")
     assert mjcf.actuated == ("crank_joint",) and mjcf.output == "rocker"
+    assert not mjcf.reference.any()
     assert np.abs(mjcf.closure_residual(mjcf.reference)).max() < 1e-12
-    t0 = math.pi / 3
-    t30, t40, _ = four_bar_closed_form(t0)
-    q0 = np.array([t0, t30 - t0, t40])
     for theta2 in (0.3, 2.5):
-        t3, t4, _ = four_bar_closed_form(theta2)
-        q = np.array([theta2, t3 - theta2, t4])
-        assert np.abs(mjcf.closure_residual(q - q0)).max() < 1e-12
-        assert mjcf.mobility(q - q0) == urdf.mobility(q) == 1
+        q = four_bar_q(theta2)
+        assert np.abs(mjcf.closure_residual(q)).max() < 1e-12
+        assert mjcf.mobility(q) == urdf.mobility(q) == 1
 
 
 # ----------------------------------------------------------------------------- five-bar
@@ -137,6 +152,14 @@ def five_bar_q(P, elbows=(1.0, -1.0)) -> np.ndarray:
         t2 = math.atan2(P[1] - Cp[1], P[0] - Cp[0])
         q += [t1, t2 - t1]
     return np.array(q)
+
+
+FIVE_BAR_HOME = np.array([0.0, 0.15])  # tip at q = 0
+
+
+def five_bar_rel(q_absolute: np.ndarray) -> np.ndarray:
+    """Joint values from home of the absolute angles (mot1, free1, mot2, free2)."""
+    return q_absolute - five_bar_q(FIVE_BAR_HOME)
 
 
 def passive_rank(model, q) -> int:
@@ -162,7 +185,8 @@ def tip_velocity_rank(model, q) -> int:
 def test_five_bar_regular_configuration():
     """Tip at (0.02, 0.15): residual 0, mobility 2, 1 redundant row, full passive and tip ranks."""
     model = load("five_bar")
-    q = five_bar_q(np.array([0.02, 0.15]))
+    assert model.output_point  # output_point: true in five_bar.yaml
+    q = five_bar_rel(five_bar_q(np.array([0.02, 0.15])))
     assert np.abs(model.closure_residual(q)).max() < 1e-12
     assert model.mobility(q) == 2 and model.redundant_constraints(q) == 1
     assert passive_rank(model, q) == 2 and tip_velocity_rank(model, q) == 2
@@ -177,7 +201,7 @@ def test_five_bar_singularities_in_closed_form():
     it still."""
     model = load("five_bar")
     t1 = math.acos((E - L2) / L1)
-    q2 = np.array([t1, -t1, math.pi - t1, t1])  # distal 1 at angle 0, distal 2 at π
+    q2 = five_bar_rel(np.array([t1, -t1, math.pi - t1, t1]))  # distal 1 at 0, distal 2 at π
     assert np.abs(model.closure_residual(q2)).max() < 1e-12
     assert model.mobility(q2) == 2 and passive_rank(model, q2) == 1
     phi = math.pi / 3
@@ -185,21 +209,22 @@ def test_five_bar_singularities_in_closed_form():
     q1 = five_bar_q(P)
     assert q1[1] == pytest.approx(0.0, abs=1e-7)  # leg 1 stretched…
     q1[:2] = phi, 0.0  # …exactly (acos near 1 loses half the digits)
+    q1 = five_bar_rel(q1)
     assert np.abs(model.closure_residual(q1)).max() < 1e-12
     assert model.mobility(q1) == 2 and tip_velocity_rank(model, q1) == 1
     assert passive_rank(model, q1) == 2
 
 
 def test_five_bar_mjcf_is_the_urdf_model():
-    """The MJCF closes at qpos0 (tip at (0, 0.15)) and at the URDF's closed form, shifted."""
+    """The MJCF closes at qpos0 = 0 (tip at (0, 0.15), the URDF's home) and at the same
+    closed form; an MJCF has no output_point key (load it with point=True)."""
     mjcf = read_mjcf(LOOPS / "five_bar.xml")
     assert mjcf.actuated == ("mot1", "mot2") and mjcf.output == "effector"
-    assert [c.kind for c in mjcf.closures] == ["point"]
-    q0 = five_bar_q(np.array([0.0, 0.15]))
+    assert [c.kind for c in mjcf.closures] == ["point"] and not mjcf.output_point
     assert np.abs(mjcf.closure_residual(mjcf.reference)).max() < 1e-12
-    q = five_bar_q(np.array([0.03, 0.17]))
-    assert np.abs(mjcf.closure_residual(q - q0)).max() < 1e-12
-    assert mjcf.mobility(q - q0) == 2
+    q = five_bar_rel(five_bar_q(np.array([0.03, 0.17])))
+    assert np.abs(mjcf.closure_residual(q)).max() < 1e-12
+    assert mjcf.mobility(q) == 2
 
 
 def test_builders_take_other_dimensions():
@@ -323,9 +348,18 @@ def test_cassie_knee_three_loops_close_in_closed_form(alpha, beta):
 
 # -------------------------------------------------------------------------------- Delta
 RB, RP, LA, LB = 0.20, 0.05, 0.20, 0.45  # base, platform radius, arm, forearm [m]
+DELTA_HOME = (0.0, 0.0, -0.35)  # platform at q = 0
 
 
 def delta_q(model, p) -> np.ndarray:
+    """:func:`delta_absolute` less its value at home (joint values from home; the
+    platform's free flyer is its displacement from home)."""
+    q = delta_absolute(model, p) - delta_absolute(model, DELTA_HOME)
+    q[-4:] = 0.0, 0.0, 0.0, 1.0
+    return q
+
+
+def delta_absolute(model, p) -> np.ndarray:
     """Closed-form inverse kinematics of the 3-RUU Delta for the platform at ``p``
     (orientation identity): per leg, A cos θ + B sin θ = C with X = W_x − R,
     A = −2 X La, B = 2 W_z La, C = Lb² − X² − La² − W_y² − W_z²; elbow U from the
@@ -360,3 +394,145 @@ def test_delta_closes_in_closed_form_and_translates(p):
     twists = model.output_twists(q)
     assert twists.shape == (3, 6) and np.allclose(twists[:, :3], 0, atol=1e-10)
     assert_jacobian_matches_fd(model, q)
+
+
+# ------------------------------------------------------------ the home assembly, q order
+def frame_placement(model, q: np.ndarray, name: str) -> pin.SE3:
+    data = model.tree.createData()
+    pin.framesForwardKinematics(model.tree, data, q)
+    return data.oMf[model.tree.getFrameId(name)]
+
+
+def planar_angle(M: pin.SE3) -> float:
+    """Angle from +x of a frame's x axis in the xy-plane."""
+    return math.atan2(M.rotation[1, 0], M.rotation[0, 0])
+
+
+def check_four_bar_home(model, q) -> None:
+    """Crank at π/3, coupler and rocker at the closed-form angles (elbow up)."""
+    t3, t4, _ = four_bar_closed_form(FOUR_BAR_HOME)
+    for frame, angle in (("crank", FOUR_BAR_HOME), ("coupler", t3), ("rocker", t4)):
+        assert planar_angle(frame_placement(model, q, frame)) == pytest.approx(angle, abs=1e-9)
+
+
+def check_five_bar_home(model, q) -> None:
+    """Tip at (0, 0.15), both elbows out at the closed-form angles."""
+    t = five_bar_q(FIVE_BAR_HOME)
+    assert frame_placement(model, q, "effector").translation == pytest.approx(
+        [0.0, 0.15, 0.0], abs=1e-12)
+    for i, body in enumerate(("proximal1", "distal1", "proximal2", "distal2")):
+        expected = t[i] if i % 2 == 0 else t[i - 1] + t[i]
+        assert math.remainder(planar_angle(frame_placement(model, q, body)) - expected,
+                              2 * math.pi) == pytest.approx(0.0, abs=1e-9)
+
+
+def check_delta_home(model, q) -> None:
+    """Platform at (0, 0, −0.35), unrotated; every hip at the closed-form angle."""
+    M = frame_placement(model, q, "platform")
+    assert M.translation == pytest.approx(DELTA_HOME, abs=1e-12)
+    assert np.allclose(M.rotation, np.eye(3), atol=1e-12)
+    absolute = delta_absolute(model, DELTA_HOME)
+    for i in range(1, 4):
+        phi = 2 * math.pi * (i - 1) / 3
+        arm = pin.utils.rotate("z", -phi) @ frame_placement(model, q, f"arm_{i}").rotation[:, 0]
+        theta = absolute[model.tree.joints[model.tree.getJointId(f"hip_{i}")].idx_q]
+        assert math.atan2(-arm[2], arm[0]) == pytest.approx(theta, abs=1e-9)
+
+
+def check_cassie_home(model, q) -> None:
+    """The closure points and the foot at CASSIE_POINTS (the closed form at α = β = 0)."""
+    for frame, point in (("knee_drive_point", "knee_drive"), ("heel_point", "heel"),
+                         ("toe_point", "toe"), ("foot", "foot")):
+        x, z = CASSIE_POINTS[point]
+        assert frame_placement(model, q, frame).translation == pytest.approx([x, 0, z],
+                                                                              abs=1e-12)
+    assert np.allclose(q, cassie_q(model, 0.0, 0.0), atol=1e-12)
+
+
+def check_ankle_home(model, q) -> None:
+    """Foot flat, cranks level, rods vertical: the closed form at roll = pitch = 0."""
+    assert np.allclose(frame_placement(model, q, "foot").rotation, np.eye(3), atol=1e-12)
+    assert np.allclose(q, ankle_q(model, 0.0, 0.0), atol=1e-12)
+
+
+HOMES = [("four_bar.urdf", {}, "1R", check_four_bar_home),
+         ("four_bar.xml", {}, "1R", check_four_bar_home),
+         ("five_bar.urdf", {}, "2T", check_five_bar_home),
+         ("five_bar.xml", {"point": True}, "2T", check_five_bar_home),
+         ("five_bar.xml", {}, "1T1R", check_five_bar_home),
+         ("delta_loops.urdf", {}, "3T", check_delta_home),
+         ("cassie_knee.urdf", {}, "1T1R", check_cassie_home),
+         ("ankle.urdf", {}, "2R", check_ankle_home)]
+
+
+@pytest.mark.parametrize("name,options,motion,check", HOMES,
+                         ids=[f"{h[0]}{'-point' if h[1] else ''}" for h in HOMES])
+def test_assemble_from_the_reference_keeps_the_intended_mode(name, options, motion, check):
+    """Linkage.assemble() from the reference (q = 0: pinocchio.neutral; MJCF qpos0)
+    stays at the home assembly: the closed-form angles, the intended motion type, no
+    singularity."""
+    link = load_mechanism(LOOPS / name, **options)
+    assert np.array_equal(link.model.reference, pin.neutral(link.model.tree))  # q = 0
+    assert np.abs(link.model.closure_residual(link.model.reference)).max() < 1e-13
+    a = link.assemble()
+    assert np.allclose(a.q, link.model.reference, atol=1e-12)
+    check(link.model, a.q)
+    an = link.analyze(a)
+    assert an.motion_type == motion and an.singularity == "none"
+    assert an.dof - an.idle_dof == len(link.actuated)
+
+
+def test_five_bar_output_is_its_pin():
+    """output_point: true makes the five-bar's effector a point (2T); point=False, or the
+    key absent, analyses the distal link as a body (1T1R)."""
+    assert load_mechanism(LOOPS / "five_bar.urdf").model.output_point
+    body = load_mechanism(LOOPS / "five_bar.urdf", point=False)
+    assert body.analyze(body.assemble()).motion_type == "1T1R"
+    point = load_mechanism(LOOPS / "five_bar.xml", point=True)
+    an = point.analyze(point.assemble())
+    assert np.allclose(an.platform_twists[:, :3], 0.0) and an.A.shape == (2, 6)
+
+
+URDF_TREES = [LOOPS / f"{n}.urdf" for n in ("four_bar", "five_bar", "cassie_knee",
+                                             "delta_loops")]
+URDF_TREES += [GEPETTO / n / "robot.urdf" for n in ("5bar_linkage", "5bar_linkage_iso3d")]
+
+
+@pytest.mark.parametrize("path", URDF_TREES, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_assembly_q_is_pinocchios_urdf_configuration(path):
+    """Assembly.q of a URDF without joint replacements, fed to a fresh
+    pinocchio.buildModelFromUrdf model of the file, closes every closure pair."""
+    link = load_mechanism(path)
+    tree = link.model.tree
+    a = link.assemble(pin.integrate(tree, link.model.reference, np.full(tree.nv, 0.05)))
+    tree = pin.buildModelFromUrdf(str(path))
+    assert list(tree.names) == list(link.model.tree.names) and tree.nq == a.q.size
+    data = tree.createData()
+    pin.framesForwardKinematics(tree, data, a.q)
+    L = link.model.length
+    for c in link.model.closures:
+        Ma = data.oMf[tree.getFrameId(c.frame_a)] * c.placement_a
+        Mb = data.oMf[tree.getFrameId(c.frame_b)] * c.placement_b
+        M = Ma.actInv(Mb)
+        assert np.linalg.norm(M.translation) / L < 1e-10
+        if c.kind == "weld":
+            assert np.linalg.norm(pin.log3(M.rotation)) < 1e-10
+
+
+@pytest.mark.parametrize("name", ["four_bar", "five_bar"])
+def test_assembly_q_is_pinocchios_mjcf_configuration(name):
+    """Assembly.q of an MJCF, fed to Pinocchio's own model and constraint models of the
+    file (pinocchio.buildModelAndLegacyConstraintsFromMJCF), closes every constraint."""
+    path = LOOPS / f"{name}.xml"
+    link = load_mechanism(path)
+    a = link.forward_kinematics(np.full(len(link.actuated), 0.2), starts=4)
+    tree, constraints = pin.buildModelAndLegacyConstraintsFromMJCF(str(path))
+    assert list(tree.names) == list(link.model.tree.names)
+    assert len(constraints) == len(link.model.closures)
+    data = tree.createData()
+    pin.forwardKinematics(tree, data, a.q)
+    for c in constraints:
+        assert str(c.type) == "CONTACT_3D"
+        pa = (data.oMi[c.joint1_id] * c.joint1_placement).translation
+        pb = (data.oMi[c.joint2_id] * c.joint2_placement).translation
+        assert np.linalg.norm(pa - pb) < 1e-10

@@ -96,6 +96,20 @@ def test_output_frame_rules(tmp_path):
     assert read_extended_urdf(urdf).output == "distal2"
 
 
+def test_output_point_key(tmp_path):
+    """output_point (YAML or TOML, our key) makes the output frame's origin a point; its
+    default is false (a body); output= keeps the file's choice."""
+    urdf = copy_model(tmp_path)
+    write(tmp_path / "five_bar.yaml", FIVE_BAR_YAML)
+    assert not read_extended_urdf(urdf).output_point
+    write(tmp_path / "five_bar.yaml", FIVE_BAR_YAML + "output_point: true\n")
+    assert read_extended_urdf(urdf).output_point
+    assert read_extended_urdf(urdf, output="distal2").output_point
+    toml = write(tmp_path / "c.toml", 'closed_loop = [["closedloop1_A", "closedloop1_B"]]\n'
+                 'type = ["3d"]\nname_mot = ["mot1", "mot2"]\noutput_point = true\n')
+    assert read_extended_urdf(urdf, toml).output_point
+
+
 def test_name_mot_matches_by_substring_in_tree_order(tmp_path):
     """name_mot ['mot'] actuates every joint whose name contains 'mot', in tree order."""
     urdf = copy_model(tmp_path)
@@ -151,6 +165,7 @@ BAD_YAML = [
     ("closed_loop: [['closedloop1_A']]\ntype: ['3d']\nname_mot: []\n", "closed_loop[0]",
      "must be a pair"),
     (FIVE_BAR_YAML + "output: nowhere\n", "output", "'nowhere' is not in the URDF"),
+    (FIVE_BAR_YAML + "output_point: 'yes'\n", "output_point", "must be true or false"),
     ("- just\n- a list\n", "", "must be a mapping"),
 ]
 
@@ -257,10 +272,16 @@ def test_mjcf_weld_relpose(tmp_path):
     assert np.abs(model.closure_residual(q)).max() < 1e-12
 
 
-def test_mjcf_several_world_bodies_are_kept():
-    """Pinocchio 4.1 keeps only the first body under <worldbody>; read_mjcf keeps all."""
-    assert pin.buildModelFromMJCF(str(LOOPS / "four_bar.xml")).njoints == 3
-    model = read_mjcf(LOOPS / "four_bar.xml")
+def test_mjcf_several_world_bodies_are_kept(tmp_path):
+    """Pinocchio 4.1 keeps only the first body under <worldbody>; read_mjcf keeps all
+    (our four-bar with its joint-less base body unwrapped)."""
+    text = (LOOPS / "four_bar.xml").read_text()
+    text = text.replace('<body name="base">', "").replace("    </body>\n  </worldbody>",
+                                                           "  </worldbody>")
+    path = write(tmp_path / "four_bar.xml", text)
+    assert pin.buildModelFromMJCF(str(path)).njoints == 3
+    assert pin.buildModelFromMJCF(str(LOOPS / "four_bar.xml")).njoints == 4
+    model = read_mjcf(path)
     assert list(model.tree.names) == ["universe", "crank_joint", "coupler_joint",
                                       "rocker_joint"]
     assert model.tree.existFrame(WORLD_BODY)

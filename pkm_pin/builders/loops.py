@@ -3,13 +3,17 @@
 Each builder takes the dimensions [m] and returns a :class:`LoopModel`: the URDF text (the
 loops cut open), the closures YAML in the layout of Gepetto's example-parallel-robots
 (``closed_loop``, ``type``, ``name_mot``, ``joint_name``/``joint_type``, plus our
-``output``), and for the planar four- and five-bar an MJCF written at an assembled pose
+``output`` and ``output_point``), and for the planar four- and five-bar an MJCF
 (``<equality><connect>``). :data:`LOOP_MODELS` names them; :func:`write_loop_models`
 writes the committed files of ``models/loops/`` (``python -m pkm_pin.builders.loops``).
 
-Every closure frame is a link hung on a fixed joint; every revolute turns about its z axis
-(planar models) or y axis (sagittal models), so that ``q = 0`` has a plain meaning given in
-each builder's docstring.
+Every model is **assembled at ``q = 0``** (the URDF's reference configuration; the MJCF's
+``qpos0``, the same configuration), in its intended assembly mode: the home pose is
+written into the joint origins, so :meth:`pkm_pin.linkage.Linkage.assemble` from the
+reference keeps it, and a joint's value is its angle from home. Every closure frame is a
+link hung on a fixed joint; every revolute turns about its z axis (planar models) or y
+axis (sagittal models). The MJCF bodies hang under one joint-less ``base`` body, so that
+Pinocchio's own parser reads the whole tree.
 """
 
 from __future__ import annotations
@@ -41,7 +45,7 @@ class LoopModel:
 
 # ------------------------------------------------------------------------ text helpers
 def _f(x: float) -> str:
-    return format(float(x), ".12g")
+    return format(float(x), ".15g")
 
 
 def _v(values) -> str:
@@ -69,7 +73,7 @@ def _urdf(name: str, header: tuple[str, str], links: list[str], joints: list[str
 
 
 def _yaml(header: tuple[str, str], loops: list, types: list, motors: list, output: str,
-          joint_name: tuple = (), joint_type: tuple = ()) -> str:
+          joint_name: tuple = (), joint_type: tuple = (), output_point: bool = False) -> str:
     def listing(items) -> str:
         return "[" + ", ".join(f"'{x}'" for x in items) + "]"
 
@@ -78,7 +82,10 @@ def _yaml(header: tuple[str, str], loops: list, types: list, motors: list, outpu
              f"type: {listing(types)}", f"name_mot: {listing(motors)}"]
     if joint_name:
         lines += [f"joint_name: {listing(joint_name)}", f"joint_type: {listing(joint_type)}"]
-    return "\n".join(lines + [f"output: {output}"]) + "\n"
+    lines.append(f"output: {output}")
+    if output_point:
+        lines.append("output_point: true")
+    return "\n".join(lines) + "\n"
 
 
 def _circle_intersection(p0, r0: float, p1, r1: float, sign: float) -> np.ndarray:
@@ -97,33 +104,42 @@ def _angle(v) -> float:
 
 
 # ----------------------------------------------------------------------------- four-bar
+def four_bar_home(ground: float = 0.10, crank: float = 0.03, coupler: float = 0.09,
+                  rocker: float = 0.07, crank_angle: float = math.pi / 3
+                  ) -> tuple[float, float, float]:
+    """Absolute angles from +x (crank θ2, coupler θ3, rocker θ4) of the four-bar
+    assembled elbow up (the coupler–rocker joint left of the line from the crank end to
+    the rocker pivot) at the crank angle ``crank_angle``."""
+    B = crank * np.array([math.cos(crank_angle), math.sin(crank_angle)])
+    C = _circle_intersection(B, coupler, (ground, 0.0), rocker, 1.0)
+    return crank_angle, _angle(C - B), _angle(C - np.array([ground, 0.0]))
+
+
 def four_bar(ground: float = 0.10, crank: float = 0.03, coupler: float = 0.09,
-             rocker: float = 0.07, mjcf_crank_angle: float = math.pi / 3) -> LoopModel:
+             rocker: float = 0.07, home_crank_angle: float = math.pi / 3) -> LoopModel:
     """Planar four-bar in the xy-plane: base pivots O2 = (0, 0) (crank, actuated) and
     O4 = (ground, 0) (rocker); the coupler tip is closed on the rocker tip by a point.
-    At ``q = 0`` every link points along +x (open). The MJCF is written assembled at the
-    crank angle ``mjcf_crank_angle`` (elbow up). Defaults: Grashof crank-rocker
-    (0.03 + 0.10 < 0.09 + 0.07, crank shortest)."""
+    ``q = 0`` is assembled at the crank angle ``home_crank_angle`` from +x, elbow up
+    (:func:`four_bar_home`); each joint's value is its angle from there. Defaults:
+    Grashof crank-rocker (0.03 + 0.10 < 0.09 + 0.07, crank shortest)."""
     header = ("Planar four-bar (Grashof crank-rocker), xy-plane, crank actuated",
               f"ground {ground} m, crank {crank} m, coupler {coupler} m, rocker {rocker} m")
+    t2, t3, t4 = four_bar_home(ground, crank, coupler, rocker, home_crank_angle)
     links = ["base", "crank", "coupler", "coupler_tip", "rocker", "rocker_tip"]
-    joints = [_joint("crank_joint", "revolute", "base", "crank"),
-              _joint("coupler_joint", "revolute", "crank", "coupler", (crank, 0, 0)),
+    joints = [_joint("crank_joint", "revolute", "base", "crank", rpy=(0, 0, t2)),
+              _joint("coupler_joint", "revolute", "crank", "coupler", (crank, 0, 0),
+                     (0, 0, t3 - t2)),
               _joint("coupler_tip_frame", "fixed", "coupler", "coupler_tip", (coupler, 0, 0)),
-              _joint("rocker_joint", "revolute", "base", "rocker", (ground, 0, 0)),
+              _joint("rocker_joint", "revolute", "base", "rocker", (ground, 0, 0), (0, 0, t4)),
               _joint("rocker_tip_frame", "fixed", "rocker", "rocker_tip", (rocker, 0, 0))]
     yaml = _yaml(header, [["coupler_tip", "rocker_tip"]], ["3d"], ["crank_joint"], "rocker")
-    B = crank * np.array([math.cos(mjcf_crank_angle), math.sin(mjcf_crank_angle)])
-    C = _circle_intersection(B, coupler, (ground, 0.0), rocker, 1.0)
-    t3, t4 = _angle(C - B), _angle(C - np.array([ground, 0.0]))
-    bodies = (f'    <body name="crank" axisangle="0 0 1 {_f(mjcf_crank_angle)}">\n'
-              '      <joint name="crank_joint" type="hinge" axis="0 0 1"/>\n'
-              f'      <body name="coupler" pos="{_f(crank)} 0 0" '
-              f'axisangle="0 0 1 {_f(t3 - mjcf_crank_angle)}">\n'
-              '        <joint name="coupler_joint" type="hinge" axis="0 0 1"/>\n'
-              '      </body>\n    </body>\n'
-              f'    <body name="rocker" pos="{_f(ground)} 0 0" axisangle="0 0 1 {_f(t4)}">\n'
-              '      <joint name="rocker_joint" type="hinge" axis="0 0 1"/>\n    </body>\n')
+    bodies = (f'<body name="crank" axisangle="0 0 1 {_f(t2)}">\n'
+              '  <joint name="crank_joint" type="hinge" axis="0 0 1"/>\n'
+              f'  <body name="coupler" pos="{_f(crank)} 0 0" axisangle="0 0 1 {_f(t3 - t2)}">\n'
+              '    <joint name="coupler_joint" type="hinge" axis="0 0 1"/>\n'
+              '  </body>\n</body>\n'
+              f'<body name="rocker" pos="{_f(ground)} 0 0" axisangle="0 0 1 {_f(t4)}">\n'
+              '  <joint name="rocker_joint" type="hinge" axis="0 0 1"/>\n</body>\n')
     mjcf = _mjcf("four_bar", header, bodies,
                  f'    <connect name="coupler_rocker" body1="coupler" body2="rocker" '
                  f'anchor="{_f(coupler)} 0 0"/>\n', ["crank_joint"])
@@ -132,48 +148,62 @@ def four_bar(ground: float = 0.10, crank: float = 0.03, coupler: float = 0.09,
 
 def _mjcf(name: str, header: tuple[str, str], bodies: str, equality: str,
           motors: list[str]) -> str:
+    """MJCF text: ``bodies`` (unindented) under one joint-less ``base`` body."""
     actuators = "".join(f'    <motor name="{m}_motor" joint="{m}"/>\n' for m in motors)
-    return (f"<!-- {header[0]} -->\n<!-- {header[1]}; written assembled at qpos0 -->\n"
+    inner = "".join(f"      {line}\n" for line in bodies.splitlines())
+    return (f"<!-- {header[0]} -->\n<!-- {header[1]}; assembled at qpos0 = 0 -->\n"
             f'<mujoco model="{name}">\n  <compiler angle="radian"/>\n'
-            f"  <worldbody>\n{bodies}  </worldbody>\n"
+            f'  <worldbody>\n    <body name="base">\n{inner}    </body>\n  </worldbody>\n'
             f"  <equality>\n{equality}  </equality>\n"
             f"  <actuator>\n{actuators}  </actuator>\n</mujoco>\n")
 
 
 # ----------------------------------------------------------------------------- five-bar
+def five_bar_home(half_base: float = 0.05, proximal: float = 0.10, distal: float = 0.12,
+                  point: tuple = (0.0, 0.15)) -> tuple[tuple[float, float], ...]:
+    """Absolute angles from +x ``((θ_p1, θ_d1), (θ_p2, θ_d2))`` of the proximal and
+    distal links of the five-bar with the tip at ``point``, elbows out."""
+    P = np.asarray(point, float)
+    out = []
+    for x, sign in ((-half_base, 1.0), (half_base, -1.0)):
+        A = np.array([x, 0.0])
+        C = _circle_intersection(A, proximal, P, distal, sign)
+        out.append((_angle(C - A), _angle(P - C)))
+    return tuple(out)
+
+
 def five_bar(half_base: float = 0.05, proximal: float = 0.10, distal: float = 0.12,
-             mjcf_point: tuple = (0.0, 0.15)) -> LoopModel:
+             home_point: tuple = (0.0, 0.15)) -> LoopModel:
     """Planar five-bar in the xy-plane: motors ``mot1`` at (−half_base, 0) and ``mot2`` at
     (half_base, 0), proximal then distal links; the distal tips (``closedloop1_A`` on
-    distal 1, ``closedloop1_B`` on distal 2) closed by a point; ``effector`` at distal 1's
-    tip. At ``q = 0`` every link points along +x. The MJCF is written assembled with the
-    tip at ``mjcf_point`` (elbows out)."""
+    distal 1, ``closedloop1_B`` on distal 2) closed by a point; the output is the pin
+    (``effector`` at distal 1's tip, ``output_point: true``: motion type 2T). ``q = 0``
+    is assembled with the tip at ``home_point``, elbows out (:func:`five_bar_home`); each
+    joint's value is its angle from there."""
     e, l1, l2 = half_base, proximal, distal
     header = ("Planar five-bar (2 motors at the base, point closure at the distal joint)",
               f"base {2 * e} m, proximal {l1} m, distal {l2} m")
+    home = five_bar_home(e, l1, l2, home_point)
     links = ["base", "proximal1", "distal1", "closedloop1_A", "effector",
              "proximal2", "distal2", "closedloop1_B"]
-    joints = [_joint("mot1", "revolute", "base", "proximal1", (-e, 0, 0)),
-              _joint("free1", "revolute", "proximal1", "distal1", (l1, 0, 0)),
-              _joint("closedloop1_A_frame", "fixed", "distal1", "closedloop1_A", (l2, 0, 0)),
-              _joint("effector_frame", "fixed", "distal1", "effector", (l2, 0, 0)),
-              _joint("mot2", "revolute", "base", "proximal2", (e, 0, 0)),
-              _joint("free2", "revolute", "proximal2", "distal2", (l1, 0, 0)),
-              _joint("closedloop1_B_frame", "fixed", "distal2", "closedloop1_B", (l2, 0, 0))]
+    joints, legs = [], []
+    for i, (x, (t1, t2)) in enumerate(zip((-e, e), home), start=1):
+        joints += [_joint(f"mot{i}", "revolute", "base", f"proximal{i}", (x, 0, 0),
+                          (0, 0, t1)),
+                   _joint(f"free{i}", "revolute", f"proximal{i}", f"distal{i}", (l1, 0, 0),
+                          (0, 0, t2 - t1))]
+        tip = "closedloop1_A" if i == 1 else "closedloop1_B"
+        joints.append(_joint(f"{tip}_frame", "fixed", f"distal{i}", tip, (l2, 0, 0)))
+        if i == 1:
+            joints.append(_joint("effector_frame", "fixed", "distal1", "effector", (l2, 0, 0)))
+        effector = f'    <body name="effector" pos="{_f(l2)} 0 0"/>\n' if i == 1 else ""
+        legs.append(f'<body name="proximal{i}" pos="{_f(x)} 0 0" axisangle="0 0 1 {_f(t1)}">\n'
+                    f'  <joint name="mot{i}" type="hinge" axis="0 0 1"/>\n'
+                    f'  <body name="distal{i}" pos="{_f(l1)} 0 0" axisangle="0 0 1 '
+                    f'{_f(t2 - t1)}">\n    <joint name="free{i}" type="hinge" axis="0 0 1"/>\n'
+                    f'{effector}  </body>\n</body>\n')
     yaml = _yaml(header, [["closedloop1_A", "closedloop1_B"]], ["3d"], ["mot1", "mot2"],
-                 "effector")
-    P = np.asarray(mjcf_point, float)
-    legs = []
-    for i, (x, sign) in enumerate(((-e, 1.0), (e, -1.0)), start=1):
-        A = np.array([x, 0.0])
-        C = _circle_intersection(A, l1, P, l2, sign)
-        t1, t2 = _angle(C - A), _angle(P - C)
-        tip = (f'        <body name="effector" pos="{_f(l2)} 0 0"/>\n' if i == 1 else "")
-        legs.append(f'    <body name="proximal{i}" pos="{_f(x)} 0 0" axisangle="0 0 1 '
-                    f'{_f(t1)}">\n      <joint name="mot{i}" type="hinge" axis="0 0 1"/>\n'
-                    f'      <body name="distal{i}" pos="{_f(l1)} 0 0" axisangle="0 0 1 '
-                    f'{_f(t2 - t1)}">\n        <joint name="free{i}" type="hinge" '
-                    f'axis="0 0 1"/>\n{tip}      </body>\n    </body>\n')
+                 "effector", output_point=True)
     mjcf = _mjcf("five_bar", header, "".join(legs),
                  f'    <connect name="distal_tips" body1="distal1" body2="distal2" '
                  f'anchor="{_f(l2)} 0 0"/>\n', ["mot1", "mot2"])
@@ -268,20 +298,38 @@ def _crank_rod(motor: str, parent: str, crank: str, rod: str, pivot, crank_end, 
 
 
 # -------------------------------------------------------------------------------- Delta
+def delta_home(base_radius: float = 0.20, platform_radius: float = 0.05, arm: float = 0.20,
+               forearm: float = 0.45, height: float = 0.35) -> tuple[float, float]:
+    """Angles (θ hip, σ forearm) [rad] of every leg of :func:`delta` with the platform
+    centred at ``(0, 0, −height)``, elbows out: the arm points along ``R_y(θ) x̂``, the
+    forearm along ``R_y(σ) x̂`` in the leg's frame (σ = θ + the elbow's y angle). The
+    wrist centre is at ``(x, 0, z) = (r_p − r_b, 0, −height)`` from the hip, so
+    ``A cos θ + B sin θ = C`` with ``A = −2 x ℓ_a``, ``B = 2 z ℓ_a``, ``C = ℓ_f² − x² − z² −
+    ℓ_a²``, θ = atan2(B, A) + acos(C / |(A, B)|)."""
+    x, z = platform_radius - base_radius, -height
+    A, B = -2 * x * arm, 2 * z * arm
+    C = forearm * forearm - x * x - z * z - arm * arm
+    theta = math.atan2(B, A) + math.acos(C / math.hypot(A, B))
+    elbow = np.array([arm * math.cos(theta), -arm * math.sin(theta)])
+    return theta, math.atan2(-(z - elbow[1]), x - elbow[0])
+
+
 def delta(base_radius: float = 0.20, platform_radius: float = 0.05, arm: float = 0.20,
-          forearm: float = 0.45) -> LoopModel:
+          forearm: float = 0.45, height: float = 0.35) -> LoopModel:
     """Delta as a tree plus 3 welds: three R-U-U legs (Tsai's equivalent of the
     parallelogram) from the base (z up) at angles 0, 120°, 240°, hip ``hip_i`` (axis:
     the leg frame's y, tangential) then arm along the leg frame's x; elbow U ``elbow_i_1``
     (y) then ``elbow_i_2`` (z); forearm along x; wrist U ``wrist_i_1`` (z) then
     ``wrist_i_2`` (y). The platform is a free body (``platform_joint``, floating) and each
-    leg tip is welded to it at radius ``platform_radius``. At ``q = 0`` the legs are
-    stretched radially and the platform is at the origin (open). 3 DOF, translational."""
+    leg tip is welded to it at radius ``platform_radius``. ``q = 0`` is assembled with the
+    platform at ``(0, 0, −height)``, unrotated, elbows out (:func:`delta_home`; the home
+    angles are in the origins of the y-axis joints): 3 DOF, translational."""
     header = ("Delta (3-RUU equivalent): three legs as branches, platform free, 3 welds",
               f"base radius {base_radius} m, platform radius {platform_radius} m, "
-              f"arm {arm} m, forearm {forearm} m")
+              f"arm {arm} m, forearm {forearm} m; home height {height} m")
+    theta, sigma = delta_home(base_radius, platform_radius, arm, forearm, height)
     links, joints, loops = ["base", "platform"], [
-        _joint("platform_joint", "floating", "base", "platform")], []
+        _joint("platform_joint", "floating", "base", "platform", (0, 0, -height))], []
     for i in range(1, 4):
         phi = 2 * math.pi * (i - 1) / 3
         c, s = math.cos(phi), math.sin(phi)
@@ -289,12 +337,13 @@ def delta(base_radius: float = 0.20, platform_radius: float = 0.05, arm: float =
                   f"platform_anchor_{i}"]
         joints += [
             _joint(f"hip_{i}", "revolute", "base", f"arm_{i}", (base_radius * c,
-                   base_radius * s, 0), (0, 0, phi), (0, 1, 0)),
+                   base_radius * s, 0), (0, theta, phi), (0, 1, 0)),
             _joint(f"elbow_{i}_1", "revolute", f"arm_{i}", f"elbow_{i}", (arm, 0, 0),
-                   axis=(0, 1, 0)),
+                   (0, sigma - theta, 0), (0, 1, 0)),
             _joint(f"elbow_{i}_2", "revolute", f"elbow_{i}", f"forearm_{i}"),
             _joint(f"wrist_{i}_1", "revolute", f"forearm_{i}", f"wrist_{i}", (forearm, 0, 0)),
-            _joint(f"wrist_{i}_2", "revolute", f"wrist_{i}", f"leg_{i}_tip", axis=(0, 1, 0)),
+            _joint(f"wrist_{i}_2", "revolute", f"wrist_{i}", f"leg_{i}_tip",
+                   rpy=(0, -sigma, 0), axis=(0, 1, 0)),
             _joint(f"platform_anchor_{i}_frame", "fixed", "platform", f"platform_anchor_{i}",
                    (platform_radius * c, platform_radius * s, 0), (0, 0, phi))]
         loops.append([f"leg_{i}_tip", f"platform_anchor_{i}"])

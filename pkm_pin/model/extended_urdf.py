@@ -37,11 +37,16 @@ toolbox's ``simplifyModel`` (three massless revolutes with concurrent axes merge
 spherical joint) is not applied: the tree keeps the URDF's joints.
 
 Two keys of our own (the toolbox ignores extra keys, so such files still load there):
-``output``, the output frame. The same keys are accepted in a TOML file. ``reference`` is
-``q = 0`` of the tree (``pinocchio.neutral``): published models are usually not closed
-there. The output frame is ``output=`` if given, else the file's ``output``, else a frame
-named ``effector`` (the toolbox's robots name their end-effector link so), else the last
-link (body frame) of the tree that no closure uses.
+``output``, the output frame, and ``output_point`` (``true``/``false``, default
+``false``): ``true`` analyses the output frame's **origin as a point**
+(:attr:`ClosureModel.output_point`: only its translations, e.g. the pin where a five-bar's
+distal links meet: motion type ``2T``), ``false`` the frame as a body (translations and
+rotations). ``load_mechanism(..., point=)`` overrides it. The same keys are accepted in a
+TOML file. ``reference`` is ``q = 0`` of the tree (``pinocchio.neutral``): published
+models are usually not closed there (ours in ``models/loops/`` are). The output frame is
+``output=`` if given, else the file's ``output``, else a frame named ``effector`` (the
+toolbox's robots name their end-effector link so), else the last link (body frame) of the
+tree that no closure uses; ``output_point`` applies to whichever frame that is.
 """
 
 from __future__ import annotations
@@ -70,7 +75,7 @@ JOINT_TYPES = ("SPHERICAL", "FIXED", "CARDAN", "UJOINT_XY", "UJOINT_YZ", "UJOINT
 
 #: Keys of a closures file: required, then optional.
 REQUIRED_KEYS = ("closed_loop", "type", "name_mot")
-OPTIONAL_KEYS = ("joint_name", "joint_type", "output")
+OPTIONAL_KEYS = ("joint_name", "joint_type", "output", "output_point")
 
 _REVOLUTE = {"X": pin.JointModelRX, "Y": pin.JointModelRY, "Z": pin.JointModelRZ}
 
@@ -87,6 +92,7 @@ class ClosureSpec:
         joint_name: Joints to replace.
         joint_type: What replaces each (``"SPHERICAL"``, ``"UJOINT_XY"``, ``"FIXED"`` …).
         output: The output frame, or None.
+        output_point: Whether the output is the output frame's origin as a point.
     """
 
     path: str
@@ -96,6 +102,7 @@ class ClosureSpec:
     joint_name: tuple[str, ...] = ()
     joint_type: tuple[str, ...] = ()
     output: str | None = None
+    output_point: bool = False
 
 
 # --------------------------------------------------------------------------- entry point
@@ -121,7 +128,8 @@ def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.Pat
     tree = _build_tree(urdf, spec, free_flyer)
     closures = _closures(tree, spec)
     out = output if output is not None else _output_frame(tree, spec)
-    return ClosureModel(tree, closures, _actuated(tree, spec), out, name=tree.name)
+    return ClosureModel(tree, closures, _actuated(tree, spec), out, name=tree.name,
+                        output_point=spec.output_point)
 
 
 def find_closures_file(urdf_path: str | os.PathLike) -> Path:
@@ -177,8 +185,11 @@ def read_closures_file(path: str | os.PathLike) -> ClosureSpec:
     output = content.get("output")
     if output is not None and not isinstance(output, str):
         raise ClosureFileError(label, "output", f"must be a frame name, got {output!r}")
+    point = content.get("output_point", False)
+    if not isinstance(point, bool):
+        raise ClosureFileError(label, "output_point", f"must be true or false, got {point!r}")
     return ClosureSpec(label, loops, types, _names(content, "name_mot", label), names, kinds,
-                       output)
+                       output, point)
 
 
 def _parse(text: str, label: str, toml: bool):
