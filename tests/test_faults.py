@@ -63,3 +63,23 @@ def test_assemble_checks_its_tolerances_before_running(kwargs, message):
     mech = mechanism("rpr3")
     with pytest.raises(InputError, match=message):
         mech.assemble(mech.home, **kwargs)
+
+
+def test_serial_arm_at_a_wrist_singularity_is_type_I_only(ur5):
+    """Every joint of a serial arm is actuated: locking them locks the tool, so a wrist
+    singularity (q5 = 0: joints 4 and 6 aligned) is type I, never II/III, and no twist
+    is uncontrolled (the actuation wrenches of the dependent joints are not defined
+    there: the engine asks which platform twists remain with the actuators locked)."""
+    import numpy as np
+
+    from pkm_pin import Mechanism
+
+    q = np.array([0.3, -1.2, 1.4, -0.6, 0.0, 0.7])
+    arm = Mechanism([ur5], home=ur5.tip_placement(q), home_q=[q])
+    an = arm.analyze()
+    assert (an.dof, an.singularity) == (5, "I")
+    assert an.indices["type_I"] < 1e-12 and an.indices["type_II"] > 0.5
+    assert an.uncontrolled_twist is None and an.lost_actuated_rates is not None
+    assert arm.sweep([arm.home]).singularity[0] == "I"
+    regular = arm.analyze(arm.assemble(ur5.tip_placement(q + [0, 0, 0, 0, 0.8, 0]), [q]))
+    assert regular.singularity == "none"

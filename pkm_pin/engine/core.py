@@ -27,6 +27,7 @@ from .stages import (
     actuation_wrench,
     carried_determinant,
     leg_constraints,
+    locked_motion_index,
     motion_twists,
     platform_system,
     scale_actuation,
@@ -274,6 +275,9 @@ def analyse_into(J, centres, layout, out, full):
             d_prev = d
         out.type_II[i], out.condition[i] = transmission(Ah, n, P, d, M, W, V_M, sv,
                                                         order)
+        if not ok[:n].all():  # an actuation wrench is not defined: the locked motions
+            out.type_II[i] = locked_motion_index(T, coords, act_col, rtol, P, d, X, W, V2,
+                                                 sv2, C, Xi, work6, order)
         out.det[i] = carried_determinant(Ah, n, P, d, layout.reference, M, P_loc,
                                          work)
         if full:

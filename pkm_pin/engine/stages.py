@@ -27,7 +27,8 @@ wrenches go out about it (:func:`shift_twist`, :func:`wrench_about_origin`).
 5. :func:`scale_actuation` — actuation wrenches in world units (unit force, or unit
    moment for a couple), signed so that ``B_ii ≥ 0``; the type I index.
 6. :func:`transmission` — the singular values of ``A_h Δ Pᵀ``: type II index and
-   condition; and :func:`carried_determinant`.
+   condition (:func:`locked_motion_index` where an actuation wrench is not defined);
+   and :func:`carried_determinant`.
 """
 
 from __future__ import annotations
@@ -355,6 +356,56 @@ def transmission(Ah, n, P, d, M, W, V, sv, order):
     descending(sv, d, order)
     t2 = sv[order[d - 1]] if d <= n else 0.0
     return t2, (sv[order[0]] / t2 if t2 > 0 else math.inf)
+
+
+@register_jitable
+def locked_motion_index(T, coords, act_col, rtol, P, d, X, W, V, sv, S, R, M, order):
+    """Stage 6 where an actuation wrench is not defined (an actuated joint whose twist
+    depends on the other joints of its leg: a type I singularity, where :func:`actuation_wrench`
+    falls back on a constraint wrench). The type II question is then asked directly:
+    which platform twists remain with every actuator locked? Leg ``l`` with its
+    actuators locked allows the span of its passive joint twists (rows of ``T``,
+    homogenised), whose reciprocal wrenches (rows of ``S``) the platform must respect;
+    with ``R`` an orthonormal basis of all of them, the index is the d-th largest
+    singular value of ``R Δ Pᵀ`` (0 when they leave a platform twist free; a serial arm,
+    every joint actuated, never does). Where every actuation wrench is defined this is
+    not used: the index is seed 000's (:func:`transmission`)."""
+    m = 0
+    for l in range(coords.shape[0] - 1):
+        k = 0
+        for c in range(coords[l], coords[l + 1]):
+            passive = True
+            for a in range(act_col.shape[0]):
+                if act_col[a] == c:
+                    passive = False
+            if passive:
+                for a in range(6):
+                    X[k, a] = T[c, (a + 3) % 6]
+                k += 1
+        reset(V, 6)
+        jacobi(X, k, 6, W, V, sv)  # no passive joint: every wrench is reciprocal
+        threshold = rtol * largest(sv, 6)
+        for j in range(6):
+            if not sv[j] > threshold:
+                for a in range(6):
+                    S[m, a] = V[a, j]
+                m += 1
+    reset(V, 6)
+    jacobi(S, m, 6, W, V, sv)
+    threshold = rtol * largest(sv, 6)
+    r = 0
+    for j in range(6):
+        if sv[j] > threshold:
+            for a in range(6):
+                R[r, a] = V[a, j]
+            r += 1
+    if r < d or d == 0:
+        return 0.0
+    reciprocal_products(R, r, P, d, M)
+    reset(V, 6)
+    jacobi(M, r, d, W, V, sv)
+    descending(sv, d, order)
+    return sv[order[d - 1]]
 
 
 @register_jitable(inline="always")
