@@ -160,8 +160,10 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
     """Plain-data summary of an :class:`~pkm_pin.analysis.Analysis` (JSON-ready).
 
     Keys: ``mechanism``, ``description``, ``pose`` (``xyz`` [m], ``rpy`` [rad]),
-    ``dof``, ``motion_type``, ``grubler``, ``redundant_constraints``,
-    ``platform_twists`` (the analysis basis), ``motion_basis`` and ``constraint_basis``
+    ``dof``, ``motion_type``, ``grubler``, ``redundant_constraints``, ``length`` (the
+    characteristic length), ``platform_twists`` (the readable basis of the text report:
+    unit directions, lines through points; not scaled by the characteristic length),
+    ``motion_basis`` and ``constraint_basis``
     (readable bases, see :func:`readable_basis`, with ``words``), ``actuated``, ``A``,
     ``B``, ``singularity``, ``constraint_singular``, ``indices``,
     ``uncontrolled_twist`` (words, at a type II/III singularity, else ``None``),
@@ -187,7 +189,8 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
         "motion_type": analysis.motion_type,
         "grubler": analysis.grubler,
         "redundant_constraints": analysis.redundant_constraints,
-        "platform_twists": analysis.platform_twists.tolist(),
+        "length": analysis.length,
+        "platform_twists": [b.screw.tolist() for b in motion],
         "motion_basis": [b.as_dict() for b in motion],
         "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
         "actuated": mech.actuated_names,

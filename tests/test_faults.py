@@ -83,3 +83,18 @@ def test_serial_arm_at_a_wrist_singularity_is_type_I_only(ur5):
     assert arm.sweep([arm.home]).singularity[0] == "I"
     regular = arm.analyze(arm.assemble(ur5.tip_placement(q + [0, 0, 0, 0, 0.8, 0]), [q]))
     assert regular.singularity == "none"
+
+
+def test_json_platform_twists_are_the_text_reports_basis():
+    """The JSON's platform twists are the readable basis the text prints (unit
+    directions), not the analysis basis scaled by the characteristic length: the same
+    Delta in metres and millimetres gives the same translations."""
+    import numpy as np
+
+    from pkm_pin.report import report_data
+
+    m, mm = mechanism("delta"), mechanism("delta", scale=1000.0)
+    a, b = report_data(m.home_analysis), report_data(mm.home_analysis)
+    assert a["platform_twists"] == [x["screw"] for x in a["motion_basis"]]
+    np.testing.assert_allclose(a["platform_twists"], b["platform_twists"], atol=1e-12)
+    assert b["length"] == pytest.approx(1000.0 * a["length"])
