@@ -395,6 +395,13 @@ def _segment_matrix(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return T
 
 
+def grid_scale(length: float) -> float:
+    """Scale of meshcat's grid and axes for a mechanism of characteristic length
+    ``length``: the power of ten at or below it (1 for a metre-sized model in metres,
+    1000 for the same in millimetres, 0.1 for a 30 cm model)."""
+    return float(10.0 ** np.floor(np.log10(length)))
+
+
 def _translation(p) -> np.ndarray:
     T = np.eye(4)
     T[:3, 3] = p
@@ -430,7 +437,7 @@ class _Painter:
 
         meshcat's camera always looks at the viewer's origin, so the mechanism's subtree
         is shifted to put its centre there; the grid and axes are shifted with it (they
-        stay at the mechanism's world origin).
+        stay at the mechanism's world origin), and scaled by :func:`grid_scale`.
         """
         vis = self.vis
         vis["/Background"].set_property("top_color", [0.97, 0.97, 0.97])
@@ -438,8 +445,12 @@ class _Painter:
         P = self.mech_points()
         centre = 0.5 * (P.min(axis=0) + P.max(axis=0))
         radius = max(float(np.max(np.linalg.norm(P - centre, axis=1))), 0.5 * self.L)
-        for path in (self.root, "/Grid", "/Axes"):
-            vis[path].set_transform(_translation(-centre))
+        vis[self.root].set_transform(_translation(-centre))
+        # meshcat's grid (0.5 unit cells) and axes (1 unit) at the model's scale: a power
+        # of ten of its characteristic length (a millimetre model gets 1000× larger ones)
+        scale = np.diag([*[grid_scale(self.L)] * 3, 1.0])
+        for path in ("/Grid", "/Axes"):
+            vis[path].set_transform(_translation(-centre) @ scale)
         direction = np.array([1.0, -1.4, 0.9])
         _, sv, Vt = np.linalg.svd(P - P.mean(axis=0))
         if sv[0] > 0 and sv[-1] < 0.15 * sv[0]:  # nearly planar: look along the normal

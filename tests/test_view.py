@@ -265,3 +265,23 @@ def test_cli_view_writes_the_page(tmp_path, capsys):
     assert str(out) in capsys.readouterr().out
     commands = page_commands(out.read_text(encoding="utf-8"))
     assert any(c["type"] == "set_animation" for c in commands)
+
+
+def test_grid_and_axes_follow_the_models_scale(tmp_path):
+    """meshcat's grid and axes are drawn at a power of ten of the characteristic length:
+    the same 3-RPR in millimetres gets them 1000 times larger (issue 17, item 7)."""
+    from pkm_pin.builders import MECHANISMS
+    from pkm_pin.view import grid_scale
+
+    assert (grid_scale(1.0), grid_scale(2.3), grid_scale(2300.0), grid_scale(0.3)) == (
+        1.0, 1.0, 1000.0, 0.1)
+    scales = []
+    for scale in (1.0, 1000.0):
+        mech = MECHANISMS["rpr3"](scale=scale).build()
+        path = tmp_path / f"rpr3_{scale:g}.html"
+        view(mech, html=path)
+        grid = [c for c in page_commands(path.read_text(encoding="utf-8"))
+                if c["type"] == "set_transform" and c["path"] == "/Grid"]
+        M = np.array(grid[-1]["matrix"], dtype=float).reshape(4, 4)
+        scales.append(np.linalg.norm(M[:3, 0]))
+    assert scales[1] == pytest.approx(1000.0 * scales[0])
