@@ -73,7 +73,7 @@ from . import screws
 from .analysis import classify
 from .errors import AssemblyError, InputError, SingularityError
 from .model.closure_model import ClosureModel, TreeKinematics
-from .solve import solve_tree_starts, tree_starts
+from .solve import iter_tree_starts, solve_tree_starts
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
@@ -149,14 +149,12 @@ class Mobility:
     grubler: int
 
 
-def _point_frame(p: np.ndarray) -> pin.SE3:
-    """``aMb`` that moves screw coordinates about the point ``p`` to the world origin."""
-    return pin.SE3(np.eye(3), np.asarray(p, float))
-
-
 def homogenised_about(S: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
-    """Screws ``S`` (rows, world origin) about the point ``p``, moment part / ``length``."""
-    return screws.homogenise(screws.transform(S, _point_frame(p).inverse()), length)
+    """Screws ``S`` (rows, world origin) about the point ``p``, moment part / ``length``:
+    ``(a; b) → (a; (b + a × p) / length)`` (the velocity, or moment, at ``p``)."""
+    S = np.atleast_2d(S)
+    return np.hstack([S[:, :3], (S[:, 3:] + S[:, :3] @ pin.skew(np.asarray(p, float)))
+                      / length])
 
 
 def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
@@ -164,7 +162,7 @@ def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
     H = np.atleast_2d(H)
     if H.shape[0] == 0:
         return np.zeros((0, 6))
-    return np.atleast_2d(screws.transform(screws.dehomogenise(H, length), _point_frame(p)))
+    return np.hstack([H[:, :3], length * H[:, 3:] - H[:, :3] @ pin.skew(np.asarray(p, float))])
 
 
 def _svd_rank(H: np.ndarray, rtol: float) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
@@ -255,22 +253,26 @@ class Linkage:
         model = self._model
         warm = self._guess_q(guess)
         targets = None if q_actuated is None else self.check_actuated(q_actuated)
-        rows = tree_starts(model, warm, count=int(starts), seed=seed)
+        rows = iter_tree_starts(model, warm, count=int(starts), seed=seed)
         sol, iterations = solve_tree_starts(model, rows, targets=targets, tol=tol,
                                             max_iter=max_iter,
                                             nearest=model.reference if warm is None else warm)
         if not sol.converged:
-            raise self._failure(sol, len(rows), targets)
-        return self._assembly(sol.q, sol.residual, iterations)
+            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets)
+        return self._assembly(sol, iterations)
 
-    def _assembly(self, q: np.ndarray, residual: float, iterations: int) -> LinkageAssembly:
-        model = self._model
-        kin = model.kinematics(q)
-        norms = {c.name or f"closure {k}": float(np.linalg.norm(kin.residual[s]))
-                 for k, (c, s) in enumerate(zip(model.closures, model.closure_slices()))}
-        q_a = _actuated_or_nan(model, q)
-        return LinkageAssembly(q.copy(), float(residual), int(iterations), norms, q_a,
-                               kin.output_placement)
+    def _assembly(self, sol, iterations: int) -> LinkageAssembly:
+        """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
+        Pinocchio pass, when it was at ``sol.q``)."""
+        model, q = self._model, sol.q
+        norms, oMo = sol.closure_norms, sol.output_placement
+        if norms is None or oMo is None:
+            kin = model.kinematics(q)
+            norms, oMo = model.closure_norms(kin.residual), kin.output_placement
+        names = {c.name or f"closure {k}": float(n)
+                 for k, (c, n) in enumerate(zip(model.closures, norms))}
+        return LinkageAssembly(q.copy(), float(sol.residual), int(iterations), names,
+                               _actuated_or_nan(model, q), oMo)
 
     def _failure(self, sol, n_starts: int, targets, what: str = "") -> LoopClosureError:
         model = self._model
@@ -337,11 +339,11 @@ class Linkage:
         home = self.assemble(guess, starts=starts, seed=seed, tol=tol)
         rows = _pose_rows(model, model.kinematics(home.q))
         sol, iterations = solve_tree_starts(
-            model, tree_starts(model, home.q, count=int(starts), seed=seed), pose=pose,
+            model, iter_tree_starts(model, home.q, count=int(starts), seed=seed), pose=pose,
             pose_rows=rows, nearest=home.q, tol=tol)
         if not sol.converged:
             raise self._failure(sol, starts + 4, None, "output pose")
-        return self._assembly(sol.q, sol.residual, iterations + home.iterations)
+        return self._assembly(sol, iterations + home.iterations)
 
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output") -> LinkageSweep:
@@ -441,6 +443,10 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: _NullSpace, rtol: float) -
 def _independent(model: ClosureModel, X: np.ndarray, rtol: float) -> tuple:
     """Greedy maximal set of actuated joints whose rates (rows of ``X``) are
     independent over the allowed motions."""
+    if X.shape[0] and X.shape[0] <= X.shape[1]:
+        sv = np.linalg.svd(X, compute_uv=False)  # full row rank: every subset is independent
+        if sv[-1] > rtol * sv[0]:
+            return tuple(model.actuated)
     chosen: list[int] = []
     scale = np.linalg.norm(X) if X.size else 0.0
     for k in range(X.shape[0]):
@@ -744,7 +750,7 @@ def _scaled_wrench(zeta_h: np.ndarray, p: np.ndarray, L: float, unit: float,
     f, m_p = zeta_h[:3], zeta_h[3:] * L
     s = np.linalg.norm(f) if np.linalg.norm(f) * L > rtol * np.linalg.norm(m_p) \
         else np.linalg.norm(m_p)
-    wrench = screws.transform(np.r_[f, m_p], _point_frame(p)) / s
+    wrench = np.r_[f, m_p - np.cross(f, p)] / s  # the moment about the world origin
     return wrench, L / unit / s
 
 

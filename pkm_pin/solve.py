@@ -831,6 +831,9 @@ class TreeSolution:
         pose: Norm of the (selected) output pose error rows (0 without a pose target).
         iterations: Newton steps taken.
         converged: Whether ``residual <= tol``.
+        closure_norms: Norm of each closure's residual rows at ``q`` (None when the
+            last evaluation was not at ``q``).
+        output_placement: World placement of the output frame at ``q`` (or None, alike).
     """
 
     q: np.ndarray
@@ -840,9 +843,8 @@ class TreeSolution:
     pose: float
     iterations: int
     converged: bool
-
-
-_NO_LIMIT = 0.5 * np.finfo(float).max
+    closure_norms: np.ndarray | None = None
+    output_placement: pin.SE3 | None = None
 
 
 def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
@@ -851,53 +853,53 @@ def tree_limits(model) -> tuple[np.ndarray, np.ndarray]:
     Pinocchio's default "no limit" (the largest float) counts as none, and so does an
     empty range ``lower == upper``: a URDF ``<limit>`` without ``lower``/``upper`` (as
     CAD exporters write, e.g. Gepetto's published models) reads as [0, 0], and a joint
-    that may not move would have been written ``fixed``."""
-    tree = model.tree
-    lo, up = np.full(tree.nq, -np.inf), np.full(tree.nq, np.inf)
-    for j in range(1, tree.njoints):
-        joint = tree.joints[j]
-        if joint.nq == 1 and joint.nv == 1:
-            i = joint.idx_q
-            a, b = tree.lowerPositionLimit[i], tree.upperPositionLimit[i]
-            if max(abs(a), abs(b)) < _NO_LIMIT and a < b:
-                lo[i], up[i] = a, b
-    return lo, up
+    that may not move would have been written ``fixed``. Read-only arrays, made once
+    per model."""
+    return model._plan.limits
 
 
-def _tree_rows(model, kin, targets, pose, pose_rows):
-    """Residual vector, its Jacobian (per unit of v) and ``(closure, actuated, pose)``."""
-    e, H = [kin.residual], [kin.closure_jacobian]
-    closure = max((float(np.linalg.norm(kin.residual[s])) for s in model.closure_slices()),
-                  default=0.0)
-    actuated = pose_err = 0.0
-    if targets is not None:
-        scales = model.velocity_units[list(model.actuated_v)]
-        ea = (model.actuated_values(kin.q) - targets) / scales
-        Ha = np.zeros((len(ea), model.nv))
-        Ha[np.arange(len(ea)), list(model.actuated_v)] = 1.0 / scales
-        e.append(ea)
-        H.append(Ha)
-        actuated = float(np.abs(ea).max(initial=0.0))
-    if pose is not None:
-        ep, Hp = pose_error_rows(model, kin, pose)
-        e.append(pose_rows @ ep)
-        H.append(pose_rows @ Hp)
-        pose_err = float(np.linalg.norm(e[-1]))
-    return np.concatenate(e), np.vstack(H), (closure, actuated, pose_err)
+class _Pass:
+    """One evaluation of the tree solver's rows at ``q`` (one Pinocchio pass)."""
+
+    def __init__(self, model, q, targets, pose, pose_rows):
+        residual, Jc, Jo, oMo = model._pass(q, model._work_data())
+        self.norms, self.output_placement = model.closure_norms(residual), oMo
+        e, H = [residual], [Jc]
+        closure = float(self.norms.max(initial=0.0))
+        actuated = pose_err = 0.0
+        if targets is not None:
+            plan = model._plan
+            ea = (plan.actuated_values(q, model) - targets) / plan.act_scales
+            e.append(ea)
+            H.append(plan.act_rows)
+            actuated = float(np.abs(ea).max(initial=0.0))
+        if pose is not None:
+            ep, Hp = _pose_error(model, oMo, Jo, pose)
+            e.append(pose_rows @ ep)
+            H.append(pose_rows @ Hp)
+            pose_err = float(np.linalg.norm(e[-1]))
+        self.e, self.H = np.concatenate(e), np.vstack(H)
+        self.parts = (closure, actuated, pose_err)
 
 
 def pose_error_rows(model, kin, target: pin.SE3) -> tuple[np.ndarray, np.ndarray]:
     """The output frame's pose error against ``target`` and its Jacobian (per unit of
-    v): ``log6(target⁻¹ · oMo)`` axis-first ``(θ [rad]; ρ / L)``, in the target's axes
-    (so frame-invariant), ``L`` = :attr:`ClosureModel.length`. For a point output
-    (:attr:`ClosureModel.output_point`) the rotation rows are zero and the linear rows
-    the position error ``(p − p_target) / L`` in world axes."""
+    v) from ``kin`` (:meth:`ClosureModel.kinematics`): ``log6(target⁻¹ · oMo)``
+    axis-first ``(θ [rad]; ρ / L)``, in the target's axes (so frame-invariant), ``L`` =
+    :attr:`ClosureModel.length`. For a point output (:attr:`ClosureModel.output_point`)
+    the rotation rows are zero and the linear rows the position error ``(p − p_target) /
+    L`` in world axes."""
+    return _pose_error(model, kin.output_placement, kin.output_jacobian, target)
+
+
+def _pose_error(model, oMo: pin.SE3, Jo: np.ndarray, target: pin.SE3):
+    """:func:`pose_error_rows` from the output placement and Jacobian."""
     if model.output_point:
-        e = np.r_[np.zeros(3), kin.output_placement.translation - target.translation]
-        return e / np.r_[1.0, 1.0, 1.0, [model.length] * 3], kin.output_jacobian / model.length
-    M = target.actInv(kin.output_placement)
+        e = np.r_[np.zeros(3), oMo.translation - target.translation]
+        return e / np.r_[1.0, 1.0, 1.0, [model.length] * 3], Jo / model.length
+    M = target.actInv(oMo)
     e = screws.log(M)
-    local = screws.adjoint(kin.output_placement.inverse()) @ kin.output_jacobian
+    local = screws.adjoint(oMo.inverse()) @ Jo
     H = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(local))
     e[3:] /= model.length
     H[3:] /= model.length
@@ -905,18 +907,22 @@ def pose_error_rows(model, kin, target: pin.SE3) -> tuple[np.ndarray, np.ndarray
 
 
 def _tree_step(model, q, e, H, free, r, lo, up):
-    """One damped Newton step on the free coordinates (columns scaled by the velocity
-    units), at most :data:`TREE_MAX_STEP`; returns ``(q_new, dimensionless step²)``."""
-    units = model.velocity_units[free]
-    Hf = H[:, free] * units
-    lam = lm_damping(r)
-    N = Hf.T @ Hf + lam * np.eye(Hf.shape[1])
+    """One damped Newton step on the free coordinates (``None``: all; columns scaled by
+    the velocity units), at most :data:`TREE_MAX_STEP`; returns ``(q_new, dimensionless
+    step²)``."""
+    units = model.velocity_units if free is None else model.velocity_units[free]
+    Hf = (H if free is None else H[:, free]) * units
+    N = Hf.T @ Hf
+    N.flat[::N.shape[0] + 1] += lm_damping(r)
     dx = -np.linalg.solve(N, Hf.T @ e)
     big = np.abs(dx).max(initial=0.0)
     if big > TREE_MAX_STEP:
         dx *= TREE_MAX_STEP / big
-    dv = np.zeros(model.nv)
-    dv[free] = units * dx
+    if free is None:
+        dv = units * dx
+    else:
+        dv = np.zeros(model.nv)
+        dv[free] = units * dx
     return np.clip(pin.integrate(model.tree, q, dv), lo, up), float(dx @ dx)
 
 
@@ -935,26 +941,30 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
     of ``r = max(closure, actuated, pose)``; stops on :func:`stop_rule` (``r ≤ tol``,
     ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled)."""
     q = model.check_q(q0).copy()
-    free = np.ones(model.nv, bool) if free is None else np.asarray(free, bool)
+    free = None if free is None else np.asarray(free, bool)
+    if free is not None and free.all():
+        free = None
     pose_rows = np.eye(6) if pose_rows is None else np.asarray(pose_rows, float)
     lo, up = tree_limits(model)
     q = np.clip(q, lo, up)
-    best, slow, it = np.inf, 0, 0
+    best, slow, it, at_q = np.inf, 0, 0, True
     while True:
-        e, H, parts = _tree_rows(model, model.kinematics(q), targets, pose, pose_rows)
-        r = max(parts)
+        ev = _Pass(model, q, targets, pose, pose_rows)
+        r = max(ev.parts)
         stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
-        if stop or not free.any():
+        if stop or (free is not None and not free.any()):
             break
-        q_new, step = _tree_step(model, q, e, H, free, r, lo, up)
+        q_new, step = _tree_step(model, q, ev.e, ev.H, free, r, lo, up)
         if not np.all(np.isfinite(q_new)):
             break
         it += 1
         moved = pin.difference(model.tree, q, q_new) / model.velocity_units
         q = q_new
         if float(moved @ moved) < NEWTON_STALL_RTOL * (1.0 + step):
+            at_q = False  # the last evaluation is at the previous q
             break
-    return TreeSolution(q, r, parts[0], parts[1], parts[2], it, bool(r <= tol))
+    return TreeSolution(q, r, *ev.parts, it, bool(r <= tol), ev.norms if at_q else None,
+                        ev.output_placement if at_q else None)
 
 
 def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
@@ -964,15 +974,22 @@ def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
     by ``numpy.random.default_rng(seed)``: each 1-DOF joint uniformly in its finite
     limits (a revolute without limits in [−π, π]), other coordinates as in the
     reference. All clipped to :func:`tree_limits`."""
+    return np.array(list(iter_tree_starts(model, warm, count, seed)), dtype=float)
+
+
+def iter_tree_starts(model, warm=None, count: int = 0, seed: int = 0):
+    """The rows of :func:`tree_starts`, made one at a time (a solve that converges from
+    the warm start makes none of the others)."""
     lo, up = tree_limits(model)
     ref = np.array(model.reference)
+    if warm is not None:
+        yield np.clip(np.asarray(model.check_q(warm), dtype=float), lo, up)
     middle = np.where(np.isfinite(lo), 0.5 * (np.nan_to_num(lo) + np.nan_to_num(up)), ref)
-    rows = [] if warm is None else [model.check_q(warm)]
-    rows += [ref, pin.neutral(model.tree), middle]
+    for row in (ref, pin.neutral(model.tree), middle):
+        yield np.clip(row, lo, up)
     rng = np.random.default_rng(seed)
     for _ in range(count):
-        rows.append(_random_tree_q(model, rng, lo, up))
-    return np.clip(np.array(rows, dtype=float), lo, up)
+        yield np.clip(_random_tree_q(model, rng, lo, up), lo, up)
 
 
 def _random_tree_q(model, rng, lo, up) -> np.ndarray:
@@ -996,14 +1013,16 @@ def _random_tree_q(model, rng, lo, up) -> np.ndarray:
 def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose_rows=None,
                       nearest=None, tol: float = CLOSURE_TOL, max_iter: int = 100
                       ) -> tuple[TreeSolution, int]:
-    """:func:`solve_tree` from each row of ``starts`` in turn. The first start's
+    """:func:`solve_tree` from each row of ``starts`` (an array, or any iterable of
+    configurations such as :func:`iter_tree_starts`) in turn. The first start's
     solution is kept when it converges (the branch continued from a warm start);
     otherwise every start is solved and, among those that converge, the one nearest
     ``nearest`` (default the first start; distance ``|pin.difference / velocity_units|``)
     is kept; none converging: the smallest residual. Returns ``(solution, total
     iterations)``."""
-    starts = np.atleast_2d(np.asarray(starts, dtype=float))
-    ref = starts[0] if nearest is None else model.check_q(nearest)
+    if isinstance(starts, np.ndarray):
+        starts = np.atleast_2d(starts)
+    ref = None if nearest is None else model.check_q(nearest)
     found, total = [], 0
     for k, q0 in enumerate(starts):
         sol = solve_tree(model, q0, free, targets, pose, pose_rows=pose_rows, tol=tol,
@@ -1012,6 +1031,8 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
         found.append(sol)
         if k == 0 and sol.converged:
             return sol, total
+        if ref is None:
+            ref = model.check_q(q0)
     good = [s for s in found if s.converged]
     if not good:
         return min(found, key=lambda s: s.residual), total

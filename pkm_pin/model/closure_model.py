@@ -43,13 +43,19 @@ Conventions:
   ``rtol`` (:data:`pkm_pin.tolerances.RANK_RTOL`) times the largest are zero.
 
 The description is immutable (the tree is a private copy; do not modify it). Every
-method makes its own ``pin.Data`` and runs one Pinocchio pass: no hidden state, safe to
-call from several threads.
+method runs one Pinocchio pass: :meth:`ClosureModel.kinematics` in a ``pin.Data`` of its
+own (kept by the :class:`TreeKinematics` it returns), the others in a working ``Data``
+per thread that no result refers to: safe to call from several threads. The index lists
+of that pass (frames, support columns, rows of each closure kind, actuated coordinates)
+are made once, at construction (:class:`_Plan`); the closure rows of all closures are
+computed together (vectorised over closures).
 """
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -142,6 +148,8 @@ class ClosureModel:
     output_point: bool = False
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
+    _plan: _Plan = field(init=False, repr=False)
+    _local: threading.local = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.tree, pin.Model):
@@ -168,10 +176,17 @@ class ClosureModel:
         units = velocity_units(tree, self.length)
         units.setflags(write=False)
         set_(self, "_units", units)
+        set_(self, "_plan", _Plan(self))
+        set_(self, "_local", threading.local())
+
+    def __getstate__(self) -> dict:
+        """Pickle: the description (not the per-thread working data)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_local"}
 
     def __setstate__(self, state: dict) -> None:
         """Unpickle: the description as pickled, its arrays read-only again."""
         self.__dict__.update(state)
+        self.__dict__["_local"] = threading.local()
         self._units.setflags(write=False)
         self.reference.setflags(write=False)
 
@@ -202,22 +217,13 @@ class ClosureModel:
     @property
     def actuated_v(self) -> tuple[int, ...]:
         """Velocity index of each actuated joint (its first coordinate)."""
-        return tuple(self.tree.joints[self.tree.getJointId(a)].idx_v for a in self.actuated)
+        return tuple(int(i) for i in self._plan.act_v)
 
     def actuated_values(self, q) -> np.ndarray:
         """Values [rad or m] of the actuated joints at ``q``: the coordinate of a 1-DOF
         joint, the angle ``atan2(sin, cos)`` of a continuous (unbounded) revolute; an
         :class:`InputError` for an actuated joint with several degrees of freedom."""
-        q = self.check_q(q)
-        out = np.empty(len(self.actuated))
-        for k, name in enumerate(self.actuated):
-            joint = self.tree.joints[self.tree.getJointId(name)]
-            if joint.nv != 1 or joint.nq not in (1, 2):
-                raise InputError(f"actuated joint {name!r} has {joint.nv} degrees of freedom "
-                                 "and no single actuated value")
-            i = joint.idx_q
-            out[k] = q[i] if joint.nq == 1 else np.arctan2(q[i + 1], q[i])
-        return out
+        return self._plan.actuated_values(self.check_q(q), self)
 
     def check_q(self, q) -> np.ndarray:
         """``q`` as a finite array of shape (nq,), or an :class:`InputError`."""
@@ -227,19 +233,17 @@ class ClosureModel:
     # ---------------------------------------------------------------- residuals
     def closure_residual(self, q) -> np.ndarray:
         """Stacked residuals of every closure at ``q`` (dimensionless, module docstring)."""
-        data = self._placements(self.check_q(q))
-        rows = [_residual(c.kind, self._relative(data, c), self.length) for c in self.closures]
-        return np.concatenate(rows) if rows else np.zeros(0)
+        return self._pass(self.check_q(q), self._work_data())[0]
 
     def closure_jacobian(self, q) -> np.ndarray:
         """``d closure_residual / dv`` (n_rows × nv) at ``q``, ``v`` the tree's velocity."""
-        return self._closure_jacobian(self._jacobians(self.check_q(q)))
+        return self._pass(self.check_q(q), self._work_data())[1]
 
     def output_jacobian(self, q) -> np.ndarray:
         """6 × nv: column k is the axis-first twist ``(ω; v_O)`` of the output frame,
         about the world origin, for a unit rate of velocity coordinate k; with
         :attr:`output_point`, the translation ``(0; v_p)`` at the velocity of its origin."""
-        return self._output_jacobian(self._jacobians(self.check_q(q)))
+        return self._pass(self.check_q(q), self._work_data())[2]
 
     # ----------------------------------------------------------------- mobility
     def mobility(self, q, rtol: float = RANK_RTOL) -> int:
@@ -262,81 +266,219 @@ class ClosureModel:
         the rows returned are orthonormal once their linear parts are divided by
         :attr:`length` (as :attr:`pkm_pin.Analysis.platform_twists`).
         """
-        data = self._jacobians(self.check_q(q))
-        _, N = _rank_and_null(self._closure_jacobian(data) * self._units, rtol)
-        T = (self._output_jacobian(data) @ (self._units[:, None] * N)).T
-        return _orthonormal_span(T, data.oMf[self._frame_ids[self.output]], self.length, rtol)
+        _, Jc, Jo, oMo = self._pass(self.check_q(q), self._work_data())
+        _, N = _rank_and_null(Jc * self._units, rtol)
+        T = (Jo @ (self._units[:, None] * N)).T
+        return _orthonormal_span(T, oMo, self.length, rtol)
 
     def kinematics(self, q) -> TreeKinematics:
         """Everything first-order at ``q`` from one Pinocchio pass (:class:`TreeKinematics`)."""
         q = self.check_q(q)
-        data = self._jacobians(q)
-        rows = [_residual(c.kind, self._relative(data, c), self.length) for c in self.closures]
-        return TreeKinematics(
-            q=q, residual=np.concatenate(rows) if rows else np.zeros(0),
-            closure_jacobian=self._closure_jacobian(data),
-            output_jacobian=self._output_jacobian(data),
-            output_placement=data.oMf[self._frame_ids[self.output]].copy(),
-            **_joint_twists(self.tree, data),
-            joint_placements=tuple(M.copy() for M in data.oMi),
-            frame_placements=tuple(M.copy() for M in data.oMf))
+        return TreeKinematics(self, q, self.tree.createData())
 
     def closure_slices(self) -> tuple[slice, ...]:
         """Rows of each closure in :meth:`closure_residual` (closure order)."""
-        ends = np.cumsum([0] + [c.dim for c in self.closures])
-        return tuple(slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:]))
+        return self._plan.slices
+
+    def closure_norms(self, residual: np.ndarray) -> np.ndarray:
+        """Norm of each closure's rows of ``residual`` (closure order)."""
+        return self._plan.closure_norms(residual)
 
     # ---------------------------------------------------------- Pinocchio passes
-    def _placements(self, q: np.ndarray) -> pin.Data:
-        """A fresh ``Data`` with every frame placement at ``q``."""
-        data = self.tree.createData()
-        pin.framesForwardKinematics(self.tree, data, q)
+    def _work_data(self) -> pin.Data:
+        """This thread's working ``Data`` (never referred to by a result)."""
+        data = getattr(self._local, "data", None)
+        if data is None:
+            data = self._local.data = self.tree.createData()
         return data
 
-    def _jacobians(self, q: np.ndarray) -> pin.Data:
-        """A fresh ``Data`` after one pass at ``q``: joint Jacobians, frame placements."""
-        data = self.tree.createData()
+    def _pass(self, q: np.ndarray, data: pin.Data) -> tuple:
+        """One Pinocchio pass at ``q`` in ``data``: ``(residual, closure Jacobian, output
+        Jacobian, output placement)``, new arrays."""
         pin.computeJointJacobians(self.tree, data, q)
         pin.updateFramePlacements(self.tree, data)
-        return data
-
-    def _relative(self, data: pin.Data, c: Closure) -> pin.SE3:
-        """``M = C_a⁻¹ C_b`` of closure ``c`` from placements in ``data``."""
-        ids = self._frame_ids
-        oMa = data.oMf[ids[c.frame_a]] * c.placement_a
-        oMb = data.oMf[ids[c.frame_b]] * c.placement_b
-        return oMa.actInv(oMb)
-
-    def _local_twists(self, data: pin.Data, frame: str, placement: pin.SE3) -> np.ndarray:
-        """6 × nv axis-first twists of the constraint frame ``frame * placement``, in
-        its own axes and about its own origin (from the LOCAL frame Jacobian)."""
-        J = pin.getFrameJacobian(self.tree, data, self._frame_ids[frame], pin.LOCAL)
-        return screws.adjoint(placement.inverse()) @ screws.from_pinocchio(J)
-
-    def _closure_jacobian(self, data: pin.Data) -> np.ndarray:
-        """The closure Jacobian from a ``data`` filled by :meth:`_jacobians`."""
-        rows = []
-        for c in self.closures:
-            M = self._relative(data, c)
-            Ta = self._local_twists(data, c.frame_a, c.placement_a)
-            Tb = self._local_twists(data, c.frame_b, c.placement_b)
-            nu = Tb - screws.adjoint(M.inverse()) @ Ta  # body twist of C_b w.r.t. C_a, in C_b
-            rows.append(_residual_rates(c.kind, M, nu, self.length))
-        return np.vstack(rows) if rows else np.zeros((0, self.nv))
-
-    def _output_jacobian(self, data: pin.Data) -> np.ndarray:
-        """The output Jacobian from a ``data`` filled by :meth:`_jacobians`."""
-        fid = self._frame_ids[self.output]
-        if self.output_point:  # the origin's velocity: LOCAL_WORLD_ALIGNED's linear rows
-            J = pin.getFrameJacobian(self.tree, data, fid, pin.LOCAL_WORLD_ALIGNED)
-            return np.vstack([np.zeros((3, self.nv)), J[:3]])
-        return screws.from_pinocchio(pin.getFrameJacobian(self.tree, data, fid, pin.WORLD))
+        return self._plan.evaluate(data, self)
 
 
-@dataclass(frozen=True, eq=False)
+class _Plan:
+    """The index lists and constants of a :class:`ClosureModel`'s one-pass kinematics,
+    made once at construction.
+
+    ``frames``: frame ids ``[frame_a of each closure, frame_b of each closure, output]``;
+    ``placements`` (2C × 4 × 4): the constraint frames in them; ``support`` (2C + 1 ×
+    nv): 1 where a velocity coordinate moves that frame (its joint's supporting joints);
+    ``rows``: per kind, the closures of that kind and their rows in the stacked residual.
+    Without mimicking joints, ``data.J`` (every joint's world twist) times ``support``
+    is a frame's world Jacobian; with them, ``getFrameJacobian`` is called per frame.
+    """
+
+    def __init__(self, model: ClosureModel):
+        tree, closures = model.tree, model.closures
+        ids = model._frame_ids
+        C = len(closures)
+        self.C, self.nv, self.length = C, tree.nv, model.length
+        self.frames = [ids[c.frame_a] for c in closures] + [ids[c.frame_b] for c in closures]
+        self.frames.append(ids[model.output])
+        self.placements = np.array([c.placement_a.homogeneous for c in closures]
+                                   + [c.placement_b.homogeneous for c in closures]
+                                   ).reshape(2 * C, 4, 4)
+        self.support = np.array([_support(tree, tree.frames[f].parentJoint)
+                                 for f in self.frames])
+        self.relative = self.support[C:2 * C] - self.support[:C]
+        self.mimic = any(tree.joints[j].shortname() == "JointModelMimic"
+                         for j in range(1, tree.njoints))
+        self.point_output = model.output_point
+        ends = np.cumsum([0] + [c.dim for c in closures])
+        self.slices = tuple(slice(int(a), int(b)) for a, b in zip(ends[:-1], ends[1:]))
+        self.starts = ends[:-1]
+        self.n_rows = int(ends[-1])
+        self.rows = {kind: _kind_rows(closures, ends, kind) for kind in KINDS}
+        self.all_points = C > 0 and all(c.kind == "point" for c in closures)
+        self.placed = any(not c.placement_a.isIdentity() or not c.placement_b.isIdentity()
+                          for c in closures)
+        joints = [tree.joints[tree.getJointId(a)] for a in model.actuated]
+        self.act_v = np.array([j.idx_v for j in joints], dtype=int)
+        self.act_q = np.array([j.idx_q for j in joints], dtype=int)
+        self.act_ok = all(j.nv == 1 and j.nq in (1, 2) for j in joints)
+        self.act_plain = all(j.nv == 1 and j.nq == 1 for j in joints)
+        self.limits = _position_limits(tree)
+        self.act_scales = model.velocity_units[self.act_v]
+        self.act_rows = np.zeros((len(joints), tree.nv))  # d(q_a / s_a) / dv
+        self.act_rows[np.arange(len(joints)), self.act_v] = 1.0 / self.act_scales
+
+    def actuated_values(self, q: np.ndarray, model: ClosureModel) -> np.ndarray:
+        """The actuated joints' values (:meth:`ClosureModel.actuated_values`)."""
+        if self.act_plain:
+            return q[self.act_q]
+        if not self.act_ok:
+            for name in model.actuated:
+                joint = model.tree.joints[model.tree.getJointId(name)]
+                if joint.nv != 1 or joint.nq not in (1, 2):
+                    raise InputError(f"actuated joint {name!r} has {joint.nv} degrees of "
+                                     "freedom and no single actuated value")
+        out = np.empty(len(self.act_q))
+        for k, (i, name) in enumerate(zip(self.act_q, model.actuated)):
+            nq = model.tree.joints[model.tree.getJointId(name)].nq
+            out[k] = q[i] if nq == 1 else np.arctan2(q[i + 1], q[i])
+        return out
+
+    def closure_norms(self, residual: np.ndarray) -> np.ndarray:
+        """Norm of each closure's rows of ``residual``."""
+        if self.C == 0:
+            return np.zeros(0)
+        return np.sqrt(np.add.reduceat(residual * residual, self.starts))
+
+    def world_jacobians(self, data: pin.Data, model: ClosureModel) -> np.ndarray:
+        """(2C + 1) × 6 × nv axis-first world Jacobians ``(ω; v_O)`` of the frames."""
+        if not self.mimic:
+            J = data.J
+            return np.concatenate([J[3:], J[:3]])[None] * self.support[:, None, :]
+        return np.array([screws.from_pinocchio(pin.getFrameJacobian(model.tree, data, f,
+                                                                    pin.WORLD))
+                         for f in self.frames])
+
+    def evaluate(self, data: pin.Data, model: ClosureModel) -> tuple:
+        """``(residual, closure Jacobian, output Jacobian, output placement)`` from a
+        ``data`` after ``computeJointJacobians`` and ``updateFramePlacements``."""
+        oMf = data.oMf
+        H = np.array([oMf[f].homogeneous for f in self.frames])
+        J = self.world_jacobians(data, model)
+        residual, jacobian = self._closure_rows(H[:-1], J)
+        oMo = pin.SE3(H[-1])
+        Jo = J[-1]
+        if self.point_output:  # the origin's velocity v_O + ω × p
+            Jo = np.vstack([np.zeros((3, self.nv)), Jo[3:] - _skew(H[-1:, :3, 3])[0] @ Jo[:3]])
+        return residual, jacobian, Jo, oMo
+
+    def _closure_rows(self, H: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Residual and Jacobian rows of every closure (module docstring), vectorised:
+        ``M = C_a⁻¹ C_b``, the relative motion's velocity at ``C_b``'s origin ``p_b``,
+        ``V = v_O + ω × p_b`` (world axes), in ``C_a`` axes for point and revolute rows,
+        in ``C_b`` axes (the body twist) for a weld's ``Jlog6``."""
+        C, L = self.C, self.length
+        residual, jacobian = np.empty(self.n_rows), np.empty((self.n_rows, self.nv))
+        if C == 0:
+            return residual, jacobian
+        Cw = H @ self.placements if self.placed else H
+        Ra_T, pa, Rb, pb = Cw[:C, :3, :3].transpose(0, 2, 1), Cw[:C, :3, 3], Cw[C:, :3, :3], \
+            Cw[C:, :3, 3]
+        W = J[C:2 * C, :3] - J[:C, :3]  # relative angular velocity (world)
+        V = J[C:2 * C, 3:] - J[:C, 3:] - _skew(pb) @ W  # v_O + ω × p_b
+        if self.all_points:  # the common case, without index lists
+            d = np.einsum("cij,cj->ci", Ra_T, pb - pa)
+            return d.reshape(-1) / L, (Ra_T @ V).reshape(-1, self.nv) / L
+        for kind in ("point", "revolute"):
+            index, rows = self.rows[kind]
+            if index.size:
+                d = np.einsum("cij,cj->ci", Ra_T[index], pb[index] - pa[index]) / L
+                rate = Ra_T[index] @ V[index] / L
+                residual[rows[:, :3]] = d
+                jacobian[rows[:, :3]] = rate
+        index, rows = self.rows["revolute"]
+        if index.size:  # x, y of C_b's z axis in C_a: d(R_aᵀ z_b) = R_aᵀ (ω_rel × z_b)
+            zb = Rb[index, :, 2]
+            residual[rows[:, 3:]] = np.einsum("cij,cj->ci", Ra_T[index], zb)[:, :2]
+            jacobian[rows[:, 3:]] = -(Ra_T[index] @ _skew(zb) @ W[index])[:, :2]
+        index, rows = self.rows["weld"]
+        for k, c in enumerate(index):
+            M = pin.SE3(Cw[c][:3, :3].T @ Cw[C + c][:3, :3],
+                        Cw[c][:3, :3].T @ (pb[c] - pa[c]))
+            Rb_T = Rb[c].T
+            nu = np.vstack([Rb_T @ V[c], Rb_T @ W[c]])  # body twist of C_b in C_b, (v; ω)
+            log, rates = pin.log6(M).vector, pin.Jlog6(M) @ nu
+            residual[rows[k]] = np.r_[log[3:], log[:3] / L]
+            jacobian[rows[k]] = np.vstack([rates[3:], rates[:3] / L])
+        return residual, jacobian
+
+
+#: Pinocchio's default "no limit" (the largest float) and anything beyond it.
+_NO_LIMIT = 0.5 * np.finfo(float).max
+
+
+def _position_limits(tree: pin.Model) -> tuple[np.ndarray, np.ndarray]:
+    """Read-only lower and upper limits (nq,) of :func:`pkm_pin.solve.tree_limits`."""
+    lo, up = np.full(tree.nq, -np.inf), np.full(tree.nq, np.inf)
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        if joint.nq == 1 and joint.nv == 1:
+            i = joint.idx_q
+            a, b = tree.lowerPositionLimit[i], tree.upperPositionLimit[i]
+            if max(abs(a), abs(b)) < _NO_LIMIT and a < b:
+                lo[i], up[i] = a, b
+    lo.setflags(write=False)
+    up.setflags(write=False)
+    return lo, up
+
+
+def _skew(p: np.ndarray) -> np.ndarray:
+    """(k × 3 × 3) cross-product matrices ``[p]×`` of the rows of ``p`` (k × 3)."""
+    S = np.zeros((len(p), 3, 3))
+    S[:, 0, 1], S[:, 0, 2], S[:, 1, 2] = -p[:, 2], p[:, 1], -p[:, 0]
+    S[:, 1, 0], S[:, 2, 0], S[:, 2, 1] = p[:, 2], -p[:, 1], p[:, 0]
+    return S
+
+
+def _support(tree: pin.Model, j: int) -> np.ndarray:
+    """1.0 at the velocity coordinates of the joints supporting joint ``j``."""
+    mask = np.zeros(tree.nv)
+    for k in tree.supports[j][1:]:
+        joint = tree.joints[k]
+        mask[joint.idx_v:joint.idx_v + joint.nv] = 1.0
+    return mask
+
+
+def _kind_rows(closures: tuple, ends: np.ndarray, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """Indices of the closures of ``kind`` and their rows (k × dim) in the residual."""
+    index = [i for i, c in enumerate(closures) if c.kind == kind]
+    rows = np.array([np.arange(ends[i], ends[i + 1]) for i in index], dtype=int)
+    return np.array(index, dtype=int), rows.reshape(len(index), KINDS[kind])
+
+
 class TreeKinematics:
     """The first-order kinematics of a :class:`ClosureModel` at one configuration, from
-    one Pinocchio pass (:meth:`ClosureModel.kinematics`).
+    one Pinocchio pass in a ``pin.Data`` of its own (:meth:`ClosureModel.kinematics`);
+    the attributes after ``output_placement`` are read from that pass when first asked
+    for.
 
     Attributes:
         q: The configuration (nq,).
@@ -356,60 +498,39 @@ class TreeKinematics:
         frame_placements: World placement of every frame (``data.oMf``).
     """
 
-    q: np.ndarray
-    residual: np.ndarray
-    closure_jacobian: np.ndarray
-    output_jacobian: np.ndarray
-    output_placement: pin.SE3
-    joint_twists: np.ndarray
-    body_jacobians: tuple
-    joint_placements: tuple
-    frame_placements: tuple
+    def __init__(self, model: ClosureModel, q: np.ndarray, data: pin.Data):
+        self.q = q
+        self._tree, self._data, self._mimic = model.tree, data, model._plan.mimic
+        (self.residual, self.closure_jacobian, self.output_jacobian,
+         self.output_placement) = model._pass(q, data)
 
+    @cached_property
+    def joint_twists(self) -> np.ndarray:
+        if not self._mimic:  # data.J: every coordinate's world twist, (v; ω)
+            J = self._data.J
+            return np.concatenate([J[3:], J[:3]]).T.copy()
+        twists = np.zeros((self._tree.nv, 6))
+        for j, J in enumerate(self.body_jacobians):
+            joint = self._tree.joints[j]
+            if j and joint.shortname() != "JointModelMimic":
+                cols = slice(joint.idx_v, joint.idx_v + joint.nv)
+                twists[cols] = J[:, cols].T
+        return twists
 
-def _joint_twists(tree: pin.Model, data: pin.Data) -> dict:
-    """``joint_twists`` and ``body_jacobians`` of :class:`TreeKinematics` from a ``data``
-    filled by :meth:`ClosureModel._jacobians` (``data.J`` itself is not used: mimicking
-    joints share their columns)."""
-    bodies = [np.zeros((6, tree.nv))]
-    twists = np.zeros((tree.nv, 6))
-    for j in range(1, tree.njoints):
-        J = screws.from_pinocchio(pin.getJointJacobian(tree, data, j, pin.WORLD))
-        bodies.append(J)
-        joint = tree.joints[j]
-        if joint.shortname() != "JointModelMimic":
-            cols = slice(joint.idx_v, joint.idx_v + joint.nv)
-            twists[cols] = J[:, cols].T
-    return {"joint_twists": twists, "body_jacobians": tuple(bodies)}
+    @cached_property
+    def body_jacobians(self) -> tuple:
+        tree, data = self._tree, self._data
+        return (np.zeros((6, tree.nv)),) + tuple(
+            screws.from_pinocchio(pin.getJointJacobian(tree, data, j, pin.WORLD))
+            for j in range(1, tree.njoints))
 
+    @cached_property
+    def joint_placements(self) -> tuple:
+        return tuple(M.copy() for M in self._data.oMi)
 
-# ------------------------------------------------------------------- residuals
-def _residual(kind: str, M: pin.SE3, length: float) -> np.ndarray:
-    """Rows of one closure's residual from its relative placement ``M = C_a⁻¹ C_b``."""
-    point = M.translation / length
-    if kind == "point":
-        return point
-    if kind == "revolute":
-        return np.r_[point, M.rotation[:2, 2]]
-    r = screws.log(M)  # (θ; ρ) axis-first
-    r[3:] /= length
-    return r
-
-
-def _residual_rates(kind: str, M: pin.SE3, nu: np.ndarray, length: float) -> np.ndarray:
-    """``d residual / dv`` of one closure: ``nu`` (6 × nv, axis-first) is the body twist
-    of ``C_b`` relative to ``C_a``, in ``C_b``, so that ``dM = M [nu]``."""
-    point = M.rotation @ nu[3:] / length  # d(p_M) = R_M v
-    if kind == "point":
-        return point
-    if kind == "revolute":
-        # d(R_M e_z) = R_M (ω × e_z) = -R_M [e_z]× ω
-        axis = -(M.rotation @ pin.skew(np.array([0.0, 0.0, 1.0])))[:2] @ nu[:3]
-        return np.vstack([point, axis])
-    # d log6(M) = Jlog6(M) nu (Pinocchio order on both sides)
-    rates = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(nu))
-    rates[3:] /= length
-    return rates
+    @cached_property
+    def frame_placements(self) -> tuple:
+        return tuple(M.copy() for M in self._data.oMf)
 
 
 # ------------------------------------------------------------------ rank decisions
