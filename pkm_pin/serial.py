@@ -198,8 +198,7 @@ class SerialChain(abc.ABC):
         """Homogenised twist magnitude the chain could reach with ``qd``: the sum over
         the velocity coordinates of ``|qd_k|`` times the norm of the homogenised joint
         twist (columns of the unit-homogenised Jacobian)."""
-        J = self.serial_jacobian(q)
-        H = self._homogenise(J)
+        J, H, _ = self._tip_jacobian(q)
         return float(np.sum(np.abs(qd) * np.linalg.norm(H, axis=0) / self._column_scales(J)))
 
     def _screw_of(self, link: str, twist: np.ndarray, scale: float) -> LinkScrew:
@@ -282,24 +281,35 @@ class SerialChain(abc.ABC):
         translational = np.linalg.norm(J[:3], axis=0) == 0.0
         return np.where(translational, L, 1.0)
 
-    def _homogenise(self, J: np.ndarray) -> np.ndarray:
-        """Dimensionless ``J``: linear rows divided by ``L``, prismatic columns times ``L``."""
+    def _homogenise(self, J: np.ndarray, tip: np.ndarray) -> np.ndarray:
+        """Dimensionless ``J``: its twists written about the tip point ``tip`` [m] (so the
+        decisions do not depend on where the chain stands in the world), linear rows
+        divided by ``L``, prismatic columns times ``L``."""
         L = self.characteristic_length
         H = J * self._column_scales(J)[None, :]
+        H[3:] += np.cross(H[:3].T, tip).T  # v_tip = v_O + ω × tip
         H[3:] /= L
         return H
+
+    def _tip_jacobian(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(J, H, tip)``: the world Jacobian, its :meth:`_homogenise` d form and the tip
+        point, from one pass."""
+        M, J = self.kinematics(q)
+        return J, self._homogenise(J, M.translation), M.translation
 
     def serial_singularity_index(self, q) -> float:
         """Dimensionless closeness to a serial singularity (seed 000, (47)–(48)).
 
-        ``σ_k / σ_1`` of the unit-homogenised Jacobian, ``k = min(6, nv)``: the linear
+        ``σ_k / σ_1`` of the unit-homogenised Jacobian, ``k = min(6, nv)``: the twists
+        are written about the tip point (the index does not change when the chain is
+        moved in the world), the linear
         rows of ``J`` are divided by the leg's :attr:`characteristic_length` ``L`` and the
         columns of translational coordinates (prismatic joints) multiplied by ``L``, so
         the index is the same for the chain in metres or in millimetres. It is 0 exactly
         where ``det J = 0`` (square ``J``) or ``det(JᵀJ) = 0`` (fewer than 6 joints), or
         where ``J`` has rank below 6 (more than 6 joints), and at most 1.
         """
-        sv = np.linalg.svd(self._homogenise(self.serial_jacobian(q)), compute_uv=False)
+        sv = np.linalg.svd(self._tip_jacobian(q)[1], compute_uv=False)
         if sv.size == 0 or sv[0] == 0.0:
             return 0.0
         return float(sv[min(6, self.model.nv) - 1] / sv[0])
@@ -337,10 +347,9 @@ class SerialChain(abc.ABC):
                 index=index,
             )
         L = self.characteristic_length
-        J = self.serial_jacobian(q)
-        H = self._homogenise(J)
+        J, H, tip = self._tip_jacobian(q)
         row = np.r_[np.ones(3), np.full(3, 1.0 / L)]
-        Vh = row * V
+        Vh = row * np.r_[V[:3], V[3:] + np.cross(V[:3], tip)]  # about the tip, as H
         x, *_ = np.linalg.lstsq(H, Vh, rcond=None)
         residual = np.linalg.norm(H @ x - Vh)
         if residual > LINK_TWIST_RTOL * max(np.linalg.norm(Vh), np.finfo(float).tiny):

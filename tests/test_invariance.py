@@ -146,3 +146,31 @@ def test_agile_eye_centred_frames_equal_offset_frames_away_from_home(eyes):
                 np.subtract(q, dq), b)
             fd = screws.from_pinocchio(pin.log6(p.pose * m.pose.inverse()).vector) / (2 * h)
             np.testing.assert_allclose(y.forward_velocity(dq / h), fd, atol=1e-7)
+
+
+def test_sensitivity_does_not_depend_on_the_world_frame():
+    """The pose error per parameter error of the moved Stewart platform is the moved one
+    (a twist about the world origin, transformed), its compatibility the same. (The base
+    placements' parameters are increments of world coordinates: they are not the same
+    errors once the world is turned, so they are left out.)"""
+    design = MECHANISMS["stewart"]()
+    mech, far = design.build(), moved(design).build()
+    a, b = mech.sensitivity(), far.sensitivity()
+    assert a.parameters == b.parameters
+    keep = ["/base." not in name for name in a.parameters]
+    L = mech.characteristic_length
+    np.testing.assert_allclose(b.matrix[:, keep], (screws.adjoint(MOVE) @ a.matrix)[:, keep],
+                               atol=1e-7 * L)
+    np.testing.assert_allclose(b.compatibility, a.compatibility, atol=1e-9)
+
+
+def test_serial_index_does_not_depend_on_the_world_frame(ur5):
+    """A serial arm's singularity index and inverse velocity: the same for the arm moved
+    100 m and turned (its Jacobian homogenised about the tip point)."""
+    far = replace(ur5, base=MOVE * ur5.base)
+    for q in ([0.3, -1.2, 1.4, -0.6, 0.8, 0.7], [0.1, -0.4, 0.9, 0.2, 0.05, -0.3]):
+        assert far.serial_singularity_index(q) == pytest.approx(
+            ur5.serial_singularity_index(q), rel=1e-9)
+        V = ur5.serial_jacobian(q) @ np.arange(1.0, 7.0)
+        np.testing.assert_allclose(far.serial_inverse_velocity(q, screws.transform(V, MOVE)),
+                                   ur5.serial_inverse_velocity(q, V), atol=1e-8)
