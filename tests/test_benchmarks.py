@@ -15,6 +15,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import bench_analysis  # noqa: E402
 import bench_fk  # noqa: E402
+import bench_linkage  # noqa: E402
+import equivalence_table  # noqa: E402
 
 pytestmark = pytest.mark.benchmark
 
@@ -35,3 +37,22 @@ def test_bench_fk_solves_to_the_same_poses(capsys):
     assert ours > 0 and ref > 0
     assert err_ours < 1e-9 and err_ref < 1e-9
     assert "ratio pkm_pin / scipy" in capsys.readouterr().out
+
+
+def test_bench_linkage_times_the_three_figures(capsys):
+    """bench_linkage.main times assembly, FK and analysis of the Cassie leg for pkm_pin
+    and the hand-written loop (same solutions, checked inside)."""
+    rows = bench_linkage.main(n=10, repeat=1)
+    assert set(rows) == {"assemble", "fk", "analyze"}
+    assert all(ours > 0 and hand > 0 for ours, hand in rows.values())
+    assert "ratio pkm_pin / hand-written" in capsys.readouterr().out
+
+
+def test_equivalence_table_numbers_are_below_1e_9(capsys):
+    """Every shipped TOML mechanism read as tree + closures equals pkm_pin.Analysis at
+    home: same DOF, motion type and class; A, B and indices within 1e-9."""
+    rows = equivalence_table.main()
+    assert len(rows) == len(equivalence_table.MECHANISMS) >= 8
+    for r in rows:
+        assert r["same"] and max(r["dA"], r["dB"], r["dindex"]) <= 1e-9, r
+    assert "| stewart |" in capsys.readouterr().out
