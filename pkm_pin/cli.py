@@ -3,15 +3,20 @@
 ::
 
     pkm-pin list                                   shipped models, one line each
-    pkm-pin analyze [MECHANISM] [--pose X Y Z R P Y] [--json] [--markdown FILE]
+    pkm-pin analyze [MECHANISM] [--pose X Y Z R P Y | --at NAME=V... | --q Q...] [--json]
     pkm-pin check FILE                             validate a mechanism file and its URDFs
     pkm-pin fk MECHANISM Q... [--all]              actuated coordinates -> platform pose(s)
-    pkm-pin ik MECHANISM [--pose X Y Z R P Y] [--all]   pose -> actuated coordinates
-    pkm-pin map MECHANISM --plane xz --range A B C D --n 100 --out PREFIX
+    pkm-pin ik MECHANISM [--pose X Y Z R P Y | --at NAME=V...] [--all]   pose -> actuated
+    pkm-pin map MECHANISM --axes x z [--at NAME=V...] --range A B C D --n 100 --out PREFIX
     pkm-pin view MECHANISM [--pose ...] [--html FILE]   browser preview (meshcat)
 
 ``MECHANISM`` is a mechanism file (``.toml``) or the name of a shipped model
-(``pkm-pin list``). Poses are x, y, z [m] and URDF roll, pitch, yaw [rad].
+(``pkm-pin list``). Poses are x, y, z [m] and URDF roll, pitch, yaw [rad]. A partial
+pose ``--at z=0.8 roll=0.1 pitch=0`` gives some of them, independent coordinates of the
+mechanism (a 3-RPS: z, roll, pitch; the agile eye: roll, pitch, yaw); the others
+(parasitic motions) are solved for (:meth:`Mechanism.complete_pose`). ``map --axes``
+varies any two independent coordinates (``--plane xy`` is ``--axes x y``), the others
+given by ``--at`` or held at home.
 
 General linkages (:class:`~pkm_pin.linkage.Linkage`: an Extended URDF ``.urdf`` with its
 closures file, an MJCF ``.xml`` / ``.mjcf``, or a ``.toml`` whose legs meet at a pin) work
@@ -43,8 +48,31 @@ from .tolerances import CROSSCHECK_TOL
 
 #: Pose coordinates in the order of ``--pose`` and of the sweep arrays.
 POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
-#: Varied coordinates of each ``map --plane``.
+#: Varied coordinates of each ``map --plane`` (``--axes`` takes any two).
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
+
+
+def at_values(items, option: str = "--at") -> dict[str, float]:
+    """A partial pose from ``NAME=VALUE`` items (NAME among x, y, z, roll, pitch, yaw)."""
+    values = {}
+    for item in items or ():
+        name, _, text = item.partition("=")
+        name = name.strip().lower()
+        if name not in POSE_NAMES or not text:
+            raise InputError(f"{option} takes NAME=VALUE with NAME in {', '.join(POSE_NAMES)}; "
+                             f"got {item!r}")
+        if name in values:
+            raise InputError(f"{option}: {name} is given twice")
+        values[name] = _number(text, f"{option} {name}")
+    return values
+
+
+def _platform_pose(args):
+    """The pose of ``--pose`` (6 numbers), ``--at`` (a partial pose, as a dict) or None."""
+    at = getattr(args, "at", None)
+    if at is not None and args.pose is not None:
+        raise InputError("give --pose (a full pose) or --at (a partial pose), not both")
+    return at_values(at) if at is not None else args.pose
 #: File suffixes read as general linkages (besides pinned ``.toml`` files).
 LINKAGE_SUFFIXES = (".urdf", ".xml", ".mjcf")
 
@@ -143,6 +171,9 @@ def _linkage_assembly(args, link):
     from .assembly import as_pose
 
     q, pose = getattr(args, "q", None), getattr(args, "pose", None)
+    if getattr(args, "at", None) is not None:
+        raise InputError("--at (a partial pose) is for platform mechanisms; give a linkage's "
+                         "output pose with --pose or its actuated values with --q")
     if q is not None and pose is not None:
         raise InputError("give --q (actuated values) or --pose (output pose), not both")
     if q is not None:
@@ -194,12 +225,13 @@ def cmd_analyze(args) -> int:
     mech = _load(args)
     if _is_linkage(mech):
         return _analyze_linkage(args, mech)
+    pose = _platform_pose(args)
     if args.q is not None:
-        if args.pose is not None:
-            raise InputError("give --q (actuated values) or --pose, not both")
+        if pose is not None:
+            raise InputError("give --q (actuated values) or --pose / --at, not both")
         analysis = mech.analyze(mech.forward_kinematics(mech.check_actuated(args.q)))
     else:
-        analysis = mech.analyze(None if args.pose is None else args.pose)
+        analysis = mech.analyze(pose)
     data = report.report_data(analysis, plots=args.plots or ())
     if args.markdown:
         _write_text(args.markdown, report.markdown(analysis, data=data))
@@ -362,25 +394,31 @@ def _no_all(args) -> None:
 
 
 def cmd_ik(args) -> int:
-    """Inverse kinematics: actuated coordinates at a pose (every working mode with --all)."""
+    """Inverse kinematics: actuated coordinates at a pose (every working mode with --all);
+    a partial pose (``--at``) is completed first and the full pose printed."""
     mech = _load(args)
     if _is_linkage(mech):
+        if getattr(args, "at", None) is not None:
+            raise InputError("--at (a partial pose) is for platform mechanisms; give a "
+                             "linkage's output pose with --pose")
         return _ik_linkage(args, mech)
-    pose = mech.home if args.pose is None else args.pose
+    pose = _platform_pose(args)
     if args.all:
-        modes = [a.q_actuated for a in mech.inverse_kinematics_all(pose)]
+        found = mech.inverse_kinematics_all(mech.home if pose is None else pose)
     else:
-        modes = [mech.inverse_kinematics(pose)]
+        found = [mech.assemble(mech.home if pose is None else pose)]
+    modes = [a.q_actuated for a in found]
     if args.json:
-        body = {"actuated": mech.actuated_names, "q_actuated": [m.tolist() for m in modes]}
+        body = {"actuated": mech.actuated_names, "q_actuated": [m.tolist() for m in modes],
+                "pose": _pose_dict(found[0].pose)}
         if not args.all:
             body["q_actuated"] = body["q_actuated"][0]
         print(json.dumps(body, indent=2))
         return 0
-    from .assembly import as_pose
-
     print(f"mechanism  {mech.name}")
-    print(f"pose       {_pose_text(as_pose(pose))}")
+    if isinstance(pose, dict):
+        print(f"given      {', '.join(f'{k}={v:g}' for k, v in pose.items())}")
+    print(f"pose       {_pose_text(found[0].pose)}")
     print(f"actuated   {', '.join(mech.actuated_names)}")
     for i, m in enumerate(modes):
         print(f"{f'mode {i + 1}' if args.all else 'q':<10} {_fmt(m)}")
@@ -428,7 +466,8 @@ def _fixed_values(items, home: np.ndarray, varied: tuple[int, int]) -> np.ndarra
 
 def map_slice(mech, plane: str, ranges, n: int, fixed=()) -> tuple[np.ndarray, np.ndarray,
                                                                      np.ndarray]:
-    """Grid of poses over a plane of the pose coordinates.
+    """Grid of full poses over a plane of the pose coordinates (the others at home or
+    ``fixed``, NAME=VALUE items).
 
     Returns:
         ``(u, v, poses)``: coordinates of the columns (n_u,), of the rows (n_v,), and the
@@ -439,49 +478,117 @@ def map_slice(mech, plane: str, ranges, n: int, fixed=()) -> tuple[np.ndarray, n
     i, j = PLANES[plane]
     home = np.r_[mech.home.translation, pin.rpy.matrixToRpy(mech.home.rotation)]
     base = _fixed_values(fixed, home, (i, j))
-    if ranges is None:
-        L = mech.characteristic_length
-        ranges = [home[i] - L, home[i] + L, home[j] - L, home[j] + L]
-    a, b, c, d = (float(x) for x in ranges)
-    if not all(np.isfinite([a, b, c, d])) or a == b or c == d:
-        raise InputError(f"--range needs finite bounds with A != B and C != D, got {ranges}")
-    if not 2 <= n <= 2000:
-        raise InputError(f"--n must be between 2 and 2000, got {n}")
-    u, v = np.linspace(a, b, n), np.linspace(c, d, n)
+    u, v = _grid_axes(mech, (i, j), home, ranges, n)
     V, U = np.meshgrid(v, u, indexing="ij")
     poses = np.tile(base, (U.size, 1))
     poses[:, i], poses[:, j] = U.ravel(), V.ravel()
     return u, v, poses
 
 
+def _grid_axes(mech, axes, home: np.ndarray, ranges, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """The values of the two varied coordinates: ``ranges`` (A B C D), default home ±
+    the characteristic length (x, y, z) or ± 0.5 rad (angles)."""
+    i, j = axes
+    if ranges is None:
+        half = [mech.characteristic_length if k < 3 else MAP_ANGLE_HALF_RANGE for k in (i, j)]
+        ranges = [home[i] - half[0], home[i] + half[0], home[j] - half[1], home[j] + half[1]]
+    a, b, c, d = (float(x) for x in ranges)
+    if not all(np.isfinite([a, b, c, d])) or a == b or c == d:
+        raise InputError(f"--range needs finite bounds with A != B and C != D, got {ranges}")
+    if not 2 <= n <= 2000:
+        raise InputError(f"--n must be between 2 and 2000, got {n}")
+    return np.linspace(a, b, n), np.linspace(c, d, n)
+
+
+#: Default half range [rad] of an angle varied by ``map --axes``.
+MAP_ANGLE_HALF_RANGE = 0.5
+
+
+def map_poses(mech, axes, ranges, n: int, at=None):
+    """The grid of a platform map over two pose coordinates ``axes`` (names), the
+    coordinates of ``at`` ({name: value}) given, as many others as the mechanism's DOF
+    needs held at home (:func:`pkm_pin.position.coordinate_plan` at the home assembly),
+    the rest solved for.
+
+    Returns:
+        ``(u, v, poses, held)``: the column and row values, the poses in row-major order
+        (an (N, 6) array when every coordinate is given or held, else a list of partial
+        poses for :meth:`Mechanism.sweep`), and the held coordinates {name: home value}.
+
+    Raises:
+        InputError: a varied coordinate also in ``at``; DependentCoordinates: the
+            coordinates are not independent for this mechanism.
+    """
+    from .position import coordinate_plan
+    from .solve import CoordinateSystem, pose_coordinates
+
+    at = dict(at or {})
+    both = [k for k in axes if k in at]
+    if both:
+        raise InputError(f"--at/--fixed {both[0]}: {both[0]} is varied over the map")
+    home_asm = mech.home_assembly
+    home = pose_coordinates(home_asm.pose)
+    idx = tuple(POSE_NAMES.index(k) for k in axes)
+    u, v = _grid_axes(mech, idx, home, ranges, n)
+    system = CoordinateSystem(mech, home_asm.pose, home_asm.leg_q)
+    _, held_rows, _ = coordinate_plan(mech, system, list(axes) + list(at))
+    held = {POSE_NAMES[k]: float(home[k]) for k in held_rows}
+    fixed = {**at, **held}
+    V, U = np.meshgrid(v, u, indexing="ij")
+    if len(fixed) + 2 == 6:
+        poses = np.tile(home, (U.size, 1))
+        for name, value in fixed.items():
+            poses[:, POSE_NAMES.index(name)] = value
+        poses[:, idx[0]], poses[:, idx[1]] = U.ravel(), V.ravel()
+        return u, v, poses, held
+    poses = [{axes[0]: float(a), axes[1]: float(b), **fixed} for a, b in zip(U.ravel(),
+                                                                             V.ravel())]
+    return u, v, poses, held
+
+
+def _map_axes_names(args) -> tuple[str, str]:
+    """The two varied coordinates of a platform map: ``--axes``, or ``--plane`` (xy)."""
+    if args.axes is not None and args.plane is not None:
+        raise InputError("give --axes NAME NAME or --plane, not both")
+    if args.axes is None:
+        return tuple(POSE_NAMES[k] for k in PLANES[args.plane or "xy"])
+    names = tuple(a.strip().lower() for a in args.axes)
+    if len(names) != 2 or len(set(names)) != 2 or any(a not in POSE_NAMES for a in names):
+        raise InputError(f"--axes takes two distinct coordinates of {', '.join(POSE_NAMES)}; "
+                         f"got {' '.join(args.axes)}")
+    return names
+
+
 def cmd_map(args) -> int:
-    """Sweep a workspace slice; write PREFIX.npz and the two PNG maps."""
+    """Sweep a workspace slice over two pose coordinates (partial poses completed on the
+    mechanism's motion); write PREFIX.npz and the two PNG maps."""
     from .plots import save_maps
 
     mech = _load(args)
     if _is_linkage(mech):
+        if args.axes is not None or args.at is not None:
+            raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
+                             "over actuated coordinates (--actuated NAME [NAME], --fixed)")
         return _map_linkage(args, mech)
-    plane = args.plane or "xy"
-    prefix = _map_prefix(args, plane)
+    axes = _map_axes_names(args)
+    tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
+    prefix = _map_prefix(args, tag)
     if args.range is not None and len(args.range) != 4:
-        raise InputError(f"--range takes 4 bounds A B C D for a plane, got {len(args.range)}")
-    u, v, poses = map_slice(mech, plane, args.range, args.n, args.fixed)
-    i, j = PLANES[plane]
-    executor = None
-    if args.jobs > 1:
-        from concurrent.futures import ProcessPoolExecutor
-
-        executor = ProcessPoolExecutor(args.jobs)
-    try:
-        result = mech.sweep(poses, executor=executor, progress=not args.quiet,
-                            chunk_size=args.chunk_size if executor else max(len(poses), 1))
-    finally:
-        if executor is not None:
-            executor.shutdown()
+        raise InputError(f"--range takes 4 bounds A B C D for two coordinates, got "
+                         f"{len(args.range)}")
+    at = at_values(args.fixed, "--fixed")
+    for name, value in at_values(args.at).items():
+        if name in at:
+            raise InputError(f"{name} is given by both --at and --fixed")
+        at[name] = value
+    u, v, poses, held = map_poses(mech, axes, args.range, args.n, at)
+    result = _sweep_map(mech, args, poses, u.size, v.size)
     shape = (v.size, u.size)
+    i, j = (POSE_NAMES.index(a) for a in axes)
     data = {k: a.reshape(shape + a.shape[1:]) for k, a in result.arrays().items()}
     units = ["m"] * 3 + ["rad"] * 3
-    data.update(u=u, v=v, plane=np.array(plane),
+    data.update(u=u, v=v, plane=np.array("".join(axes) if args.axes is None else tag),
+                axes=np.array(axes),
                 labels=np.array([f"{POSE_NAMES[i]} [{units[i]}]", f"{POSE_NAMES[j]} [{units[j]}]"]),
                 mechanism=np.array(mech.name), actuated=np.array(mech.actuated_names),
                 failure_index=np.array([f[0] for f in result.failures], dtype=int),
@@ -492,16 +599,70 @@ def cmd_map(args) -> int:
     except OSError as e:
         raise InputError(f"cannot write {npz}: {e.strerror or e}") from e
     pngs = save_maps(data, prefix, title=mech.name)
-    n_ok = int(result.ok.sum())
-    counts = {c: int(np.sum(result.singularity == c)) for c in ("I", "II", "III")}
-    print(f"mechanism  {mech.name}")
-    print(f"slice      {plane}: {POSE_NAMES[i]} in [{u[0]:g}, {u[-1]:g}], "
-          f"{POSE_NAMES[j]} in [{v[0]:g}, {v[-1]:g}], {u.size} × {v.size} poses")
-    print(f"assembled  {n_ok} of {len(poses)}; singular grid points: "
-          + ", ".join(f"type {k} {c}" for k, c in counts.items()))
+    _print_map(mech, axes, u, v, at, held, result, isinstance(poses, list))
     for path in [npz, *pngs]:
         print(f"wrote      {path}")
     return 0
+
+
+def _sweep_map(mech, args, poses, n_u: int, n_v: int):
+    """The sweep of a map's poses (row-major); partial poses completed in snake order,
+    each from its neighbour, the result given back in row-major order."""
+    import dataclasses
+
+    executor = None
+    if args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(args.jobs)
+    order = _snake(n_u, n_v) if isinstance(poses, list) else np.arange(len(poses))
+    ordered = [poses[k] for k in order] if isinstance(poses, list) else poses
+    try:
+        result = mech.sweep(ordered, executor=executor, progress=not args.quiet,
+                            chunk_size=args.chunk_size if executor else max(len(poses), 1))
+    finally:
+        if executor is not None:
+            executor.shutdown()
+    if not isinstance(poses, list):
+        return result
+    back = np.empty_like(order)
+    back[order] = np.arange(len(order))
+    out = {}
+    for f in dataclasses.fields(result):
+        a = getattr(result, f.name)
+        if isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == len(order):
+            out[f.name] = a[back]
+        elif f.name == "failures":
+            out[f.name] = sorted((int(order[i]), r) for i, r in a)
+        else:
+            out[f.name] = a
+    return type(result)(**out)
+
+
+def _print_map(mech, axes, u, v, at, held, result, completed: bool) -> None:
+    """The text summary of a platform map: the slice, what was given, held and solved
+    for, how many poses assembled, and why the others did not."""
+    n_ok, total = int(result.ok.sum()), len(result.ok)
+    counts = {c: int(np.sum(result.singularity == c)) for c in ("I", "II", "III")}
+    print(f"mechanism  {mech.name}")
+    print(f"slice      {axes[0]} in [{u[0]:g}, {u[-1]:g}], {axes[1]} in [{v[0]:g}, {v[-1]:g}], "
+          f"{u.size} × {v.size} poses")
+    fixed = [f"{k}={x:g}" for k, x in at.items()] + [f"{k}={x:g} (home)" for k, x in
+                                                      held.items()]
+    if fixed:
+        print(f"fixed      {', '.join(fixed)}")
+    if completed:
+        solved = [k for k in POSE_NAMES if k not in axes and k not in at and k not in held]
+        print(f"solved for {', '.join(solved)} (on the mechanism's motion)")
+    print(f"assembled  {n_ok} of {total}; singular grid points: "
+          + ", ".join(f"type {k} {c}" for k, c in counts.items()))
+    if result.failures:
+        first = result.failures[0][1]
+        not_completed = sum(r.startswith("not completed") for _, r in result.failures)
+        what = f" ({not_completed} not completed)" if not_completed else ""
+        print(f"failed     {len(result.failures)}{what}; e.g. {first[:200]}")
+    if n_ok == 0:
+        print("warning    no pose of this slice assembled")
 
 
 def _map_prefix(args, tag: str) -> Path:
@@ -683,6 +844,13 @@ def _pose_option(p, default: str = "the home pose") -> None:
                    f"(default: {default})")
 
 
+def _at_option(p, text: str = "") -> None:
+    p.add_argument("--at", nargs="+", metavar="NAME=VALUE",
+                   help=text or "a partial pose: some of x, y, z [m], roll, pitch, yaw [rad] "
+                   "that are independent coordinates of the mechanism (e.g. z=0.8 roll=0.1 "
+                   "pitch=0 for a 3-RPS); the others are solved for")
+
+
 def _linkage_options(p, q: bool = False) -> None:
     """``--output``, ``--point`` / ``--body``, ``--closures`` (and ``--q``) of a linkage."""
     g = p.add_argument_group("general linkages (.urdf, .xml, .mjcf, pinned .toml)")
@@ -725,6 +893,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "With no MECHANISM: the built-in 3-RPR of seed 000.")
     p.add_argument("mechanism", nargs="?", metavar="MECHANISM", help=_MECH_HELP)
     _pose_option(p)
+    _at_option(p)
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--markdown", metavar="FILE", help="also write a Markdown report to FILE")
     p.add_argument("--plots", nargs="+", metavar="PNG",
@@ -758,25 +927,32 @@ def build_parser() -> argparse.ArgumentParser:
                        "of home); with --all every working mode.")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
     _pose_option(p)
+    _at_option(p)
     p.add_argument("--all", action="store_true", help="every working mode")
     p.add_argument("--json", action="store_true", help="print JSON")
     _linkage_options(p)
     p.set_defaults(func=cmd_ik)
 
     p = sub.add_parser("map", help="singularity and conditioning maps of a workspace slice",
-                       description="Sweep a plane of the pose coordinates (the others at home "
-                       "or --fixed); write PREFIX.npz (every array), PREFIX_singularity.png and "
-                       "PREFIX_conditioning.png.")
+                       description="Sweep two pose coordinates (--axes, or --plane), the "
+                       "others given by --at, held at home as the mechanism's DOF needs, the "
+                       "rest (parasitic motions) solved for; write PREFIX.npz (every array), "
+                       "PREFIX_singularity.png and PREFIX_conditioning.png.")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
     p.add_argument("--plane", choices=sorted(PLANES),
                    help="the two varied coordinates (default xy; platform mechanisms)")
+    p.add_argument("--axes", nargs=2, metavar="NAME",
+                   help="any two independent coordinates of x y z roll pitch yaw (e.g. roll "
+                   "pitch; platform mechanisms)")
+    _at_option(p, "values of other independent coordinates, e.g. z=0.8 (default: home)")
     p.add_argument("--range", nargs="+", type=float, metavar="BOUND",
                    help="A B C D: first coordinate from A to B, second from C to D "
-                   "(default: home ± the characteristic length; for a linkage: the joint "
+                   "(default: home ± the characteristic length, angles ± 0.5 rad; for a "
+                   "linkage: the joint "
                    "limits of the varied actuated joints, or ± π rad)")
     p.add_argument("--n", type=int, default=50, help="grid points per coordinate (default 50)")
     p.add_argument("--fixed", nargs="+", metavar="NAME=VALUE",
-                   help="values of the other coordinates (x y z roll pitch yaw; default home; "
+                   help="as --at (x y z roll pitch yaw; default home; "
                    "for a linkage: the other actuated joints, default their reference values)")
     p.add_argument("--actuated", nargs="+", metavar="NAME",
                    help="linkage: the one or two varied actuated joints (default the first two)")

@@ -26,9 +26,10 @@ without it the leg's inverse kinematics starts from its neutral configuration.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from functools import cached_property
 from pathlib import Path
@@ -55,7 +56,14 @@ from .errors import (
 from .leg import Leg
 from .screws import as_fraction, as_vector
 from .solve import LEGS, solve_kernel, solve_system
-from .tolerances import CLOSENESS_SINGULAR_TOL, CLOSURE_TOL, INERTIA_TOL
+from .tolerances import (
+    CLOSENESS_SINGULAR_TOL,
+    CLOSURE_TOL,
+    INERTIA_TOL,
+    JOINT_LIMIT_SLACK,
+    TYPE_I_CLOSURE_TOL,
+    TYPE_I_STALL_FACTOR,
+)
 from .twists import LegFrames, leg_frames, verified_twists
 
 if sys.version_info >= (3, 11):
@@ -206,37 +214,91 @@ class Mechanism:
         return self.analyze(self.home_assembly)
 
     def assemble(self, pose, guess=None, *, tol: float = CLOSURE_TOL,
-                 restarts: int = 24) -> Assembly:
+                 restarts: int = 24, project: bool = True) -> Assembly:
         """Solve every leg so that its tip coincides with ``pose * anchor``.
 
         Args:
-            pose: Platform pose (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw).
+            pose: Platform pose (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw), or
+                a partial pose: a mapping of some of x, y, z, roll, pitch, yaw to values
+                (completed first, :meth:`complete_pose`; ``info["given"]``,
+                ``info["held"]``).
             guess: An :class:`Assembly` or a list of leg configurations to warm-start
                 from (default: the home assembly), which keeps the legs on its branch.
             tol: Relative closure tolerance of each leg.
             restarts: Restarts of a leg solver that stalls (see :meth:`Leg.solve`).
+            project: A full pose that some leg cannot reach is projected onto the
+                mechanism's motion manifold when the nearest pose differs from it by at
+                most :data:`~pkm_pin.tolerances.POSE_PROJECTION_TOL` (a lower-mobility
+                mechanism's pose at printed precision; ``info["projection"]``, the
+                difference, and ``info["projected_from"]``).
+
+        A leg that stalls at its type I singularity or at a joint limit (a pose on the
+        workspace boundary, where Newton converges only like a square root) with a
+        residual below :data:`~pkm_pin.tolerances.TYPE_I_CLOSURE_TOL` is accepted:
+        ``info["boundary"]`` names it and ``residual`` is the closure reached.
 
         Raises:
-            AssemblyError: a leg cannot reach the pose within its joint limits.
+            AssemblyError: a leg cannot reach the pose within its joint limits (and the
+                pose is not within the projection tolerance of the motion manifold).
+            DependentCoordinates, ForwardKinematicsError: a partial pose that is not
+                one of the mechanism's independent coordinates, or cannot be completed.
         """
-        pose = as_pose(pose)
         tol = as_fraction(tol, "tol")
         if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) \
                 or restarts < 0:
             raise InputError(f"restarts must be a non-negative integer, got {restarts!r}")
-        starts = self.leg_starts(guess)
+        if isinstance(pose, Mapping):
+            done = position.complete(self, pose, guess, tol=tol)
+            asm = self._assemble_pose(done.pose, done.leg_q, tol, restarts)
+            asm.info.update(done.info)
+            return asm
+        pose = as_pose(pose)
+        try:
+            return self._assemble_pose(pose, self.leg_starts(guess), tol, restarts)
+        except AssemblyError as e:
+            if not project:
+                raise
+            failure = e
+        try:
+            near = position.project_pose(self, pose, guess, closure_tol=tol)
+        except position.OffMotionManifold as e:
+            raise e from failure
+        except AssemblyError:
+            raise failure from None
+        asm = self._assemble_pose(near.pose, near.leg_q, tol, 0)
+        asm.info.update(near.info)
+        return asm
+
+    def _assemble_pose(self, pose: pin.SE3, starts: list, tol: float,
+                       restarts: int) -> Assembly:
+        """:meth:`assemble` of a full pose from the leg configurations ``starts``."""
         kernel = self.kernel
         if kernel is not None and all(q is not None for q in starts) \
                 and prefer_compiled(solve_system):
             return self._assemble_compiled(kernel, pose, starts, tol, restarts)
-        leg_q, worst = [], 0.0
-        for leg, anchor, q0 in zip(self.legs, self.anchors, starts):
-            sol = leg.solve(pose * anchor, q0, tol=tol, restarts=restarts)
-            if not sol.converged:
-                raise AssemblyError(leg.name, sol.residual)
-            leg_q.append(sol.q)
-            worst = max(worst, sol.residual)
-        return Assembly(self, pose, leg_q, worst)
+        leg_q, worst, boundary = [], 0.0, []
+        for i, q0 in enumerate(starts):
+            q, residual = self._solve_leg(i, pose, q0, tol, restarts, boundary)
+            leg_q.append(q)
+            worst = max(worst, residual)
+        asm = Assembly(self, pose, leg_q, worst)
+        if boundary:
+            asm.info["boundary"] = boundary
+        return asm
+
+    def _solve_leg(self, i: int, pose: pin.SE3, q0, tol: float, restarts: int,
+                   boundary: list) -> tuple[np.ndarray, float]:
+        """Leg ``i`` at ``pose * anchor`` (:meth:`Leg.solve` with its restarts); a leg
+        stalled on the workspace boundary (:func:`stalled_at_boundary`) is accepted and
+        named in ``boundary``. Returns its configuration and residual."""
+        leg = self.legs[i]
+        sol = leg.solve(pose * self.anchors[i], q0, tol=tol, restarts=restarts)
+        if sol.converged:
+            return sol.q, sol.residual
+        if stalled_at_boundary(leg, sol.q, sol.residual):
+            boundary.append(leg.name)
+            return sol.q, sol.residual
+        raise AssemblyError(leg.name, sol.residual)
 
     def _assemble_compiled(self, kernel, pose: pin.SE3, starts: list, tol: float,
                            restarts: int) -> Assembly:
@@ -251,15 +313,25 @@ class Mechanism:
         c = kernel.coords
         leg_q = [Q[c[i]:c[i + 1]] for i in range(len(self.legs))]
         J, errors, worst = verified_twists(self, leg_q, M)
+        boundary = []
         if not worst <= tol:  # a leg Pinocchio does not confirm: Leg.solve, restarts
             for i in np.flatnonzero(~(errors <= tol)):
-                leg = self.legs[i]
-                sol = leg.solve(pose * self.anchors[i], leg_q[i], tol=tol, restarts=restarts)
-                if not sol.converged:
-                    raise AssemblyError(leg.name, sol.residual)
-                leg_q[i] = sol.q
+                leg_q[i], _ = self._solve_leg(int(i), pose, leg_q[i], tol, restarts, boundary)
             J, errors, worst = verified_twists(self, leg_q, M)
-        return Assembly(self, pose, leg_q, worst, joint_twists=J)
+        asm = Assembly(self, pose, leg_q, worst, joint_twists=J)
+        if boundary:
+            asm.info["boundary"] = boundary
+        return asm
+
+    def complete_pose(self, guess=None, **coords) -> pin.SE3:
+        """The full pose on the motion manifold at a partial pose: ``coords`` some of x,
+        y, z [m], roll, pitch, yaw [rad] that are independent coordinates of the
+        mechanism (a 3-RPS: ``z=…, roll=…, pitch=…``), the others solved for from
+        ``guess`` (default home; its branch is kept).
+
+        See :func:`pkm_pin.position.complete_pose`.
+        """
+        return position.complete_pose(self, guess, **coords)
 
     def leg_starts(self, guess=None) -> list:
         """The leg configurations an assembly warm-starts from (one per leg; ``None``:
@@ -350,13 +422,131 @@ class Mechanism:
 
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,
-              singular_tol: float = CLOSENESS_SINGULAR_TOL) -> _sweep.SweepResult:
+              singular_tol: float = CLOSENESS_SINGULAR_TOL,
+              transmission: bool = True) -> _sweep.SweepResult:
         """Assemble and analyse the mechanism at every pose.
+
+        ``poses``: full poses (a sequence of ``pin.SE3`` or an (N, 6) array), or partial
+        poses (:meth:`complete_pose`): a sequence of mappings ``{"z": …, "roll": …,
+        "pitch": …}``, or one mapping of coordinate names to equal-length sequences (or
+        scalars, repeated), e.g. ``{"z": zs, "roll": rolls, "pitch": 0.0}``. Partial poses
+        are completed in the order given, each warm-started from the last one completed
+        (from home for the first): order them along a path or a
+        snake for a continuous branch. A partial pose that cannot be completed is a
+        failure of the result (its pose row holds the given coordinates, nan elsewhere).
 
         See :func:`pkm_pin.sweep.sweep`.
         """
-        return _sweep.sweep(self, poses, executor=executor, chunk_size=chunk_size,
-                            progress=progress, rtol=rtol, singular_tol=singular_tol)
+        options = dict(executor=executor, chunk_size=chunk_size, progress=progress,
+                       rtol=rtol, singular_tol=singular_tol, transmission=transmission)
+        partial = _partial_poses(poses)
+        if partial is None:
+            return _sweep.sweep(self, poses, **options)
+        full, failures, previous = np.full((len(partial), 6), np.nan), [], None
+        for i, coords in enumerate(partial):
+            try:
+                done = position.complete(self, coords, previous)
+            except PkmError as e:
+                failures.append((i, f"not completed: {e}"))
+                for name, value in position.partial_pose(coords).items():
+                    full[i, _POSE_NAMES.index(name)] = value
+                continue
+            full[i] = position.pose_coordinates(done.pose)
+            for name, value in done.info["given"].items():  # exactly as given
+                full[i, _POSE_NAMES.index(name)] = value
+            previous = done
+        done_idx = np.flatnonzero(np.isfinite(full).all(axis=1))
+        if not len(done_idx):
+            return _failed_sweep(self, full, failures)
+        return _scatter(_sweep.sweep(self, full[done_idx], **options), full, done_idx,
+                        failures)
+
+
+_POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+def _partial_poses(poses) -> list | None:
+    """The partial poses of :meth:`Mechanism.sweep` as a list of mappings, or ``None``
+    when ``poses`` are full poses."""
+    if isinstance(poses, Mapping):
+        sizes = {len(v) for v in poses.values() if np.ndim(v) == 1}
+        if len(sizes) > 1:
+            raise InputError(f"the coordinates of partial poses must have equal lengths, "
+                             f"got {sorted(sizes)}")
+        n = sizes.pop() if sizes else 1
+        for k, v in poses.items():
+            if np.ndim(v) > 1:
+                raise InputError(f"partial poses: {k} must be a number or a 1-D sequence")
+        columns = {k: (np.asarray(v, dtype=float) if np.ndim(v) == 1 else np.full(n, v))
+                   for k, v in poses.items()}
+        return [{k: float(c[i]) for k, c in columns.items()} for i in range(n)]
+    if isinstance(poses, (list, tuple)) and poses and all(isinstance(p, Mapping)
+                                                          for p in poses):
+        return list(poses)
+    return None
+
+
+def _scatter(result: _sweep.SweepResult, full: np.ndarray, idx: np.ndarray,
+             failures: list) -> _sweep.SweepResult:
+    """A sweep result over every pose from the result over the rows ``idx`` (none:
+    ``result`` is only a template): each per-pose array scattered (nan, −1, "" or False
+    elsewhere), failures merged."""
+    rows, out = len(result.poses), {}
+    for f in dataclasses.fields(result):
+        a = getattr(result, f.name)
+        if f.name == "poses":
+            out[f.name] = full
+        elif isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == rows:
+            b = np.empty((len(full),) + a.shape[1:], dtype=a.dtype)
+            b[...] = _fill_value(a.dtype)
+            if len(idx):
+                b[idx] = a
+            out[f.name] = b
+        elif f.name == "failures":
+            out[f.name] = sorted(failures + ([(int(idx[i]), r) for i, r in a] if len(idx)
+                                             else []))
+        else:
+            out[f.name] = a
+    return type(result)(**out)
+
+
+def _fill_value(dtype):
+    """What a sweep array holds where a pose did not assemble."""
+    if dtype.kind == "b":
+        return False
+    if dtype.kind in "iu":
+        return -1
+    if dtype.kind in "US":
+        return ""
+    return np.nan
+
+
+def _failed_sweep(mech, full: np.ndarray, failures: list) -> _sweep.SweepResult:
+    """The sweep result of poses none of which was completed (the arrays of a one-pose
+    sweep of home as the template)."""
+    return _scatter(_sweep.sweep(mech, [mech.home]), full, np.empty(0, int), failures)
+
+
+def stalled_at_boundary(leg: Leg, q: np.ndarray, residual: float) -> bool:
+    """Whether a leg that stalled at ``q`` with the relative closure ``residual`` is on
+    its workspace boundary and close enough to be accepted: ``residual ≤``
+    :data:`~pkm_pin.tolerances.TYPE_I_CLOSURE_TOL` and either a joint at a finite limit
+    (within :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK`) or the leg at its type I
+    singularity: the smallest singular value of its homogenised Jacobian (columns per
+    unit of each coordinate, moments about the tip / the leg's length) relative to the
+    largest at most ``TYPE_I_STALL_FACTOR · √residual`` (Newton's square-root
+    convergence there)."""
+    if not residual <= TYPE_I_CLOSURE_TOL:
+        return False
+    lo, up = leg._bounds
+    finite = np.isfinite(lo) & np.isfinite(up)
+    if np.any(finite & ((q <= lo + JOINT_LIMIT_SLACK) | (q >= up - JOINT_LIMIT_SLACK))):
+        return True
+    tip, J = leg.kinematics(q)
+    w = J[:3] * leg._velocity_units
+    v = J[3:] * leg._velocity_units + np.cross(w.T, tip.translation).T
+    s = np.linalg.svd(np.vstack([w, v / leg.characteristic_length]), compute_uv=False)
+    return bool(s[0] > 0 and s[-1] <= TYPE_I_STALL_FACTOR * np.sqrt(residual) * s[0])
 
 
 # --------------------------------------------------------------------- TOML files

@@ -39,6 +39,7 @@ at the target from the reached actuated coordinates.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from itertools import product
 
@@ -49,14 +50,25 @@ from . import screws
 from .analysis import Analysis
 from .assembly import Assembly, as_pose
 from .compiling import prefer_compiled
-from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
+from .errors import (
+    AssemblyError,
+    ForwardKinematicsError,
+    InputError,
+    PkmError,
+    SingularityError,
+)
 from .modes import AssemblyModes, assembly_modes
 from .solve import (
     ACTUATED,
     LEGS,
     PLATFORM,
+    POSE_COORDINATES,
     ClosureSolution,
+    CoordinateSystem,
+    closure_error,
+    pose_coordinates,
     solve_closure,
+    solve_coordinates,
     solve_from,
     solve_kernel,
     solve_leg,
@@ -68,10 +80,12 @@ from .tolerances import (
     CONTINUATION_MIN_STEP,
     CONTINUATION_STEP,
     CONTINUATION_TOL,
+    COORDINATE_INDEPENDENCE_RTOL,
     FK_ACCEPT_FLOOR,
     INERTIA_TOL,
     JOINT_LIMIT_SLACK,
     LINES_SINGULAR_TOL,
+    POSE_PROJECTION_TOL,
     SAME_ACTUATED_ATOL,
     SAME_CONFIGURATION_TOL,
     TARGET_LIMIT_SLACK,
@@ -590,11 +604,16 @@ def forward_kinematics_all(mech, q_actuated, *, starts: int = 32, seed: int = 0,
 # ================================================================ inverse problem
 def inverse_kinematics(mech, pose, guess=None) -> np.ndarray:
     """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
-    default home): those of ``mech.assemble(pose, guess)``.
+    default home): those of ``mech.assemble(pose, guess)``. ``pose`` may be partial (a
+    mapping of independent coordinates, :func:`complete_pose`), and a full pose off a
+    lower-mobility mechanism's motion by at most
+    :data:`~pkm_pin.tolerances.POSE_PROJECTION_TOL` is projected onto it.
 
     Raises:
         InputError: a malformed pose.
         AssemblyError: a leg cannot reach the pose within its limits.
+        DependentCoordinates, ForwardKinematicsError: a partial pose that is not made of
+            independent coordinates, or cannot be completed.
     """
     return mech.assemble(pose, guess).q_actuated
 
@@ -617,7 +636,7 @@ def inverse_kinematics_all(mech, pose, *, starts: int = 16, seed: int = 0,
     Raises:
         AssemblyError: some leg reaches the pose in no configuration.
     """
-    pose = as_pose(pose)
+    pose = complete(mech, pose).pose if isinstance(pose, Mapping) else as_pose(pose)
     per_leg = []
     home_q = mech.leg_starts(None)
     compiled = mech.kernel is not None and prefer_compiled(solve_from)
@@ -763,3 +782,289 @@ def iterative_ik(leg, target, q0, *, max_angle_step: float, max_translation_step
     err_final = _tip_error(leg.tip_placement(sol.q), target)
     return IterativeIKResult(sol.q, q_steps, float(angle), axis, r, n, err_steps, err_final,
                              sol.converged, path)
+
+
+# ==================================================================== partial poses
+class DependentCoordinates(InputError):
+    """Pose coordinates of a partial pose that are not independent coordinates of the
+    mechanism (more than its DOF, or one a function of the others, e.g. a parasitic
+    motion of a 3-RPS).
+
+    Attributes:
+        given: The coordinates given.
+        dof: The mechanism's DOF at the start assembly.
+        motion_type: Its motion type there (``"1T2R"``…; ``""`` when unknown).
+        independent: A set of independent coordinates (the first found in the order x,
+            y, z, roll, pitch, yaw).
+    """
+
+    def __init__(self, mechanism: str, given, dof: int, motion_type: str, independent,
+                 reason: str):
+        self.given, self.dof, self.motion_type = tuple(given), dof, motion_type
+        self.independent = tuple(independent)
+        kind = f" ({motion_type})" if motion_type else ""
+        super().__init__(
+            f"{', '.join(self.given)} are not independent coordinates of {mechanism!r}: "
+            f"{reason}; it has {dof} DOF{kind} here: give at most {dof} independent "
+            f"coordinates, e.g. {', '.join(self.independent) or '(none)'} (the others are "
+            "solved for)")
+
+
+class OffMotionManifold(AssemblyError):
+    """A full pose that is not one of a lower-mobility mechanism's: the nearest pose of
+    its motion manifold differs from it by more than the projection tolerance.
+
+    Attributes:
+        distance: That difference (largest coordinate; x, y, z relative to the
+            characteristic length, angles in rad).
+    """
+
+    def __init__(self, leg: str, residual: float, distance: float, tol: float):
+        self.distance = float(distance)
+        super().__init__(leg, residual,
+                         f"the nearest pose of the mechanism's motion differs from it by "
+                         f"{distance:.3g} in a coordinate (x, y, z relative to the "
+                         f"characteristic length, angles in rad), more than the {tol:g} "
+                         "accepted; give the mechanism's independent coordinates instead "
+                         "(a partial pose, Mechanism.complete_pose)")
+
+
+def partial_pose(coords) -> dict[str, float]:
+    """A partial pose checked: ``{name: value}`` with names among
+    :data:`~pkm_pin.solve.POSE_COORDINATES` (x, y, z [m], roll, pitch, yaw [rad]) and
+    finite values, in that order.
+
+    Raises:
+        InputError: an unknown name or a value that is not a finite number.
+    """
+    if not isinstance(coords, Mapping):
+        raise InputError(f"a partial pose is a mapping of coordinate names to values, got "
+                         f"{type(coords).__name__}")
+    unknown = [str(k) for k in coords if k not in POSE_COORDINATES]
+    if unknown:
+        raise InputError(f"unknown pose coordinate(s) {', '.join(map(repr, unknown))}: a "
+                         f"partial pose names some of {', '.join(POSE_COORDINATES)}")
+    out = {}
+    for name in POSE_COORDINATES:
+        if name in coords:
+            v = coords[name]
+            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                    or not math.isfinite(float(v)):
+                raise InputError(f"pose coordinate {name} must be a finite number, got {v!r}")
+            out[name] = float(v)
+    return out
+
+
+def _start_state(mech, guess) -> tuple[pin.SE3, list]:
+    """Pose and leg configurations a completion or projection starts from: an
+    :class:`Assembly`, a pose (assembled first), leg configurations (at the home pose),
+    or ``None`` (the home assembly once known, else the home pose with ``home_q``)."""
+    if isinstance(guess, Assembly):
+        return guess.pose, [q.copy() for q in guess.leg_q]
+    if guess is None and "home_assembly" not in mech.__dict__:
+        starts = mech.leg_starts(None)
+        return mech.home, [leg.neutral() if q is None else q
+                           for leg, q in zip(mech.legs, starts)]
+    if guess is None:
+        return _start_state(mech, mech.home_assembly)
+    if isinstance(guess, (pin.SE3, Mapping)) or np.shape(guess) in ((6,), (4, 4)):
+        return _start_state(mech, mech.assemble(guess))
+    starts = mech.leg_starts(guess)
+    return mech.home, [leg.neutral() if q is None else q for leg, q in zip(mech.legs, starts)]
+
+
+def _rank(G: np.ndarray, rows, top: float) -> int:
+    """Numerical rank of the coordinate rates ``G[rows]`` relative to ``top``."""
+    if not len(rows) or top <= 0:
+        return 0
+    s = np.linalg.svd(G[list(rows)], compute_uv=False)
+    return int(np.sum(s > COORDINATE_INDEPENDENCE_RTOL * top))
+
+
+def coordinate_plan(mech, system: CoordinateSystem, given) -> tuple[list[int], list[int], int]:
+    """The coordinates a completion fixes, from the motions of ``system``: the
+    ``given`` names (checked independent) and, when fewer than the DOF, the first of the
+    others in the order x, y, z, roll, pitch, yaw that complete an independent set
+    (held at the start's values). Returns ``(given rows, held rows, dof)``.
+
+    Raises:
+        DependentCoordinates: naming the mechanism's DOF, motion type and a valid set.
+    """
+    G = system.C @ system.free
+    s = np.linalg.svd(G, compute_uv=False)
+    top = float(s[0]) if s.size else 0.0
+    everything = list(range(6))
+    dof = _rank(G, everything, top)
+    rows = [POSE_COORDINATES.index(n) for n in given]
+
+    def greedy(start, candidates):
+        chosen = list(start)
+        for k in candidates:
+            if len(chosen) < dof and _rank(G, chosen + [k], top) == len(chosen) + 1:
+                chosen.append(k)
+        return chosen
+
+    if _rank(G, rows, top) < len(rows):
+        independent = [POSE_COORDINATES[k] for k in greedy([], everything)]
+        if len(rows) > dof:
+            reason = f"{len(rows)} coordinates for {dof} DOF"
+        else:
+            kept = []
+            for k in rows:
+                if _rank(G, kept + [k], top) == len(kept):
+                    break
+                kept.append(k)
+            reason = (f"{POSE_COORDINATES[k]} is a function of "
+                      f"{', '.join(POSE_COORDINATES[j] for j in kept)}" if kept else
+                      f"{POSE_COORDINATES[k]} does not change to first order (a parasitic "
+                      "motion)")
+        raise DependentCoordinates(mech.name, given, dof, _motion_type(mech), independent,
+                                   reason)
+    held = greedy(rows, [k for k in everything if k not in rows])[len(rows):]
+    return rows, held, dof
+
+
+def _motion_type(mech) -> str:
+    """The home analysis' motion type, ``""`` when it cannot be computed."""
+    try:
+        return mech.home_analysis.motion_type
+    except PkmError:
+        return ""
+
+
+def complete(mech, coords, guess=None, *, tol: float = CLOSURE_TOL,
+             max_iter: int = 50) -> Assembly:
+    """The assembly at a partial pose (see :func:`complete_pose`), its ``info`` holding
+    ``given`` (the coordinates given), ``held`` (coordinates held at the guess's values
+    because fewer than the DOF were given), ``dof`` and ``iterations``."""
+    given = partial_pose(coords)
+    pose0, leg_q0 = _start_state(mech, guess)
+    system = CoordinateSystem(mech, pose0, leg_q0)
+    rows, held, dof = coordinate_plan(mech, system, list(given))
+    start_values = pose_coordinates(pose0)
+    all_rows = rows + held
+    values = np.r_[list(given.values()), start_values[held]]
+    sol = _complete_from(mech, pose0, leg_q0, all_rows, values, start_values, tol, max_iter)
+    asm = _checked_completion(mech, sol, given, tol)
+    asm.info.update(given=dict(given), held={POSE_COORDINATES[k]: float(start_values[k])
+                                             for k in held},
+                    dof=dof, iterations=sol.iterations)
+    return asm
+
+
+def _complete_from(mech, pose0, leg_q0, rows, values, start_values, tol, max_iter):
+    """:func:`~pkm_pin.solve.solve_coordinates` from the start; where Newton does not
+    converge, the same by continuation (the targets moved from the start's values in 4,
+    then 16 steps, each warm-started from the last)."""
+    sol = solve_coordinates(mech, pose0, leg_q0, rows, values, tol=tol, max_iter=max_iter)
+    if _completed(sol, tol):
+        return sol
+    first = start_values[rows]
+    delta = values - first
+    delta[np.asarray(rows) >= 3] = (delta[np.asarray(rows) >= 3] + np.pi) % (2 * np.pi) - np.pi
+    for steps in (4, 16):
+        pose, leg_q, iterations = pose0, leg_q0, sol.iterations
+        for k in range(1, steps + 1):
+            last = k == steps
+            step = solve_coordinates(mech, pose, leg_q, rows, first + k / steps * delta,
+                                     tol=tol if last else CONTINUATION_TOL, max_iter=max_iter)
+            iterations += step.iterations
+            if not _completed(step, tol if last else CONTINUATION_TOL):
+                break
+            pose, leg_q = step.pose, step.leg_q
+        step.iterations = iterations
+        if _completed(step, tol):
+            return step
+    return sol
+
+
+def _completed(sol, tol: float) -> bool:
+    return sol.closure <= tol and sol.coordinates <= max(tol, FK_ACCEPT_FLOOR)
+
+
+def _checked_completion(mech, sol, given: dict, tol: float) -> Assembly:
+    """The assembly of a completion, or a :class:`ForwardKinematicsError` saying why
+    it is none."""
+    reached = _assembly_of(mech, sol)
+    inside = _in_limits(mech, sol.leg_q)
+    if _completed(sol, tol) and inside:
+        return reached
+    text = ", ".join(f"{k}={v:g}" for k, v in given.items())
+    raise ForwardKinematicsError(
+        f"the partial pose {text} cannot be completed on the motion of {mech.name!r} from "
+        f"the guess: closure error {sol.closure:.3g}, largest coordinate error "
+        f"{sol.coordinates:.3g} (tol {tol:g}){'' if inside else ', outside the joint limits'}"
+        " after Newton's method and a continuation (out of the workspace, a joint limit or "
+        "a singularity on the way)", reached)
+
+
+def complete_pose(mech, guess=None, **coords) -> pin.SE3:
+    """The full platform pose on the mechanism's motion manifold at a partial pose.
+
+    ``coords``: some of x, y, z [m], roll, pitch, yaw [rad] (URDF roll-pitch-yaw of the
+    platform) that are independent coordinates of the mechanism (a 3-RPS: z, roll,
+    pitch; the agile eye: roll, pitch, yaw; the Delta: x, y, z; the planar 3-RPR: x, z,
+    pitch); the other coordinates (parasitic motions) are solved for: the closure
+    solver with rows fixing the given coordinates
+    (:func:`pkm_pin.solve.solve_coordinates`), warm-started from ``guess`` (an
+    :class:`Assembly`, a pose, or ``None``: home), so the branch of the guess is kept.
+    With fewer coordinates than the DOF, the first of the others (order x, y, z, roll,
+    pitch, yaw) that complete an independent set are held at the guess's values.
+
+    Raises:
+        InputError: an unknown coordinate name or a value that is not finite.
+        DependentCoordinates: the coordinates are not independent for this mechanism
+            (the message gives its DOF, motion type and a set that is).
+        ForwardKinematicsError: no pose of the manifold has these coordinates near the
+            guess (the reason and the state reached).
+    """
+    return complete(mech, coords, guess).pose
+
+
+def project_pose(mech, pose, guess=None, *, tol: float = POSE_PROJECTION_TOL,
+                 closure_tol: float = CLOSURE_TOL) -> Assembly:
+    """The assembly at the pose of the mechanism's motion manifold nearest ``pose`` (in
+    x, y, z divided by the characteristic length and roll, pitch, yaw [rad]; Newton from
+    ``guess``, default home), when it differs from ``pose`` by at most ``tol``
+    (:data:`~pkm_pin.tolerances.POSE_PROJECTION_TOL`) in every coordinate: a 6-D pose
+    of a lower-mobility mechanism given at printed precision. ``info["projection"]``:
+    that difference.
+
+    Raises:
+        AssemblyError: the nearest pose is farther (the pose is not one of the
+            mechanism's), or none is found.
+    """
+    pose = as_pose(pose)
+    target = pose_coordinates(pose)
+    pose0, leg_q0 = _start_state(mech, guess)
+    system = CoordinateSystem(mech, pose0, leg_q0)
+    G = system.C @ system.free
+    top = float(np.linalg.svd(G, compute_uv=False)[0]) if G.size else 0.0
+    if _rank(G, range(6), top) == 6 and system.closure <= closure_tol:
+        raise AssemblyError(mech.legs[0].name, np.nan, "a mechanism with 6 DOF has no "
+                            "lower-dimensional motion to project a pose onto")
+    sol = solve_coordinates(mech, pose0, leg_q0, range(6), target, tol=closure_tol)
+    scales = np.r_[[mech.characteristic_length] * 3, 1.0, 1.0, 1.0]
+    reached = pose_coordinates(sol.pose)
+    diff = np.abs(reached - target)
+    diff[3:] = np.abs((diff[3:] + np.pi) % (2 * np.pi) - np.pi)
+    distance = float(np.max(diff / scales))
+    k = int(np.argmax(sol.residuals)) if len(sol.residuals) else 0
+    if not (sol.closure <= closure_tol and _in_limits(mech, sol.leg_q)):
+        raise AssemblyError(mech.legs[k].name, sol.residuals[k],
+                            "and no pose of the mechanism's motion near it was found")
+    if not distance <= tol:
+        raise OffMotionManifold(mech.legs[k].name, _leg_residual(mech, pose, k, sol.leg_q[k]),
+                                distance, tol)
+    asm = _assembly_of(mech, sol)
+    asm.info.update(projection=distance, projected_from=target.tolist())
+    return asm
+
+
+def _leg_residual(mech, pose: pin.SE3, k: int, q) -> float:
+    """Leg ``k``'s relative closure error at ``q`` against ``pose · anchor_k``."""
+    leg = mech.legs[k]
+    e = np.empty(6)
+    return float(closure_error(leg.tip_placement(q).homogeneous,
+                               (pose * mech.anchors[k]).homogeneous,
+                               leg.characteristic_length, e))

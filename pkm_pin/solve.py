@@ -76,7 +76,7 @@ from .compiling import prefer_compiled
 from .engine.linalg import jacobi
 from .kernels import _compose, _fk, chain_of, twist_exp
 from .kernels import pose_error as closure_error
-from .tolerances import CLOSURE_TOL, NEWTON_STALL_RTOL
+from .tolerances import CLOSURE_TOL, NEWTON_STALL_RTOL, RANK_RTOL
 
 # numba's typed IR inlining (register_jitable(inline="always")) trips one of its own
 # pedantic checks on the first compilation ("variable '…' is not in scope": the inlined
@@ -84,8 +84,10 @@ from .tolerances import CLOSURE_TOL, NEWTON_STALL_RTOL
 warnings.filterwarnings("ignore", message=r"variable '.*' is not in scope",
                         category=NumbaIRAssumptionWarning)
 
-__all__ = ["ACTUATED", "LEGS", "PLATFORM", "ClosureSolution", "LegSolution", "Mask",
-           "closure_error", "closure_iteration", "solve_closure", "solve_from",
+__all__ = ["ACTUATED", "LEGS", "PLATFORM", "POSE_COORDINATES", "ClosureSolution",
+           "CoordinateSolution", "CoordinateSystem", "LegSolution", "Mask", "closure_error",
+           "closure_iteration", "coordinate_errors", "coordinate_rates", "coordinate_scales",
+           "pose_coordinates", "solve_closure", "solve_coordinates", "solve_from",
            "solve_kernel", "solve_leg", "solve_system", "start_configurations", "track"]
 
 
@@ -1041,3 +1043,181 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
         d = pin.difference(model.tree, ref, s.q) / model.velocity_units
         return float(d @ d)
     return min(good, key=distance), total
+
+
+# ================================================= pose-coordinate rows (Python driver)
+# Partial poses (:func:`pkm_pin.position.complete_pose`) and the projection of a pose
+# onto the motion manifold add rows fixing some of the platform's pose coordinates to the
+# closure rows. The closure rows are solved exactly and the coordinate rows in the least-
+# squares sense on the motions that keep the closure (the null space of the closure rows):
+# with as many independent coordinates as the mechanism's DOF the coordinates are reached,
+# with more (a full 6-D pose off the manifold) the pose closest to them is found.
+
+#: Pose coordinates of the platform: its origin x, y, z [m] and URDF roll, pitch, yaw
+#: [rad] (``R = Rz(yaw) Ry(pitch) Rx(roll)``), the order of a 6-number pose.
+POSE_COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
+
+
+def pose_coordinates(pose: pin.SE3) -> np.ndarray:
+    """x, y, z [m], roll, pitch, yaw [rad] of a platform placement (world)."""
+    return np.r_[pose.translation, pin.rpy.matrixToRpy(pose.rotation)]
+
+
+def coordinate_scales(length: float) -> np.ndarray:
+    """Unit of each pose coordinate: ``length`` for x, y, z, 1 rad for the angles."""
+    return np.r_[[length] * 3, 1.0, 1.0, 1.0]
+
+
+def coordinate_rates(pose: pin.SE3, length: float) -> np.ndarray:
+    """(6, 6) rates of the scaled pose coordinates (x, y, z divided by ``length``; roll,
+    pitch, yaw [rad]) per unit of the dimensionless platform twist ``ξ = (ω; v_O /
+    length)`` of :mod:`pkm_pin.solve` (axis-first, about the world origin): the origin
+    moves by ``v_O + ω × p`` and the angles by ``E(rpy)⁻¹ ω`` (world ω; infinite at
+    pitch = ±π/2, where roll and yaw are not coordinates)."""
+    p = pose.translation / length
+    C = np.zeros((6, 6))
+    C[:3, :3] = -pin.skew(p)
+    C[:3, 3:] = np.eye(3)
+    rpy = pin.rpy.matrixToRpy(pose.rotation)
+    C[3:, :3] = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD)
+    return C
+
+
+def coordinate_errors(pose: pin.SE3, rows, values, length: float) -> np.ndarray:
+    """``(values − c_rows(pose)) / scale``: the scaled errors of the targeted coordinates
+    (``rows``: indices into :data:`POSE_COORDINATES`), angles wrapped to (−π, π]."""
+    rows = np.asarray(rows, dtype=int)
+    d = np.asarray(values, dtype=float) - pose_coordinates(pose)[rows]
+    angle = rows >= 3
+    d[angle] = -((-d[angle] + np.pi) % (2 * np.pi) - np.pi)
+    return d / coordinate_scales(length)[rows]
+
+
+@dataclass
+class CoordinateSolution(ClosureSolution):
+    """Result of :func:`solve_coordinates`: a :class:`ClosureSolution` and
+
+    Attributes:
+        coordinates: Largest scaled error of the targeted coordinates (x, y, z divided by
+            the characteristic length, angles in rad) at the pose reached.
+    """
+
+    coordinates: float = 0.0
+
+
+class CoordinateSystem:
+    """The closure rows and the pose-coordinate rates of a mechanism at one state (the
+    Python driver's evaluation, :func:`closure_iteration` compiled once ready).
+
+    Attributes:
+        A: (6 legs, Σ nv + 6) the closure rows per dimensionless unknown ``[Δq; ξ]``
+            (``H_i Δq_i − X_i ξ = e_i``, see the module docstring).
+        e: (6 legs,) the closure residuals.
+        residuals: (legs,) each leg's :func:`closure_error`.
+        closure: Their largest value.
+        C: (6, Σ nv + 6) the scaled pose-coordinate rates (:func:`coordinate_rates`) per
+            dimensionless unknown (zero on the joints).
+        free: (Σ nv + 6, k) orthonormal basis of the null space of ``A``: the motions of
+            the mechanism (platform motions and the legs' idle motions) to first order.
+    """
+
+    def __init__(self, mech, pose: pin.SE3, leg_q: list, ws=None):
+        legs = mech.legs
+        coords = np.asarray(mech.leg_frames.coords, dtype=np.int64)
+        n, ntot, L = len(legs), int(coords[-1]), mech.characteristic_length
+        ws = system_workspace(n, int(max(np.diff(coords))), ntot) if ws is None else ws
+        _evaluate(legs, mech.anchors, pose, leg_q, ws)
+        lengths = np.array([leg.characteristic_length for leg in legs], dtype=float)
+        units = np.concatenate([leg._velocity_units for leg in legs])
+        iterate = iteration_compiled if prefer_compiled(iteration_compiled) \
+            else closure_iteration
+        residual = np.empty(n)
+        empty_i, empty = np.empty(0, np.int64), np.empty(0)
+        # it == max_iter: rows and residuals only, no step
+        _, closure, _, _, _ = iterate(coords, lengths, units, L, True, empty_i, empty, empty,
+                                      empty, 0.0, 0, 0, np.inf, 0, residual, ws)
+        A = np.zeros((6 * n, ntot + 6))
+        for i in range(n):
+            c0, c1 = coords[i], coords[i + 1]
+            A[6 * i:6 * i + 6, c0:c1] = ws.H[i, :, :c1 - c0]
+            A[6 * i:6 * i + 6, ntot:] = -ws.X[i]
+        self.A, self.e = A, ws.e[:n].reshape(-1).copy()
+        self.residuals, self.closure = residual, float(closure)
+        self.C = np.zeros((6, ntot + 6))
+        self.C[:, ntot:] = coordinate_rates(pose, L)
+        self.coords, self.units, self.length, self.ws = coords, units, L, ws
+        U, s, Vt = np.linalg.svd(A)
+        rank = int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
+        self._U, self._s, self._V = U[:, :rank], s[:rank], Vt[:rank].T
+        self.free = Vt[rank:].T
+
+    def step(self, rows, d, lam: float) -> np.ndarray:
+        """The damped step ``z = [Δq; ξ]``: the closure rows solved exactly (damped
+        pseudo-inverse), then the coordinate rows ``C_rows z = d`` in the least-squares
+        sense (damping ``lam``) on :attr:`free`."""
+        s = self._s
+        z = self._V @ (s / (s * s + lam) * (self._U.T @ self.e))
+        if len(rows):
+            G = self.C[rows] @ self.free
+            rhs = d - self.C[rows] @ z
+            y = np.linalg.solve(G.T @ G + lam * np.eye(G.shape[1]), G.T @ rhs)
+            z = z + self.free @ y
+        return z
+
+
+def _apply(mech, pose: pin.SE3, leg_q: list, z: np.ndarray, coords, units,
+           length: float) -> tuple[pin.SE3, list, float]:
+    """Move the legs by ``units · Δq`` (``pin.integrate``, projected onto the limits) and
+    the platform to ``exp(ξ) · pose``. Returns the new pose, the legs and the squared
+    dimensionless step taken."""
+    ntot = int(coords[-1])
+    xi = z[ntot:]
+    new_q, step = [], float(xi @ xi)
+    for i, leg in enumerate(mech.legs):
+        u, q = units[coords[i]:coords[i + 1]], leg_q[i]
+        new = leg.clip(pin.integrate(leg.model, q, u * z[coords[i]:coords[i + 1]]))
+        dd = pin.difference(leg.model, q, new) / u
+        step += float(dd @ dd)
+        new_q.append(new)
+    return screws.exp(np.r_[xi[:3], length * xi[3:]]) * pose, new_q, step
+
+
+def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = CLOSURE_TOL,
+                      max_iter: int = 50) -> CoordinateSolution:
+    """The closure solver with rows fixing pose coordinates (Python driver, Pinocchio's
+    legs): every leg's joints and the platform from ``pose`` and ``leg_q``, the closure
+    of every leg to ``tol`` and the coordinates ``rows`` (indices into
+    :data:`POSE_COORDINATES`) to ``values`` [m, rad]. Each step solves the closure rows
+    (damped Newton, :func:`lm_damping`) and the coordinate rows by least squares on the
+    motions that keep the closure (:class:`CoordinateSystem`): as many independent
+    coordinates as the DOF are reached; more are approached as closely as the closure
+    allows (the nearest pose of the motion manifold, in scaled coordinates).
+
+    Stops when ``r = max(closure, |C z|∞) ≤ tol`` (``C z``: the coordinate change the
+    next step wants, which is the coordinate error when it can be reached), on
+    :func:`stop_rule` otherwise, or when a step stalls (a joint limit)."""
+    rows = np.asarray(rows, dtype=int)
+    values = np.asarray(values, dtype=float)
+    leg_q = [leg.clip(np.array(q, dtype=float)) for leg, q in zip(mech.legs, leg_q)]
+    L = mech.characteristic_length
+    it, best, slow, ws = 0, np.inf, 0, None
+    while True:
+        system = CoordinateSystem(mech, pose, leg_q, ws)
+        ws = system.ws
+        d = coordinate_errors(pose, rows, values, L)
+        z = system.step(rows, d, lm_damping(max(system.closure, float(np.abs(d).max(
+            initial=0.0)))))
+        r = max(system.closure, float(np.abs(system.C[rows] @ z).max(initial=0.0)))
+        stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
+        if stop or not np.all(np.isfinite(z)):
+            break
+        it += 1
+        pose, leg_q, step = _apply(mech, pose, leg_q, z, system.coords, system.units, L)
+        size = sum(float(np.sum((q / u) ** 2)) for q, u in zip(
+            leg_q, np.split(system.units, system.coords[1:-1])))
+        if step < NEWTON_STALL_RTOL * (1.0 + size):
+            system = CoordinateSystem(mech, pose, leg_q, ws)
+            d = coordinate_errors(pose, rows, values, L)
+            break
+    return CoordinateSolution(pose, leg_q, system.residuals.copy(), system.closure, 0.0, it,
+                              coordinates=float(np.abs(d).max(initial=0.0)))

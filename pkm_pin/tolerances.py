@@ -114,6 +114,30 @@ ASSEMBLY_CHECK_RTOL = 1e-8
 #: (absolute, on a dimensionless rotation matrix).
 ROTATION_MATRIX_ATOL = 1e-9
 
+#: A leg whose Newton iteration stalls at its type I singularity (its homogenised
+#: Jacobian's smallest singular value, relative to the largest, at most
+#: ``TYPE_I_STALL_FACTOR · √residual``: Newton converges only like a square root there)
+#: or at a joint limit, is accepted by :meth:`Mechanism.assemble` when its relative
+#: closure residual (as :data:`CLOSURE_TOL`) is at most this: a pose on the workspace
+#: boundary given at 6 significant digits lies up to ~1e-7 outside it. The residual
+#: reached is reported (``Assembly.residual``, ``info["boundary"]``).
+TYPE_I_CLOSURE_TOL = 1e-6
+#: See :data:`TYPE_I_CLOSURE_TOL` (dimensionless factor).
+TYPE_I_STALL_FACTOR = 100.0
+
+# ========================================================== partial poses (issue 17)
+#: Pose coordinates x, y, z, roll, pitch, yaw are independent coordinates of a mechanism
+#: at an assembly when the smallest singular value of their scaled rates (x, y, z
+#: divided by the characteristic length, angles in rad) over the mechanism's motions is
+#: above this fraction of the largest singular value of all six coordinates' rates.
+COORDINATE_INDEPENDENCE_RTOL = 1e-6
+#: A full 6-D pose off a lower-mobility mechanism's motion manifold (e.g. printed at 6
+#: significant digits) is projected onto it (the nearest pose of the manifold, scaled
+#: coordinates) when that pose differs from it by at most this in every coordinate: x, y,
+#: z relative to the characteristic length, roll, pitch, yaw in rad. Beyond it the pose
+#: is refused (:class:`~pkm_pin.errors.AssemblyError`).
+POSE_PROJECTION_TOL = 1e-5
+
 # ====================================================== forward kinematics (seed 003)
 #: Largest increment of one Euler continuation step: a fraction of the characteristic
 #: length for prismatic coordinates, radians for revolute ones (``position.STEP``).
