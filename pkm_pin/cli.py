@@ -804,6 +804,8 @@ def cmd_view(args) -> int:
     if args.html is not None and not Path(args.html).parent.is_dir():
         raise InputError(f"--html {args.html}: the folder {Path(args.html).parent} does not exist")
     mech = _load(args)
+    if args.html is not None and Path(args.html).is_dir():  # a folder: the page inside it
+        args.html = str(Path(args.html) / f"{_slug(args.mechanism)}.html")
     if _is_linkage(mech):
         where = _linkage_assembly(args, mech)
     elif args.q is not None:

@@ -8,6 +8,8 @@ closure equations: the platform pose and one configuration per leg.
 Mechanism files are TOML (read with the standard library)::
 
     name = "3-RPR (seed 000)"
+    length_unit = "m"                               # optional: "mm" for a model in mm
+    closure = "weld"                                # optional: legs at a pin, see below
     [[legs]]
     name = "A"
     urdf = "../urdf/rpr_leg_a.urdf"                 # relative to this file
@@ -22,6 +24,11 @@ Mechanism files are TOML (read with the standard library)::
 
 ``home_q`` (optional) selects the working mode (e.g. elbow up/down) of each leg at home;
 without it the leg's inverse kinematics starts from its neutral configuration.
+
+``closure = "spherical"`` or ``"revolute"`` joins the legs' tips at a pin instead of a
+platform (:mod:`pkm_pin.model.pinned`; no ``[home]``: ``home_q`` is where assembly
+starts); ``load_mechanism`` then returns a :class:`~pkm_pin.linkage.Linkage`.
+``length_unit`` only labels lengths in reports: nothing is converted.
 """
 
 from __future__ import annotations
@@ -90,6 +97,10 @@ class Mechanism:
         home: A platform pose where the mechanism assembles (identity by default).
         home_q: Optional leg configurations at home, selecting the working mode.
         description: One line saying what it is.
+        length_unit: The unit the URDFs' lengths are written in (``"m"`` as URDF
+            specifies; ``"mm"`` for a model written in millimetres): reports label
+            lengths with it. Nothing is converted: pkm_pin's results are in the model's
+            own unit, and every index and rank decision is unit-invariant.
     """
 
     def __init__(
@@ -100,6 +111,7 @@ class Mechanism:
         home: pin.SE3 | None = None,
         home_q: Sequence | None = None,
         description: str = "",
+        length_unit: str = "m",
     ):
         self.legs = list(legs)
         if not self.legs:
@@ -120,6 +132,10 @@ class Mechanism:
         self.anchors = anchors
         self.name = name
         self.description = description
+        if not isinstance(length_unit, str) or not length_unit.strip():
+            raise InputError(f"length_unit must be a unit name such as 'm' or 'mm', got "
+                             f"{length_unit!r}")
+        self.length_unit = length_unit
         self.home = as_pose(home) if home is not None else pin.SE3.Identity()
         if home_q is not None:
             if len(home_q) != len(self.legs):
@@ -551,7 +567,7 @@ def stalled_at_boundary(leg: Leg, q: np.ndarray, residual: float) -> bool:
 
 # --------------------------------------------------------------------- TOML files
 _LEG_KEYS = {"name", "urdf", "tip", "actuated", "base", "anchor", "home_q"}
-_TOP_KEYS = {"name", "description", "legs", "home", "closure"}
+_TOP_KEYS = {"name", "description", "legs", "home", "closure", "length_unit"}
 #: Values of the top-level ``closure`` key: a rigid platform, or a pin.
 _CLOSURES = ("weld", "spherical", "revolute")
 _POSE_KEYS = {"xyz", "rpy"}
@@ -665,7 +681,8 @@ def _load_toml(path: Path):
     try:
         return Mechanism(legs, anchors, name=name, home=home,
                          home_q=home_q if any(q is not None for q in home_q) else None,
-                         description=description)
+                         description=description,
+                         length_unit=_typed(doc, "length_unit", str, label, "", default="m"))
     except InputError as e:
         raise MechanismFileError(label, "", str(e)) from e
 

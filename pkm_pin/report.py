@@ -190,6 +190,7 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
         "grubler": analysis.grubler,
         "redundant_constraints": analysis.redundant_constraints,
         "length": analysis.length,
+        "length_unit": getattr(mech, "length_unit", "m"),
         "platform_twists": [b.screw.tolist() for b in motion],
         "motion_basis": [b.as_dict() for b in motion],
         "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
@@ -221,7 +222,9 @@ def markdown(analysis, plots: Sequence[str | Path] = (), data: dict | None = Non
     lines = [f"# {r['mechanism']}", ""]
     if r["description"]:
         lines += [r["description"], ""]
-    lines += ["## Pose", "", "| x [m] | y [m] | z [m] | roll [rad] | pitch [rad] | yaw [rad] |",
+    u = r.get("length_unit", "m")
+    lines += ["## Pose", "", f"| x [{u}] | y [{u}] | z [{u}] | roll [rad] | pitch [rad] | "
+              "yaw [rad] |",
               "|---|---|---|---|---|---|",
               "| " + " | ".join(_num(v) for v in [*xyz, *rpy]) + " |", ""]
     lines += ["## Mobility", "",

@@ -98,3 +98,29 @@ def test_json_platform_twists_are_the_text_reports_basis():
     assert a["platform_twists"] == [x["screw"] for x in a["motion_basis"]]
     np.testing.assert_allclose(a["platform_twists"], b["platform_twists"], atol=1e-12)
     assert b["length"] == pytest.approx(1000.0 * a["length"])
+
+
+def test_reports_label_lengths_in_the_models_unit(tmp_path):
+    """A model written in millimetres says so (length_unit = "mm"): the report's pose
+    header is not "[m]"; the default is the URDF's metre."""
+    from pathlib import Path
+
+    from pkm_pin import load_mechanism
+    from pkm_pin.report import markdown
+
+    toml = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "rpr3.toml"
+    text = toml.read_text().replace("../urdf/", str(toml.parents[1] / "urdf") + "/")
+    assert "| x [m] |" in markdown(load_mechanism(toml).home_analysis)
+    path = tmp_path / "rpr3_mm.toml"
+    path.write_text('length_unit = "mm"\n' + text)
+    report = markdown(load_mechanism(path).home_analysis)
+    assert "| x [mm] | y [mm] | z [mm] |" in report and "[m]" not in report
+
+
+def test_view_html_into_a_folder_writes_a_page_there(tmp_path, capsys):
+    """`pkm-pin view rpr3 --html DIR` writes DIR/rpr3.html (it ended in a traceback)."""
+    from pkm_pin.cli import main
+
+    assert main(["view", "rpr3", "--html", str(tmp_path)]) == 0
+    assert (tmp_path / "rpr3.html").stat().st_size > 1000
+    assert f"wrote      {tmp_path / 'rpr3.html'}" in capsys.readouterr().out
