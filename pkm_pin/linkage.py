@@ -71,14 +71,16 @@ import pinocchio as pin
 
 from . import screws
 from .analysis import classify
-from .errors import AssemblyError, InputError, SingularityError
+from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .model.closure_model import ClosureModel, TreeKinematics
-from .solve import iter_tree_starts, solve_tree_starts
+from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
+    MODES_PATIENCE,
     RANK_RTOL,
     ROTATION_COUNT_TOL,
+    SAME_CONFIGURATION_TOL,
     SPAN_RTOL,
 )
 
@@ -319,6 +321,68 @@ class Linkage:
         branch nearest ``guess`` (a configuration or :class:`LinkageAssembly`; default
         the reference configuration)."""
         return self.assemble(guess, q_actuated=q_actuated, starts=starts, seed=seed, tol=tol)
+
+    def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
+                               patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL):
+        """Every assembly mode found for the actuated values: a multistart of the tree
+        solver from batches of ``starts`` configurations drawn within the joint limits
+        (the reference first), stopped after ``patience`` batches in a row find no new
+        mode. Two assemblies are the same mode when every joint origin and the output
+        pose agree to :data:`~pkm_pin.tolerances.SAME_CONFIGURATION_TOL` (relative to
+        the characteristic length): an idle motion (a rod spinning between its spherical
+        joints) does not make a new mode.
+
+        Returns:
+            :class:`~pkm_pin.modes.AssemblyModes` of :class:`LinkageAssembly`, nearest
+            the reference first, ``complete=False`` (a multistart proves nothing).
+
+        Raises:
+            ForwardKinematicsError: no start closes the loops at these values.
+        """
+        from time import perf_counter
+
+        from .modes import AssemblyModes
+
+        t0 = perf_counter()
+        target = self.check_actuated(q_actuated)
+        model = self._model
+        found, signatures, batch, quiet, tried = [], [], 0, 0, 0
+        while quiet < patience:
+            rows = tree_starts(model, None if batch else model.reference, count=starts,
+                               seed=seed + batch)
+            new = False
+            for q0 in rows:
+                tried += 1
+                sol = solve_tree(model, q0, targets=target, tol=tol)
+                if not sol.converged:
+                    continue
+                sig = self._signature(sol.q)
+                if all(np.max(np.abs(sig - s)) > SAME_CONFIGURATION_TOL for s in signatures):
+                    signatures.append(sig)
+                    found.append(self._assembly(sol, sol.iterations))
+                    new = True
+            batch += 1
+            quiet = 0 if new else quiet + 1
+        if not found:
+            raise ForwardKinematicsError(
+                f"no assembly of {self.name!r} at the actuated values {np.round(target, 6)}: "
+                f"none of {tried} starts closed the loops (not proven: a multistart)")
+        ref = self._signature(model.reference)
+        found.sort(key=lambda a: float(np.linalg.norm(self._signature(a.q) - ref)))
+        return AssemblyModes(found, False, "multistart",
+                             {"starts": tried, "batches": batch, "modes": len(found)},
+                             perf_counter() - t0)
+
+    def _signature(self, q) -> np.ndarray:
+        """Every joint origin and the output placement at ``q``, divided by the length:
+        what tells two assembly modes apart (idle motions leave it unchanged)."""
+        tree = self._model.tree
+        data = tree.createData()
+        pin.framesForwardKinematics(tree, data, np.asarray(q, dtype=float))
+        oMo = data.oMf[tree.getFrameId(self._model.output)]
+        points = [data.oMi[j].translation for j in range(1, tree.njoints)]
+        return np.concatenate(points + [oMo.translation, oMo.rotation.ravel()
+                                        * self._model.length]) / self._model.length
 
     def inverse_kinematics(self, pose, guess=None, *, starts: int = 16, seed: int = 0,
                            tol: float = CLOSURE_TOL) -> LinkageAssembly:

@@ -236,3 +236,31 @@ def test_pinned_legs_input_errors():
         pinned_legs(legs[:1], None, "spherical")
     with pytest.raises(InputError, match="1 anchors given for 2 legs"):
         pinned_legs(legs, [pin.SE3.Identity()], "spherical")
+
+
+def test_five_bar_forward_kinematics_all_finds_both_circle_intersections(five):
+    """At given motor angles the pin lies on both distal circles (radius L2 about each
+    elbow): the two intersections are the two assembly modes."""
+    a = five.assemble()
+    qa = a.q_actuated + np.array([0.1, -0.05])
+    modes = five.forward_kinematics_all(qa)
+    assert len(modes) == 2 and modes.complete is False and modes.method == "multistart"
+    e = [np.array([x, 0.0]) + L1 * np.array([math.cos(t), math.sin(t)])
+         for x, t in ((-A, qa[0]), (A, qa[1]))]
+    d = e[1] - e[0]
+    dist = np.linalg.norm(d)
+    mid = e[0] + 0.5 * d
+    h = math.sqrt(L2 ** 2 - (dist / 2) ** 2)
+    normal = np.array([-d[1], d[0]]) / dist
+    expected = sorted([tuple(mid + h * normal), tuple(mid - h * normal)])
+    got = sorted(tuple(m.output_pose.translation[:2]) for m in modes)
+    np.testing.assert_allclose(got, expected, atol=1e-10)
+    # the first mode is the reference's branch (nearest the reference configuration)
+    assert modes[0].output_pose.translation[1] > modes[1].output_pose.translation[1]
+
+
+def test_forward_kinematics_all_raises_out_of_reach(five):
+    from pkm_pin import ForwardKinematicsError
+
+    with pytest.raises(ForwardKinematicsError, match="no assembly.*not proven"):
+        five.forward_kinematics_all([math.pi / 2 + 1.5, math.pi / 2 - 1.5], patience=1)
