@@ -160,7 +160,8 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
     """Plain-data summary of an :class:`~pkm_pin.analysis.Analysis` (JSON-ready).
 
     Keys: ``mechanism``, ``description``, ``pose`` (``xyz`` [m], ``rpy`` [rad]),
-    ``dof``, ``motion_type``, ``grubler``, ``redundant_constraints``, ``length`` (the
+    ``dof``, ``motion_type``, ``grubler``, ``redundant_constraints``, ``idle_dof`` and
+    ``idle_motions`` (in words, from the closure model), ``length`` (the
     characteristic length), ``platform_twists`` (the readable basis of the text report:
     unit directions, lines through points; not scaled by the characteristic length),
     ``motion_basis`` and ``constraint_basis``
@@ -180,6 +181,7 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
                             analysis.translations)
     constraints = readable_basis(analysis.constraint_wrenches, centre, analysis.length)
     free = analysis.uncontrolled_twist
+    idle = _idle(analysis)
     return {
         "mechanism": mech.name,
         "description": mech.description,
@@ -189,6 +191,8 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
         "motion_type": analysis.motion_type,
         "grubler": analysis.grubler,
         "redundant_constraints": analysis.redundant_constraints,
+        "idle_dof": len(idle),
+        "idle_motions": idle,
         "length": analysis.length,
         "length_unit": getattr(mech, "length_unit", "m"),
         "platform_twists": [b.screw.tolist() for b in motion],
@@ -206,6 +210,18 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
         "crosscheck_max_error": None if checks is None else max(checks.values()),
         "plots": [str(p) for p in plots],
     }
+
+
+def _idle(analysis) -> list[str]:
+    """The idle motions of the mechanism at the analysed assembly, in words: the motions
+    of its joints that move neither an actuator nor the platform (a leg spinning about
+    the line through its two spherical joints), read from its closure model."""
+    from .linkage import Linkage
+    from .model.closure_model import configuration
+
+    mech = analysis.mechanism
+    link = Linkage(mech.closure_model)
+    return list(link.mobility(configuration(mech, analysis.assembly)).idle_motions)
 
 
 # ---------------------------------------------------------------------- Markdown
@@ -231,6 +247,8 @@ def markdown(analysis, plots: Sequence[str | Path] = (), data: dict | None = Non
               f"- degree of freedom: **{r['dof']}** ({r['motion_type']})",
               f"- Grübler–Kutzbach count: {r['grubler']}",
               f"- redundant constraints: {r['redundant_constraints']}",
+              f"- idle motions: {r['idle_dof']}" + "".join(
+                  f"\n  - {m}" for m in r["idle_motions"]),
               "", "Platform twists (ω; v_O) about the world origin:", "",
               "| # | twist (ω; v_O) | in words |", "|---|---|---|"]
     lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"

@@ -98,6 +98,7 @@ def test_json_platform_twists_are_the_text_reports_basis():
     assert a["platform_twists"] == [x["screw"] for x in a["motion_basis"]]
     np.testing.assert_allclose(a["platform_twists"], b["platform_twists"], atol=1e-12)
     assert b["length"] == pytest.approx(1000.0 * a["length"])
+    assert (a["idle_dof"], a["idle_motions"], a["redundant_constraints"]) == (0, [], 3)
 
 
 def test_reports_label_lengths_in_the_models_unit(tmp_path):
