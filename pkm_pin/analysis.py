@@ -37,6 +37,14 @@ from . import engine, screws
 from .assembly import checked_twists
 from .errors import InputError, SingularityError
 from .tolerances import CLOSENESS_SINGULAR_TOL, ROTATION_COUNT_TOL
+from .transmission import (
+    Ellipsoid,
+    Transmission,
+    constraint_transmission,
+    leg_points,
+    local_transmission_index,
+    transmission_indices,
+)
 
 #: Dimensionless threshold below which a closeness index counts as singular (alias of
 #: :data:`pkm_pin.tolerances.CLOSENESS_SINGULAR_TOL`).
@@ -305,6 +313,131 @@ class Analysis:
                 f"{self.indices['type_I']:.3g} < {self.singular_tol:g}",
                 "inverse", self.indices["type_I"])
         return (self.A @ screws.DELTA @ t) / np.diag(self.B)
+
+    # -------------------------------------------------------------- transmission
+    @cached_property
+    def transmission(self) -> Transmission:
+        """Motion/force transmission indices ITI, OTI, LTI and CTI
+        (:mod:`pkm_pin.transmission`; Wang, Wu & Liu 2010): dimensionless, in [0, 1],
+        invariant under units and rigid motions, 0 at type I (ITI), type II (OTI) and
+        constraint (CTI) singularities."""
+        mech, L = self.mechanism, self.length
+        lay = mech.engine_layout
+        A, J = self._about_centre(self.A), self._about_centre(self.joint_twists)
+        P = screws.dehomogenise(self._results.platform[0, :self.dof], L)
+        p_in, p_out = leg_points(A, J, lay.coords, lay.act_col, lay.act_leg, L)
+        iti, oti = transmission_indices(A, J[lay.act_col], P, p_in, p_out, L, self.rtol)
+        C = [self._about_centre(ls.constraint_wrenches).reshape(-1, 6) for ls in self.legs]
+        points = [leg_points(c[:1], J, lay.coords, [lay.coords[k] - 1], [k], L)[1][0]
+                  if len(c) else np.zeros(3) for k, c in enumerate(C)]
+        generic = (None if self.assembly is mech.__dict__.get("home_assembly")
+                   else mech.home_analysis.constraint_wrenches.shape[0])
+        leg_cti = constraint_transmission(A, C, points, L, self.rtol, generic)
+        return Transmission(iti, oti, float(local_transmission_index(iti, oti)), leg_cti,
+                            float(leg_cti.min()) if len(leg_cti) else 1.0,
+                            np.asarray(lay.act_leg), tuple(leg.name for leg in mech.legs))
+
+    # -------------------------------------------------------------------- statics
+    def _balance(self, wrench) -> tuple[np.ndarray, np.ndarray]:
+        """``(λ, μ)`` with ``wrench = Aᵀ λ + Cᵀ μ`` (C: :attr:`constraint_wrenches`),
+        solved on rows homogenised about :attr:`centre`."""
+        w = screws.as_vector(wrench, 6, "wrench", noun="components")
+        if self.indices["type_II"] < self.singular_tol:
+            raise SingularityError(
+                f"actuator efforts undefined: type II closeness index "
+                f"{self.indices['type_II']:.3g} < {self.singular_tol:g} (the actuators "
+                f"cannot balance every wrench here)", "forward", self.indices["type_II"])
+        L = self.length
+        rows = screws.homogenise(self._about_centre(self.full_jacobian), L)
+        rhs = screws.homogenise(self._about_centre(w), L)
+        x, *_ = np.linalg.lstsq(rows.T, rhs, rcond=None)
+        if np.linalg.norm(rows.T @ x - rhs) > 1e-9 * max(np.linalg.norm(rhs), 1e-300):
+            raise InputError("this wrench is not balanced by the actuation and constraint "
+                             "wrenches (fewer actuators than degrees of freedom)")
+        n = self.mechanism.n_actuated
+        return x[:n], x[n:]
+
+    def actuator_efforts(self, wrench) -> np.ndarray:
+        """Actuator efforts ``τ`` (n,) [N for a prismatic, N m for a revolute actuator]
+        with which the legs apply the wrench ``wrench`` (axis-first ``(f; m_O)`` about the
+        world origin [N, N m]) to the platform.
+
+        Virtual work: for every admissible platform twist ``t``, ``τ · q̇_a = w ∘ t``.
+        Writing ``w = Aᵀ λ + Cᵀ μ`` (actuation and constraint wrenches) and using
+        ``A Δ t = B q̇_a``, ``C Δ t = 0`` gives ``τ = B λ``. To hold an external load
+        ``w_ext`` (a payload's weight: :func:`pkm_pin.transmission.payload_wrench`), pass
+        ``−w_ext``. With redundant actuation, the minimum-norm ``(λ, μ)`` (homogenised).
+
+        Raises:
+            SingularityError: at or near a type II singularity.
+            InputError: the wrench cannot be balanced (fewer actuators than DOF).
+        """
+        lam, _ = self._balance(wrench)
+        return np.diag(self.B) * lam
+
+    def constraint_forces(self, wrench) -> np.ndarray:
+        """Magnitudes ``μ`` (6 − dof,) of the part of ``wrench`` carried by the
+        constraints: ``wrench = Aᵀ λ + Cᵀ μ`` with ``C`` = :attr:`constraint_wrenches`
+        (rows of unit norm once written about :attr:`centre` with moments divided by the
+        characteristic length, so ``μ`` is in newtons); the wrench they carry is
+        ``μ @ constraint_wrenches``. Same conventions and errors as
+        :meth:`actuator_efforts`."""
+        return self._balance(wrench)[1]
+
+    def _velocity_map(self) -> tuple[np.ndarray, np.ndarray]:
+        """``K`` (d × n) with ``x = K q̇_h`` (x: coordinates of the platform twist on the
+        orthonormal homogenised basis ``P_h`` about the centre; ``q̇_h``: actuated rates,
+        prismatic ones divided by L), and ``P_h``."""
+        n, d, L = self.mechanism.n_actuated, self.dof, self.length
+        if n != d:
+            raise InputError(f"ellipsoids need as many actuators as degrees of freedom "
+                             f"(here {n} actuators, {d} DOF)")
+        if self.indices["type_II"] < self.singular_tol:
+            raise SingularityError(
+                f"ellipsoids undefined: type II closeness index "
+                f"{self.indices['type_II']:.3g} < {self.singular_tol:g}", "forward",
+                self.indices["type_II"])
+        P_h = self._results.platform[0, :d]
+        A_h = screws.homogenise(self._about_centre(self.A), L)
+        prismatic = ~(np.linalg.norm(self.actuated_twists[:, :3], axis=1) > 0)
+        D = np.diag(self.B) * np.where(prismatic, L, 1.0) / L
+        return np.linalg.solve(A_h @ screws.DELTA @ P_h.T, np.diag(D)), P_h
+
+    def velocity_ellipsoid(self) -> Ellipsoid:
+        """Platform twists reached by actuated rates of unit norm.
+
+        Homogenised units, so that the answer does not depend on units or frame:
+        actuated rates as revolute [rad/s] and prismatic [m/s] divided by the
+        characteristic length L; twists about the platform centre as ``(ω; v_c / L)``
+        [1/s]. Semi-axes are the singular values of that map (largest first), axes the
+        twists (about the world origin) along them.
+
+        Raises:
+            InputError: actuators and DOF differ. SingularityError: type II.
+        """
+        K, P_h = self._velocity_map()
+        U, sv, _ = np.linalg.svd(K)
+        return Ellipsoid(sv, self._to_origin(U.T @ P_h), self.centre.copy(), self.length)
+
+    def force_ellipsoid(self) -> Ellipsoid:
+        """Platform wrenches produced by actuator efforts of unit norm (the dual of
+        :meth:`velocity_ellipsoid`: same principal directions, semi-axes inverted).
+
+        Homogenised units: efforts as prismatic [N] and revolute [N m] divided by L;
+        wrenches about the centre as ``(f; m_c / L)`` [N], each axis the wrench (about
+        the world origin) that does work only on its twist axis (modulo the constraint
+        wrenches, which the structure carries). Semi-axes largest first (inf at a
+        type I singularity).
+
+        Raises:
+            InputError: actuators and DOF differ. SingularityError: type II.
+        """
+        K, P_h = self._velocity_map()
+        U, sv, _ = np.linalg.svd(K)
+        with np.errstate(divide="ignore"):
+            semi = 1.0 / sv[::-1]
+        W_h = (U.T @ P_h)[::-1][:, [3, 4, 5, 0, 1, 2]]
+        return Ellipsoid(semi, self._to_origin(W_h), self.centre.copy(), self.length)
 
     def passive_rates(self, twist) -> list[np.ndarray]:
         """Every leg's joint rates (all joints, velocity order) for a platform twist."""

@@ -40,6 +40,7 @@ from .analysis import SINGULAR_TOL, classify, layout_of
 from .errors import AssemblyError, InputError
 from .screws import as_float_array, homogenise
 from .tolerances import RANK_RTOL
+from .transmission import sweep_lti
 from .twists import joint_twists, sweep_pass
 
 
@@ -56,6 +57,8 @@ class SweepResult:
         det: (N,) signed determinant of ``A Δ`` on the home platform twist basis carried
             to each pose (continuous sign across a slice; nan when not square).
         q_actuated: (N, n) actuated coordinates (nan where not assembled).
+        lti: (N,) local transmission index ``min(ITI, OTI)`` (:mod:`pkm_pin.transmission`;
+            nan where not assembled, or when the sweep ran with ``transmission=False``).
         failures: (index, reason) of every pose that did not assemble.
     """
 
@@ -69,11 +72,16 @@ class SweepResult:
     det: np.ndarray
     q_actuated: np.ndarray
     failures: list = field(default_factory=list)
+    lti: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.lti is None:
+            self.lti = np.full(len(self.ok), np.nan)
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Every array by name (for ``numpy.savez``)."""
         return {k: getattr(self, k) for k in ("poses", "ok", "dof", "singularity", "type_I",
-                                              "type_II", "condition", "det", "q_actuated")}
+                                              "type_II", "condition", "det", "q_actuated", "lti")}
 
 
 def pose_array(poses) -> np.ndarray:
@@ -169,15 +177,29 @@ def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
 
 
 def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
-                   singular_tol: float, progress=None, restarts: int = 4) -> dict:
-    """Assemble and analyse the poses of one chunk (rows of X, already ordered).
+                   singular_tol: float, progress=None, restarts: int = 4,
+                   transmission: bool = True) -> dict:
+    """Assemble and analyse the poses of one chunk (rows of X, already ordered); with
+    ``transmission``, the LTI too.
 
     Module-level so that process-based executors can pickle it."""
     kernel = mech.kernel
     layout = layout_of(mech, rtol, reference)
     if kernel is None:
-        return _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts)
-    return _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts)
+        return _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts, transmission)
+    return _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
+                                    transmission)
+
+
+def _analyse(J, layout, centres, transmission: bool, out: dict, idx) -> None:
+    """The engine on the assembled poses ``idx`` (joint twists ``J``): fills ``out``'s
+    scalar columns, and its ``lti`` with ``transmission`` (the engine keeps A and the
+    platform bases then, and :func:`pkm_pin.transmission.sweep_lti` runs in NumPy)."""
+    r = engine.analyse(J, layout, full=transmission, centres=centres)
+    for key in ("dof", "type_I", "type_II", "condition", "det"):
+        out[key][idx] = getattr(r, key)
+    if transmission:
+        out["lti"][idx] = sweep_lti(r.A, r.platform, r.dof, J, centres, layout)
 
 
 #: Closure tolerance of the legs in a sweep (relative, as :meth:`Mechanism.assemble`).
@@ -188,7 +210,8 @@ SWEEP_TOL = 1e-12
 TRUST = 1e-7
 
 
-def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dict:
+def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
+                             transmission: bool = True) -> dict:
     from .kernels import anchor_targets
     from .solve import solve_from, start_configurations, track
 
@@ -236,7 +259,8 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dic
         progress(N)
     out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan)}
+           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
+           "lti": np.full(N, np.nan)}
     if not ok[idx].all():
         Js = Js[ok[idx]]
         idx = idx[ok[idx]]
@@ -246,9 +270,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts) -> dic
     out["q_actuated"][idx] = np.concatenate(
         [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
     # 3. the analysis engine (compiled screw algebra) on every assembled pose
-    r = engine.analyse(Js, layout, full=False, centres=X[idx, :3])
-    for key in ("dof", "type_I", "type_II", "condition", "det"):
-        out[key][idx] = getattr(r, key)
+    _analyse(Js, layout, X[idx, :3], transmission, out, idx)
     return out
 
 
@@ -265,7 +287,8 @@ def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:
         Q[i] = q
 
 
-def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts) -> dict:
+def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts,
+                              transmission: bool = True) -> dict:
     """:func:`evaluate_chunk` for legs without a compiled kernel."""
     N, n = len(X), mech.n_actuated
     ok = np.zeros(N, bool)
@@ -296,15 +319,14 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts) -> dict:
             progress(1)
     out = {"ok": ok, "q_actuated": q_act, "failures": failures,
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan)}
+           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
+           "lti": np.full(N, np.nan)}
     if not solved:
         return out
     J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
          for asm in solved]  # the assembly's verifying pass gave them, when it ran
-    r = engine.analyse(np.stack(J), layout, full=False,
-                       centres=np.array([asm.pose.translation for asm in solved]))
-    for key in ("dof", "type_I", "type_II", "condition", "det"):
-        out[key][ok] = getattr(r, key)
+    _analyse(np.stack(J), layout, np.array([asm.pose.translation for asm in solved]),
+             transmission, out, ok)
     return out
 
 
@@ -337,7 +359,7 @@ def _evaluate_shared(blob: bytes, digest: str, *args) -> dict:
 
 def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
           progress: bool = False, rtol: float | None = None,
-          singular_tol: float = SINGULAR_TOL) -> SweepResult:
+          singular_tol: float = SINGULAR_TOL, transmission: bool = True) -> SweepResult:
     """Assemble and analyse the mechanism at every pose.
 
     Args:
@@ -351,6 +373,9 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
         rtol: Relative tolerance of rank decisions (default
             :data:`pkm_pin.tolerances.RANK_RTOL`).
         singular_tol: Threshold of the closeness indices.
+        transmission: Compute the local transmission index ``lti`` (the engine then
+            keeps every pose's actuation wrenches and platform basis, and the indices
+            run in NumPy over the chunk; ``False`` leaves ``lti`` nan).
 
     Returns:
         A :class:`SweepResult`; poses that do not assemble are recorded in
@@ -367,8 +392,8 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
     bar = _progress_bar(len(X)) if progress else None
     if executor is None:
         tick = bar.update if bar is not None else None
-        parts = [evaluate_chunk(mech, X[c], reference, rtol, singular_tol, tick)
-                 for c in chunks]
+        parts = [evaluate_chunk(mech, X[c], reference, rtol, singular_tol, tick,
+                                transmission=transmission) for c in chunks]
     else:
         # the mechanism is pickled once per sweep and every worker unpickles its own
         # copy once (:func:`_evaluate_shared`); bytes also spare Dask the tokenising of
@@ -376,7 +401,7 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
         blob = pickle.dumps(mech, protocol=pickle.HIGHEST_PROTOCOL)
         digest = hashlib.sha256(blob).hexdigest()
         futures = [executor.submit(_evaluate_shared, blob, digest, X[c], reference, rtol,
-                                   singular_tol) for c in chunks]
+                                   singular_tol, None, 4, transmission) for c in chunks]
         parts = []
         for c, fut in zip(chunks, futures):
             parts.append(fut.result())
@@ -397,7 +422,8 @@ def _gather(X, chunks, parts, n, singular_tol) -> SweepResult:
     N = len(X)
     res = {"ok": np.zeros(N, bool), "q_actuated": np.full((N, n), np.nan),
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan)}
+           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
+           "lti": np.full(N, np.nan)}
     failures = []
     for idx, part in zip(chunks, parts):
         for key in res:
@@ -406,4 +432,5 @@ def _gather(X, chunks, parts, n, singular_tol) -> SweepResult:
     # nan (not assembled) compares False: "none", then "" where not ok
     sing = np.where(res["ok"], classify(res["type_I"], res["type_II"], singular_tol), "")
     return SweepResult(X, res["ok"], res["dof"], sing, res["type_I"], res["type_II"],
-                       res["condition"], res["det"], res["q_actuated"], sorted(failures))
+                       res["condition"], res["det"], res["q_actuated"], sorted(failures),
+                       res["lti"])

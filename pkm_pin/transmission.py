@@ -1,0 +1,503 @@
+"""Motion/force transmission indices of parallel mechanisms (Wang, Wu & Liu 2010; Liu et
+al. 2014), on arrays of screws: one definition for :class:`~pkm_pin.Analysis`,
+:meth:`~pkm_pin.Mechanism.sweep` and the general linkages.
+
+References (docs/indices.md): J. Wang, C. Wu, X.-J. Liu, "Performance evaluation of
+parallel manipulators: motion/force transmissibility and its index", Mech. Mach. Theory
+45 (2010) 1462–1476; X.-J. Liu, C. Wu, J. Wang, I. Bonev, "Motion/force
+constrainability analysis of lower-mobility parallel manipulators", ASME J. Mech. Robot.
+6 (2014) 011002; the pressure angle of Takeda & Funabashi (1995).
+
+**Power coefficient.** A unit transmission wrench ``$_T`` (pitch ``h_T``) acting at a
+point ``P`` of its axis on a body whose unit twist is ``$`` (pitch ``h``, axis at the
+distance ``d`` and angle ``θ`` from the wrench's) develops the power ``$_T ∘ $ = (h_T +
+h) cos θ − d sin θ``; the paper normalises it by its largest value over the wrench
+directions, ``|$_T ∘ $|_max = √((h_T + h)² + d_max²)``, with ``d_max`` the potential
+largest distance. We take the wrench's *application point* ``P`` as what fixes the
+potential: ``d_max`` is the distance from ``P`` to the twist's axis, so that with
+``u = v_P + h_T ω`` (the velocity of ``P`` plus ``h_T ω``)
+
+    ``λ = |$_T ∘ $| / |$_T ∘ $|_max = |f · u| / (|f| |u|)``        (:func:`power_coefficient`)
+
+— the cosine of the pressure angle at ``P`` for a pure force. A couple ``(0; m)`` gives
+``|m · ω| / (|m| |ω|)``. ``λ`` is dimensionless, in [0, 1], does not depend on the scale
+of either screw, on the units or on the frame, and is 0 exactly when the wrench does no
+work on the twist (0 also when no direction of the wrench could: ``u = 0``).
+
+**Indices** (per actuator ``i``, with ``$_Ti`` its actuation wrench, the row ``A_i``):
+
+* ``ITI_i = λ($_Ti, $_Ii; P_in)``: against the twist ``$_Ii`` of the actuated joint, at
+  the point where the force reaches the actuated link — the point of the wrench axis
+  nearest to the axis of the first rotation joint after the actuator in its leg (the
+  elbow of a five-bar, :func:`leg_points`). 0 exactly at a type I singularity
+  (``B_ii = A_i ∘ $_Ii = 0``); 1 for a prismatic actuator pushing along its wrench.
+* ``OTI_i = λ($_Ti, $_Oi; P_out)``: against the output twist ``$_Oi``, the platform
+  twist when every other actuator is locked (reciprocal to every other ``A_j`` among
+  the platform twists, :func:`output_twists`), at the point where the force reaches the
+  platform (nearest to the leg's last rotation joint; the output point of a linkage).
+  0 exactly at a type II singularity.
+* ``LTI = min_i min(ITI_i, OTI_i)`` (local transmission index; ≥ 0.7: good transmission).
+* ``CTI``: for a leg ``k`` with constraint wrenches ``C_k``, the twists ``R_k``
+  reciprocal to every actuation wrench and to the other legs' constraints (what the
+  platform could do without leg ``k``'s constraints): with one constraint wrench and
+  one freed twist, ``λ(c, r; P_out)`` (Liu et al.'s constraint transmission index);
+  otherwise the smallest singular value of ``Ĉ_k Δ R̂_kᵀ`` with both bases orthonormal
+  once homogenised about the platform centre (the same index generalised to
+  subspaces: 0 when a freed twist escapes the leg's constraints). A leg whose
+  constraints cannot be lost alone (no freed twist, or no constraint) counts 1.
+  :func:`constraint_transmission`.
+
+Screws are rows, axis-first (:mod:`pkm_pin.screws`): twists ``(ω; v)``, wrenches
+``(f; m)``, all about one common point (any: the indices do not depend on it; about the
+platform centre keeps the numbers well conditioned).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InputError
+from .screws import DELTA, as_vector3
+from .tolerances import RANK_RTOL
+
+#: Relative size below which a screw part counts as zero when deciding couples and
+#: translations and below which ``|u|`` counts as zero (no direction can do work).
+ZERO_RTOL = 1e-12
+#: ``|sin θ|`` between a wrench axis and a joint axis below which the two are parallel
+#: (no unique nearest point): the next candidate joint is used (:func:`leg_points`);
+#: also the sine of the principal angle below which a freed twist counts as one of the
+#: motions free with every wrench (:func:`constraint_transmission`).
+PARALLEL_SIN = 1e-6
+#: LTI at or above this value: good transmission (Wang et al. 2010).
+GOOD_LTI = 0.7
+
+
+def _dot(a, b):
+    return np.einsum("...k,...k->...", a, b)
+
+
+def _cross(a, b):
+    """``a × b`` over the last axis (broadcasting; faster than ``numpy.cross``)."""
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = b[..., 0], b[..., 1], b[..., 2]
+    return np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+
+
+def power_coefficient(wrench, twist, point, length: float) -> np.ndarray:
+    """Power coefficient ``λ = |$_T ∘ $| / |$_T ∘ $|_max`` (module docstring).
+
+    Args:
+        wrench: (..., 6) wrenches ``(f; m)`` about a common point (any scale).
+        twist: (..., 6) twists ``(ω; v)`` about the same point (any scale).
+        point: (..., 3) application point of each wrench [m], same frame; projected onto
+            the wrench's axis first (ignored for a couple).
+        length: Characteristic length [m]: a wrench is a couple when ``|f| · length ≤
+            1e-12 |m|``, a twist a translation when ``|ω| · length ≤ 1e-12 |v|``.
+
+    Returns:
+        (...) values in [0, 1].
+    """
+    W, T = np.asarray(wrench, float), np.asarray(twist, float)
+    P = np.asarray(point, float)
+    f, m, w, v = W[..., :3], W[..., 3:], T[..., :3], T[..., 3:]
+    fn, mn = np.linalg.norm(f, axis=-1), np.linalg.norm(m, axis=-1)
+    wn = np.linalg.norm(w, axis=-1)
+    couple = fn * length <= ZERO_RTOL * mn
+    ff = np.where(couple, 1.0, fn * fn)[..., None]
+    p0 = _cross(f, m) / ff  # the axis point nearest the common origin
+    fhat = f / np.sqrt(ff)
+    P = p0 + _dot(P - p0, fhat)[..., None] * fhat  # onto the axis
+    h = (_dot(f, m) / ff[..., 0])[..., None]
+    u = v + _cross(w, P) + h * w
+    un = np.linalg.norm(u, axis=-1)
+    scale_u = np.linalg.norm(v, axis=-1) + wn * (length + np.linalg.norm(P, axis=-1))
+    num = np.where(couple, np.abs(_dot(m, w)), np.abs(_dot(f, u)))
+    den = np.where(couple, mn * wn, fn * un)
+    dead = np.where(couple, wn * length <= ZERO_RTOL * np.linalg.norm(v, axis=-1),
+                    un <= ZERO_RTOL * scale_u)
+    dead |= (fn == 0) & (mn == 0)
+    out = np.where(dead | (den == 0), 0.0, num / np.where(den == 0, 1.0, den))
+    return np.clip(out, 0.0, 1.0)
+
+
+def nearest_point(wrench, twist) -> tuple[np.ndarray, np.ndarray]:
+    """The point of each wrench's axis nearest to each twist's axis, and ``|sin θ|``
+    between the two axes (0 when the twist is a translation or the wrench a couple: no
+    point; the point returned is then the wrench axis point nearest the origin).
+
+    Args:
+        wrench: (..., 6) wrenches ``(f; m)``; twist: (..., 6) twists ``(ω; v)``.
+
+    Returns:
+        ((..., 3) points [m], (...) sines).
+    """
+    W, T = np.asarray(wrench, float), np.asarray(twist, float)
+    f, m, w, v = W[..., :3], W[..., 3:], T[..., :3], T[..., 3:]
+    ff, ww = _dot(f, f), _dot(w, w)
+    ok_f, ok_w = ff > 0, ww > 0
+    d1 = f / np.sqrt(np.where(ok_f, ff, 1.0))[..., None]
+    d2 = w / np.sqrt(np.where(ok_w, ww, 1.0))[..., None]
+    p1 = _cross(f, m) / np.where(ok_f, ff, 1.0)[..., None]
+    p2 = _cross(w, v) / np.where(ok_w, ww, 1.0)[..., None]
+    n = _cross(d1, d2)
+    nn = _dot(n, n)
+    s = _dot(_cross(p2 - p1, d2), n) / np.where(nn > 0, nn, 1.0)
+    sin = np.where(ok_f & ok_w, np.sqrt(nn), 0.0)
+    return p1 + np.where(sin > 0, s, 0.0)[..., None] * d1, sin
+
+
+def _is_rotation(T: np.ndarray, length: float) -> np.ndarray:
+    return (np.linalg.norm(T[..., :3], axis=-1) * length
+            > ZERO_RTOL * np.linalg.norm(T[..., 3:], axis=-1))
+
+
+def leg_points(A, J, coords, act_col, act_leg, length: float,
+               centre=None) -> tuple[np.ndarray, np.ndarray]:
+    """Application points of the actuation wrenches: on the actuated link and on the
+    platform (module docstring).
+
+    The input point is the point of ``A_i``'s axis nearest to the axis of the first
+    rotation joint after the actuated one in its leg that is not parallel to it; the
+    output point the one nearest to the leg's last such joint. A leg without one uses
+    the point of the wrench axis nearest to ``centre``.
+
+    Args:
+        A: (..., n, 6) actuation wrenches; J: (..., nv, 6) joint twists of every leg, one
+            leg after the other in chain order (base to tip), about the same point.
+        coords: (legs + 1,) row offsets of the legs in ``J``; act_col: (n,) row of each
+            actuated joint; act_leg: (n,) its leg.
+        length: Characteristic length [m].
+        centre: (..., 3) fallback point (default: the origin of the coordinates).
+
+    Returns:
+        ((..., n, 3) input points, (..., n, 3) output points).
+    """
+    A, J = np.asarray(A, float), np.asarray(J, float)
+    batch = A.shape[:-2]
+    c = np.zeros(batch + (3,)) if centre is None else np.broadcast_to(centre, batch + (3,))
+    p_in = np.empty(batch + (A.shape[-2], 3))
+    p_out = np.empty_like(p_in)
+    for a in range(A.shape[-2]):
+        W = A[..., a, :]
+        # fallback: the wrench axis point nearest to the centre
+        p0, _ = nearest_point(W - np.concatenate([np.zeros(batch + (3,)),
+                                                  _cross(c, W[..., :3])], axis=-1),
+                              np.zeros(batch + (6,)))
+        p0 = p0 + c
+        end = int(coords[int(act_leg[a]) + 1])
+        rows = range(int(act_col[a]) + 1, end)
+        for out, order in ((p_in, rows), (p_out, reversed(rows))):
+            out[..., a, :] = p0
+            found = np.zeros(batch, bool)
+            for r in order:
+                T = J[..., r, :]
+                p, sin = nearest_point(W, T)
+                take = ~found & _is_rotation(T, length) & (sin > PARALLEL_SIN)
+                out[..., a, :] = np.where(take[..., None], p, out[..., a, :])
+                found |= take
+    return p_in, p_out
+
+
+def _homogenised_rows(S: np.ndarray, length: float) -> np.ndarray:
+    H = np.array(S, dtype=float, copy=True)
+    H[..., 3:] /= length
+    return H
+
+
+def output_twists(A, platform, length: float, rtol: float = RANK_RTOL) -> np.ndarray:
+    """Output twist of each actuator: the platform twist when every other actuator is
+    locked (reciprocal to every other row of ``A`` among the rows of ``platform``).
+
+    Args:
+        A: (..., n, 6) actuation wrenches; platform: (..., d, 6) a basis of the platform
+            twists; both about the same point, world units.
+        length: Characteristic length [m] (homogenising for the rank decisions).
+        rtol: Relative tolerance of the rank decisions.
+
+    Returns:
+        (..., n, 6) twists (unit once homogenised). A zero row when locking the others
+        leaves more than one twist (the others dependent, or fewer actuators than
+        degrees of freedom: that space holds a twist on which ``A_i`` does no work, so
+        the OTI is 0); nan rows when it leaves none (redundant actuation).
+    """
+    A, P = np.asarray(A, float), np.asarray(platform, float)
+    n, d = A.shape[-2], P.shape[-2]
+    Ah = _homogenised_rows(A, length)
+    Ah = Ah / np.maximum(np.linalg.norm(Ah, axis=-1, keepdims=True), 1e-300)
+    Ph = _homogenised_rows(P, length)
+    Q = np.linalg.qr(np.swapaxes(Ph, -1, -2))[0]  # (..., 6, d) orthonormal columns
+    M = Ah @ DELTA @ Q  # (..., n, d)
+    if n == d and n > 1:
+        return _adjugate_twists(M, Q, length, rtol)
+    out = np.full(A.shape, np.nan)
+    for i in range(n):
+        others = np.delete(M, i, axis=-2)
+        if others.shape[-2] == 0:
+            X = np.broadcast_to(np.eye(d), M.shape[:-2] + (d, d))
+            null = np.full(M.shape[:-2], d)
+        else:
+            _, sv, Vt = np.linalg.svd(others, full_matrices=True)
+            big = sv[..., :1] if sv.shape[-1] else np.zeros(M.shape[:-2] + (1,))
+            rank = np.sum(sv > rtol * big, axis=-1)
+            null = d - rank
+            X = np.swapaxes(Vt, -1, -2)  # columns: right singular vectors
+        x = X[..., :, -1]  # the last right singular vector
+        t = np.einsum("...kd,...d->...k", Q, x)
+        t[..., 3:] *= length
+        t = np.where((null == 1)[..., None], t, np.where((null > 1)[..., None], 0.0, np.nan))
+        out[..., i, :] = t
+    return out
+
+
+def _adjugate_twists(M, Q, length: float, rtol: float) -> np.ndarray:
+    """:func:`output_twists` for as many actuators as DOF: column ``i`` of the adjugate
+    of ``M`` (reciprocal to every other row, continuous through singularities) from one
+    SVD, ``adj M = det(U Vᵀ) V diag(Π_{j≠k} σ_j) Uᵀ``; zero where two singular values
+    vanish (the others then leave more than one twist)."""
+    U, sv, Vt = np.linalg.svd(M)
+    n = sv.shape[-1]
+    big = np.maximum(sv[..., :1], 1e-300)
+    r = sv / big
+    prod = np.stack([np.prod(np.delete(r, k, axis=-1), axis=-1) for k in range(n)], -1)
+    sign = np.linalg.det(U) * np.linalg.det(Vt)
+    adj = np.einsum("...kd,...k,...ik->...id", Vt, prod, U) * sign[..., None, None]
+    adj = np.where((r[..., -2] <= rtol)[..., None, None], 0.0, adj)
+    T = np.einsum("...ed,...id->...ie", Q, adj)  # row i: column i of adj, as a twist
+    T = T / np.maximum(np.linalg.norm(T, axis=-1, keepdims=True), 1e-300)
+    T[..., 3:] *= length
+    return T
+
+
+def transmission_indices(A, input_twists, platform, input_points, output_points,
+                         length: float, rtol: float = RANK_RTOL
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """ITI and OTI of every actuator (module docstring).
+
+    Args:
+        A: (..., n, 6) actuation wrenches (rows of A); input_twists: (..., n, 6) the
+            twists of the actuated joints; platform: (..., d, 6) a basis of the platform
+            (output) twists; all about one common point, world units.
+        input_points, output_points: (..., n, 3) application points of each wrench on
+            the actuated link and on the platform (:func:`leg_points`; for a linkage
+            with a point output, the output point).
+        length: Characteristic length [m]; rtol: relative tolerance of rank decisions.
+
+    Returns:
+        ((..., n) ITI, (..., n) OTI): OTI is 0 where locking the other actuators leaves
+        several twists (type II, or too few actuators), nan where it leaves none
+        (redundant actuation).
+    """
+    A = np.asarray(A, float)
+    iti = power_coefficient(A, input_twists, input_points, length)
+    T = output_twists(A, platform, length, rtol)
+    oti = power_coefficient(A, np.nan_to_num(T), output_points, length)
+    oti = np.where(np.isnan(T[..., 0]), np.nan, oti)
+    return iti, oti
+
+
+def local_transmission_index(iti, oti) -> np.ndarray:
+    """``LTI = min_i min(ITI_i, OTI_i)`` over the last axis (nan when there are no
+    actuators; the nan OTIs of redundant actuation are skipped)."""
+    both = np.concatenate([np.asarray(iti, float), np.asarray(oti, float)], axis=-1)
+    if both.shape[-1] == 0:
+        return np.full(both.shape[:-1], np.nan)
+    low = np.where(np.isnan(both), np.inf, both).min(axis=-1)
+    return np.where(np.isinf(low), np.nan, low)
+
+
+def _orthonormal(S: np.ndarray, length: float, rtol: float) -> np.ndarray:
+    """Orthonormal rows spanning the homogenised rows of ``S`` (rank by ``rtol``)."""
+    return _orthonormal_h(_homogenised_rows(S, length), rtol)
+
+
+def _orthonormal_h(H: np.ndarray, rtol: float) -> np.ndarray:
+    """Orthonormal rows spanning the (homogenised) rows of ``H`` (rank by ``rtol``)."""
+    n = np.linalg.norm(H, axis=1) if len(H) else np.zeros(0)
+    keep = n > ZERO_RTOL * n.max() if len(n) else n > 0
+    if not keep.any():
+        return np.zeros((0, 6))
+    _, sv, Vt = np.linalg.svd(H[keep] / n[keep, None])
+    return Vt[:int(np.sum(sv > rtol * sv[0]))]
+
+
+def constraint_transmission(A, leg_constraints, output_points, length: float,
+                            rtol: float = RANK_RTOL, generic_rank: int | None = None
+                            ) -> np.ndarray:
+    """Constraint transmission index of every leg (module docstring), at one pose.
+
+    The twists ``R_k`` freed by removing leg ``k``'s constraints are those reciprocal to
+    every actuation wrench and to the other legs' constraints. While the union of the
+    constraints keeps its ``generic_rank`` (no constraint singularity), the twists
+    reciprocal to *every* wrench are left out of ``R_k``: they are the uncontrolled
+    motions of a type II singularity, which the OTI reports, not a constraint that
+    fails.
+
+    Args:
+        A: (n, 6) actuation wrenches; leg_constraints: per leg, (k, 6) a basis of its
+            constraint wrenches; output_points: per leg, (3,) the point where its
+            constraint forces reach the platform; all about one common point (the
+            platform centre: the rank decisions homogenise about it).
+        length: Characteristic length [m]; rtol: relative tolerance of rank decisions.
+        generic_rank: Rank of the union of the constraints away from constraint
+            singularities (the home pose's); default: this pose's.
+
+    Returns:
+        (legs,) values in [0, 1].
+    """
+    A = np.asarray(A, float).reshape(-1, 6)
+    Cs = [np.asarray(c, float).reshape(-1, 6) for c in leg_constraints]
+    union = _orthonormal(np.vstack([np.zeros((0, 6))] + Cs), length, rtol)
+    free = _reciprocal(np.vstack([_orthonormal(A, length, rtol), union]), rtol)
+    if generic_rank is not None and len(union) < generic_rank:
+        free = np.zeros((0, 6))  # a constraint singularity: keep every freed twist
+    out = np.ones(len(Cs))
+    for k, C in enumerate(Cs):
+        if not len(C):
+            continue
+        rest = np.vstack([A] + [c for j, c in enumerate(Cs) if j != k])
+        R = _reciprocal(_orthonormal(rest, length, rtol), rtol)
+        if len(free) and len(R):  # leave out the motions free with every wrench
+            # the rows are orthonormal: singular values of the rest are sines of the
+            # principal angles between R_k and the free motions
+            _, sv, Vt = np.linalg.svd(R - (R @ free.T) @ free)
+            R = Vt[:int(np.sum(sv > PARALLEL_SIN))]
+        if not len(R):
+            continue
+        Ch = _orthonormal(C, length, rtol)
+        if len(Ch) == 1 and len(R) == 1:
+            t = R[0].copy()
+            t[3:] *= length
+            out[k] = power_coefficient(C[0], t, output_points[k], length)
+        else:
+            sv = np.linalg.svd(Ch @ DELTA @ R.T, compute_uv=False)
+            out[k] = float(sv[len(R) - 1]) if len(R) <= len(Ch) else 0.0
+    return np.clip(out, 0.0, 1.0)
+
+
+def _reciprocal(Wh: np.ndarray, rtol: float) -> np.ndarray:
+    """Orthonormal homogenised twists reciprocal to the orthonormal homogenised wrench
+    rows ``Wh`` (all six when there are none)."""
+    if not len(Wh):
+        return np.eye(6)
+    _, sv, Vt = np.linalg.svd(Wh @ DELTA)
+    return Vt[int(np.sum(sv > rtol * sv[0])):]
+
+
+@dataclass(frozen=True)
+class Transmission:
+    """Motion/force transmission indices at one pose (module docstring).
+
+    Attributes:
+        iti: (n,) input transmission index of each actuator.
+        oti: (n,) output transmission index of each actuator (nan: redundant actuation).
+        lti: ``min(ITI, OTI)`` over the actuators.
+        leg_cti: (legs,) constraint transmission index of each leg.
+        cti: Its minimum (1 without constraints that a leg could lose).
+        legs: (n,) the leg of each actuator (0-based).
+        leg_names: Names of the legs.
+    """
+
+    iti: np.ndarray
+    oti: np.ndarray
+    lti: float
+    leg_cti: np.ndarray
+    cti: float
+    legs: np.ndarray
+    leg_names: tuple
+
+    @property
+    def good(self) -> bool:
+        """Whether ``LTI`` and ``CTI`` are at least :data:`GOOD_LTI`."""
+        return bool(self.lti >= GOOD_LTI and self.cti >= GOOD_LTI)
+
+    @property
+    def worst(self) -> str:
+        """The weakest index in words, e.g. ``"leg 2 transmits poorly: ITI 0.12"``
+        (``"transmits well"`` when every index is at least :data:`GOOD_LTI`)."""
+        cands = [(v, "ITI", int(self.legs[i])) for i, v in enumerate(self.iti)]
+        cands += [(v, "OTI", int(self.legs[i])) for i, v in enumerate(self.oti)
+                  if np.isfinite(v)]
+        cands += [(v, "CTI", k) for k, v in enumerate(self.leg_cti)]
+        if not cands:
+            return "no actuators"
+        value, name, leg = min(cands, key=lambda c: c[0])
+        label = self.leg_names[leg] if leg < len(self.leg_names) else str(leg + 1)
+        word = "transmits well" if value >= GOOD_LTI else "transmits poorly"
+        return f"leg {label} {word}: {name} {value:.2f}"
+
+
+def about(S, centre) -> np.ndarray:
+    """Screws ``S`` (..., k, 6) about the world origin written about ``centre`` (..., 3)
+    (twists and wrenches alike: ``(a; b − c × a)``)."""
+    S = np.array(S, dtype=float, copy=True)
+    c = np.asarray(centre, float)[..., None, :]
+    S[..., 3:] -= _cross(c, S[..., :3])
+    return S
+
+
+def sweep_lti(A, platform_h, dof, J, centres, layout) -> np.ndarray:
+    """LTI at N poses from the engine's arrays (:class:`pkm_pin.engine.Results`).
+
+    Args:
+        A: (N, n, 6) actuation wrenches about the world origin; platform_h: (N, 6, 6)
+            homogenised platform bases about the centres (rows beyond ``dof`` unused);
+            dof: (N,); J: (N, nv, 6) joint twists about the world origin; centres:
+            (N, 3); layout: the mechanism's :class:`~pkm_pin.engine.Layout`.
+
+    Returns:
+        (N,) LTI (nan without actuators).
+    """
+    L, rtol = float(layout.length), float(layout.rtol)
+    out = np.full(len(A), np.nan)
+    if A.shape[1] == 0 or not len(A):
+        return out
+    Ac, Jc = about(A, centres), about(J, centres)
+    for d in np.unique(dof):
+        i = np.flatnonzero(dof == d)
+        P = np.array(platform_h[i, :d], copy=True)
+        P[..., 3:] *= L
+        p_in, p_out = leg_points(Ac[i], Jc[i], layout.coords, layout.act_col,
+                                 layout.act_leg, L)
+        iti, oti = transmission_indices(Ac[i], Jc[i][:, layout.act_col], P, p_in, p_out,
+                                        L, rtol)
+        out[i] = local_transmission_index(iti, oti)
+    return out
+
+
+@dataclass(frozen=True)
+class Ellipsoid:
+    """Velocity or force ellipsoid of the platform at one pose (see
+    :meth:`pkm_pin.Analysis.velocity_ellipsoid`).
+
+    Attributes:
+        semi_axes: (d,) semi-axes, largest first (dimensionless: homogenised units).
+        axes: (d, 6) principal axes: twists ``(ω; v_O)`` (velocity) or wrenches
+            ``(f; m_O)`` (force) about the world origin, each of unit norm once written
+            about ``centre`` with its moment part divided by ``length``.
+        centre: (3,) the platform centre [m]; length: the characteristic length L [m].
+    """
+
+    semi_axes: np.ndarray
+    axes: np.ndarray
+    centre: np.ndarray
+    length: float
+
+
+def payload_wrench(mass: float, centre_of_mass, g=(0.0, 0.0, -9.81)) -> np.ndarray:
+    """The gravity wrench ``(m g; c × m g)`` of a payload on the platform, axis-first about
+    the world origin [N, N m].
+
+    Args:
+        mass: Payload mass [kg]; centre_of_mass: (3,) its centre of mass in the world
+            [m]; g: (3,) gravity [m/s²] (default 9.81 m/s² along −z).
+
+    To find the efforts that hold it: ``analysis.actuator_efforts(-payload_wrench(...))``
+    (the actuators must apply the opposite wrench).
+    """
+    m = float(mass)
+    if not (np.isfinite(m) and m >= 0):
+        raise InputError(f"mass must be a finite non-negative number [kg], got {mass!r}")
+    f = m * as_vector3(g, "g")
+    return np.concatenate([f, _cross(as_vector3(centre_of_mass, "centre_of_mass"), f)])
