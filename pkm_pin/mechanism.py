@@ -439,7 +439,7 @@ class Mechanism:
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,
               singular_tol: float = CLOSENESS_SINGULAR_TOL,
-              transmission: bool = True) -> _sweep.SweepResult:
+              transmission: bool = False) -> _sweep.SweepResult:
         """Assemble and analyse the mechanism at every pose.
 
         ``poses``: full poses (a sequence of ``pin.SE3`` or an (N, 6) array), or partial

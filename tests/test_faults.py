@@ -125,3 +125,39 @@ def test_view_html_into_a_folder_writes_a_page_there(tmp_path, capsys):
     assert main(["view", "rpr3", "--html", str(tmp_path)]) == 0
     assert (tmp_path / "rpr3.html").stat().st_size > 1000
     assert f"wrote      {tmp_path / 'rpr3.html'}" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"rtol": float("nan")}, "rtol must be a number between 0 and 1"),
+    ({"rtol": -1.0}, "rtol must be a number between 0 and 1"),
+    ({"singular_tol": 2.0}, "singular_tol must be a number between 0 and 1"),
+])
+def test_sweep_checks_its_tolerances(kwargs, message):
+    mech = mechanism("rpr3")
+    with pytest.raises(InputError, match=message):
+        mech.sweep([mech.home], **kwargs)
+
+
+def test_interrupted_executor_sweep_cancels_the_chunks_not_started():
+    """Ctrl-C (or a failed chunk) while waiting on an executor: the chunks not started
+    are cancelled at once instead of running to the end."""
+    from concurrent.futures import Future
+
+    class Interrupting:
+        """An executor whose first result raises KeyboardInterrupt."""
+
+        def __init__(self):
+            self.futures = []
+
+        def submit(self, fn, *args):
+            f = Future()
+            if not self.futures:
+                f.set_exception(KeyboardInterrupt())
+            self.futures.append(f)
+            return f
+
+    mech = mechanism("rpr3")
+    ex = Interrupting()
+    with pytest.raises(KeyboardInterrupt):
+        mech.sweep([mech.home] * 10, executor=ex, chunk_size=2)
+    assert len(ex.futures) == 5 and all(f.cancelled() for f in ex.futures[1:])
