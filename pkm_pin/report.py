@@ -166,7 +166,8 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
     unit directions, lines through points; not scaled by the characteristic length),
     ``motion_basis`` and ``constraint_basis``
     (readable bases, see :func:`readable_basis`, with ``words``), ``actuated``, ``A``,
-    ``B``, ``singularity``, ``constraint_singular``, ``indices``,
+    ``B``, ``singularity``, ``constraint_singular``, ``indices``, ``transmission``
+    (ITI, OTI per actuator, LTI, CTI, the weakest in words; ``None`` at a type II pose),
     ``uncontrolled_twist`` (words, at a type II/III singularity, else ``None``),
     ``crosscheck`` (quantity → largest dimensionless difference, or ``None``),
     ``crosscheck_max_error`` and ``plots`` (file paths).
@@ -182,6 +183,7 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
     constraints = readable_basis(analysis.constraint_wrenches, centre, analysis.length)
     free = analysis.uncontrolled_twist
     idle = _idle(analysis)
+    tr = _transmission(analysis)
     return {
         "mechanism": mech.name,
         "description": mech.description,
@@ -204,12 +206,29 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
         "singularity": analysis.singularity,
         "constraint_singular": bool(analysis.constraint_singular),
         "indices": analysis.indices,
+        "transmission": tr,
         "uncontrolled_twist": None if free is None else
         readable_basis(free[None], centre, analysis.length)[0].words(),
         "crosscheck": checks,
         "crosscheck_max_error": None if checks is None else max(checks.values()),
         "plots": [str(p) for p in plots],
     }
+
+
+def _transmission(analysis) -> dict | None:
+    """The motion/force transmission indices (:attr:`Analysis.transmission`) as plain
+    data with the weakest one in words; ``None`` where they are not defined (a type II
+    pose)."""
+    from .errors import PkmError
+
+    try:
+        tr = analysis.transmission
+    except PkmError:
+        return None
+    clean = [None if not np.isfinite(v) else float(v) for v in tr.iti]
+    return {"iti": clean, "oti": [None if not np.isfinite(v) else float(v) for v in tr.oti],
+            "lti": float(tr.lti), "cti": float(tr.cti),
+            "leg_cti": [float(v) for v in tr.leg_cti], "good": tr.good, "words": tr.worst}
 
 
 def _idle(analysis) -> list[str]:
@@ -271,6 +290,15 @@ def markdown(analysis, plots: Sequence[str | Path] = (), data: dict | None = Non
         lines += [f"- uncontrolled twist: {r['uncontrolled_twist']}"]
     lines += ["", "| index | value |", "|---|---|"]
     lines += [f"| {k} | {_num(v)} |" for k, v in r["indices"].items()]
+    tr = r.get("transmission")
+    if tr is not None:
+        lines += ["", "## Motion/force transmission", "", f"{tr['words']}.", "",
+                  "| actuator | ITI | OTI |", "|---|---|---|"]
+        lines += [f"| {a} | {_num(i) if i is not None else '—'} | "
+                  f"{_num(o) if o is not None else '—'} |"
+                  for a, i, o in zip(r["actuated"], tr["iti"], tr["oti"])]
+        lines += ["", f"LTI = {_num(tr['lti'])} (good transmission: ≥ 0.7), "
+                  f"CTI = {_num(tr['cti'])}"]
     lines += ["", "## Cross-check against the hand-written formulas", ""]
     if r["crosscheck"] is None:
         lines += ["No hand-written formulas exist for this mechanism."]
@@ -315,6 +343,9 @@ def text(r: dict) -> str:
     if r["uncontrolled_twist"]:
         out += [f"uncontrolled twist {r['uncontrolled_twist']}"]
     out += ["indices            " + ", ".join(f"{k} = {v:.6g}" for k, v in r["indices"].items())]
+    tr = r.get("transmission")
+    if tr is not None:
+        out += [f"transmission       LTI = {tr['lti']:.3g}, CTI = {tr['cti']:.3g}: {tr['words']}"]
     if r["crosscheck"] is None:
         out += ["cross-check        no hand-written formulas for this mechanism"]
     else:

@@ -131,3 +131,18 @@ def test_markdown_says_when_no_formulas_exist(analyses):
     text = markdown(analyses["delta"])
     assert "No hand-written formulas exist for this mechanism." in text
     assert "pure moment about (1, 0, 0)" in text  # Delta: the three constraint couples
+
+
+def test_report_gives_the_transmission_indices_in_words():
+    """analyze's data, text and Markdown carry ITI/OTI/LTI/CTI and the weakest in words
+    (issue 18): equal to Analysis.transmission."""
+    from pkm_pin.builders import MECHANISMS
+    from pkm_pin.report import markdown, report_data, text
+
+    an = MECHANISMS["rpr3"]().build().home_analysis
+    tr = an.transmission
+    data = report_data(an)
+    assert data["transmission"]["lti"] == pytest.approx(tr.lti, rel=1e-12)
+    assert data["transmission"]["words"] == tr.worst == "leg B transmits poorly: OTI 0.59"
+    assert "transmission       LTI = 0.587, CTI = 1: leg B transmits poorly" in text(data)
+    assert "## Motion/force transmission" in markdown(an, data=data)
