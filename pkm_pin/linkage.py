@@ -373,6 +373,51 @@ class Linkage:
                              {"starts": tried, "batches": batch, "modes": len(found)},
                              perf_counter() - t0)
 
+    def transmission(self, q):
+        """Motion/force transmission indices of the linkage at ``q`` (a configuration or
+        :class:`LinkageAssembly`; :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010):
+        each actuator is its own "leg".
+
+        The transmission wrench of an actuator is the one its loop passes on to the
+        output: reciprocal to every passive freedom of the loop (its passive joints and
+        the freedoms its closure leaves: three rotations at a point closure, one at a
+        revolute closure) other than the output body's own support joints, and
+        orthogonal to the loop's constraint wrenches (:func:`_transmission_wrench`) —
+        a four-bar's coupler line, a five-bar's distal link through the pin. It acts on
+        the actuated link at the point of its axis nearest to the first revolute child
+        of the actuated joint it is not parallel to (ITI), and on the output at the
+        output point (a point output) or at the output body's joint nearest to its axis
+        (OTI). ``cti`` is nan: the constraint index is defined for the legs of a
+        platform (:attr:`pkm_pin.Analysis.transmission`).
+
+        Returns:
+            :class:`~pkm_pin.transmission.Transmission`.
+        """
+        from .transmission import Transmission, transmission_indices
+
+        q = q.q if isinstance(q, LinkageAssembly) else self._model.check_q(q)
+        an = self.analyze(q)
+        model, kin = self._model, self._model.kinematics(q)
+        tree, J = model.tree, kin.joint_twists
+        cols = list(model.actuated_v)
+        ids = [tree.getJointId(name) for name in model.actuated]
+        out_joint = tree.frames[tree.getFrameId(model.output)].parentJoint
+        W = np.array([_transmission_wrench(model, kin, j, self._loops[k], out_joint,
+                                           an.reference_point) for k, j in enumerate(ids)]
+                     ).reshape(-1, 6)
+        p_in = np.array([_input_point(tree, J, W[k], j, an.reference_point)
+                         for k, j in enumerate(ids)]).reshape(-1, 3)
+        points = ([an.reference_point] if model.output_point
+                  else _body_points(model, kin, out_joint) or [an.reference_point])
+        p_out = np.array([min(points, key=lambda p: _distance_to_axis(w, p))
+                          for w in W]).reshape(-1, 3)
+        iti, oti = transmission_indices(W, J[cols], an.platform_twists, p_in, p_out,
+                                        model.length)
+        lti = float(np.min(np.minimum(iti, np.where(np.isnan(oti), np.inf, oti)),
+                           initial=np.inf)) if len(iti) else float("nan")
+        return Transmission(iti, oti, lti, np.zeros(0), float("nan"),
+                            np.arange(len(cols)), tuple(model.actuated))
+
     def _signature(self, q) -> np.ndarray:
         """Every joint origin and the output placement at ``q``, divided by the length:
         what tells two assembly modes apart (idle motions leave it unchanged)."""
@@ -563,6 +608,94 @@ def describe_motion(model: ClosureModel, kin: TreeKinematics, v: np.ndarray) -> 
             return f"{_body_name(tree, j)} spins about the line through {through}{where}"
     return (f"joints {', '.join(moving)} move (bodies "
             f"{', '.join(_body_name(tree, j) for j in bodies)})")
+
+
+def _loop_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, support: set
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The twists (rows, world origin) of the freedoms of actuator ``j``'s side of the
+    loops ``loops`` (its "leg"): the joints on the tree path from the loop's branching
+    point to the closure frame on ``j``'s side (those of ``support`` left out) and what
+    the closure leaves free (rotations about the point of a point closure, about the
+    axis of a revolute one). Returns ``(passive, actuated)``: ``actuated`` is joint
+    ``j``'s."""
+    tree, J = model.tree, kin.joint_twists
+    passive, actuated = [], []
+    for c in loops:
+        cl = model.closures[c]
+        fa, fb = (tree.getFrameId(f) for f in (cl.frame_a, cl.frame_b))
+        sa, sb = (set(tree.supports[tree.frames[f].parentJoint]) for f in (fa, fb))
+        path = ((sa - sb) if j in sa else (sb - sa)) - support - {0}
+        for k in sorted(path):
+            rows = J[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
+            (actuated if k == j else passive).extend(rows)
+        C = kin.frame_placements[fa] * cl.placement_a
+        axes = np.eye(3) if cl.kind == "point" else (
+            C.rotation[:, 2:] .T if cl.kind == "revolute" else np.zeros((0, 3)))
+        passive.extend(np.r_[w, np.cross(C.translation, w)] for w in axes)
+    return np.array(passive).reshape(-1, 6), np.array(actuated).reshape(-1, 6)
+
+
+def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops,
+                         out_joint: int, p: np.ndarray, rtol: float = RANK_RTOL
+                         ) -> np.ndarray:
+    """The wrench actuator ``j``'s loops pass on to the output (:meth:`Linkage.
+    transmission`), a unit force or unit couple about the world origin: reciprocal to
+    the loops' passive freedoms, orthogonal (homogenised about ``p``) to the wrenches
+    reciprocal to all their freedoms; zeros when the actuator's twist depends on them."""
+    L = model.length
+    # the output body's own support joints carry the output's motion, not the leg's
+    support = set() if model.output_point else set(model.tree.supports[out_joint])
+    passive, act = _loop_freedoms(model, kin, loops, j, support)
+
+    def reciprocal(T):
+        X = homogenised_about(T, p, L)[:, [3, 4, 5, 0, 1, 2]] if len(T) else np.zeros((0, 6))
+        r = _svd_rank(X, rtol)[0] if len(T) else 0
+        return np.linalg.svd(np.vstack([X, np.zeros((1, 6))]), full_matrices=True)[2][r:]
+
+    free = reciprocal(passive)
+    cons = reciprocal(np.vstack([passive, act]))
+    W = free - (free @ cons.T) @ cons if len(cons) else free
+    _, sv, Vt = np.linalg.svd(W)
+    if not len(sv) or sv[0] <= rtol:
+        return np.zeros(6)
+    zeta = from_homogenised(Vt[0][None], p, L)[0]
+    f, m = zeta[:3], zeta[3:]
+    s = np.linalg.norm(f) if np.linalg.norm(f) * L > rtol * np.linalg.norm(m) else np.linalg.norm(m)
+    return zeta / s
+
+
+def _distance_to_axis(wrench: np.ndarray, p: np.ndarray) -> float:
+    """Distance from the point ``p`` to the axis of ``wrench`` (axis-first, world
+    origin); for a couple, 0."""
+    f, m = wrench[:3], wrench[3:]
+    ff = f @ f
+    if ff == 0.0:
+        return 0.0
+    foot = np.cross(f, m) / ff  # the axis point nearest the origin
+    return float(np.linalg.norm(np.cross(p - foot, f)) / np.sqrt(ff))
+
+
+def _input_point(tree: pin.Model, J: np.ndarray, wrench: np.ndarray, j: int,
+                 fallback: np.ndarray) -> np.ndarray:
+    """Where an actuation wrench acts on the actuated link (joint ``j``'s child body):
+    the point of its axis nearest to the axis of the first revolute child joint that
+    the wrench axis is not parallel to (the rule of
+    :func:`pkm_pin.transmission.leg_points`: a five-bar's elbow); else the axis point
+    nearest to ``fallback``."""
+    from .transmission import PARALLEL_SIN, nearest_point
+
+    for k in range(1, tree.njoints):
+        jk = tree.joints[k]
+        if tree.parents[k] != j or jk.nv != 1 or not np.any(J[jk.idx_v, :3]):
+            continue
+        p, sin = nearest_point(wrench, J[jk.idx_v])
+        if sin > PARALLEL_SIN:
+            return p
+    f = wrench[:3]
+    if f @ f == 0.0:
+        return np.array(fallback, dtype=float)
+    foot, d = np.cross(f, wrench[3:]) / (f @ f), f / np.linalg.norm(f)
+    return foot + ((fallback - foot) @ d) * d
 
 
 def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:

@@ -121,6 +121,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "singularity": an.singularity,
         "constraint_singular": an.constraint_singular,
         "indices": {k: _finite_or_none(v) for k, v in an.indices.items()},
+        "transmission": _transmission(link, assembly),
         "uncontrolled_twist": None,
         "crosscheck": None,
         "crosscheck_max_error": None,
@@ -173,8 +174,25 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
     out += [f"    {_row(row)}" for row in r["A"]]
     out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
     out += [f"singularity        {r['singularity']}", f"indices            {idx}"]
+    tr = r.get("transmission")
+    if tr is not None:
+        out += [f"transmission       LTI = {tr['lti']:.3g}: {tr['words']}"]
     out += [f"plot               {p}" for p in r.get("plots", [])]
     return "\n".join(out)
+
+
+def _transmission(link, assembly) -> dict | None:
+    """:meth:`Linkage.transmission` as plain data (ITI/OTI per actuator, LTI, the
+    weakest in words); ``None`` where it is not defined."""
+    from .errors import PkmError
+
+    try:
+        tr = link.transmission(assembly)
+    except (PkmError, np.linalg.LinAlgError):
+        return None
+    return {"iti": [_finite_or_none(v) for v in tr.iti],
+            "oti": [_finite_or_none(v) for v in tr.oti],
+            "lti": _finite_or_none(tr.lti), "good": tr.good, "words": tr.worst}
 
 
 def linkage_markdown(r: dict) -> str:

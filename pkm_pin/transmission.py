@@ -409,8 +409,9 @@ class Transmission:
 
     @property
     def good(self) -> bool:
-        """Whether ``LTI`` and ``CTI`` are at least :data:`GOOD_LTI`."""
-        return bool(self.lti >= GOOD_LTI and self.cti >= GOOD_LTI)
+        """Whether ``LTI`` and ``CTI`` are at least :data:`GOOD_LTI` (a ``CTI`` of nan,
+        not defined — a general linkage's —, is not held against it)."""
+        return bool(self.lti >= GOOD_LTI and (np.isnan(self.cti) or self.cti >= GOOD_LTI))
 
     @property
     def worst(self) -> str:

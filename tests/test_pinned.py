@@ -264,3 +264,44 @@ def test_forward_kinematics_all_raises_out_of_reach(five):
 
     with pytest.raises(ForwardKinematicsError, match="no assembly.*not proven"):
         five.forward_kinematics_all([math.pi / 2 + 1.5, math.pi / 2 - 1.5], patience=1)
+
+
+def test_linkage_transmission_of_the_five_bar_and_four_bar_closed_forms(five):
+    """Linkage.transmission (issue 18 for general linkages): the five-bar's
+    ITI_i = |sin γ_i| (proximal vs distal link of leg i) and OTI = |sin ψ| (between
+    the distal links); the four-bar driven by its crank: ITI = |sin(θ3 − θ2)| (crank vs
+    coupler) and OTI = |sin μ| = |sin(θ3 − θ4)| (the transmission angle)."""
+    from pkm_pin.builders.loops import four_bar_home
+
+    for shift in ([0.0, 0.0], [0.2, -0.1], [-0.3, 0.25]):
+        a = five.forward_kinematics(five.assemble().q_actuated + shift, guess=five.assemble())
+        _, elbows, tips = _five_bar_points(a.q)
+        base = [np.array([-A, 0.0]), np.array([A, 0.0])]
+        prox = [e - b for e, b in zip(elbows, base)]
+        dist = [tips[0] - e for e in elbows]
+        sin = [abs(np.cross(p, d)) / (np.linalg.norm(p) * np.linalg.norm(d))
+               for p, d in zip(prox, dist)]
+        psi = abs(np.cross(*dist)) / (np.linalg.norm(dist[0]) * np.linalg.norm(dist[1]))
+        tr = five.transmission(a)
+        np.testing.assert_allclose(tr.iti, sin, atol=1e-10)
+        np.testing.assert_allclose(tr.oti, [psi, psi], atol=1e-10)
+        assert tr.lti == pytest.approx(min(*sin, psi), abs=1e-10) and np.isnan(tr.cti)
+    bar = load_mechanism(ROOT / "models" / "loops" / "four_bar.urdf")
+    home = bar.assemble()
+    t2_home = four_bar_home()[0]
+    for dq in (0.0, 0.7, 2.0, -1.2):
+        a = bar.forward_kinematics([dq], guess=home)
+        t2, t3, t4 = four_bar_home(crank_angle=t2_home + dq)
+        tr = bar.transmission(a)
+        assert tr.iti[0] == pytest.approx(abs(math.sin(t3 - t2)), abs=1e-9)
+        assert tr.oti[0] == pytest.approx(abs(math.sin(t3 - t4)), abs=1e-9)
+
+
+def test_linkage_report_gives_the_transmission_in_words(five):
+    from pkm_pin.report_linkage import linkage_report_data, linkage_text
+
+    a = five.assemble()
+    data = linkage_report_data(five, a)
+    tr = five.transmission(a)
+    assert data["transmission"]["lti"] == pytest.approx(tr.lti, rel=1e-12)
+    assert f"transmission       LTI = {tr.lti:.3g}: {tr.worst}" in linkage_text(data)
