@@ -502,3 +502,36 @@ def payload_wrench(mass: float, centre_of_mass, g=(0.0, 0.0, -9.81)) -> np.ndarr
         raise InputError(f"mass must be a finite non-negative number [kg], got {mass!r}")
     f = m * as_vector3(g, "g")
     return np.concatenate([f, _cross(as_vector3(centre_of_mass, "centre_of_mass"), f)])
+
+
+def worst_efforts(mech, poses, wrench) -> dict:
+    """The largest actuator efforts over a set of poses, for one wrench the actuators
+    apply to the platform (``−payload_wrench(...)`` to hold a payload; a callable
+    ``wrench(pose)`` for a load that depends on the pose): each pose assembled from the
+    previous one (order them along a path) and :meth:`Analysis.actuator_efforts`.
+
+    Returns:
+        ``{"efforts": (N, n) τ [N or N m] (nan where the pose does not assemble or is
+        type II), "worst": (n,) max |τ_i| over the poses, "pose_index": (n,) where,
+        "failures": [(index, reason)]}``.
+    """
+    from .assembly import as_pose
+    from .errors import PkmError
+
+    poses = [as_pose(p) for p in poses]
+    n = mech.n_actuated
+    tau = np.full((len(poses), n), np.nan)
+    failures, guess = [], None
+    for i, pose in enumerate(poses):
+        try:
+            a = mech.assemble(pose, guess)
+            w = wrench(pose) if callable(wrench) else wrench
+            tau[i] = mech.analyze(a).actuator_efforts(w)
+            guess = a
+        except PkmError as e:
+            failures.append((i, str(e)))
+    mag = np.where(np.isnan(tau), -np.inf, np.abs(tau))
+    idx = np.argmax(mag, axis=0) if len(poses) else np.zeros(n, int)
+    worst = np.array([mag[k, a] if len(poses) else np.nan for a, k in enumerate(idx)])
+    return {"efforts": tau, "worst": np.where(np.isinf(worst), np.nan, worst),
+            "pose_index": idx, "failures": failures}

@@ -409,3 +409,20 @@ def test_sweep_lti_equals_the_analysis():
                                       rel=1e-9)
     assert "lti" in res.arrays()
     assert np.isnan(sweep.sweep(mech, X).lti).all()
+
+
+def test_worst_efforts_over_poses_is_the_largest_per_pose_effort():
+    """transmission.worst_efforts: the per-actuator maximum of |τ| over the poses, each
+    τ being Analysis.actuator_efforts at that pose (a payload held by a Stewart)."""
+    from pkm_pin.transmission import payload_wrench, worst_efforts
+
+    mech = mechanism("stewart")
+    h = mech.home
+    poses = [pin.SE3(h.rotation, h.translation + [dx, 0.0, 0.0]) for dx in (-0.1, 0.0, 0.1)]
+    w = -payload_wrench(10.0, h.translation)
+    out = worst_efforts(mech, poses, w)
+    per_pose = np.array([mech.analyze(mech.assemble(p)).actuator_efforts(w) for p in poses])
+    np.testing.assert_allclose(out["efforts"], per_pose, rtol=1e-9)
+    np.testing.assert_allclose(out["worst"], np.abs(per_pose).max(axis=0), rtol=1e-12)
+    np.testing.assert_array_equal(out["pose_index"], np.abs(per_pose).argmax(axis=0))
+    assert out["failures"] == []
