@@ -454,6 +454,13 @@ class Linkage:
             raise self._failure(sol, starts + 4, None, "output pose")
         return self._assembly(sol, iterations + home.iterations)
 
+    def workspace(self, coords=None, **options):
+        """Reachable and singularity-free workspaces of the output point or over actuated
+        coordinates: :func:`pkm_pin.workspace.linkage_workspace`."""
+        from .workspace import linkage_workspace
+
+        return linkage_workspace(self, coords, **options)
+
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output") -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×

@@ -436,6 +436,17 @@ class Mechanism:
         """
         return _sensitivity.sensitivity(self, assembly, parameters)
 
+    def workspace(self, coords=None, **options):
+        """The reachable, singularity-free and good-transmission workspaces over some of
+        the pose coordinates (default the independent ones), with volumes and inscribed
+        shapes (a :class:`~pkm_pin.workspace.Workspace`).
+
+        See :func:`pkm_pin.workspace.workspace`.
+        """
+        from .workspace import workspace
+
+        return workspace(self, coords, **options)
+
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,
               singular_tol: float = CLOSENESS_SINGULAR_TOL,

@@ -1,0 +1,874 @@
+"""Workspaces: where a mechanism reaches, where it is free of singularities, where it
+transmits well, with their volumes and the largest cube and cylinder they hold.
+
+The workspace is sampled over some of the platform's pose coordinates (x, y, z [model
+length unit], roll, pitch, yaw [rad]; default the mechanism's independent coordinates,
+:func:`default_coordinates`), the other coordinates fixed (given by ``at`` or held at
+home), inside a box ``bounds``:
+
+* ``sampling="grid"``: ``n`` cells per coordinate; each cell is sampled at its centre,
+  so the cells tile the box exactly and every volume is a volume *inside the box*;
+* ``sampling="sobol"``: ``samples`` scrambled Sobol points (seeded, :mod:`scipy.stats.qmc`).
+
+Every sample is assembled and analysed by the sweep engine (:func:`pkm_pin.sweep.sweep`:
+compiled legs, chunks, any executor including a Dask client, a progress bar). Kinds:
+
+* ``"reachable"``: the samples that assemble within the joint limits;
+* ``"singularity-free"``: on a grid, the cells connected to the home cell (faces shared)
+  through cells that assemble with the home DOF, with no type I / II / III singularity
+  (:attr:`SweepResult.singularity` "none") and with the same sign of the carried
+  determinant ``det(A Δ)`` as home (:attr:`SweepResult.det`): a grid step across a type
+  II locus changes its sign even when no sample falls on it. With Sobol points there is
+  no neighbourhood: the samples with those properties (connectivity not checked);
+* ``"transmission"``: the singularity-free workspace where the local transmission index
+  LTI (:mod:`pkm_pin.transmission`) is at least ``threshold`` (0.7), again the part
+  connected to home (empty when home itself transmits worse).
+
+Volumes (:class:`Volume`; an area for two coordinates, a product of units for mixed
+coordinates) on a grid are the cell count times the cell volume, with a bracket: a cell
+is a *boundary cell* when one of its 3^k − 1 neighbours (diagonals included) disagrees
+with it; the true volume lies between the volume of the inside cells that are not on
+the boundary and that plus every boundary cell, provided the workspace has no feature
+thinner than two cells (``error`` = the larger distance from the count to the bracket's
+ends, about half the boundary cells; it falls like the cell size). With Sobol points the
+volume is the fraction inside times the box volume and ``error`` three binomial standard
+errors (conservative: quasi-random points converge faster than random ones).
+
+Inscribed shapes (:class:`Inscribed`), centred on ``centre`` (default home) inside a
+kind's workspace: the largest axis-aligned cube (square in 2-D) and, in 3-D, the
+cylinder of largest volume whose axis is along z (else the last coordinate) — what a
+machine-tool designer sizes a machine by. A cell that is not in the workspace, and the
+outside of the box, bound them; they are exact for the grid's cells (a shape touches the
+nearest cell that is out) and ``error`` is one cell size.
+
+General linkages (:class:`~pkm_pin.linkage.Linkage`, :func:`linkage_workspace`) are
+sampled over the output point's coordinates (inverse kinematics) or over actuated
+coordinates (forward kinematics). The closure solver goes from cell to cell from the home
+(reference) cell, each cell warm-started from its solved neighbours, with the solver's
+restarts where they fail: the workspace found is the one connected to home.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections import deque
+from collections.abc import Mapping, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import InputError, PkmError
+
+#: The pose coordinates, in the order of the sweep arrays.
+COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
+#: Workspace kinds.
+KINDS = ("reachable", "singularity-free", "transmission")
+#: Largest number of coordinates sampled at once.
+MAX_COORDINATES = 3
+#: Default half range of an angle [rad] when no bounds are given.
+ANGLE_HALF_RANGE = 0.5
+#: Parasitic coordinates whose completed values stay within this of home (lengths
+#: relative to the characteristic length, angles [rad]) at every probe are taken as
+#: constant: the workspace's poses are then full poses (the fast path of the sweep).
+CONSTANT_COORDINATE_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class Volume:
+    """A workspace's volume (area for two coordinates) with its stated accuracy.
+
+    Attributes:
+        value: Cell count × cell volume (grid), or inside fraction × box volume (Sobol).
+        error: Bound on ``|value − true volume|`` inside the box (module docstring).
+        lower, upper: The bracket (grid), or ``value ∓ error`` (Sobol).
+        cells: Samples inside.
+        boundary_cells: Boundary cells (grid; 0 for Sobol).
+        unit: Unit of the volume, e.g. ``"m^3"``, ``"m^2·rad"``.
+    """
+
+    value: float
+    error: float
+    lower: float
+    upper: float
+    cells: int
+    boundary_cells: int
+    unit: str
+
+    def as_dict(self) -> dict:
+        """Plain data (for JSON)."""
+        return {"value": self.value, "error": self.error, "lower": self.lower,
+                "upper": self.upper, "cells": self.cells,
+                "boundary_cells": self.boundary_cells, "unit": self.unit}
+
+
+@dataclass(frozen=True)
+class Inscribed:
+    """The largest shapes centred on ``centre`` inside a workspace (module docstring).
+
+    Attributes:
+        centre: (k,) their centre in the workspace coordinates.
+        cube: Half side of the largest axis-aligned cube (square in 2-D) [unit of the
+            coordinates]; nan when the coordinates have different units.
+        cylinder_radius, cylinder_half_height: The cylinder of largest volume with its
+            axis along ``axis`` through the centre (3-D, the other two coordinates of
+            one unit); in 2-D the radius is the largest disc's, the half height nan.
+        axis: The cylinder's axis coordinate.
+        error: Accuracy of each size: one cell (the largest spacing); with Sobol
+            points the typical spacing.
+    """
+
+    centre: np.ndarray
+    cube: float
+    cylinder_radius: float
+    cylinder_half_height: float
+    axis: str
+    error: float
+
+    def as_dict(self) -> dict:
+        """Plain data (for JSON)."""
+        return {"centre": [float(c) for c in self.centre], "cube_half_side": self.cube,
+                "cylinder_radius": self.cylinder_radius,
+                "cylinder_half_height": self.cylinder_half_height, "axis": self.axis,
+                "error": self.error}
+
+
+@dataclass(frozen=True, eq=False)
+class Workspace:
+    """A sampled workspace (:func:`workspace`, :func:`linkage_workspace`).
+
+    Attributes:
+        mechanism: The mechanism's name.
+        coords: The sampled coordinates (pose coordinates, or actuated joint names).
+        units: Their units (``"m"``/``"mm"``… or ``"rad"``).
+        bounds: (k, 2) the box.
+        sampling: ``"grid"`` or ``"sobol"``.
+        axes: Grid: the cell centres of each coordinate (``()`` for Sobol).
+        shape: Grid: ``(n_1, …, n_k)``; Sobol: ``(N,)``. Every per-sample array has it.
+        points: (N, k) the samples (grid: cells in C order of ``shape``).
+        fixed: The other coordinates and their values (given or held at home).
+        home: (k,) the home coordinates.
+        masks: Kind → boolean array (``shape``): the samples in that workspace.
+        values: Per-sample arrays: ``ok``, ``singularity`` (class), ``det`` (carried
+            determinant), ``lti`` (nan where not computed).
+        volumes: Kind → :class:`Volume`.
+        inscribed: Kind → :class:`Inscribed` (the singularity-free and transmission
+            workspaces; the reachable one too).
+        counts: Samples, assembled, failures, the kinds' samples, ``on_bounds`` (reachable
+            samples on the box's faces: the reachable workspace extends beyond the box).
+        timing: Seconds: ``evaluate`` (assembly and analysis), ``masks``, ``total``;
+            ``poses_per_s``.
+        threshold: The LTI threshold of the transmission workspace.
+        method: How the samples were evaluated: ``"poses"`` (full poses, the sweep's
+            fast path), ``"completed poses"`` (partial poses completed on the motion),
+            ``"linkage output"``, ``"linkage actuated"``.
+    """
+
+    mechanism: str
+    coords: tuple
+    units: tuple
+    bounds: np.ndarray
+    sampling: str
+    axes: tuple
+    shape: tuple
+    points: np.ndarray = field(repr=False)
+    fixed: dict
+    home: np.ndarray
+    masks: dict = field(repr=False)
+    values: dict = field(repr=False)
+    volumes: dict
+    inscribed: dict
+    counts: dict
+    timing: dict
+    threshold: float
+    method: str
+
+    @property
+    def spacing(self) -> np.ndarray:
+        """(k,) cell sizes (grid; the typical spacing of the samples for Sobol)."""
+        span = self.bounds[:, 1] - self.bounds[:, 0]
+        if self.sampling == "grid":
+            return span / np.array(self.shape, float)
+        return span * len(self.points) ** (-1.0 / len(self.coords))
+
+    def as_dict(self) -> dict:
+        """Plain data (JSON): coordinates, bounds, volumes, inscribed shapes, counts,
+        timing."""
+        return {"mechanism": self.mechanism, "coords": list(self.coords),
+                "units": list(self.units), "bounds": self.bounds.tolist(),
+                "sampling": self.sampling, "shape": list(self.shape),
+                "fixed": {k: float(v) for k, v in self.fixed.items()},
+                "home": self.home.tolist(), "threshold": self.threshold,
+                "method": self.method,
+                "volumes": {k: v.as_dict() for k, v in self.volumes.items()},
+                "inscribed": {k: v.as_dict() for k, v in self.inscribed.items()},
+                "counts": dict(self.counts), "timing": dict(self.timing)}
+
+
+# ================================================================ grid algebra
+def grid_axes(bounds: np.ndarray, n) -> tuple[np.ndarray, ...]:
+    """Cell centres ``lo + (i + ½) h`` of ``n`` cells per coordinate (an int, or one
+    per coordinate) tiling each interval of ``bounds`` (k, 2)."""
+    ns = np.broadcast_to(np.asarray(n), (len(bounds),))
+    out = []
+    for (lo, hi), m in zip(bounds, ns):
+        m = int(m)
+        if m < 2:
+            raise InputError(f"a workspace grid needs at least 2 cells per coordinate, got {m}")
+        h = (hi - lo) / m
+        out.append(lo + (np.arange(m) + 0.5) * h)
+    return tuple(out)
+
+
+def grid_points(axes: Sequence[np.ndarray]) -> np.ndarray:
+    """(N, k) the cells of a grid in C order (the last coordinate fastest)."""
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.stack([m.ravel() for m in mesh], axis=1)
+
+
+def boundary_cells(mask: np.ndarray) -> np.ndarray:
+    """Cells one of whose 3^k − 1 neighbours (diagonals included) disagrees with them;
+    the box's faces are not a boundary (the box is the domain)."""
+    from scipy import ndimage
+
+    mask = np.asarray(mask, bool)
+    full = ndimage.generate_binary_structure(mask.ndim, mask.ndim)
+    inner = ndimage.binary_erosion(mask, full, border_value=1)
+    outer = ndimage.binary_dilation(mask, full)
+    return (mask & ~inner) | (~mask & outer)
+
+
+def grid_volume(mask: np.ndarray, spacing: np.ndarray, unit: str) -> Volume:
+    """:class:`Volume` of the cells of ``mask`` (cells of sizes ``spacing``) with its
+    bracket (module docstring)."""
+    mask = np.asarray(mask, bool)
+    cell = float(np.prod(spacing))
+    edge = boundary_cells(mask)
+    n_in, n_in_edge, n_out_edge = int(mask.sum()), int((mask & edge).sum()), \
+        int((~mask & edge).sum())
+    value = n_in * cell
+    lower, upper = (n_in - n_in_edge) * cell, (n_in + n_out_edge) * cell
+    return Volume(value, max(value - lower, upper - value), lower, upper, n_in,
+                  n_in_edge + n_out_edge, unit)
+
+
+def sample_volume(inside: np.ndarray, box_volume: float, unit: str) -> Volume:
+    """:class:`Volume` from the inside fraction of uniform samples of a box: three
+    binomial standard errors."""
+    inside = np.asarray(inside, bool)
+    N = max(inside.size, 1)
+    p = inside.sum() / N
+    value = float(p * box_volume)
+    error = float(3.0 * math.sqrt(max(p * (1 - p), 1.0 / N) / N) * box_volume)
+    return Volume(value, error, value - error, value + error, int(inside.sum()), 0, unit)
+
+
+def component(mask: np.ndarray, index) -> np.ndarray:
+    """The cells of ``mask`` connected to cell ``index`` through shared faces (empty
+    when that cell is not in ``mask``)."""
+    from scipy import ndimage
+
+    mask = np.asarray(mask, bool)
+    if index is None or not mask[tuple(index)]:
+        return np.zeros_like(mask)
+    labels, _ = ndimage.label(mask, ndimage.generate_binary_structure(mask.ndim, 1))
+    return labels == labels[tuple(index)]
+
+
+def _cylinder(d_r: np.ndarray, d_z: np.ndarray, r_box: float, z_box: float
+              ) -> tuple[float, float]:
+    """Radius and half height of the largest-volume cylinder avoiding every obstacle
+    (an obstacle ``i`` is avoided when ``d_r[i] ≥ r`` or ``d_z[i] ≥ h``), within the box
+    (``r ≤ r_box``, ``h ≤ z_box``)."""
+    order = np.argsort(d_r)
+    d_r, d_z = d_r[order], d_z[order]
+    # radius just up to d_r[i]: the obstacles j < i (d_r[j] < r) bound the height
+    best, best_rh = -1.0, (0.0, 0.0)
+    radii = np.r_[d_r[d_r < r_box], r_box]
+    prefix = np.minimum.accumulate(np.r_[z_box, d_z])  # min over the first i obstacles
+    for r in np.unique(radii):
+        i = int(np.searchsorted(d_r, r, side="left"))  # obstacles with d_r < r
+        h = float(prefix[i])
+        if r * r * h > best:
+            best, best_rh = r * r * h, (float(r), h)
+    return best_rh
+
+
+def inscribed_shapes(mask: np.ndarray, points: np.ndarray, centre: np.ndarray,
+                     bounds: np.ndarray, spacing: np.ndarray, units: Sequence[str],
+                     coords: Sequence[str], grid: bool) -> Inscribed:
+    """:class:`Inscribed` in the samples of ``mask`` centred on ``centre``: the samples
+    out of it are obstacles (whole cells on a grid, points otherwise), and so is the
+    outside of ``bounds``."""
+    out = points[~np.asarray(mask, bool).ravel()]
+    half = 0.5 * spacing if grid else np.zeros_like(spacing)
+    gap = np.maximum(np.abs(out - centre) - half, 0.0)  # per-axis distance to each cell
+    to_box = np.minimum(centre - bounds[:, 0], bounds[:, 1] - centre)
+    same_unit = len(set(units)) == 1
+    err = float(np.max(spacing))
+    cube = np.nan
+    if same_unit:
+        cube = float(min(gap.max(axis=1).min() if len(gap) else np.inf, to_box.min()))
+        cube = max(cube, 0.0)
+    k = len(coords)
+    ax = coords.index("z") if "z" in coords else k - 1
+    radial = [i for i in range(k) if i != ax] if k == 3 else list(range(k))
+    radius = half_height = np.nan
+    if len({units[i] for i in radial}) == 1:
+        d_r = np.sqrt((gap[:, radial] ** 2).sum(axis=1))
+        r_box = float(to_box[radial].min())
+        if k == 3:
+            radius, half_height = _cylinder(d_r, gap[:, ax], r_box, float(to_box[ax]))
+        elif k == 2:
+            radius = float(min(d_r.min() if len(d_r) else np.inf, r_box))
+    if not bool(np.asarray(mask, bool).any()):
+        cube, radius, half_height = 0.0, 0.0, 0.0 if k == 3 else np.nan
+    return Inscribed(np.asarray(centre, float), cube, radius, half_height, coords[ax], err)
+
+
+# ============================================================ the coordinates
+def default_coordinates(mech) -> tuple[str, ...]:
+    """The mechanism's independent coordinates at home (those
+    :meth:`Mechanism.complete_pose` accepts, first found in the order x, y, z, roll,
+    pitch, yaw: a Delta x, y, z; a 3-RPS z, roll, pitch; a 3-RPR x, z, pitch); with more
+    than three (a 6-DOF hexapod), x, y, z: the constant-orientation workspace."""
+    from .position import coordinate_plan
+    from .solve import CoordinateSystem
+
+    home = mech.home_assembly
+    system = CoordinateSystem(mech, home.pose, home.leg_q)
+    _, held, _ = coordinate_plan(mech, system, [])
+    names = tuple(COORDINATES[k] for k in held)
+    return names if len(names) <= MAX_COORDINATES else names[:MAX_COORDINATES]
+
+
+def _check_coords(coords, allowed: Sequence[str]) -> tuple[str, ...]:
+    if isinstance(coords, str):
+        coords = (coords,)
+    names = tuple(str(c).strip() for c in coords)
+    bad = [c for c in names if c not in allowed]
+    if bad or not names or len(set(names)) != len(names) or len(names) > MAX_COORDINATES:
+        raise InputError(f"a workspace is sampled over 1 to {MAX_COORDINATES} distinct "
+                         f"coordinates among {', '.join(allowed)}; got {', '.join(names)}")
+    return names
+
+
+def _bounds(bounds, coords, home: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """(k, 2) the box: ``bounds`` (a mapping name → (lo, hi), or one pair per
+    coordinate, or a flat list lo1 hi1 lo2 hi2 …), default home ± ``half``."""
+    k = len(coords)
+    if bounds is None:
+        return np.stack([home - half, home + half], axis=1)
+    if isinstance(bounds, Mapping):
+        unknown = [b for b in bounds if b not in coords]
+        if unknown:
+            raise InputError(f"bounds given for {unknown}, not among the sampled "
+                             f"coordinates {list(coords)}")
+        B = np.stack([home - half, home + half], axis=1)
+        for name, pair in bounds.items():
+            B[coords.index(name)] = np.asarray(pair, float)
+    else:
+        B = np.asarray(bounds, float)
+        if B.shape != (k, 2):
+            B = B.reshape(-1)
+            if B.size != 2 * k:
+                raise InputError(f"bounds: {2 * k} numbers (lo, hi per coordinate) for "
+                                 f"{', '.join(coords)}, got {B.size}")
+            B = B.reshape(k, 2)
+    if not np.all(np.isfinite(B)) or np.any(B[:, 1] <= B[:, 0]):
+        raise InputError(f"bounds must be finite with lo < hi for each coordinate, got "
+                         f"{B.tolist()}")
+    return B
+
+
+def _units(coords, length_unit: str) -> tuple[str, ...]:
+    return tuple("rad" if c in COORDINATES[3:] else length_unit for c in coords)
+
+
+def _volume_unit(units: Sequence[str]) -> str:
+    parts = []
+    for u in dict.fromkeys(units):
+        p = sum(1 for v in units if v == u)
+        parts.append(u if p == 1 else f"{u}^{p}")
+    return "·".join(parts)
+
+
+def _home_cell(axes, bounds, home) -> tuple | None:
+    """The grid index of the cell holding ``home`` (None outside the box)."""
+    if np.any(home < bounds[:, 0]) or np.any(home > bounds[:, 1]):
+        return None
+    idx = []
+    for a, (lo, hi), h in zip(axes, bounds, home):
+        n = len(a)
+        idx.append(int(min(max(math.floor((h - lo) / (hi - lo) * n), 0), n - 1)))
+    return tuple(idx)
+
+
+def _samples(bounds, sampling, n, samples, seed):
+    """``(axes, shape, points)`` of a grid or of Sobol points."""
+    if sampling == "grid":
+        axes = grid_axes(bounds, n)
+        return axes, tuple(len(a) for a in axes), grid_points(axes)
+    if sampling != "sobol":
+        raise InputError(f"sampling must be 'grid' or 'sobol', got {sampling!r}")
+    from scipy.stats import qmc
+
+    N = int(samples if samples is not None else int(n) ** len(bounds))
+    if N < 2:
+        raise InputError(f"samples must be at least 2, got {N}")
+    u = qmc.Sobol(len(bounds), scramble=True, seed=seed).random(N)
+    return (), (N,), bounds[:, 0] + u * (bounds[:, 1] - bounds[:, 0])
+
+
+# ============================================================ mechanisms
+def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
+              samples: int | None = None, seed: int = 0, at: Mapping | None = None,
+              kinds: Sequence[str] | None = None, threshold: float | None = None,
+              centre=None, executor: Executor | None = None, chunk_size: int = 2000,
+              progress: bool = False) -> Workspace:
+    """The workspaces of a mechanism over some of its pose coordinates (module docstring).
+
+    Args:
+        mech: A :class:`~pkm_pin.Mechanism` (a :class:`~pkm_pin.linkage.Linkage` goes to
+            :func:`linkage_workspace`).
+        coords: 1 to 3 of x, y, z, roll, pitch, yaw (default
+            :func:`default_coordinates`): positions at a fixed orientation give the
+            constant-orientation workspace, angles at a fixed position the orientation
+            workspace.
+        bounds: The box: ``{name: (lo, hi)}`` or one (lo, hi) per coordinate (default
+            home ± the characteristic length, angles ± 0.5 rad).
+        n: Grid cells per coordinate (an int or one per coordinate).
+        sampling: ``"grid"`` or ``"sobol"`` (``samples`` points, default ``n**k``,
+            scrambled with ``seed``).
+        at: Values of other pose coordinates ``{name: value}`` (default: those the DOF
+            needs held at home; the rest, parasitic motions, are solved for).
+        kinds: Among :data:`KINDS` (default all).
+        threshold: LTI of the transmission workspace (default
+            :data:`pkm_pin.transmission.GOOD_LTI`, 0.7).
+        centre: Centre of the inscribed shapes (k,) (default home).
+        executor, chunk_size, progress: As :func:`pkm_pin.sweep.sweep`.
+
+    Raises:
+        InputError: malformed coordinates, bounds or options; home outside the bounds
+            for a connected kind. DependentCoordinates: the coordinates (with ``at``)
+            are not independent for this mechanism.
+    """
+    from .linkage import Linkage
+    from .transmission import GOOD_LTI
+
+    if isinstance(mech, Linkage):
+        return linkage_workspace(mech, coords, bounds=bounds, n=n, sampling=sampling,
+                                 samples=samples, seed=seed, kinds=kinds, centre=centre,
+                                 progress=progress)
+    t0 = time.perf_counter()
+    kinds = _kinds(kinds, KINDS)
+    threshold = GOOD_LTI if threshold is None else float(threshold)
+    coords = default_coordinates(mech) if coords is None else _check_coords(coords, COORDINATES)
+    at = dict(at or {})
+    plan = _pose_plan(mech, coords, at)
+    home = plan["home"][[COORDINATES.index(c) for c in coords]]
+    L = mech.characteristic_length
+    half = np.array([L if c in COORDINATES[:3] else ANGLE_HALF_RANGE for c in coords])
+    B = _bounds(bounds, coords, home, half)
+    axes, shape, points = _samples(B, sampling, n, samples, seed)
+    method, X = _poses(mech, coords, plan, points, B, seed)
+    t1 = time.perf_counter()
+    res = _sweep_samples(mech, X, method, "transmission" in kinds, executor, chunk_size,
+                         progress)
+    t2 = time.perf_counter()
+    values = {"ok": res.ok.reshape(shape), "singularity": res.singularity.reshape(shape),
+              "det": res.det.reshape(shape), "lti": res.lti.reshape(shape),
+              "dof": res.dof.reshape(shape)}
+    home_dof = mech.home_analysis.dof
+    home_det = _home_det(mech)
+    ws = _finish(mech.name, coords, _units(coords, mech.length_unit), B, sampling, axes,
+                 shape, points, plan["fixed"], home, values, home_dof, home_det, kinds,
+                 threshold, centre, method, t0, t1, t2, len(res.failures))
+    return ws
+
+
+def _kinds(kinds, allowed) -> tuple[str, ...]:
+    if kinds is None:
+        return tuple(allowed)
+    kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
+    bad = [k for k in kinds if k not in KINDS]
+    if bad or not kinds:
+        raise InputError(f"workspace kinds are {', '.join(KINDS)}; got {', '.join(kinds)}")
+    missing = [k for k in kinds if k not in allowed]
+    if missing:
+        raise InputError(f"{', '.join(missing)}: not available here (available: "
+                         f"{', '.join(allowed)})")
+    return tuple(k for k in KINDS if k in kinds or k == "reachable")
+
+
+def _pose_plan(mech, coords, at: dict) -> dict:
+    """The coordinates held or given besides ``coords``, and those solved for."""
+    from .position import coordinate_plan, partial_pose
+    from .solve import CoordinateSystem, pose_coordinates
+
+    both = [c for c in coords if c in at]
+    if both:
+        raise InputError(f"at: {both[0]} is a sampled coordinate")
+    at = partial_pose(at)
+    home_asm = mech.home_assembly
+    home = pose_coordinates(home_asm.pose)
+    system = CoordinateSystem(mech, home_asm.pose, home_asm.leg_q)
+    _, held_rows, _ = coordinate_plan(mech, system, list(coords) + list(at))
+    fixed = {**at, **{COORDINATES[k]: float(home[k]) for k in held_rows}}
+    solved = [c for c in COORDINATES if c not in coords and c not in fixed]
+    return {"home": home, "fixed": fixed, "solved": solved}
+
+
+def _poses(mech, coords, plan, points, bounds, seed) -> tuple[str, object]:
+    """The samples as full poses (N, 6) when the solved-for coordinates are constant
+    over the box (probed), else as partial poses (a list of mappings)."""
+    home, fixed, solved = plan["home"], plan["fixed"], plan["solved"]
+    full = np.tile(home, (len(points), 1))
+    for name, value in fixed.items():
+        full[:, COORDINATES.index(name)] = value
+    for j, c in enumerate(coords):
+        full[:, COORDINATES.index(c)] = points[:, j]
+    if not solved or _constant(mech, coords, plan, bounds, seed):
+        return "poses", full
+    return "completed poses", [{**{c: float(p[j]) for j, c in enumerate(coords)}, **fixed}
+                               for p in points]
+
+
+def _constant(mech, coords, plan, bounds, seed, probes: int = 6) -> bool:
+    """Whether the solved-for coordinates keep their home values at ``probes`` seeded
+    random points within a tenth of the box's span of home (a Delta's or a planar
+    mechanism's orientation; not a 3-RPS's parasitic motions). At least two probes must
+    complete."""
+    from .position import complete
+    from .solve import pose_coordinates
+
+    rng = np.random.default_rng(seed)
+    span = bounds[:, 1] - bounds[:, 0]
+    home, idx = plan["home"], [COORDINATES.index(c) for c in plan["solved"]]
+    mid = home[[COORDINATES.index(c) for c in coords]]
+    scale = np.array([mech.characteristic_length] * 3 + [1.0] * 3)[idx]
+    done = 0
+    for _ in range(probes):
+        p = mid + (rng.random(len(coords)) - 0.5) * 0.2 * span
+        try:
+            asm = complete(mech, {**{c: float(v) for c, v in zip(coords, p)}, **plan["fixed"]})
+        except PkmError:
+            continue
+        got = pose_coordinates(asm.pose)[idx]
+        diff = np.abs(got - home[idx])
+        diff = np.where(np.array(idx) >= 3, np.abs((diff + np.pi) % (2 * np.pi) - np.pi), diff)
+        if np.any(diff / scale > CONSTANT_COORDINATE_TOL):
+            return False
+        done += 1
+    return done >= 2
+
+
+def _sweep_samples(mech, X, method, transmission, executor, chunk_size, progress):
+    """The sweep of the samples (partial poses completed in a serpentine order, each from
+    its neighbour, and given back in the samples' order)."""
+    import dataclasses
+
+    from .sweep import serpentine_order
+
+    options = dict(executor=executor, chunk_size=chunk_size, progress=progress,
+                   transmission=transmission)
+    if method == "poses":
+        return mech.sweep(X, **options)
+    keys = np.array([[p[c] for c in sorted(p)] for p in X])
+    order = serpentine_order(keys)
+    res = mech.sweep([X[k] for k in order], **options)
+    back = np.empty_like(order)
+    back[order] = np.arange(len(order))
+    out = {}
+    for f in dataclasses.fields(res):
+        a = getattr(res, f.name)
+        if isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == len(order):
+            out[f.name] = a[back]
+        elif f.name == "failures":
+            out[f.name] = sorted((int(order[i]), r) for i, r in a)
+        else:
+            out[f.name] = a
+    return type(res)(**out)
+
+
+def _home_det(mech) -> float:
+    """The carried determinant at the home pose (its sign is the home side of the type
+    II loci): a one-pose sweep of home."""
+    res = mech.sweep([mech.home])
+    return float(res.det[0])
+
+
+def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, values,
+            home_dof, home_det, kinds, threshold, centre, method, t0, t1, t2,
+            failures) -> Workspace:
+    """The masks, volumes and inscribed shapes from the per-sample values."""
+    ok, cls, det, lti = values["ok"], values["singularity"], values["det"], values["lti"]
+    grid = sampling == "grid"
+    masks = {"reachable": ok.astype(bool)}
+    start = _home_cell(axes, B, home) if grid else None
+    free = ok & (cls == "none") & (values["dof"] == home_dof)
+    if np.isfinite(home_det) and home_det != 0:
+        free &= np.sign(np.nan_to_num(det, nan=home_det)) == np.sign(home_det)
+    if "singularity-free" in kinds or "transmission" in kinds:
+        if grid and start is None:
+            raise InputError(f"home {np.round(home, 6).tolist()} is outside the bounds "
+                             f"{B.tolist()}: the connected workspaces grow from home")
+        masks["singularity-free"] = component(free, start) if grid else free
+    if "transmission" in kinds:
+        good = masks["singularity-free"] & (np.nan_to_num(lti, nan=-1.0) >= threshold)
+        masks["transmission"] = component(good, start) if grid else good
+    k = len(coords)
+    spacing = (B[:, 1] - B[:, 0]) / np.array(shape, float) if grid else \
+        (B[:, 1] - B[:, 0]) * len(points) ** (-1.0 / k)
+    unit = _volume_unit(units)
+    box = float(np.prod(B[:, 1] - B[:, 0]))
+    volumes = {kind: grid_volume(m, spacing, unit) if grid else sample_volume(m, box, unit)
+               for kind, m in masks.items()}
+    c = np.asarray(home if centre is None else centre, float)
+    if c.shape != (k,) or not np.all(np.isfinite(c)):
+        raise InputError(f"centre must be {k} finite numbers ({', '.join(coords)}), got "
+                         f"{np.shape(c)}")
+    inscribed = {kind: inscribed_shapes(m, points, c, B, spacing, units, coords, grid)
+                 for kind, m in masks.items()}
+    t3 = time.perf_counter()
+    on_bounds = 0
+    if grid:
+        edge = np.zeros(shape, bool)
+        for d in range(k):
+            sl = [slice(None)] * k
+            sl[d] = [0, shape[d] - 1]
+            edge[tuple(sl)] = True
+        on_bounds = int((masks["reachable"] & edge).sum())
+    counts = {"samples": int(ok.size), "assembled": int(ok.sum()), "failures": int(failures),
+              **{kind: int(m.sum()) for kind, m in masks.items()}, "on_bounds": on_bounds}
+    timing = {"evaluate": t2 - t1, "masks": t3 - t2, "total": t3 - t0,
+              "poses_per_s": ok.size / max(t2 - t1, 1e-12)}
+    return Workspace(name, tuple(coords), tuple(units), B, sampling, tuple(axes),
+                     tuple(shape), points, dict(fixed), np.asarray(home, float), masks,
+                     values, volumes, inscribed, counts, timing, float(threshold), method)
+
+
+# ============================================================ general linkages
+def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "grid",
+                      samples: int | None = None, seed: int = 0,
+                      kinds: Sequence[str] | None = None, centre=None, max_iter: int = 20,
+                      progress: bool = False) -> Workspace:
+    """The reachable and singularity-free workspaces of a general linkage (module
+    docstring), on a grid.
+
+    Args:
+        link: The :class:`~pkm_pin.linkage.Linkage`.
+        coords: The output point's coordinates among x, y, z (inverse kinematics of the
+            output: default those it moves along, when the output is a point) or actuated
+            joint names (forward kinematics; default the first two when the output is
+            not a point); the other actuated values, or output coordinates, stay at the
+            reference assembly's.
+        bounds, n: As :func:`workspace` (default: the reference ± the characteristic
+            length, or the actuated joints' limits / ± π).
+        kinds: ``"reachable"``, ``"singularity-free"`` (the transmission indices are not
+            computed for general linkages).
+        centre: Of the inscribed shapes (default: the reference).
+        max_iter: Newton iterations of each cell's solve.
+    """
+    from .linkage import _pose_rows
+    from .solve import iter_tree_starts, solve_tree
+
+    if sampling != "grid":
+        raise InputError("a linkage's workspace grows from cell to cell: sampling='grid'")
+    t0 = time.perf_counter()
+    kinds = _kinds(kinds, KINDS[:2])
+    model = link.model
+    ref = link.assemble()
+    out_xyz = ref.output_pose.translation.copy()
+    if coords is None:
+        coords = _default_linkage_coords(link, ref)
+    coords = (coords,) if isinstance(coords, str) else tuple(coords)
+    actuated = all(c in link.actuated for c in coords)
+    if actuated:
+        coords = _check_coords(coords, link.actuated)
+        idx = [link.actuated.index(c) for c in coords]
+        home = ref.q_actuated[idx].copy()
+        half = np.array([np.pi if _unit_of(link, c) == "rad" else model.length
+                         for c in coords])
+        units = tuple(_unit_of(link, c) for c in coords)
+        B = _bounds(bounds, coords, home, half) if bounds is not None else \
+            np.array([_limits(link, c, h, hf) for c, h, hf in zip(coords, home, half)])
+        fixed = {a: float(v) for a, v in zip(link.actuated, ref.q_actuated)
+                 if a not in coords}
+        method = "linkage actuated"
+    else:
+        if not model.output_point:
+            raise InputError("a linkage's workspace over output coordinates needs a point "
+                             "output (--point); give actuated joint names instead")
+        coords = _check_coords(coords, COORDINATES[:3])
+        idx = [COORDINATES.index(c) for c in coords]
+        home = out_xyz[idx]
+        B = _bounds(bounds, coords, home, np.full(len(coords), model.length))
+        units = ("m",) * len(coords)
+        fixed = {c: float(out_xyz[k]) for k, c in enumerate(COORDINATES[:3])
+                 if c not in coords}
+        method = "linkage output"
+        rows = _pose_rows(model, model.kinematics(ref.q))
+    axes, shape, points = _samples(B, "grid", n, None, seed)
+    start = _home_cell(axes, B, home)
+    if start is None:
+        raise InputError(f"the reference {np.round(home, 6).tolist()} is outside the bounds "
+                         f"{B.tolist()}: a linkage's workspace grows from it")
+
+    def solve(cell, q0):
+        p = points[np.ravel_multi_index(cell, shape)]
+        if actuated:
+            targets = ref.q_actuated.copy()
+            targets[idx] = p
+            return solve_tree(model, q0, targets=targets, max_iter=max_iter)
+        xyz = out_xyz.copy()
+        xyz[idx] = p
+        return solve_tree(model, q0, pose=pin.SE3(np.eye(3), xyz), pose_rows=rows,
+                          max_iter=max_iter)
+
+    t1 = time.perf_counter()
+    Q = _grow(shape, start, ref.q, solve, lambda: iter_tree_starts(model, None), progress)
+    values = _linkage_values(link, Q, shape, "singularity-free" in kinds, ref)
+    t2 = time.perf_counter()
+    home_an = link.analyze(ref.q)
+    home_det = _carried_det(home_an, home_an.platform_twists)
+    return _finish(link.name, coords, units, B, "grid", axes, shape, points, fixed, home,
+                   values, home_an.dof, home_det, kinds, np.nan, centre, method, t0, t1,
+                   t2, int((~values["ok"]).sum()))
+
+
+def _default_linkage_coords(link, ref) -> tuple[str, ...]:
+    """The output point's moving coordinates (at the reference), else the first two
+    actuated joints."""
+    from .linkage import _pose_rows
+
+    model = link.model
+    if model.output_point:
+        rows = _pose_rows(model, model.kinematics(ref.q))
+        moving = np.linalg.norm(rows[:, 3:], axis=0) > 1e-6
+        names = tuple(c for c, m in zip(COORDINATES[:3], moving) if m)
+        if names:
+            return names
+    return tuple(link.actuated[:2])
+
+
+def _unit_of(link, name: str) -> str:
+    model = link.model
+    joint = model.tree.joints[model.tree.getJointId(name)]
+    return "rad" if model.velocity_units[joint.idx_v] == 1.0 else "m"
+
+
+def _limits(link, name: str, value: float, half: float) -> tuple[float, float]:
+    model = link.model
+    joint = model.tree.joints[model.tree.getJointId(name)]
+    lo = float(model.tree.lowerPositionLimit[joint.idx_q])
+    hi = float(model.tree.upperPositionLimit[joint.idx_q])
+    if np.isfinite([lo, hi]).all() and 0 < hi - lo < 1e6 * model.length:
+        return lo, hi
+    return value - half, value + half
+
+
+def _grow(shape, start, q_start, solve, global_starts, progress) -> dict:
+    """Solve the cells from ``start`` outwards: each cell from a solved neighbour's
+    configuration (up to two neighbours), then from the solver's global starts (the
+    reference, neutral and mid-limits configurations); returns {flat index: q} of the
+    cells solved (the part of the workspace connected to ``start``)."""
+    k = len(shape)
+    solved: dict = {}
+    tries = np.zeros(shape, np.int8)  # neighbour tries; 3: the global starts tried too
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=int(np.prod(shape)), unit="cell", desc="workspace", leave=False)
+
+    def accept(cell, q):
+        solved[int(np.ravel_multi_index(cell, shape))] = q
+        if bar is not None:
+            bar.update(1)
+        for d in range(k):
+            for s in (-1, 1):
+                nb = list(cell)
+                nb[d] += s
+                if 0 <= nb[d] < shape[d] and tries[tuple(nb)] < 2 \
+                        and int(np.ravel_multi_index(nb, shape)) not in solved:
+                    queue.append((tuple(nb), q))
+
+    def from_global(cell) -> bool:
+        tries[cell] = 3
+        for q1 in global_starts():
+            sol = solve(cell, q1)
+            if sol.converged:
+                accept(cell, sol.q)
+                return True
+        return False
+
+    queue: deque = deque()
+    sol = solve(tuple(start), q_start)
+    if sol.converged:
+        accept(tuple(start), sol.q)
+    else:
+        from_global(tuple(start))
+    while queue:
+        while queue:
+            cell, q0 = queue.popleft()
+            if int(np.ravel_multi_index(cell, shape)) in solved or tries[cell] >= 2:
+                continue
+            tries[cell] += 1
+            sol = solve(cell, q0)
+            if sol.converged:
+                accept(cell, sol.q)
+            elif tries[cell] == 2:
+                from_global(cell)
+        for cell in zip(*np.nonzero(tries == 1)):  # one neighbour only: global starts
+            if int(np.ravel_multi_index(cell, shape)) not in solved:
+                from_global(tuple(int(c) for c in cell))
+    if bar is not None:
+        bar.close()
+    return solved
+
+
+def _carried_det(an, P0_world: np.ndarray) -> float:
+    """``det(A_n Δ P̃ᵀ)`` of a linkage analysis: actuation wrenches normalised, the
+    reference's output twists ``P0_world`` projected on the current twist system (both
+    homogenised about the analysis' reference point); nan when not square."""
+    from .linkage import homogenised_about
+
+    p, L = an.reference_point, an.length
+    if an.A.shape[0] != an.output_dof or an.output_dof == 0:
+        return np.nan
+    A = homogenised_about(an.A, p, L)
+    A = A / np.linalg.norm(A, axis=1, keepdims=True)
+    P = homogenised_about(an.platform_twists, p, L)
+    P0 = homogenised_about(P0_world, p, L)
+    carried = (P0 @ P.T) @ P
+    return float(np.linalg.det(A @ carried[:, [3, 4, 5, 0, 1, 2]].T))
+
+
+def _linkage_values(link, Q: dict, shape, analyse: bool, ref) -> dict:
+    """The per-cell arrays of a linkage workspace (analyses only with ``analyse``)."""
+    N = int(np.prod(shape))
+    ok = np.zeros(N, bool)
+    cls = np.full(N, "", dtype="<U4")
+    det, dof = np.full(N, np.nan), np.full(N, -1)
+    generic = link.analyze(ref.q)
+    for i, q in Q.items():
+        ok[i] = True
+        if not analyse:
+            cls[i] = "none"
+            dof[i] = generic.dof
+            continue
+        an = link.analyze(q, generic=generic)
+        cls[i] = an.singularity if not an.constraint_singular else "III"
+        dof[i] = an.dof
+        det[i] = _carried_det(an, generic.platform_twists)
+    return {"ok": ok.reshape(shape), "singularity": cls.reshape(shape),
+            "det": det.reshape(shape), "lti": np.full(shape, np.nan),
+            "dof": dof.reshape(shape)}
+
+
+__all__ = ["COORDINATES", "KINDS", "Inscribed", "Volume", "Workspace", "boundary_cells",
+           "component", "default_coordinates", "grid_axes", "grid_volume",
+           "inscribed_shapes", "linkage_workspace", "sample_volume", "workspace"]

@@ -1,0 +1,234 @@
+"""Workspaces: volumes against closed forms and Monte Carlo, connectivity across type II
+loci, inscribed shapes, unit invariance, the CLI's files."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import pkm_pin.builders as builders
+from pkm_pin.builders import MECHANISMS
+from pkm_pin.builders.planar import rpr3_type2_pose
+from pkm_pin.errors import InputError
+from pkm_pin.workspace import (
+    component,
+    grid_axes,
+    grid_points,
+    grid_volume,
+    inscribed_shapes,
+    workspace,
+)
+
+# five-bar of pkm_pin.builders.five_bar(): base pivots at (∓A, 0), links L1, L2
+A, L1, L2 = 0.1, 0.2, 0.25
+FIVE_BAR_BOX = [(-0.36, 0.36), (-0.46, 0.46)]
+
+
+def annuli_area(a: float = A, l1: float = L1, l2: float = L2, m: int = 400_001) -> float:
+    """Area of the intersection of the annuli |l1 − l2| ≤ |p − (∓a, 0)| ≤ l1 + l2, by
+    integration over x of the length of y in both (for y ≥ 0 each annulus is one
+    interval [√(r² − dx²), √(R² − dx²)]; doubled by symmetry)."""
+    r, R = abs(l1 - l2), l1 + l2
+    x = np.linspace(-R + a, R - a, m)
+
+    def interval(dx):
+        return (np.sqrt(np.clip(r * r - dx * dx, 0, None)),
+                np.sqrt(np.clip(R * R - dx * dx, 0, None)))
+
+    lo1, hi1 = interval(x + a)
+    lo2, hi2 = interval(x - a)
+    length = 2 * np.clip(np.minimum(hi1, hi2) - np.maximum(lo1, lo2), 0, None)
+    return float(np.trapezoid(length, x))
+
+
+def in_annuli(P: np.ndarray) -> np.ndarray:
+    d1, d2 = np.hypot(P[:, 0] + A, P[:, 1]), np.hypot(P[:, 0] - A, P[:, 1])
+    r, R = abs(L1 - L2), L1 + L2
+    return (d1 >= r) & (d1 <= R) & (d2 >= r) & (d2 <= R)
+
+
+@pytest.fixture(scope="module")
+def five_bar():
+    return builders.five_bar().build()
+
+
+@pytest.fixture(scope="module")
+def delta():
+    return MECHANISMS["delta"]().build()
+
+
+DELTA_BOX = np.array([(-0.6, 0.6), (-0.6, 0.6), (-1.3, -0.3)])
+
+
+def test_annulus_area_formula_is_converged():
+    """The reference area does not change when the integration is refined."""
+    assert abs(annuli_area(m=400_001) - annuli_area(m=100_001)) < 1e-6
+
+
+def test_five_bar_reachable_area_is_the_annuli_intersection(five_bar):
+    """The five-bar's reachable cells are exactly the cell centres in both annuli, the
+    area lies within the stated bound of the closed form at every resolution, the bound
+    halves with the cell size and the error at the finest grid is below the coarsest's."""
+    exact = annuli_area()
+    errors, bounds = [], []
+    for n in (10, 20, 40):
+        ws = five_bar.workspace(bounds=FIVE_BAR_BOX, n=n, kinds=["reachable"])
+        assert ws.coords == ("x", "y") and ws.method == "linkage output"
+        np.testing.assert_array_equal(ws.masks["reachable"].ravel(), in_annuli(ws.points))
+        v = ws.volumes["reachable"]
+        assert v.lower <= exact <= v.upper and abs(v.value - exact) <= v.error
+        errors.append(abs(v.value - exact))
+        bounds.append(v.error)
+    assert bounds[1] < 0.6 * bounds[0] and bounds[2] < 0.6 * bounds[1]
+    assert errors[2] < errors[0] and errors[1] < errors[0]
+
+
+def test_five_bar_singularity_free_part_stops_at_the_type_II_locus(five_bar):
+    """The singularity-free area connected to home is a strict part of the reachable
+    area; every cell of it has the home sign of the carried determinant."""
+    ws = five_bar.workspace(bounds=FIVE_BAR_BOX, n=16)
+    free, reach = ws.masks["singularity-free"], ws.masks["reachable"]
+    assert free.sum() > 0.3 * reach.sum() and (free & ~reach).sum() == 0
+    assert free.sum() < reach.sum()
+    det = ws.values["det"][free]
+    assert np.all(np.sign(det) == np.sign(det[0]))
+
+
+def test_delta_reachable_volume_matches_monte_carlo(delta):
+    """The Delta's reachable volume within its joint limits (grid) agrees with a dense
+    Monte-Carlo reference (uniform points of the same box, assembled by the sweep) within
+    the stated error plus three Monte-Carlo standard errors."""
+    ws = delta.workspace(bounds=DELTA_BOX, n=16, kinds=["reachable"])
+    assert ws.coords == ("x", "y", "z") and ws.method == "poses"
+    rng = np.random.default_rng(7)
+    N = 20000
+    X = np.zeros((N, 6))
+    X[:, :3] = DELTA_BOX[:, 0] + rng.random((N, 3)) * (DELTA_BOX[:, 1] - DELTA_BOX[:, 0])
+    ok = delta.sweep(X).ok
+    box = float(np.prod(DELTA_BOX[:, 1] - DELTA_BOX[:, 0]))
+    p = ok.mean()
+    mc, sigma = p * box, np.sqrt(p * (1 - p) / N) * box
+    v = ws.volumes["reachable"]
+    assert abs(v.value - mc) <= v.error + 3 * sigma
+    assert abs(v.value - mc) < 0.05 * mc  # and in fact much closer than the bound
+    sobol = delta.workspace(bounds=DELTA_BOX, sampling="sobol", samples=4096,
+                            kinds=["reachable"])
+    s = sobol.volumes["reachable"]
+    assert abs(s.value - mc) <= s.error + 3 * sigma
+
+
+def test_rpr3_singularity_free_workspace_excludes_its_type_II_pose():
+    """At the home orientation, the 3-RPR's singularity-free workspace grown from home
+    stops at the known type II pose (a cell centre here, classified II), which is
+    reachable: no cell beyond it is in the workspace."""
+    mech = MECHANISMS["rpr3"]().build()
+    T = rpr3_type2_pose()
+    x2, z2 = T.translation[0], T.translation[2]
+    hx, hz = 2.0 / 24, 0.6 / 8
+    box = [(x2 - 18.5 * hx, x2 + 5.5 * hx), (z2 - 4.5 * hz, z2 + 3.5 * hz)]
+    ws = mech.workspace(("x", "z"), bounds=box, n=(24, 8),
+                        kinds=["reachable", "singularity-free"])
+    assert ws.fixed["pitch"] == pytest.approx(0.6)
+    assert ws.axes[0][18] == pytest.approx(x2) and ws.axes[1][4] == pytest.approx(z2)
+    assert ws.masks["reachable"][18, 4] and ws.values["singularity"][18, 4] == "II"
+    assert not ws.masks["singularity-free"][18, 4]
+    free = ws.masks["singularity-free"]
+    assert free.sum() > 20
+    assert ws.axes[0][free[:, 4]].max() < x2  # home's side of the locus only
+    assert ws.masks["reachable"][19:, 4].any()  # though the far side is reachable
+
+
+def test_component_follows_faces_only():
+    """Cells touching only at a corner are not connected; a home cell out of the mask
+    gives an empty component."""
+    m = np.zeros((4, 4), bool)
+    m[0, 0] = m[1, 1] = m[1, 2] = True
+    assert component(m, (1, 1)).sum() == 2
+    assert component(m, (0, 0)).sum() == 1
+    assert component(m, (3, 3)).sum() == 0
+
+
+def test_grid_volume_brackets_a_ball():
+    """A ball's volume lies in the bracket of its grid count at two resolutions; the
+    bound falls like the cell size."""
+    errs = []
+    for n in (20, 40):
+        B = np.array([(-1.0, 1.0)] * 3)
+        P = grid_points(grid_axes(B, n))
+        mask = (np.linalg.norm(P, axis=1) <= 0.8).reshape(n, n, n)
+        v = grid_volume(mask, np.full(3, 2.0 / n), "m^3")
+        exact = 4 / 3 * np.pi * 0.8 ** 3
+        assert v.lower <= exact <= v.upper and abs(v.value - exact) <= v.error
+        errs.append(v.error)
+    assert errs[1] < 0.6 * errs[0]
+
+
+def test_inscribed_cube_and_cylinder_in_a_ball():
+    """In a ball of radius R: cube half side R/√3, the largest cylinder (axis z) radius
+    R√(2/3) and half height R/√3, each within one cell; in a disc, square R/√2 and
+    disc R."""
+    R, n = 0.8, 60
+    B = np.array([(-1.0, 1.0)] * 3)
+    P = grid_points(grid_axes(B, n))
+    mask = (np.linalg.norm(P, axis=1) <= R).reshape(n, n, n)
+    h = np.full(3, 2.0 / n)
+    s = inscribed_shapes(mask, P, np.zeros(3), B, h, ("m",) * 3, ("x", "y", "z"), True)
+    assert abs(s.cube - R / np.sqrt(3)) <= s.error
+    assert abs(s.cylinder_radius - R * np.sqrt(2 / 3)) <= 2 * s.error
+    assert abs(s.cylinder_half_height - R / np.sqrt(3)) <= 2 * s.error
+    P2 = grid_points(grid_axes(B[:2], n))
+    disc = (np.linalg.norm(P2, axis=1) <= R).reshape(n, n)
+    s2 = inscribed_shapes(disc, P2, np.zeros(2), B[:2], h[:2], ("m", "m"), ("x", "y"), True)
+    assert abs(s2.cube - R / np.sqrt(2)) <= s2.error
+    assert abs(s2.cylinder_radius - R) <= s2.error
+
+
+def test_inscribed_shapes_in_a_box_are_exact():
+    """A box-shaped workspace aligned with the cells holds a cube of its smallest half
+    side and a cylinder bounded by the box; mixed units give no cube."""
+    n = 20
+    B = np.array([(-1.0, 1.0)] * 3)
+    P = grid_points(grid_axes(B, n))
+    inside = (np.abs(P[:, 0]) < 0.5) & (np.abs(P[:, 1]) < 0.7) & (np.abs(P[:, 2]) < 0.9)
+    s = inscribed_shapes(inside.reshape(n, n, n), P, np.zeros(3), B, np.full(3, 0.1),
+                         ("m",) * 3, ("x", "y", "z"), True)
+    assert s.cube == pytest.approx(0.5)
+    assert s.cylinder_radius == pytest.approx(0.5) and s.cylinder_half_height == \
+        pytest.approx(0.9)
+    mixed = inscribed_shapes(inside.reshape(n, n, n), P, np.zeros(3), B, np.full(3, 0.1),
+                             ("m", "m", "rad"), ("x", "y", "pitch"), True)
+    assert np.isnan(mixed.cube) and mixed.cylinder_radius == pytest.approx(0.5)
+
+
+def test_volumes_scale_with_units_and_counts_do_not(delta):
+    """The Delta in millimetres: the same cells, volumes × 1e9, inscribed sizes × 1e3."""
+    mm = MECHANISMS["delta"](scale=1000.0).build()
+    a = delta.workspace(bounds=DELTA_BOX, n=10)
+    b = mm.workspace(bounds=1000.0 * DELTA_BOX, n=10)
+    for kind in a.masks:
+        np.testing.assert_array_equal(a.masks[kind], b.masks[kind])
+        assert b.volumes[kind].value == pytest.approx(1e9 * a.volumes[kind].value, rel=1e-9)
+        assert b.volumes[kind].error == pytest.approx(1e9 * a.volumes[kind].error, rel=1e-9)
+        assert b.inscribed[kind].cube == pytest.approx(1e3 * a.inscribed[kind].cube,
+                                                       rel=1e-9, abs=1e-9)
+    assert a.counts == b.counts
+
+
+def test_orientation_workspace_of_the_3rps_completes_parasitic_motions():
+    """The 3-RPS over roll, pitch at fixed z: poses completed on its motion (parasitic
+    x, y, yaw solved for); home's cell is singularity-free."""
+    mech = MECHANISMS["rps3"]().build()
+    ws = mech.workspace(("roll", "pitch"), n=5, bounds=[(-0.2, 0.2), (-0.2, 0.2)])
+    assert ws.method == "completed poses" and "z" in ws.fixed
+    assert ws.masks["singularity-free"][2, 2] and ws.units == ("rad", "rad")
+    assert ws.volumes["reachable"].unit == "rad^2"
+
+
+def test_bad_inputs_are_refused(delta):
+    """Unknown coordinates, reversed bounds, home outside the box: InputError."""
+    with pytest.raises(InputError):
+        delta.workspace(("x", "w"))
+    with pytest.raises(InputError):
+        delta.workspace(bounds=[(1, 0), (0, 1), (0, 1)], n=4)
+    with pytest.raises(InputError, match="outside the bounds"):
+        workspace(delta, bounds=[(0.5, 0.6), (0.5, 0.6), (-1.0, -0.9)], n=3)
