@@ -825,6 +825,84 @@ def cmd_view(args) -> int:
     return 0
 
 
+def cmd_workspace(args) -> int:
+    """Reachable, singularity-free and good-transmission workspaces
+    (:func:`pkm_pin.workspace.workspace`): print (or ``--json``) the volumes with their
+    errors, the inscribed shapes and the counts; write PREFIX.json, PREFIX.npz, the PNG
+    pictures and PREFIX.html (a meshcat point cloud)."""
+    from .plots import workspace_plots
+    from .view import workspace_cloud
+    from .workspace import workspace
+
+    mech = _load(args)
+    prefix = Path(args.out if args.out else f"workspace_{_slug(args.mechanism)}")
+    if not prefix.parent.is_dir():
+        raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
+    coords = args.coords
+    if args.range is not None and coords is None:
+        raise InputError("--range needs --coords (the coordinates it bounds)")
+    if args.range is not None and len(args.range) != 2 * len(coords):
+        raise InputError(f"--range takes {2 * len(coords)} bounds (lo hi per coordinate), "
+                         f"got {len(args.range)}")
+    bounds = None if args.range is None else np.reshape(args.range, (-1, 2))
+    options = dict(bounds=bounds, n=args.n, kinds=args.kind, progress=not args.quiet)
+    if args.sobol is not None:
+        options.update(sampling="sobol", samples=args.sobol)
+    if _is_linkage(mech):
+        if args.at or args.jobs > 1:
+            raise InputError("--at/--jobs are for platform mechanisms")
+    else:
+        options.update(at=at_values(args.at))
+    executor = None
+    if not _is_linkage(mech) and args.jobs > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        executor = ProcessPoolExecutor(args.jobs)
+        options.update(executor=executor, chunk_size=args.chunk_size)
+    try:
+        ws = workspace(mech, coords, **options)
+    finally:
+        if executor is not None:
+            executor.shutdown()
+    data = ws.as_dict()
+    files = [prefix.with_name(prefix.name + ".json"), prefix.with_name(prefix.name + ".npz")]
+    try:
+        files[0].write_text(json.dumps(data, indent=2))
+        np.savez_compressed(files[1], points=ws.points, shape=np.array(ws.shape),
+                            coords=np.array(ws.coords), bounds=ws.bounds,
+                            **{f"mask_{k}": m for k, m in ws.masks.items()},
+                            **{k: v for k, v in ws.values.items()},
+                            **{f"axis_{i}": a for i, a in enumerate(ws.axes)})
+        files += workspace_plots(ws, prefix, title=mech.name)
+        html = prefix.with_name(prefix.name + ".html")
+        workspace_cloud(ws, html=html)
+        files.append(html)
+    except OSError as e:
+        raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
+    data["files"] = [str(f) for f in files]
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    print(f"mechanism  {mech.name}  ({ws.method})")
+    print("box        " + ", ".join(f"{c} in [{lo:g}, {hi:g}] {u}" for c, (lo, hi), u in
+                                    zip(ws.coords, ws.bounds, ws.units))
+          + f"; {ws.sampling} {' x '.join(map(str, ws.shape))}")
+    if ws.fixed:
+        print("fixed      " + ", ".join(f"{k}={v:g}" for k, v in ws.fixed.items()))
+    for kind, v in ws.volumes.items():
+        s = ws.inscribed[kind]
+        print(f"{kind:<18} volume {v.value:.6g} ± {v.error:.2g} {v.unit} ({v.cells} cells); "
+              f"cube half side {s.cube:.4g}, cylinder r {s.cylinder_radius:.4g} "
+              f"h/2 {s.cylinder_half_height:.4g} (± {s.error:.2g})")
+    if ws.counts["on_bounds"]:
+        print(f"note       {ws.counts['on_bounds']} reachable cells on the box's faces: the "
+              "workspace extends beyond --range")
+    print(f"time       {ws.timing['total']:.3g} s, {ws.timing['poses_per_s']:.0f} poses/s")
+    for path in files:
+        print(f"wrote      {path}")
+    return 0
+
+
 def _write_text(path: str, text: str) -> None:
     try:
         Path(path).write_text(text)
@@ -964,6 +1042,35 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     _linkage_options(p)
     p.set_defaults(func=cmd_map)
+
+    p = sub.add_parser("workspace", help="reachable / singularity-free / transmission "
+                       "workspaces, volumes, inscribed cube and cylinder",
+                       description="Sample the workspace over some pose coordinates (default "
+                       "the independent ones; a linkage: its output point, or actuated joints) "
+                       "on a grid; write PREFIX.json (volumes with errors, inscribed shapes, "
+                       "counts), PREFIX.npz, PNG pictures and PREFIX.html (meshcat point "
+                       "cloud).")
+    p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
+    p.add_argument("--coords", nargs="+", metavar="NAME",
+                   help="1 to 3 of x y z roll pitch yaw (a linkage: x y z of its output "
+                   "point, or actuated joint names)")
+    p.add_argument("--range", nargs="+", type=float, metavar="BOUND",
+                   help="lo hi per coordinate (default home ± the characteristic length, "
+                   "angles ± 0.5 rad)")
+    p.add_argument("--n", type=int, default=30, help="grid cells per coordinate (30)")
+    p.add_argument("--sobol", type=int, metavar="N",
+                   help="N seeded quasi-random samples instead of a grid")
+    p.add_argument("--kind", nargs="+", choices=("reachable", "singularity-free",
+                                                 "transmission"),
+                   help="the workspaces computed (default all available)")
+    _at_option(p, "values of other pose coordinates (default: home)")
+    p.add_argument("--out", metavar="PREFIX", help="output prefix (default workspace_NAME)")
+    p.add_argument("--json", action="store_true", help="print the JSON numbers")
+    p.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
+    p.add_argument("--chunk-size", type=int, default=2000, help="poses per task (2000)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _linkage_options(p)
+    p.set_defaults(func=cmd_workspace)
 
     p = sub.add_parser("view", help="browser preview (meshcat)",
                        description="Draw the mechanism at a pose (legs, platform, joint screws, "

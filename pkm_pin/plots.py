@@ -210,3 +210,96 @@ def save_maps(data: Mapping, prefix: str | Path, title: str = "") -> list[Path]:
     conditioning_map(data["u"], data["v"], data["condition"], data["ok"], det=data["det"],
                      labels=labels, title=f"{head}log10 cond(A Δ)", path=cond)
     return [sing, cond]
+
+
+# ------------------------------------------------------------------- workspaces
+#: Colours of the workspace kinds, from the largest to the smallest set.
+WORKSPACE_COLOURS = {"reachable": "#fdb863", "singularity-free": "#92c5de",
+                     "transmission": "#1a9850"}
+
+
+def _workspace_codes(ws) -> tuple[np.ndarray, list[str]]:
+    """Per cell, the index of the smallest kind it belongs to (nan: not reachable)."""
+    kinds = [k for k in WORKSPACE_COLOURS if k in ws.masks]
+    codes = np.full(ws.shape, np.nan)
+    for i, k in enumerate(kinds):
+        codes[ws.masks[k]] = i
+    return codes, kinds
+
+
+def _workspace_panel(ax, ws, codes2, kinds, u, v, labels, centre=None) -> None:
+    cmap = ListedColormap([WORKSPACE_COLOURS[k] for k in kinds])
+    ax.set_facecolor(_NOT_ASSEMBLED)
+    ax.pcolormesh(u, v, np.ma.masked_invalid(codes2.T), cmap=cmap, vmin=-0.5,
+                  vmax=len(kinds) - 0.5, shading="nearest")
+    ax.set_xlabel(labels[0])
+    ax.set_ylabel(labels[1])
+    if centre is not None:
+        ax.plot([centre[0]], [centre[1]], "k+", ms=9)
+
+
+def workspace_plots(ws, prefix: str | Path, title: str = "") -> list[Path]:
+    """PNG pictures of a gridded :class:`~pkm_pin.workspace.Workspace`.
+
+    Two coordinates: ``PREFIX_workspace.png``, the cells coloured by the smallest kind
+    they belong to (reachable, singularity-free, good transmission; grey: not
+    reachable), the home cell marked and the largest inscribed square of the smallest
+    non-empty kind drawn. Three: ``PREFIX_slices.png``, up to 6 slices at values of the
+    third coordinate. One: a strip. Sobol samples: a scatter of the first two.
+
+    Returns:
+        The paths written.
+    """
+    prefix = Path(prefix)
+    codes, kinds = _workspace_codes(ws)
+    labels = [f"{c} [{u}]" for c, u in zip(ws.coords, ws.units)]
+    handles = [Patch(color=WORKSPACE_COLOURS[k], label=k) for k in kinds]
+    handles.append(Patch(color=_NOT_ASSEMBLED, label="not reachable"))
+    head = f"{title}: " if title else ""
+    k = len(ws.coords)
+    if ws.sampling != "grid" or k == 1:
+        fig, ax = _figure(f"{head}workspace samples", labels + ["-"] * (2 - min(k, 2)))
+        P = ws.points
+        y = P[:, 1] if k > 1 else np.zeros(len(P))
+        flat = codes.ravel()
+        for i, kind in enumerate(kinds):
+            hit = flat == i
+            ax.plot(P[hit, 0], y[hit], ".", color=WORKSPACE_COLOURS[kind], ms=3)
+        ax.legend(handles=handles, loc="upper right", fontsize=8)
+        path = prefix.with_name(prefix.name + "_workspace.png")
+        fig.savefig(path)
+        return [path]
+    if k == 2:
+        fig, ax = _figure(f"{head}workspace over {ws.coords[0]}, {ws.coords[1]}", labels)
+        _workspace_panel(ax, ws, codes, kinds, ws.axes[0], ws.axes[1], labels, ws.home)
+        smallest = next((kd for kd in reversed(kinds) if ws.masks[kd].any()), None)
+        shape = ws.inscribed.get(smallest) if smallest else None
+        if shape is not None and np.isfinite(shape.cube) and shape.cube > 0:
+            c, a = shape.centre, shape.cube
+            ax.plot(c[0] + a * np.array([-1, 1, 1, -1, -1]),
+                    c[1] + a * np.array([-1, -1, 1, 1, -1]), "k-", lw=1.2)
+            handles.append(Line2D([], [], color="k", lw=1.2,
+                                  label=f"largest square ({smallest})"))
+        ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
+        if ws.units[0] == ws.units[1]:
+            ax.set_aspect("equal", adjustable="box")
+        path = prefix.with_name(prefix.name + "_workspace.png")
+        fig.savefig(path)
+        return [path]
+    n3 = ws.shape[2]
+    picks = np.unique(np.linspace(0, n3 - 1, min(6, n3)).round().astype(int))
+    fig = Figure(figsize=(11.0, 7.0), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    cols = min(3, len(picks))
+    rows = int(np.ceil(len(picks) / cols))
+    for i, s in enumerate(picks):
+        ax = fig.add_subplot(rows, cols, i + 1)
+        _workspace_panel(ax, ws, codes[:, :, s], kinds, ws.axes[0], ws.axes[1], labels)
+        ax.set_title(f"{ws.coords[2]} = {ws.axes[2][s]:.4g} {ws.units[2]}", fontsize=9)
+        if ws.units[0] == ws.units[1]:
+            ax.set_aspect("equal", adjustable="box")
+    fig.legend(handles=handles, loc="outside lower center", ncols=len(handles), fontsize=8)
+    fig.suptitle(f"{head}workspace slices")
+    path = prefix.with_name(prefix.name + "_slices.png")
+    fig.savefig(path)
+    return [path]

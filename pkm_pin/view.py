@@ -707,3 +707,58 @@ def _polygon_faces(pts: np.ndarray, tol: float) -> np.ndarray | None:
     ring = ConvexHull(xy).vertices if len(pts) > 3 else np.arange(3)
     return np.array([[ring[0], ring[i], ring[i + 1]] for i in range(1, len(ring) - 1)],
                     dtype=np.uint32)
+
+
+# --------------------------------------------------------------- workspace cloud
+#: Colours of the workspace kinds in the point cloud (0xRRGGBB).
+WORKSPACE_CLOUD_COLOURS = {"reachable": 0xFDB863, "singularity-free": 0x4393C3,
+                           "transmission": 0x1A9850}
+
+
+def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=None,
+                    open: bool = False) -> SceneRecorder:  # noqa: A002
+    """A meshcat point cloud of a :class:`~pkm_pin.workspace.Workspace`: one point per
+    sample in it, coloured by the smallest kind it belongs to (reachable,
+    singularity-free, good transmission), one node per kind
+    (``pkm/workspace/<kind>``) so each can be hidden in the viewer's controls. Two
+    coordinates are drawn in a plane (the third at 0); the point size is the cell size.
+
+    Returns:
+        The :class:`SceneRecorder` holding the scene (``static_html()``); ``html``:
+        the page is written there.
+    """
+    meshcat, g = _meshcat()[:2]
+    recorder = SceneRecorder(forward=None if visualizer is None else visualizer.window)
+    vis = meshcat.Visualizer(window=recorder)
+    P = np.zeros((len(ws.points), 3))
+    P[:, :len(ws.coords)] = ws.points
+    span = float(np.max(ws.bounds[:, 1] - ws.bounds[:, 0]))
+    size = float(np.min(ws.spacing)) if len(ws.points) else span / 100
+    kinds = [k for k in WORKSPACE_CLOUD_COLOURS if k in ws.masks]
+    smallest = np.full(len(P), -1)
+    for i, k in enumerate(kinds):
+        smallest[np.asarray(ws.masks[k]).ravel()] = i
+    centre = P.mean(axis=0) if len(P) else np.zeros(3)
+    root = vis["pkm"]["workspace"]
+    root.set_transform(pin.SE3(np.eye(3), -centre).homogeneous)
+    for i, k in enumerate(kinds):
+        pts = P[smallest == i]
+        if not len(pts):
+            continue
+        rgb = np.array([(WORKSPACE_CLOUD_COLOURS[k] >> s) & 0xFF for s in (16, 8, 0)]) / 255
+        colour = np.tile(rgb[:, None], (1, len(pts)))
+        root[node_name(k)].set_object(g.PointCloud(pts.T.astype(np.float32),
+                                                   colour.astype(np.float32), size=size))
+    home = np.zeros(3)
+    home[:len(ws.coords)] = ws.home
+    root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=0x000000))
+    root["home"].set_transform(pin.SE3(np.eye(3), home).homogeneous)
+    if html is not None:
+        Path(html).write_text(recorder.static_html(title=f"pkm_pin workspace: {ws.mechanism}"),
+                              encoding="utf-8")
+    if open:
+        fd, name = tempfile.mkstemp(prefix="pkm_pin_ws_", suffix=".html")
+        os.close(fd)
+        Path(name).write_text(recorder.static_html(), encoding="utf-8")
+        webbrowser.open(Path(name).as_uri(), new=2)
+    return recorder

@@ -194,9 +194,9 @@ class Workspace:
         return span * len(self.points) ** (-1.0 / len(self.coords))
 
     def as_dict(self) -> dict:
-        """Plain data (JSON): coordinates, bounds, volumes, inscribed shapes, counts,
-        timing."""
-        return {"mechanism": self.mechanism, "coords": list(self.coords),
+        """Plain data (JSON; nan and inf as None): coordinates, bounds, volumes,
+        inscribed shapes, counts, timing."""
+        return _plain({"mechanism": self.mechanism, "coords": list(self.coords),
                 "units": list(self.units), "bounds": self.bounds.tolist(),
                 "sampling": self.sampling, "shape": list(self.shape),
                 "fixed": {k: float(v) for k, v in self.fixed.items()},
@@ -204,7 +204,18 @@ class Workspace:
                 "method": self.method,
                 "volumes": {k: v.as_dict() for k, v in self.volumes.items()},
                 "inscribed": {k: v.as_dict() for k, v in self.inscribed.items()},
-                "counts": dict(self.counts), "timing": dict(self.timing)}
+                "counts": dict(self.counts), "timing": dict(self.timing)})
+
+
+def _plain(x):
+    """JSON-safe data: non-finite numbers become None."""
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (float, np.floating)):
+        return float(x) if math.isfinite(x) else None
+    return x
 
 
 # ================================================================ grid algebra

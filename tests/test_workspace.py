@@ -232,3 +232,33 @@ def test_bad_inputs_are_refused(delta):
         delta.workspace(bounds=[(1, 0), (0, 1), (0, 1)], n=4)
     with pytest.raises(InputError, match="outside the bounds"):
         workspace(delta, bounds=[(0.5, 0.6), (0.5, 0.6), (-1.0, -0.9)], n=3)
+
+
+def test_cli_writes_json_plots_and_view(tmp_path, capsys):
+    """`pkm-pin workspace` prints the JSON numbers and writes the JSON, npz, PNG and HTML
+    files, for a platform mechanism (3-D slices) and the pinned five-bar (2-D)."""
+    import json
+    from pathlib import Path
+
+    from pkm_pin.cli import main
+
+    out = tmp_path / "delta"
+    assert main(["workspace", "delta", "--coords", "x", "y", "z", "--range", "-0.6", "0.6",
+                 "-0.6", "0.6", "-1.3", "-0.3", "--n", "6", "--out", str(out), "--json",
+                 "--quiet"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data["volumes"]) == {"reachable", "singularity-free", "transmission"}
+    assert data["volumes"]["reachable"]["value"] > 0 and data["counts"]["samples"] == 216
+    for name in ("delta.json", "delta.npz", "delta_slices.png", "delta.html"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert "PointCloud" in (tmp_path / "delta.html").read_text() or \
+        (tmp_path / "delta.html").stat().st_size > 100_000
+    five = Path(__file__).resolve().parents[1] / "models" / "pinned" / "five_bar.toml"
+    out = tmp_path / "five"
+    assert main(["workspace", str(five), "--n", "8", "--kind", "reachable", "--out",
+                 str(out), "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "reachable" in text and "volume" in text
+    for name in ("five.json", "five_workspace.png", "five.html"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert main(["workspace", "delta", "--range", "0", "1"]) == 2
