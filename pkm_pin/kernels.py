@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -41,24 +40,30 @@ AT_PARENT = 4
 
 
 class Chain(NamedTuple):
-    """A serial chain as the compiled functions take it (one argument): the constants
-    of :class:`ChainKernel` (``parent`` … ``nv``: the forward kinematics of :func:`_fk`;
-    ``lower`` … ``units``: the limits and scales the closure solver reads)."""
+    """A serial chain as the compiled functions take it (one argument).
 
-    parent: np.ndarray
-    post: np.ndarray
-    kind: np.ndarray
-    axis: np.ndarray
-    rate: np.ndarray
-    iq: np.ndarray
-    iv: np.ndarray
-    tip: np.ndarray
-    base: np.ndarray
+    Joint ``j`` moves its frame by ``parent_j · exp(S_j q[iq_j]) · post_j`` where
+    ``S_j`` is a rotation about ``axis_j`` at rate ``rate_j`` (revolute) or a translation
+    ``rate_j · axis_j`` (prismatic); mimic joints read the coordinate of their primary
+    joint, their ratio is in ``rate_j`` and their offset in ``post_j``; ``iv_j`` is the
+    Jacobian column the joint contributes to. ``parent`` … ``nv`` are what
+    :func:`_fk` reads; ``lower`` … ``units`` what the closure solver reads.
+    """
+
+    parent: np.ndarray  # (nj, 4, 4) joint placements in the parent joint frame
+    post: np.ndarray  # (nj, 4, 4) constant factor after the motion (mimic offset)
+    kind: np.ndarray  # (nj,) REVOLUTE / PRISMATIC, + HAS_POST, + AT_PARENT
+    axis: np.ndarray  # (nj, 3) unit axis in the joint frame (e_a exactly along a frame axis)
+    rate: np.ndarray  # (nj,) rad or m per unit of the coordinate (signed)
+    iq: np.ndarray  # (nj,) configuration index driving the joint
+    iv: np.ndarray  # (nj,) Jacobian column
+    tip: np.ndarray  # (4, 4) tip frame in the last joint frame
+    base: np.ndarray  # (4, 4) root placement in the world
     nv: int
-    lower: np.ndarray
-    upper: np.ndarray
-    length: float
-    units: np.ndarray
+    lower: np.ndarray  # (nq,)
+    upper: np.ndarray  # (nq,)
+    length: float  # characteristic length of the leg [m]
+    units: np.ndarray  # (nv,) unit of each coordinate: length (prismatic) or 1 rad
 
 
 class Chains(NamedTuple):
@@ -100,39 +105,16 @@ def chain_of(chains, i):
                  chains.upper[c0:c1], chains.lengths[i], chains.units[c0:c1])
 
 
-@dataclass(frozen=True)
-class ChainKernel:
-    """Constants of a serial chain, as arrays for the compiled functions.
+class ChainKernel(Chain):
+    """The compiled kinematics of one leg (:func:`chain_kernel`): its :class:`Chain`
+    (the same fields) with the calls a leg makes on it."""
 
-    Joint ``j`` moves its frame by ``parent_j · exp(S_j q[iq_j]) · post_j`` where
-    ``S_j`` is a rotation about ``axis_j`` at rate ``rate_j`` (revolute) or a translation
-    ``rate_j · axis_j`` (prismatic); mimic joints read the coordinate of their primary
-    joint, their ratio is in ``rate_j`` and their offset in ``post_j``; ``iv_j`` is the
-    Jacobian column the joint contributes to.
-    """
+    __slots__ = ()
 
-    parent: np.ndarray  # (nj, 4, 4) joint placements in the parent joint frame
-    post: np.ndarray  # (nj, 4, 4) constant factor after the motion (mimic offset)
-    kind: np.ndarray  # (nj,) REVOLUTE / PRISMATIC, + HAS_POST, + AT_PARENT
-    axis: np.ndarray  # (nj, 3) unit axis in the joint frame (e_a exactly along a frame axis)
-    rate: np.ndarray  # (nj,) rad or m per unit of the coordinate (signed)
-    iq: np.ndarray  # (nj,) configuration index driving the joint
-    iv: np.ndarray  # (nj,) Jacobian column
-    tip: np.ndarray  # (4, 4) tip frame in the last joint frame
-    base: np.ndarray  # (4, 4) root placement in the world
-    lower: np.ndarray  # (nq,)
-    upper: np.ndarray  # (nq,)
-    length: float  # characteristic length of the leg [m]
-    nv: int
-    units: np.ndarray  # (nv,) unit of each coordinate: length (prismatic) or 1 rad
-
-
-    @cached_property
+    @property
     def chain(self) -> Chain:
-        """The constants as the compiled functions take them."""
-        return Chain(self.parent, self.post, self.kind, self.axis, self.rate, self.iq,
-                     self.iv, self.tip, self.base, self.nv, self.lower, self.upper,
-                     self.length, self.units)
+        """The constants as the plain :class:`Chain` the compiled functions take."""
+        return Chain(*self)
 
     def kinematics(self, q) -> tuple[np.ndarray, np.ndarray]:
         """Tip placement (4×4, world) and 6×nv axis-first world Jacobian at ``q``."""
@@ -210,7 +192,7 @@ def chain_kernel(leg) -> ChainKernel | None:
     lo, up = leg._bounds
     return ChainKernel(parent, post, kind, axis, rate, iq, iv,
                        m.frames[leg.tip_id].placement.homogeneous, leg.base.homogeneous,
-                       lo.copy(), up.copy(), float(leg.characteristic_length), int(m.nv),
+                       int(m.nv), lo.copy(), up.copy(), float(leg.characteristic_length),
                        leg._velocity_units.copy())
 
 
@@ -492,40 +474,17 @@ def is_path(X, length, samples):
 # ============================================================== a whole mechanism
 @dataclass(frozen=True)
 class MechanismKernel:
-    """The legs' kernels flattened into single arrays (numba takes no lists of arrays).
-
-    Leg ``i`` owns joints ``joints[i]:joints[i+1]`` and coordinates
-    ``coords[i]:coords[i+1]`` of the concatenated configuration ``Q``.
-    """
+    """The legs' kernels (``legs``) and their arrays flattened into one
+    :class:`Chains` (``chains``; numba takes no lists of arrays), whose fields read as
+    attributes of the kernel (``kernel.coords``, ``kernel.anchors`` …)."""
 
     legs: tuple
-    joints: np.ndarray
-    coords: np.ndarray
-    parent: np.ndarray
-    post: np.ndarray
-    kind: np.ndarray
-    axis: np.ndarray
-    rate: np.ndarray
-    iq: np.ndarray
-    iv: np.ndarray
-    tips: np.ndarray
-    bases: np.ndarray
-    anchors: np.ndarray
-    lower: np.ndarray
-    upper: np.ndarray
-    actuated: np.ndarray  # global indices of the actuated coordinates in Q
-    scales: np.ndarray  # unit of each actuated coordinate
-    length: float
-    lengths: np.ndarray  # characteristic length of each leg
-    units: np.ndarray  # unit of each coordinate of Q: its leg's length (prismatic) or 1 rad
+    chains: Chains
 
-    @cached_property
-    def chains(self) -> Chains:
-        """The arrays as the compiled functions take them."""
-        return Chains(self.joints, self.coords, self.parent, self.post, self.kind,
-                      self.axis, self.rate, self.iq, self.iv, self.tips, self.bases,
-                      self.anchors, self.lower, self.upper, self.lengths, self.units,
-                      self.actuated, self.scales, self.length)
+    def __getattr__(self, name: str):
+        if name.startswith("__") or name in ("legs", "chains"):
+            raise AttributeError(name)
+        return getattr(self.chains, name)
 
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
@@ -538,15 +497,15 @@ def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
     actuated = np.concatenate([coords[i] + np.atleast_1d(leg.actuated_q)
                                for i, leg in enumerate(mech.legs)]).astype(np.int64)
     cat = np.concatenate
-    return MechanismKernel(
-        tuple(legs), joints, coords, cat([k.parent for k in legs]), cat([k.post for k in legs]),
+    return MechanismKernel(tuple(legs), Chains(
+        joints, coords, cat([k.parent for k in legs]), cat([k.post for k in legs]),
         cat([k.kind for k in legs]), cat([k.axis for k in legs]), cat([k.rate for k in legs]),
         cat([k.iq for k in legs]), cat([k.iv for k in legs]),
         np.stack([k.tip for k in legs]), np.stack([k.base for k in legs]),
         np.stack([a.homogeneous for a in mech.anchors]),
-        cat([k.lower for k in legs]), cat([k.upper for k in legs]), actuated,
-        np.asarray(scales, dtype=float), float(mech.characteristic_length),
-        np.array([k.length for k in legs], dtype=float), cat([k.units for k in legs]))
+        cat([k.lower for k in legs]), cat([k.upper for k in legs]),
+        np.array([k.length for k in legs], dtype=float), cat([k.units for k in legs]),
+        actuated, np.asarray(scales, dtype=float), float(mech.characteristic_length)))
 
 
 @njit(cache=True, nogil=True)
