@@ -446,21 +446,11 @@ def _ik_linkage(args, link) -> int:
 def _fixed_values(items, home: np.ndarray, varied: tuple[int, int]) -> np.ndarray:
     """The pose coordinates held fixed: home, overridden by ``NAME=VALUE`` items."""
     values = home.copy()
-    for item in items or ():
-        name, _, text = item.partition("=")
-        name = name.strip().lower()
-        if name not in POSE_NAMES or not text:
-            raise InputError(f"--fixed takes NAME=VALUE with NAME in {', '.join(POSE_NAMES)}; "
-                             f"got {item!r}")
+    for name, value in at_values(items, "--fixed").items():
         k = POSE_NAMES.index(name)
         if k in varied:
             raise InputError(f"--fixed {name}: {name} is varied over the plane")
-        try:
-            values[k] = float(text)
-        except ValueError as e:
-            raise InputError(f"--fixed {name}: {text!r} is not a number") from e
-        if not np.isfinite(values[k]):
-            raise InputError(f"--fixed {name}: the value must be finite, got {text!r}")
+        values[k] = value
     return values
 
 

@@ -18,6 +18,7 @@ import pinocchio as pin
 
 from ..errors import InputError
 from .design import LegDesign, MechanismDesign
+from .spatial import three_arms
 from .urdf_writer import JointSpec, chain_urdf
 
 _Z = (0.0, 0.0, 1.0)
@@ -97,14 +98,7 @@ def delta_point(scale: float = 1.0, *, base_radius: float = 0.2, upper_arm: floa
     # the rod from the elbow to the pin, in the arm's frame (turned by R1 about y)
     d = pin.rpy.rpyToMatrix(0.0, q1, 0.0).T @ (np.array([0.0, 0.0, -depth]) - elbow)
     u1 = math.atan2(-d[2], d[0])
-    q = np.array([q1, u1, 0.0])
-    legs, home_q = [], []
-    for i, phi in enumerate((0.0, 2 * math.pi / 3, -2 * math.pi / 3)):
-        Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
-        base = pin.SE3(Rz, Rz @ np.array([Rb, 0.0, 0.0]))
-        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("R1",), base, q, home,
-                                        "delta_point_leg.urdf"))
-        home_q.append(q.copy())
+    legs, home_q = three_arms(xml, np.array([q1, u1, 0.0]), home, Rb, "delta_point_leg.urdf")
     return MechanismDesign(
         name="Delta (point platform)", description="Delta whose platform is a point: "
         "three R-U-rod legs joined by a spherical pin; actuated base revolutes; 3T",

@@ -198,17 +198,26 @@ def delta(
     xml = chain_urdf("delta_leg", joints, tip="tip")
     home = pin.SE3(np.eye(3), np.array([0.0, 0.0, -h]))
     q = _delta_q(xml, {"R1": q1, "R6": -(q1 + beta)})
-    legs, home_q = [], []
-    for i, phi in enumerate(_AZIMUTHS):
-        Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
-        leg_base = pin.SE3(Rz, Rz @ np.array([Rb, 0.0, 0.0]))
-        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("R1",), leg_base, q, home,
-                                        "delta_leg.urdf"))
-        home_q.append(q.copy())
+    legs, home_q = three_arms(xml, q, home, Rb, "delta_leg.urdf")
     return MechanismDesign(
         name="Delta",
         description="Delta robot (3 R-Pa-R legs); actuated base revolutes; 3T",
         legs=legs, home=home, home_q=home_q, slug="delta")
+
+
+def three_arms(xml: str, q: np.ndarray, home: pin.SE3, radius: float, urdf_file: str
+               ) -> tuple[list[LegDesign], list[np.ndarray]]:
+    """A Delta's three legs (the URDF ``xml``, actuated ``R1``, tip ``tip``) at
+    azimuths 0°, 120°, 240° on the base circle of ``radius``, each assembled at ``home``
+    with joint values ``q``: ``(legs, home_q)``."""
+    legs, home_q = [], []
+    for i, phi in enumerate(_AZIMUTHS):
+        Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
+        base = pin.SE3(Rz, Rz @ np.array([radius, 0.0, 0.0]))
+        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("R1",), base, q, home,
+                                        urdf_file))
+        home_q.append(q.copy())
+    return legs, home_q
 
 
 def _delta_q(xml: str, values: dict[str, float]) -> np.ndarray:
