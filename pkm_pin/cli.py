@@ -311,7 +311,8 @@ def _check_linkage(path: Path, link) -> int:
     from .linkage import LoopClosureError
 
     model = link.model
-    closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or "none"
+    closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or (
+        "none: a tree, analysed as a serial chain")
     print(f"ok    loads: {link.name!r}, {model.tree.njoints - 1} joints (nq {model.nq}, "
           f"nv {model.nv}), {len(model.closures)} closure{'s' * (len(model.closures) != 1)} "
           f"({closures}), "

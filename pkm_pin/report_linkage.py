@@ -153,7 +153,8 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
     idx = ", ".join(f"{k} = {'undefined' if v is None else f'{v:.6g}'}"
                     for k, v in r["indices"].items())
     out = [f"mechanism          {r['mechanism']}  (linkage: {len(r['joints'])} joints, "
-           f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''})",
+           f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''}"
+           + ("; no closure: a tree, analysed as a serial chain)" if not r["closures"] else ")"),
            output_line(r, frames),
            f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
            "joints (q):"] + joints_lines(r)

@@ -335,3 +335,23 @@ def test_help_lists_the_linkage_options(capsys):
         text = capsys.readouterr().out
         for option in ("--output", "--point", "--body", "--closures"):
             assert option in text
+
+
+def test_mjcf_without_equality_is_a_tree_and_says_so(tmp_path, capsys):
+    """An MJCF without <equality> loads as a tree and is analysed as a serial chain; the
+    CLI says so (issue 16, bad input)."""
+    from pkm_pin.cli import main
+
+    path = tmp_path / "arm.xml"
+    path.write_text(
+        '<mujoco model="arm"><worldbody><body name="link1"><joint name="j1" type="hinge" '
+        'axis="0 0 1"/><geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>'
+        '<body name="link2" pos="0.3 0 0"><joint name="j2" type="hinge" axis="0 0 1"/>'
+        '<geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.02"/></body></body>'
+        '</worldbody><actuator><motor joint="j1"/><motor joint="j2"/></actuator></mujoco>')
+    assert main(["analyze", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "no closure: a tree, analysed as a serial chain" in out
+    assert "DOF                2" in out
+    assert main(["check", str(path)]) == 0
+    assert "0 closures (none: a tree, analysed as a serial chain)" in capsys.readouterr().out
