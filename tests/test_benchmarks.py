@@ -56,3 +56,14 @@ def test_equivalence_table_numbers_are_below_1e_9(capsys):
     for r in rows:
         assert r["same"] and max(r["dA"], r["dB"], r["dindex"]) <= 1e-9, r
     assert "| stewart |" in capsys.readouterr().out
+
+
+def test_bench_workspace_runs_serial_and_on_dask(capsys):
+    """bench_workspace.main times a small 3-RPR workspace here and on a LocalCluster with
+    1 and 2 workers (same masks, checked inside) and prints the scaling."""
+    import bench_workspace
+
+    rows = bench_workspace.main(n=6, chunk=64)
+    assert set(rows) == {"serial", "dask 1", "dask 2"}
+    assert all(t > 0 and rate > 0 for t, rate in rows.values())
+    assert "efficiency" in capsys.readouterr().out
