@@ -417,14 +417,23 @@ class Leg(SerialChain):
 
     # -------------------------------------------------------------------- pickle
     def __getstate__(self) -> dict:
-        """The description only: no Pinocchio data, no cached values."""
+        """The description only: no Pinocchio data, no cached values. A model with
+        mimic joints travels as its URDF text and is built again on unpickling:
+        Pinocchio 4.1 unpickles ``JointModelMimic`` into a model that crashes the first
+        kinematics pass (a segmentation fault: every process-pool or Dask sweep of a
+        Delta died of it)."""
         state = {k: v for k, v in self.__dict__.items()
                  if k != "_local"
                  and not isinstance(getattr(type(self), k, None), cached_property)}
+        if self.xml is not None and any(j.shortname() == "JointModelMimic"
+                                        for j in self.model.joints):
+            state["model"] = None
         return state
 
     def __setstate__(self, state: dict) -> None:
         self.__dict__.update(state)
+        if self.model is None:  # built again from the URDF text (see __getstate__)
+            self.model = _chain_model(urdf.build_model(urdf.read(self.xml)), self.tip)
         self._local = threading.local()
 
     # ----------------------------------------------------------------------- IK

@@ -145,8 +145,11 @@ class Mechanism:
         self.home_q = home_q
 
     def __getstate__(self) -> dict:
-        """Pickle without the cached home analysis (it is recomputed on demand)."""
-        return {k: v for k, v in self.__dict__.items() if k != "home_analysis"}
+        """Pickle without the cached home analysis and closure model (recomputed on
+        demand; the closure model's Pinocchio tree may hold mimic joints, which
+        Pinocchio 4.1 does not unpickle soundly: see :meth:`Leg.__getstate__`)."""
+        return {k: v for k, v in self.__dict__.items()
+                if k not in ("home_analysis", "closure_model")}
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, legs={[leg.name for leg in self.legs]})"

@@ -161,3 +161,22 @@ def test_interrupted_executor_sweep_cancels_the_chunks_not_started():
     with pytest.raises(KeyboardInterrupt):
         mech.sweep([mech.home] * 10, executor=ex, chunk_size=2)
     assert len(ex.futures) == 5 and all(f.cancelled() for f in ex.futures[1:])
+
+
+def test_a_pickled_delta_sweeps_in_worker_processes():
+    """Legs with mimic joints (the Delta's parallelograms) travel as URDF text: Pinocchio
+    4.1 unpickles JointModelMimic into a model that segfaults the first kinematics pass,
+    which killed every process-pool or Dask sweep of a Delta."""
+    import pickle
+    from concurrent.futures import ProcessPoolExecutor
+
+    import numpy as np
+
+    mech = mechanism("delta")
+    mech.closure_model  # a cached tree with mimic joints must not travel either
+    copy = pickle.loads(pickle.dumps(mech))
+    assert copy.sweep([copy.home]).ok.all()
+    with ProcessPoolExecutor(2) as ex:
+        res = mech.sweep([mech.home] * 4, executor=ex, chunk_size=2)
+    assert res.ok.all()
+    np.testing.assert_allclose(res.type_II, mech.sweep([mech.home] * 4).type_II, rtol=1e-12)
