@@ -257,3 +257,19 @@ def test_a_urdf_refused_by_urdfdom_is_still_one_line(tmp_path):
     assert proc.returncode == 2
     assert proc.stderr.startswith("pkm-pin: error:")
     assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+
+
+def test_first_analyze_on_a_fresh_installation_compiles_nothing_long(tmp_path):
+    """README's first command with an empty numba cache: no compilation long enough to
+    be announced (> 2 s): the single pose runs the engine's and the closure check's
+    source as plain Python (issue 15, item 5). Not a timing test: it checks what runs."""
+    import os
+    import subprocess
+    import sys
+
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    out = subprocess.run([sys.executable, "-m", "pkm_pin.cli", "analyze"], env=env,
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    assert "DOF                3" in out.stdout
+    assert "compiling" not in out.stderr, out.stderr
