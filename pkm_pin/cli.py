@@ -599,8 +599,6 @@ def cmd_map(args) -> int:
 def _sweep_map(mech, args, poses, n_u: int, n_v: int):
     """The sweep of a map's poses (row-major); partial poses completed in snake order,
     each from its neighbour, the result given back in row-major order."""
-    import dataclasses
-
     executor = None
     if args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
@@ -614,20 +612,7 @@ def _sweep_map(mech, args, poses, n_u: int, n_v: int):
     finally:
         if executor is not None:
             executor.shutdown()
-    if not isinstance(poses, list):
-        return result
-    back = np.empty_like(order)
-    back[order] = np.arange(len(order))
-    out = {}
-    for f in dataclasses.fields(result):
-        a = getattr(result, f.name)
-        if isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == len(order):
-            out[f.name] = a[back]
-        elif f.name == "failures":
-            out[f.name] = sorted((int(order[i]), r) for i, r in a)
-        else:
-            out[f.name] = a
-    return type(result)(**out)
+    return result.unordered(order) if isinstance(poses, list) else result
 
 
 def _print_map(mech, axes, u, v, at, held, result, completed: bool) -> None:

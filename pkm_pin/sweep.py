@@ -78,6 +78,26 @@ class SweepResult:
         if self.lti is None:
             self.lti = np.full(len(self.ok), np.nan)
 
+    def unordered(self, order: np.ndarray) -> SweepResult:
+        """This result of a sweep over ``poses[order]`` given back in the order of
+        ``poses`` (a grid walked in a snake so that warm starts hold, reported row by
+        row): every per-pose array and the failures' indices permuted back."""
+        import dataclasses
+
+        order = np.asarray(order)
+        back = np.empty_like(order)
+        back[order] = np.arange(len(order))
+        out = {}
+        for f in dataclasses.fields(self):
+            a = getattr(self, f.name)
+            if isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == len(order):
+                out[f.name] = a[back]
+            elif f.name == "failures":
+                out[f.name] = sorted((int(order[i]), r) for i, r in a)
+            else:
+                out[f.name] = a
+        return type(self)(**out)
+
     def arrays(self) -> dict[str, np.ndarray]:
         """Every array by name (for ``numpy.savez``)."""
         return {k: getattr(self, k) for k in ("poses", "ok", "dof", "singularity", "type_I",

@@ -579,8 +579,6 @@ def _constant(mech, coords, plan, bounds, seed, probes: int = 6) -> bool:
 def _sweep_samples(mech, X, method, transmission, executor, chunk_size, progress):
     """The sweep of the samples (partial poses completed in a serpentine order, each from
     its neighbour, and given back in the samples' order)."""
-    import dataclasses
-
     from .sweep import serpentine_order
 
     options = dict(executor=executor, chunk_size=chunk_size, progress=progress,
@@ -589,19 +587,7 @@ def _sweep_samples(mech, X, method, transmission, executor, chunk_size, progress
         return mech.sweep(X, **options)
     keys = np.array([[p[c] for c in sorted(p)] for p in X])
     order = serpentine_order(keys)
-    res = mech.sweep([X[k] for k in order], **options)
-    back = np.empty_like(order)
-    back[order] = np.arange(len(order))
-    out = {}
-    for f in dataclasses.fields(res):
-        a = getattr(res, f.name)
-        if isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == len(order):
-            out[f.name] = a[back]
-        elif f.name == "failures":
-            out[f.name] = sorted((int(order[i]), r) for i, r in a)
-        else:
-            out[f.name] = a
-    return type(res)(**out)
+    return mech.sweep([X[k] for k in order], **options).unordered(order)
 
 
 def _home_det(mech) -> float:
