@@ -577,7 +577,7 @@ def cmd_map(args) -> int:
     shape = (v.size, u.size)
     i, j = (POSE_NAMES.index(a) for a in axes)
     data = {k: a.reshape(shape + a.shape[1:]) for k, a in result.arrays().items()}
-    units = ["m"] * 3 + ["rad"] * 3
+    units = [getattr(mech, "length_unit", "m")] * 3 + ["rad"] * 3
     data.update(u=u, v=v, plane=np.array("".join(axes) if args.axes is None else tag),
                 axes=np.array(axes),
                 labels=np.array([f"{POSE_NAMES[i]} [{units[i]}]", f"{POSE_NAMES[j]} [{units[j]}]"]),
