@@ -279,9 +279,12 @@ def test_linkage_transmission_of_the_five_bar_and_four_bar_closed_forms(five):
         base = [np.array([-A, 0.0]), np.array([A, 0.0])]
         prox = [e - b for e, b in zip(elbows, base)]
         dist = [tips[0] - e for e in elbows]
-        sin = [abs(np.cross(p, d)) / (np.linalg.norm(p) * np.linalg.norm(d))
+        def cross2(u, v):
+            return u[0] * v[1] - u[1] * v[0]
+
+        sin = [abs(cross2(p, d)) / (np.linalg.norm(p) * np.linalg.norm(d))
                for p, d in zip(prox, dist)]
-        psi = abs(np.cross(*dist)) / (np.linalg.norm(dist[0]) * np.linalg.norm(dist[1]))
+        psi = abs(cross2(*dist)) / (np.linalg.norm(dist[0]) * np.linalg.norm(dist[1]))
         tr = five.transmission(a)
         np.testing.assert_allclose(tr.iti, sin, atol=1e-10)
         np.testing.assert_allclose(tr.oti, [psi, psi], atol=1e-10)
