@@ -475,16 +475,15 @@ def is_path(X, length, samples):
 @dataclass(frozen=True)
 class MechanismKernel:
     """The legs' kernels (``legs``) and their arrays flattened into one
-    :class:`Chains` (``chains``; numba takes no lists of arrays), whose fields read as
-    attributes of the kernel (``kernel.coords``, ``kernel.anchors`` …)."""
+    :class:`Chains` (``chains``; numba takes no lists of arrays), whose fields are
+    also attributes of the kernel (``kernel.coords``, ``kernel.anchors`` …)."""
 
     legs: tuple
     chains: Chains
 
-    def __getattr__(self, name: str):
-        if name.startswith("__") or name in ("legs", "chains"):
-            raise AttributeError(name)
-        return getattr(self.chains, name)
+    def __post_init__(self) -> None:
+        # the Chains' fields as plain attributes (a hot path reads them per pose)
+        self.__dict__.update(self.chains._asdict())
 
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:
