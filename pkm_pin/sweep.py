@@ -40,7 +40,7 @@ from .analysis import SINGULAR_TOL, classify, layout_of
 from .errors import AssemblyError, InputError
 from .screws import as_float_array, as_fraction, homogenise
 from .tolerances import RANK_RTOL
-from .transmission import sweep_lti
+from .transmission import sweep_cti, sweep_lti
 from .twists import joint_twists, sweep_pass
 
 
@@ -59,6 +59,8 @@ class SweepResult:
         q_actuated: (N, n) actuated coordinates (nan where not assembled).
         lti: (N,) local transmission index ``min(ITI, OTI)`` (:mod:`pkm_pin.transmission`;
             nan where not assembled, or when the sweep ran with ``transmission=False``).
+        cti: (N,) constraint transmission index (the smallest leg's; 1 when no leg has
+            a constraint it could lose; nan as ``lti``).
         failures: (index, reason) of every pose that did not assemble.
     """
 
@@ -73,10 +75,13 @@ class SweepResult:
     q_actuated: np.ndarray
     failures: list = field(default_factory=list)
     lti: np.ndarray | None = None
+    cti: np.ndarray | None = None
 
     def __post_init__(self):
         if self.lti is None:
             self.lti = np.full(len(self.ok), np.nan)
+        if self.cti is None:
+            self.cti = np.full(len(self.ok), np.nan)
 
     def unordered(self, order: np.ndarray) -> SweepResult:
         """This result of a sweep over ``poses[order]`` given back in the order of
@@ -101,7 +106,8 @@ class SweepResult:
     def arrays(self) -> dict[str, np.ndarray]:
         """Every array by name (for ``numpy.savez``)."""
         return {k: getattr(self, k) for k in ("poses", "ok", "dof", "singularity", "type_I",
-                                              "type_II", "condition", "det", "q_actuated", "lti")}
+                                              "type_II", "condition", "det", "q_actuated", "lti",
+                                              "cti")}
 
 
 def pose_array(poses) -> np.ndarray:
@@ -200,7 +206,7 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
                    singular_tol: float, progress=None, restarts: int = 4,
                    transmission: bool = False) -> dict:
     """Assemble and analyse the poses of one chunk (rows of X, already ordered); with
-    ``transmission``, the LTI too.
+    ``transmission``, the LTI and CTI too.
 
     Module-level so that process-based executors can pickle it."""
     kernel = mech.kernel
@@ -213,13 +219,18 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
 
 def _analyse(J, layout, centres, transmission: bool, out: dict, idx) -> None:
     """The engine on the assembled poses ``idx`` (joint twists ``J``): fills ``out``'s
-    scalar columns, and its ``lti`` with ``transmission`` (the engine keeps A and the
-    platform bases then, and :func:`pkm_pin.transmission.sweep_lti` runs in NumPy)."""
+    scalar columns, and its ``lti`` and ``cti`` with ``transmission`` (the engine keeps
+    A, the platform and leg constraint bases then, and
+    :func:`pkm_pin.transmission.sweep_lti` and :func:`~pkm_pin.transmission.sweep_cti`
+    run in NumPy; the home pose's constraint rank is 6 − the rows of the reference
+    platform basis)."""
     r = engine.analyse(J, layout, full=transmission, centres=centres)
     for key in ("dof", "type_I", "type_II", "condition", "det"):
         out[key][idx] = getattr(r, key)
     if transmission:
         out["lti"][idx] = sweep_lti(r.A, r.platform, r.dof, J, centres, layout)
+        out["cti"][idx] = sweep_cti(r.A, r.leg_constraints, r.leg_dims, J, centres,
+                                    layout, 6 - len(layout.reference))
 
 
 #: Closure tolerance of the legs in a sweep (relative, as :meth:`Mechanism.assemble`).
@@ -280,7 +291,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
     out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
            "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan)}
+           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
     if not ok[idx].all():
         Js = Js[ok[idx]]
         idx = idx[ok[idx]]
@@ -340,7 +351,7 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts,
     out = {"ok": ok, "q_actuated": q_act, "failures": failures,
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
            "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan)}
+           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
     if not solved:
         return out
     J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
@@ -393,10 +404,10 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
         rtol: Relative tolerance of rank decisions (default
             :data:`pkm_pin.tolerances.RANK_RTOL`).
         singular_tol: Threshold of the closeness indices.
-        transmission: Also compute the local transmission index ``lti`` (the engine
-            then keeps every pose's actuation wrenches and platform basis, and the
-            indices run in NumPy over the chunk: about 20–30 µs more per pose); by
-            default ``lti`` is nan.
+        transmission: Also compute the local and constraint transmission indices
+            ``lti`` and ``cti`` (the engine then keeps every pose's actuation wrenches,
+            platform and constraint bases, and the indices run in NumPy over the
+            chunk); by default both are nan.
 
     Returns:
         A :class:`SweepResult`; poses that do not assemble are recorded in
@@ -450,7 +461,7 @@ def _gather(X, chunks, parts, n, singular_tol) -> SweepResult:
     res = {"ok": np.zeros(N, bool), "q_actuated": np.full((N, n), np.nan),
            "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
            "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan)}
+           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
     failures = []
     for idx, part in zip(chunks, parts):
         for key in res:
@@ -460,4 +471,4 @@ def _gather(X, chunks, parts, n, singular_tol) -> SweepResult:
     sing = np.where(res["ok"], classify(res["type_I"], res["type_II"], singular_tol), "")
     return SweepResult(X, res["ok"], res["dof"], sing, res["type_I"], res["type_II"],
                        res["condition"], res["det"], res["q_actuated"], sorted(failures),
-                       res["lti"])
+                       res["lti"], res["cti"])

@@ -307,82 +307,145 @@ def local_transmission_index(iti, oti) -> np.ndarray:
     return np.where(np.isinf(low), np.nan, low)
 
 
-def _orthonormal(S: np.ndarray, length: float, rtol: float) -> np.ndarray:
-    """Orthonormal rows spanning the homogenised rows of ``S`` (rank by ``rtol``)."""
-    return _orthonormal_h(_homogenised_rows(S, length), rtol)
+def _orthonormal_rows(H: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    """An orthonormal basis of the span of the (homogenised) rows of each ``H`` (...,
+    m, 6), rank by ``rtol`` relative to the largest singular value once every row that
+    is not negligible (``|row| > 1e-12 max |row|``) has unit norm.
+
+    Returns:
+        ((..., 6, 6) rows: the basis first, zero rows after it; (...) ranks).
+    """
+    batch = H.shape[:-2]
+    if H.shape[-2] == 0:
+        return np.zeros(batch + (6, 6)), np.zeros(batch, int)
+    n = np.linalg.norm(H, axis=-1)
+    keep = n > ZERO_RTOL * n.max(axis=-1, keepdims=True)
+    Hn = np.where(keep[..., None], H / np.where(keep, n, 1.0)[..., None], 0.0)
+    _, sv, Vt = np.linalg.svd(Hn, full_matrices=False)  # (..., min(m, 6), 6)
+    rank = np.sum(sv > rtol * sv[..., :1], axis=-1)
+    if Vt.shape[-2] < 6:
+        Vt = np.concatenate([Vt, np.zeros(batch + (6 - Vt.shape[-2], 6))], axis=-2)
+    return _first_rows(Vt, 0, rank), rank
 
 
-def _orthonormal_h(H: np.ndarray, rtol: float) -> np.ndarray:
-    """Orthonormal rows spanning the (homogenised) rows of ``H`` (rank by ``rtol``)."""
-    n = np.linalg.norm(H, axis=1) if len(H) else np.zeros(0)
-    keep = n > ZERO_RTOL * n.max() if len(n) else n > 0
-    if not keep.any():
-        return np.zeros((0, 6))
-    _, sv, Vt = np.linalg.svd(H[keep] / n[keep, None])
-    return Vt[:int(np.sum(sv > rtol * sv[0]))]
+def _first_rows(V: np.ndarray, start, stop) -> np.ndarray:
+    """``V`` (..., 6, 6) with the rows outside ``start:stop`` (per matrix) zeroed."""
+    r = np.arange(V.shape[-2])
+    keep = (r >= np.asarray(start)[..., None]) & (r < np.asarray(stop)[..., None])
+    return np.where(keep[..., None], V, 0.0)
 
 
-def constraint_transmission(A, leg_constraints, output_points, length: float,
-                            rtol: float = RANK_RTOL, generic_rank: int | None = None
-                            ) -> np.ndarray:
-    """Constraint transmission index of every leg (module docstring), at one pose.
+def _reciprocal_rows(Wh: np.ndarray, rtol: float) -> tuple[np.ndarray, np.ndarray]:
+    """An orthonormal basis of the homogenised twists reciprocal to the homogenised
+    wrench rows ``Wh`` (..., m, 6) (zero rows allowed; all six twists when every row is
+    zero), as ((..., 6, 6) rows, zero rows after the basis; (...) dimensions)."""
+    batch = Wh.shape[:-2]
+    if Wh.shape[-2] == 0:
+        return np.broadcast_to(np.eye(6), batch + (6, 6)).copy(), np.full(batch, 6)
+    _, sv, Vt = np.linalg.svd(Wh @ DELTA, full_matrices=Wh.shape[-2] < 6)
+    rank = np.sum(sv > rtol * sv[..., :1], axis=-1)
+    return _shift_up(Vt, rank), 6 - rank
+
+
+def _shift_up(V: np.ndarray, by: np.ndarray) -> np.ndarray:
+    """Rows ``by:`` of each ``V`` (..., 6, 6) moved to the top (zeros below)."""
+    r = np.arange(V.shape[-2])
+    src = np.minimum(r + np.asarray(by)[..., None], V.shape[-2] - 1)
+    out = np.take_along_axis(V, src[..., None], axis=-2)
+    return np.where((r + np.asarray(by)[..., None] < V.shape[-2])[..., None], out, 0.0)
+
+
+def constraint_transmissions(A, leg_constraints, output_points, length: float,
+                             rtol: float = RANK_RTOL, generic_rank: int | None = None
+                             ) -> np.ndarray:
+    """Constraint transmission index of every leg at N poses (module docstring;
+    :func:`constraint_transmission` is this at one pose).
 
     The twists ``R_k`` freed by removing leg ``k``'s constraints are those reciprocal to
     every actuation wrench and to the other legs' constraints. While the union of the
     constraints keeps its ``generic_rank`` (no constraint singularity), the twists
     reciprocal to *every* wrench are left out of ``R_k``: they are the uncontrolled
     motions of a type II singularity, which the OTI reports, not a constraint that
-    fails.
+    fails. Every span is decided on orthonormal rows (each leg's constraints first,
+    then their union), rank by ``rtol`` relative to the largest singular value.
+
+    Args:
+        A: (N, n, 6) actuation wrenches; leg_constraints: (N, legs, K, 6) each leg's
+            constraint wrenches (any spanning rows, zero rows as padding);
+            output_points: (N, legs, 3) the point where each leg's constraint forces
+            reach the platform; all about one common point per pose (the platform
+            centre: the rank decisions homogenise about it), world units.
+        length: Characteristic length [m]; rtol: relative tolerance of rank decisions.
+        generic_rank: Rank of the union of the constraints away from constraint
+            singularities (the home pose's); default: each pose's own.
+
+    Returns:
+        (N, legs) values in [0, 1]; 1 for a leg without constraints or whose
+        constraints cannot be lost alone.
+    """
+    A = np.asarray(A, float)
+    C = np.asarray(leg_constraints, float)
+    N, legs = C.shape[0], C.shape[1]
+    out = np.ones((N, legs))
+    if not N or not legs:
+        return out
+    OA, r_a = _orthonormal_rows(_homogenised_rows(A, length), rtol)
+    OC, dims = _orthonormal_rows(_homogenised_rows(C, length), rtol)  # (N, legs, 6, 6)
+    # the rows beyond every pose's rank are zero: left out of the products below
+    if not dims.any():
+        return out
+    OA, OC = OA[:, :int(r_a.max(initial=0))], OC[:, :, :int(dims.max())]
+    union, r_u = _orthonormal_rows(OC.reshape(N, -1, 6), rtol)
+    free, _ = _reciprocal_rows(np.concatenate([OA, union], axis=-2), rtol)
+    if generic_rank is not None:  # a constraint singularity: keep every freed twist
+        free = np.where((r_u < generic_rank)[:, None, None], 0.0, free)
+    P = np.asarray(output_points, float).reshape(N, legs, 3)
+    rows = np.arange(N)
+    for k in range(legs):
+        rest = np.concatenate([OA] + [OC[:, j] for j in range(legs) if j != k], axis=-2)
+        basis, r_rest = _orthonormal_rows(rest, rtol)
+        R, _ = _reciprocal_rows(basis[:, :int(r_rest.max(initial=0))], rtol)
+        # leave out the motions free with every wrench: the rows are orthonormal, the
+        # singular values of the rest are the sines of the principal angles
+        _, sv, Vt = np.linalg.svd(R - (R @ np.swapaxes(free, -1, -2)) @ free)
+        n_r = np.sum(sv > PARALLEL_SIN, axis=-1)
+        R = _first_rows(Vt, 0, n_r)
+        m = dims[:, k]
+        s = np.linalg.svd(OC[:, k] @ DELTA @ np.swapaxes(R, -1, -2), compute_uv=False)
+        value = np.where(n_r <= m, s[rows, np.clip(n_r - 1, 0, s.shape[-1] - 1)], 0.0)
+        single = (m == 1) & (n_r == 1)
+        if single.any():  # one wrench, one twist: the power coefficient at the point
+            w, t = OC[single, k, 0].copy(), R[single, 0].copy()
+            w[:, 3:] *= length
+            t[:, 3:] *= length
+            value[single] = power_coefficient(w, t, P[single, k], length)
+        out[:, k] = np.where((m == 0) | (n_r == 0), 1.0, value)
+    return np.clip(out, 0.0, 1.0)
+
+
+def constraint_transmission(A, leg_constraints, output_points, length: float,
+                            rtol: float = RANK_RTOL, generic_rank: int | None = None
+                            ) -> np.ndarray:
+    """Constraint transmission index of every leg at one pose:
+    :func:`constraint_transmissions` of that pose.
 
     Args:
         A: (n, 6) actuation wrenches; leg_constraints: per leg, (k, 6) a basis of its
             constraint wrenches; output_points: per leg, (3,) the point where its
             constraint forces reach the platform; all about one common point (the
-            platform centre: the rank decisions homogenise about it).
-        length: Characteristic length [m]; rtol: relative tolerance of rank decisions.
-        generic_rank: Rank of the union of the constraints away from constraint
-            singularities (the home pose's); default: this pose's.
+            platform centre), world units.
+        length, rtol, generic_rank: As :func:`constraint_transmissions`.
 
     Returns:
         (legs,) values in [0, 1].
     """
     A = np.asarray(A, float).reshape(-1, 6)
     Cs = [np.asarray(c, float).reshape(-1, 6) for c in leg_constraints]
-    union = _orthonormal(np.vstack([np.zeros((0, 6))] + Cs), length, rtol)
-    free = _reciprocal(np.vstack([_orthonormal(A, length, rtol), union]), rtol)
-    if generic_rank is not None and len(union) < generic_rank:
-        free = np.zeros((0, 6))  # a constraint singularity: keep every freed twist
-    out = np.ones(len(Cs))
-    for k, C in enumerate(Cs):
-        if not len(C):
-            continue
-        rest = np.vstack([A] + [c for j, c in enumerate(Cs) if j != k])
-        R = _reciprocal(_orthonormal(rest, length, rtol), rtol)
-        if len(free) and len(R):  # leave out the motions free with every wrench
-            # the rows are orthonormal: singular values of the rest are sines of the
-            # principal angles between R_k and the free motions
-            _, sv, Vt = np.linalg.svd(R - (R @ free.T) @ free)
-            R = Vt[:int(np.sum(sv > PARALLEL_SIN))]
-        if not len(R):
-            continue
-        Ch = _orthonormal(C, length, rtol)
-        if len(Ch) == 1 and len(R) == 1:
-            t = R[0].copy()
-            t[3:] *= length
-            out[k] = power_coefficient(C[0], t, output_points[k], length)
-        else:
-            sv = np.linalg.svd(Ch @ DELTA @ R.T, compute_uv=False)
-            out[k] = float(sv[len(R) - 1]) if len(R) <= len(Ch) else 0.0
-    return np.clip(out, 0.0, 1.0)
-
-
-def _reciprocal(Wh: np.ndarray, rtol: float) -> np.ndarray:
-    """Orthonormal homogenised twists reciprocal to the orthonormal homogenised wrench
-    rows ``Wh`` (all six when there are none)."""
-    if not len(Wh):
-        return np.eye(6)
-    _, sv, Vt = np.linalg.svd(Wh @ DELTA)
-    return Vt[int(np.sum(sv > rtol * sv[0])):]
+    C = np.zeros((1, len(Cs), max([len(c) for c in Cs] + [1]), 6))
+    for k, c in enumerate(Cs):
+        C[0, k, :len(c)] = c
+    P = np.asarray(output_points, float).reshape(1, len(Cs), 3)
+    return constraint_transmissions(A[None], C, P, length, rtol, generic_rank)[0]
 
 
 @dataclass(frozen=True)
@@ -465,6 +528,37 @@ def sweep_lti(A, platform_h, dof, J, centres, layout) -> np.ndarray:
                                         L, rtol)
         out[i] = local_transmission_index(iti, oti)
     return out
+
+
+def sweep_cti(A, leg_constraints, leg_dims, J, centres, layout, generic_rank: int
+              ) -> np.ndarray:
+    """CTI (the smallest leg's) at N poses from the engine's arrays, as
+    :attr:`pkm_pin.Analysis.transmission` computes it at each pose.
+
+    Args:
+        A: (N, n, 6) actuation wrenches about the world origin; leg_constraints:
+            (N, legs, 6, 6) each leg's homogenised orthonormal constraint basis about
+            the centres; leg_dims: (N, legs) their dimensions; J: (N, nv, 6) joint
+            twists about the world origin; centres: (N, 3); layout: the mechanism's
+            :class:`~pkm_pin.engine.Layout`; generic_rank: the home pose's rank of the
+            union of the constraints (6 − home DOF).
+
+    Returns:
+        (N,) CTI (1 for a mechanism whose legs have no constraint to lose).
+    """
+    L, rtol = float(layout.length), float(layout.rtol)
+    N, legs = len(A), len(layout.coords) - 1
+    if not N or not legs or not np.any(leg_dims):
+        return np.ones(N)
+    C = np.array(leg_constraints, dtype=float, copy=True)
+    C[..., 3:] *= L  # world units about the centres
+    Ac, Jc = about(A, centres), about(J, centres)
+    points = np.zeros((N, legs, 3))
+    for k in range(legs):
+        if np.any(leg_dims[:, k] == 1):  # the point is used for one wrench only
+            points[:, k] = leg_points(C[:, k, :1], Jc, layout.coords,
+                                      [layout.coords[k] - 1], [k], L)[1][:, 0]
+    return constraint_transmissions(Ac, C, points, L, rtol, generic_rank).min(axis=1)
 
 
 @dataclass(frozen=True)

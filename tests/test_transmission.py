@@ -411,6 +411,44 @@ def test_sweep_lti_equals_the_analysis():
     assert np.isnan(sweep.sweep(mech, X).lti).all()
 
 
+def _pose(x):
+    return pin.SE3(pin.rpy.rpyToMatrix(*x[3:]), x[:3])
+
+
+def test_sweep_cti_equals_the_analysis_near_the_upu3_constraint_singularity():
+    """The sweep's cti column (transmission=True) is Analysis.transmission.cti at each
+    pose to 1e-9 on the 3-UPU as it descends to its constraint-singular pose (z = 0),
+    where it falls to 0 (and nan by default)."""
+    mech = mechanism("upu3")
+    T = upu3_constraint_singular_pose()
+    x0 = np.r_[T.translation, pin.rpy.matrixToRpy(T.rotation)]
+    X = np.array([x0 + [dx, dy, z, 0, 0, 0] for dx in (-0.05, 0.0, 0.05) for dy in (0.0, 0.03)
+                  for z in (0.8, 0.3, 0.05, 0.005, 1e-4, 0.0)])
+    res = mech.sweep(X, transmission=True)
+    assert res.ok.all()
+    for x, cti, lti in zip(X, res.cti, res.lti):
+        t = mech.analyze(mech.assemble(_pose(x))).transmission
+        assert cti == pytest.approx(t.cti, abs=1e-9) and lti == pytest.approx(t.lti, abs=1e-9)
+    z = X[:, 2] - x0[2]
+    assert np.all(res.cti[z == 0.0] < 1e-7) and np.all(res.cti[z == 0.8] > 0.5)
+    assert np.all(np.diff(res.cti.reshape(6, 6)[:, 1:], axis=1) < 0)  # falls with z
+    assert "cti" in res.arrays() and np.isnan(mech.sweep(X[:3]).cti).all()
+
+
+def test_sweep_cti_equals_the_analysis_on_the_3rps():
+    """3-RPS (one constraint force a leg): the sweep's cti is the analysis' at each
+    completed pose of a small orientation workspace, within [0, 1]."""
+    mech = mechanism("rps3")
+    z = mech.home.translation[2]
+    poses = [mech.complete_pose({"z": z + dz, "roll": r, "pitch": p})
+             for dz in (-0.05, 0.05) for r in (-0.2, 0.0, 0.2) for p in (-0.1, 0.15)]
+    res = mech.sweep(poses, transmission=True)
+    assert res.ok.all() and np.all((res.cti >= 0) & (res.cti <= 1))
+    for pose, cti in zip(poses, res.cti):
+        assert cti == pytest.approx(mech.analyze(mech.assemble(pose)).transmission.cti,
+                                    abs=1e-9)
+
+
 def test_worst_efforts_over_poses_is_the_largest_per_pose_effort():
     """transmission.worst_efforts: the per-actuator maximum of |τ| over the poses, each
     τ being Analysis.actuator_efforts at that pose (a payload held by a Stewart)."""
