@@ -36,13 +36,13 @@ NAMES = sorted(MECHANISMS)
 
 #: Rank of one leg's joint twists at home.
 LEG_RANK = {"rpr3": 3, "rrr3": 3, "stewart": 6, "delta": 4, "upu3": 5, "rps3": 5,
-            "orthoglide": 4, "orthoglide_quasi": 4}
+            "prs3": 5, "agile_eye": 3, "orthoglide": 4, "orthoglide_quasi": 4}
 #: Mobility of the platform (6 − rank of the union of the legs' constraint wrenches).
 MOBILITY = {"rpr3": 3, "rrr3": 3, "stewart": 6, "delta": 3, "upu3": 3, "rps3": 3,
-            "orthoglide": 3, "orthoglide_quasi": 3}
+            "prs3": 3, "agile_eye": 3, "orthoglide": 3, "orthoglide_quasi": 3}
 #: Number of legs.
 N_LEGS = {"rpr3": 3, "rrr3": 3, "stewart": 6, "delta": 3, "upu3": 3, "rps3": 3,
-          "orthoglide": 3, "orthoglide_quasi": 3}
+          "prs3": 3, "agile_eye": 3, "orthoglide": 3, "orthoglide_quasi": 3}
 
 #: Smallest relative singular value of the actuation wrenches accepted as "far from
 #: a singularity" at home (the actual values are 0.13 to 0.31).

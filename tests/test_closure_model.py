@@ -11,17 +11,20 @@ mechanism           nv   rows  mobility  redundant  dof  idle
 rpr3, rrr3           15    18         3          6    3     0
 stewart (6-UPS)      42    36         6          0    6     0
 delta                18    18         3          3    3     0
-upu3, rps3           21    18         3          0    3     0
+upu3, rps3, prs3     21    18         3          0    3     0
+agile_eye            15    18         3          6    3     0
 orthoglide(_quasi)   18    18         3          3    3     0
 =================  ====  ====  ========  =========  ===  ====
 
 No mechanism has an idle (internal) motion: at a regular pose every leg's joint twists
 are independent (3 planar twists of an RPR/RRR leg; U-P-S: 2 + 1 + 3 = 6 twists that
 span the 6 screws, the spin of a leg about its axis is not a joint motion since the U
-has 2 rotations; U-P-U and R-P-S: 5; the delta's and the Orthoglide's R-(Pa)-R legs: 4
+has 2 rotations; U-P-U, R-P-S and P-R-S: 5; the agile eye's R-R-R: 3 concurrent
+rotations; the delta's and the Orthoglide's R-(Pa)-R legs: 4
 with each parallelogram one coordinate), so a motion of the tree with the platform at
 rest moves no joint. Hence mobility = dof, and redundant = mobility − Grübler count
-(the planar ones: their 3 out-of-plane constraints counted by 3 legs; delta and
+(the planar ones: their 3 out-of-plane constraints counted by 3 legs; the agile eye:
+its 3 translation constraints counted by 3 legs; delta and
 Orthoglide: the 3 rotation constraints counted twice over), equal to
 ``Analysis.redundant_constraints``. With the actuated rates held at zero no motion is
 left (the poses are regular).
@@ -62,6 +65,8 @@ EXPECTED = {
     "delta": (3, 3, 3, 0),
     "upu3": (3, 0, 3, 0),
     "rps3": (3, 0, 3, 0),
+    "prs3": (3, 0, 3, 0),
+    "agile_eye": (3, 6, 3, 0),
     "orthoglide": (3, 3, 3, 0),
     "orthoglide_quasi": (3, 3, 3, 0),
 }
@@ -225,12 +230,27 @@ def test_output_twists_equal_platform_twists(name):
         np.testing.assert_allclose(H @ H.T, np.eye(len(T)), atol=1e-12)
 
 
+def _without_length(mech) -> bool:
+    """Whether no leg has a length (every joint and tip frame at its leg's base, no
+    prismatic joint: the agile eye written with its frames at the centre), so that the
+    mechanism's only length, where its centre is, says nothing of its size."""
+    return all(np.allclose([p.translation for p in leg.model.jointPlacements], 0.0)
+               and not np.any(leg.model.frames[leg.tip_id].placement.translation)
+               and not leg._prismatic_joints for leg in mech.legs)
+
+
 @pytest.mark.parametrize("name", NAMES)
 def test_unit_invariance(name):
     """The mechanism in millimetres has the same dimensionless closure Jacobian, the
-    same mobility and redundancy, and the same homogenised output span."""
+    same mobility and redundancy, and the same homogenised output span about the
+    platform's origin; its unit of
+    length is 1000 times larger (the same fallback 1 for a mechanism without length)."""
     mech, mm = mechanism(name), mechanism(name, 1000.0)
-    assert mm.characteristic_length == pytest.approx(1000 * mech.characteristic_length)
+    if _without_length(mech):
+        # nothing to scale: the unit of length is the fallback 1 in either model
+        assert mm.characteristic_length == mech.characteristic_length == 1.0
+    else:
+        assert mm.characteristic_length == pytest.approx(1000 * mech.characteristic_length)
     cm, cm_mm = mech.closure_model, mm.closure_model
     for assembly in assemblies(name)[:2]:
         pose = pin.SE3(assembly.pose.rotation, 1000.0 * assembly.pose.translation)
@@ -239,9 +259,13 @@ def test_unit_invariance(name):
                                    cm.closure_jacobian(q) * cm.velocity_units, atol=1e-8)
         assert cm_mm.mobility(q_mm) == cm.mobility(q)
         assert cm_mm.redundant_constraints(q_mm) == cm.redundant_constraints(q)
+        # spans about the platform's origin (the world origin is no point of the mechanism)
+        about, about_mm = (pin.SE3(np.eye(3), -p.translation) for p in (assembly.pose, pose))
         np.testing.assert_allclose(
-            homogenised_projector(cm_mm.output_twists(q_mm), mm.characteristic_length),
-            homogenised_projector(cm.output_twists(q), mech.characteristic_length), atol=1e-8)
+            homogenised_projector(screws.transform(cm_mm.output_twists(q_mm), about_mm),
+                                  mm.characteristic_length),
+            homogenised_projector(screws.transform(cm.output_twists(q), about),
+                                  mech.characteristic_length), atol=1e-8)
 
 
 @pytest.mark.parametrize("name", NAMES)

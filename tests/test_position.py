@@ -26,24 +26,33 @@ def pose_error(a: pin.SE3, b: pin.SE3, L: float) -> float:
     return float(np.max(np.abs(np.r_[e[:3] / L, e[3:]])))
 
 
+#: Motion types whose platform poses are not ``exp`` of a platform twist sized by
+#: :func:`random_platform_twist` (rotation and translation parts sized apart): the
+#: curved 1T2R motion (parasitic x, y, yaw) and rotations about a centre away from the
+#: world origin (3R). Their poses come from forward kinematics of random actuations.
+CURVED_MOTIONS = ("1T2R", "3R")
+
+
 @pytest.mark.parametrize("name", sorted(MECHANISMS))
 def test_fk_of_ik_is_identity(name):
     """FK(IK(pose)) returns the pose to 1e-10 from a guess 5 cm / 5° away."""
     m = mech(name)
     home = m.home_assembly
     L = m.characteristic_length
+    scales = m.actuated_scales  # L for a prismatic actuator, 1 rad for a revolute one
+    curved = m.home_analysis.motion_type in CURVED_MOTIONS
     rng = np.random.default_rng(3)
     for _ in range(3):
-        if name == "rps3":  # curved 1T2R motion: poses from FK of random actuations
-            qa = home.q_actuated + rng.uniform(-0.1, 0.1, 3) * L
+        if curved:
+            qa = home.q_actuated + rng.uniform(-0.1, 0.1, m.n_actuated) * scales
             pose = m.forward_kinematics(qa).pose
         else:
             pose = screws.exp(random_platform_twist(m, home, rng, 0.15, 0.1 * L)) * home.pose
         target = m.assemble(pose)
         qa = m.inverse_kinematics(pose)
         np.testing.assert_allclose(qa, target.q_actuated)
-        if name == "rps3":
-            guess = m.forward_kinematics(qa + 0.04 * L * np.sign(rng.normal(size=3)))
+        if curved:
+            guess = m.forward_kinematics(qa + 0.04 * scales * np.sign(rng.normal(size=3)))
         else:
             g = random_platform_twist(m, target, rng, np.radians(5), 0.05)
             guess = m.assemble(screws.exp(g) * pose, target)

@@ -17,7 +17,9 @@ from .planar import (
     rrr3_stretched_pose,
 )
 from .spatial import (
+    agile_eye,
     delta,
+    prs3,
     rps3,
     stewart,
     stewart_default_points,
@@ -35,6 +37,8 @@ MECHANISMS = {
     "delta": delta,
     "upu3": upu3,
     "rps3": rps3,
+    "prs3": prs3,
+    "agile_eye": agile_eye,
     "orthoglide": orthoglide,
     "orthoglide_quasi": orthoglide_quasi,
 }
@@ -47,6 +51,8 @@ DESCRIPTIONS = {
     "delta": "Delta robot, parallelograms as mimic joints, 3T with 3 redundant constraints",
     "upu3": "3-UPU translational mechanism (Tsai), prismatic actuators, 3T",
     "rps3": "3-RPS mechanism, prismatic actuators, 1T2R",
+    "prs3": "3-PRS mechanism, vertical prismatic actuators on the base, 1T2R",
+    "agile_eye": "agile eye (spherical 3-RRR), nine revolute axes through one centre, 3R",
     "orthoglide": "Orthoglide of seed 001, 3 P-R-Pa-R legs on orthogonal prismatic actuators, 3T",
     "orthoglide_quasi": "Orthoglide with tilted/offset actuator axes, unequal legs (seed 001), 3T",
 }
@@ -60,11 +66,13 @@ __all__ = [
     "delta_point",
     "five_bar",
     "MechanismDesign",
+    "agile_eye",
     "chain_robot",
     "chain_urdf",
     "delta",
     "orthoglide",
     "orthoglide_quasi",
+    "prs3",
     "robot_to_xml",
     "rpr3",
     "rpr3_type2_pose",

@@ -1,4 +1,5 @@
-"""Spatial parallel mechanisms: 6-UPS Gough–Stewart, Delta, 3-UPU (Tsai), 3-RPS.
+"""Spatial parallel mechanisms: 6-UPS Gough–Stewart, Delta, 3-UPU (Tsai), 3-RPS, 3-PRS,
+agile eye (spherical 3-RRR).
 
 Every length is multiplied by ``scale`` (``scale=1000`` builds the same mechanism in
 millimetres); angles are in radians. The legs of the symmetric mechanisms stand at
@@ -25,11 +26,11 @@ _HALF_PI = 0.5 * math.pi
 _AZIMUTHS = np.radians([0.0, 120.0, 240.0])
 
 
-def _spherical(prefix: str = "S") -> list[JointSpec]:
-    """Three concurrent revolutes about x, y, z (a spherical joint); the middle one
-    limited to ±π/2 (its gimbal lock)."""
+def _spherical(prefix: str = "S", xyz=(0.0, 0.0, 0.0)) -> list[JointSpec]:
+    """Three concurrent revolutes about x, y, z (a spherical joint) at ``xyz`` in the
+    previous joint's frame; the middle one limited to ±π/2 (its gimbal lock)."""
     return [
-        JointSpec(f"{prefix}1", "revolute", axis=_X, lower=-math.pi, upper=math.pi),
+        JointSpec(f"{prefix}1", "revolute", xyz=xyz, axis=_X, lower=-math.pi, upper=math.pi),
         JointSpec(f"{prefix}2", "revolute", axis=_Y, lower=-_HALF_PI, upper=_HALF_PI),
         JointSpec(f"{prefix}3", "revolute", axis=_Z, lower=-math.pi, upper=math.pi),
     ]
@@ -333,6 +334,73 @@ def rps3(
         name="3-RPS",
         description="3-RPS parallel mechanism; prismatic actuators; 1T2R",
         legs=legs, home=home, home_q=home_q, slug="rps3")
+
+
+# ============================================================================ 3-PRS
+def prs3(
+    scale: float = 1.0,
+    *,
+    base_radius: float = 1.0,
+    platform_radius: float = 0.4,
+    leg_length: float = 1.0,
+    height: float = 1.0,
+    tilt: float = 0.0,
+    stroke: tuple[float, float] = (0.0, 1.0),
+) -> MechanismDesign:
+    """3-PRS parallel mechanism: actuated prismatic joints on the base; 3 DOF (1T2R,
+    driven by z, roll, pitch; x, y, yaw are parasitic).
+
+    Leg URDF (``prs_leg.urdf``, shared): ``P`` prismatic along the leg frame's z (the
+    actuator: vertical, or leaning by ``tilt`` towards the centre) from the base point at
+    ``base_radius``; ``R`` revolute about the leg frame's y (the tangent to the base
+    circle) at the slider; a rod of ``leg_length`` to the spherical joint ``S1``, ``S2``,
+    ``S3`` (about x, y, z of the rod frame, concurrent) at ``platform_radius`` on the
+    platform; tip frame ``tip`` at the sphere centre. Leg frames: x radial (outwards), y
+    tangent, z the actuator axis (turned about y by ``tilt``). The leg's constraint is a
+    force through the sphere centre parallel to R.
+
+    Home: platform horizontal, centred, at ``height``; ``R = 0`` with the rod inclined in
+    the radial plane from the slider to the sphere centre, ``S = 0``; ``P`` = the
+    slider's travel from the base point (0.2 for the defaults: rod at 36.9° from the
+    vertical, a 3-4-5 triangle), within ``stroke`` (limits of ``P`` [m], multiplied by
+    ``scale``). The slider is below the sphere centre (the rod points upwards).
+    """
+    Rb, rp, rod, h = (scale * v for v in (base_radius, platform_radius, leg_length, height))
+    a = np.array([-math.sin(tilt), 0.0, math.cos(tilt)])  # actuator axis, leg frame
+    centre = np.array([rp - Rb, 0.0, h])  # sphere centre from the base point, leg frame
+    # |s a − centre| = rod, the slider below the sphere: the smaller root
+    b = a @ centre
+    disc = b * b - (centre @ centre - rod * rod)
+    if disc < 0:
+        raise InputError("the rod is too short to reach the platform at this height")
+    s0 = b - math.sqrt(disc)
+    lower, upper = scale * stroke[0], scale * stroke[1]
+    if not lower <= s0 <= upper:
+        raise InputError(f"the slider's home travel {s0:.6g} is outside the stroke "
+                         f"[{lower:.6g}, {upper:.6g}]")
+    d = (centre - s0 * a) / rod  # rod direction, leg frame
+    d_local = pin.rpy.rpyToMatrix(0.0, -tilt, 0.0).T @ d  # in P's frame (z = actuator)
+    beta = math.atan2(d_local[0], d_local[2])  # R_y(beta) z = rod direction
+    joints = [
+        JointSpec("P", "prismatic", rpy=(0.0, -tilt, 0.0), axis=_Z, lower=lower, upper=upper),
+        JointSpec("R", "revolute", rpy=(0.0, beta, 0.0), axis=_Y, lower=-_HALF_PI,
+                  upper=_HALF_PI),
+        *_spherical("S", xyz=(0.0, 0.0, rod)),
+    ]
+    xml = chain_urdf("prs_leg", joints, tip="tip")
+    home = pin.SE3(np.eye(3), np.array([0.0, 0.0, h]))
+    legs, home_q = [], []
+    for i, phi in enumerate(_AZIMUTHS):
+        Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
+        base = pin.SE3(Rz, Rz @ np.array([Rb, 0.0, 0.0]))
+        q = np.array([s0, 0.0, 0.0, 0.0, 0.0])
+        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("P",), base, q, home,
+                                        "prs_leg.urdf"))
+        home_q.append(q)
+    return MechanismDesign(
+        name="3-PRS",
+        description="3-PRS parallel mechanism; prismatic actuators on the base; 1T2R",
+        legs=legs, home=home, home_q=home_q, slug="prs3")
 
 
 # ========================================================================== agile eye
