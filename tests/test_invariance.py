@@ -3,7 +3,8 @@ written (issue 17, items 1 and 2).
 
 * Every shipped mechanism moved 100 m and turned arbitrarily has the same DOF, motion
   type, class and indices, its actuation wrenches are the moved ones (covariant rows of
-  A), B is the same, and forward kinematics gives the moved pose.
+  A), B is the same, and forward kinematics gives the moved pose; its reading as a
+  general linkage (one tree plus closures) gives the same indices too.
 * The agile eye written with every joint frame at the centre (three concurrent
   revolutes, one actuated: not a spherical joint) equals the one written with offset
   frames, and both are isotropic at home.
@@ -20,6 +21,8 @@ import pytest
 from pkm_pin import screws
 from pkm_pin.builders import MECHANISMS
 from pkm_pin.builders.spatial import agile_eye
+from pkm_pin.linkage import Linkage
+from pkm_pin.model.closure_model import configuration, from_mechanism
 
 #: A rigid motion of the whole mechanism: 100 m away, turned about a skew axis.
 MOVE = pin.SE3(pin.rpy.rpyToMatrix(0.7, -1.1, 2.3), np.array([100.0, -60.0, 75.0]))
@@ -102,6 +105,20 @@ def test_forward_kinematics_does_not_depend_on_the_world_frame(pair):
     L = mech.characteristic_length
     np.testing.assert_allclose((MOVE * a.pose).homogeneous, b.pose.homogeneous,
                                atol=1e-8 * max(1.0, L))
+
+
+def test_linkage_indices_do_not_depend_on_the_world_frame(pair):
+    """The general-linkage reading of a shipped mechanism (its tree plus one weld per leg)
+    gives the same seed-000 and general indices, DOF and class for the mechanism moved
+    100 m and turned, at home and at three poses of forward kinematics."""
+    mech, far = pair
+    link, link_far = Linkage(from_mechanism(mech)), Linkage(from_mechanism(far))
+    for pose in poses(mech, n=4):
+        a = link.analyze(configuration(mech, mech.assemble(pose)))
+        b = link_far.analyze(configuration(far, far.assemble(MOVE * pose)))
+        assert (b.dof, b.output_dof, b.singularity) == (a.dof, a.output_dof, a.singularity)
+        for key in ("type_I", "type_II", "condition_A", "forward", "inverse"):
+            assert b.indices[key] == pytest.approx(a.indices[key], rel=1e-8, abs=1e-12), key
 
 
 # ------------------------------------------------------------------------ agile eye
