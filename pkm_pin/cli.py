@@ -773,8 +773,9 @@ def _slug(spec: str) -> str:
 
 
 def cmd_view(args) -> int:
-    """Browser preview of the mechanism at a pose (default: home): a self-contained
-    HTML page written to --html, or opened in the browser."""
+    """Browser preview of the mechanism at a pose (default: home), a partial pose
+    (``--at``, completed on the mechanism's motion and printed) or actuated values
+    (``--q``): a self-contained HTML page written to --html, or opened in the browser."""
     from .view import view
 
     if args.html is not None and not Path(args.html).parent.is_dir():
@@ -784,10 +785,18 @@ def cmd_view(args) -> int:
         args.html = str(Path(args.html) / f"{_slug(args.mechanism)}.html")
     if _is_linkage(mech):
         where = _linkage_assembly(args, mech)
-    elif args.q is not None:
-        where = mech.forward_kinematics(mech.check_actuated(args.q))
     else:
-        where = args.pose
+        pose = _platform_pose(args)
+        if args.q is not None and pose is not None:
+            raise InputError("give --q (actuated values) or --pose / --at, not both")
+        if args.q is not None:
+            where = mech.forward_kinematics(mech.check_actuated(args.q))
+        elif isinstance(pose, dict):  # a partial pose: completed on the motion
+            where = mech.assemble(pose)
+            print(f"given      {', '.join(f'{k}={v:g}' for k, v in pose.items())}")
+            print(f"pose       {_pose_text(where.pose)}")
+        else:
+            where = pose
     scene = view(mech, where, html=args.html, open=args.html is None or args.open,
                  show_screws=not args.no_screws, show_wrenches=not args.no_wrenches)
     if args.html is not None:
@@ -1054,6 +1063,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "self-contained HTML page, or open it in the browser.")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
     _pose_option(p)
+    _at_option(p)
     p.add_argument("--html", metavar="FILE", help="write the page to FILE (no browser)")
     p.add_argument("--open", action="store_true", help="with --html: open it too")
     p.add_argument("--no-screws", action="store_true", help="do not draw the joint screws")

@@ -269,3 +269,40 @@ def test_cli_map_over_z_and_roll(tmp_path, capsys):
     for i, j in np.argwhere(~data["ok"]):
         q = longer.inverse_kinematics(dict(z=data["u"][j], roll=data["v"][i], pitch=0.0))
         assert q.min() < 0.0 or q.max() > 1.0
+
+
+# -------------------------------------------------------------------------- view
+def _transforms(path) -> dict:
+    """The meshcat transforms (path: column-major 4 × 4) embedded in a written page."""
+    import base64
+    import re
+
+    import umsgpack
+
+    commands = [umsgpack.unpackb(base64.b64decode(b)) for b in
+                re.findall(r'pkmRun\("([A-Za-z0-9+/=]+)"\);', path.read_text(encoding="utf-8"))]
+    return {c["path"]: c["matrix"] for c in commands if c["type"] == "set_transform"}
+
+
+def test_cli_view_at_a_partial_pose(mech, tmp_path, capsys):
+    """pkm-pin view prs3 --at z=1.1 roll=0.1 pitch=0 prints the completed pose and draws
+    the mechanism there (every transform that of view() at mech.assemble of the partial
+    pose); --at with --pose or --q, or a parasitic coordinate, exits with status 2."""
+    from pkm_pin.view import view
+
+    page = tmp_path / "at.html"
+    assert main(["view", "prs3", "--at", "z=1.1", "roll=0.1", "pitch=0", "--html",
+                 str(page)]) == 0
+    out = capsys.readouterr().out
+    assert "given      z=1.1, roll=0.1, pitch=0" in out and "rpy [0.1, 0, 0]" in out
+    given = dict(z=1.1, roll=0.1, pitch=0.0)
+    view(mech, mech.assemble(given), html=tmp_path / "api.html")
+    drawn = _transforms(page)
+    assert drawn == _transforms(tmp_path / "api.html")
+    platform = np.reshape(drawn["/meshcat/pkm/3-PRS/platform"], (4, 4)).T
+    np.testing.assert_allclose(platform, mech.complete_pose(**given).homogeneous, atol=1e-12)
+    for extra in (["--pose", "0", "0", "1", "0", "0", "0"], ["--q", "0.2", "0.2", "0.2"]):
+        assert main(["view", "prs3", "--at", "z=1.1", *extra, "--html", str(page)]) == 2
+        assert "not both" in capsys.readouterr().err
+    assert main(["view", "prs3", "--at", "x=0.1", "z=1.1", "--html", str(page)]) == 2
+    assert "not independent" in capsys.readouterr().err
