@@ -7,7 +7,8 @@ azimuths 0°, 120°, 240° about the world z axis; the base lies in the plane z 
 
 At home, every leg has its base-side joint angles at 0 and its spherical groups (three
 concurrent revolutes x, y, z) at 0, far from their gimbal lock (middle angle ±π/2): the
-leg's base frame is turned so that its z axis points along the leg at home.
+leg's base frame is turned so that its z axis points along the leg at home (the 3-PRS's
+along its actuator, the rod turned by a fixed offset of its R joint).
 """
 
 from __future__ import annotations
