@@ -21,8 +21,10 @@ compiled legs, chunks, any executor including a Dask client, a progress bar). Ki
   II locus changes its sign even when no sample falls on it. With Sobol points there is
   no neighbourhood: the samples with those properties (connectivity not checked);
 * ``"transmission"``: the singularity-free workspace where the local transmission index
-  LTI (:mod:`pkm_pin.transmission`) is at least ``threshold`` (0.7), again the part
-  connected to home (empty when home itself transmits worse).
+  LTI (:mod:`pkm_pin.transmission`) and, where it is defined, the constraint
+  transmission index CTI are at least ``threshold`` (0.7): ``min(LTI, CTI) ≥ 0.7``; again
+  the part connected to home (empty when home itself transmits worse). A general
+  linkage's CTI is not defined (nan): its LTI alone decides.
 
 Volumes (:class:`Volume`; an area for two coordinates, a product of units for mixed
 coordinates) on a grid are the cell count times the cell volume, with a bracket: a cell
@@ -152,7 +154,7 @@ class Workspace:
         home: (k,) the home coordinates.
         masks: Kind → boolean array (``shape``): the samples in that workspace.
         values: Per-sample arrays: ``ok``, ``singularity`` (class), ``det`` (carried
-            determinant), ``lti`` (nan where not computed).
+            determinant), ``lti``, ``cti`` (nan where not computed or not defined).
         volumes: Kind → :class:`Volume`.
         inscribed: Kind → :class:`Inscribed` (the singularity-free and transmission
             workspaces; the reachable one too).
@@ -160,7 +162,7 @@ class Workspace:
             samples on the box's faces: the reachable workspace extends beyond the box).
         timing: Seconds: ``evaluate`` (assembly and analysis), ``masks``, ``total``;
             ``poses_per_s``.
-        threshold: The LTI threshold of the transmission workspace.
+        threshold: The ``min(LTI, CTI)`` threshold of the transmission workspace.
         method: How the samples were evaluated: ``"poses"`` (full poses, the sweep's
             fast path), ``"completed poses"`` (partial poses completed on the motion),
             ``"linkage output"``, ``"linkage actuated"``.
@@ -456,7 +458,7 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
         at: Values of other pose coordinates ``{name: value}`` (default: those the DOF
             needs held at home; the rest, parasitic motions, are solved for).
         kinds: Among :data:`KINDS` (default all).
-        threshold: LTI of the transmission workspace (default
+        threshold: ``min(LTI, CTI)`` of the transmission workspace (default
             :data:`pkm_pin.transmission.GOOD_LTI`, 0.7).
         centre: Centre of the inscribed shapes (k,) (default home).
         executor, chunk_size, progress: As :func:`pkm_pin.sweep.sweep`.
@@ -471,8 +473,8 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
 
     if isinstance(mech, Linkage):
         return linkage_workspace(mech, coords, bounds=bounds, n=n, sampling=sampling,
-                                 samples=samples, seed=seed, kinds=kinds, centre=centre,
-                                 progress=progress)
+                                 samples=samples, seed=seed, kinds=kinds,
+                                 threshold=threshold, centre=centre, progress=progress)
     t0 = time.perf_counter()
     kinds = _kinds(kinds, KINDS)
     threshold = GOOD_LTI if threshold is None else float(threshold)
@@ -491,7 +493,7 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     t2 = time.perf_counter()
     values = {"ok": res.ok.reshape(shape), "singularity": res.singularity.reshape(shape),
               "det": res.det.reshape(shape), "lti": res.lti.reshape(shape),
-              "dof": res.dof.reshape(shape)}
+              "cti": res.cti.reshape(shape), "dof": res.dof.reshape(shape)}
     home_dof = mech.home_analysis.dof
     home_det = _home_det(mech)
     ws = _finish(mech.name, coords, _units(coords, mech.length_unit), B, sampling, axes,
@@ -615,6 +617,9 @@ def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, 
         masks["singularity-free"] = component(free, start) if grid else free
     if "transmission" in kinds:
         good = masks["singularity-free"] & (np.nan_to_num(lti, nan=-1.0) >= threshold)
+        cti = values.get("cti")
+        if cti is not None:  # min(LTI, CTI) where the CTI is defined
+            good &= np.isnan(cti) | (cti >= threshold)
         masks["transmission"] = component(good, start) if grid else good
     k = len(coords)
     spacing = (B[:, 1] - B[:, 0]) / np.array(shape, float) if grid else \
@@ -650,10 +655,11 @@ def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, 
 # ============================================================ general linkages
 def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "grid",
                       samples: int | None = None, seed: int = 0,
-                      kinds: Sequence[str] | None = None, centre=None, max_iter: int = 20,
-                      progress: bool = False) -> Workspace:
-    """The reachable and singularity-free workspaces of a general linkage (module
-    docstring), on a grid.
+                      kinds: Sequence[str] | None = None, threshold: float | None = None,
+                      centre=None, max_iter: int = 10, progress: bool = False) -> Workspace:
+    """The reachable, singularity-free and good-transmission workspaces of a general
+    linkage (module docstring), on a grid, on the working mode of the reference
+    assembly.
 
     Args:
         link: The :class:`~pkm_pin.linkage.Linkage`.
@@ -664,18 +670,24 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
             reference assembly's.
         bounds, n: As :func:`workspace` (default: the reference ± the characteristic
             length, or the actuated joints' limits / ± π).
-        kinds: ``"reachable"``, ``"singularity-free"`` (the transmission indices are not
-            computed for general linkages).
+        kinds: Among :data:`KINDS` (default all): ``"transmission"`` uses
+            :meth:`Linkage.transmission <pkm_pin.linkage.Linkage.transmission>` at each
+            cell (LTI; a linkage's CTI is not defined).
+        threshold: LTI of the transmission workspace (default
+            :data:`pkm_pin.transmission.GOOD_LTI`, 0.7).
         centre: Of the inscribed shapes (default: the reference).
-        max_iter: Newton iterations of each cell's solve.
+        max_iter: Newton iterations of each continuation step (a step from a
+            neighbour converges in a few; one that does not is halved).
     """
     from .linkage import _pose_rows
     from .solve import iter_tree_starts, solve_tree
+    from .transmission import GOOD_LTI
 
     if sampling != "grid":
         raise InputError("a linkage's workspace grows from cell to cell: sampling='grid'")
     t0 = time.perf_counter()
-    kinds = _kinds(kinds, KINDS[:2])
+    kinds = _kinds(kinds, KINDS)
+    threshold = GOOD_LTI if threshold is None else float(threshold)
     model = link.model
     ref = link.assemble()
     out_xyz = ref.output_pose.translation.copy()
@@ -714,8 +726,7 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
         raise InputError(f"the reference {np.round(home, 6).tolist()} is outside the bounds "
                          f"{B.tolist()}: a linkage's workspace grows from it")
 
-    def solve(cell, q0):
-        p = points[np.ravel_multi_index(cell, shape)]
+    def solve_at(p, q0):
         if actuated:
             targets = ref.q_actuated.copy()
             targets[idx] = p
@@ -725,14 +736,51 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
         return solve_tree(model, q0, pose=pin.SE3(np.eye(3), xyz), pose_rows=rows,
                           max_iter=max_iter)
 
+    p_scale = np.array([_scale_of(link, c) for c in coords]) if actuated else \
+        np.full(len(coords), model.length)
+
+    turn = _full_turns(model)  # (nv,) revolutes whose limits span a full turn
+
+    def jump(q0, q1, p0, p1) -> float:
+        dq = pin.difference(model.tree, q0, q1)
+        dq[turn] = (dq[turn] + np.pi) % (2 * np.pi) - np.pi  # the same posture
+        dq = np.abs(dq / model.velocity_units).max()
+        dp = np.abs((p1 - p0) / p_scale).max()
+        return float(dq / dp) if dp > 0 else (0.0 if dq <= 1e-9 else np.inf)
+
+    def starts(q0):
+        yield q0
+        near = turn & (np.abs(q0 - np.clip(q0, model.tree.lowerPositionLimit + TURN_MARGIN,
+                                            model.tree.upperPositionLimit - TURN_MARGIN))
+                       > 0) if turn.any() else turn
+        if near.any():  # round the limit: the same posture on the other side
+            q1 = q0.copy()
+            q1[near] -= 2 * np.pi * np.sign(q0[near])
+            yield q1
+
+    def follow(p0, q0, p1):
+        return _follow(solve_at, jump, starts, p0, q0, p1)
+
+    def first():
+        """The start cell's configuration: followed from the reference, else from the
+        solver's global starts (the reference, neutral, mid-limits)."""
+        p = points[np.ravel_multi_index(start, shape)]
+        q = follow(home, ref.q, p)
+        for q1 in () if q is not None else iter_tree_starts(model, None):
+            sol = solve_at(p, q1)
+            if sol.converged:
+                return sol.q
+        return q
+
     t1 = time.perf_counter()
-    Q = _grow(shape, start, ref.q, solve, lambda: iter_tree_starts(model, None), progress)
-    values = _linkage_values(link, Q, shape, "singularity-free" in kinds, ref)
+    Q = _grow(shape, start, first(), lambda cell: points[np.ravel_multi_index(cell, shape)],
+              follow, progress)
+    values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds, ref)
     t2 = time.perf_counter()
     home_an = link.analyze(ref.q)
     home_det = _carried_det(home_an, home_an.platform_twists)
     return _finish(link.name, coords, units, B, "grid", axes, shape, points, fixed, home,
-                   values, home_an.dof, home_det, kinds, np.nan, centre, method, t0, t1,
+                   values, home_an.dof, home_det, kinds, threshold, centre, method, t0, t1,
                    t2, int((~values["ok"]).sum()))
 
 
@@ -751,6 +799,34 @@ def _default_linkage_coords(link, ref) -> tuple[str, ...]:
     return tuple(link.actuated[:2])
 
 
+#: A full-turn revolute (limits spanning 2π) within this of a limit [rad] is also
+#: tried from the other side of the turn when a cell is followed (:func:`_follow`).
+TURN_MARGIN = 0.5
+#: Halvings of a cell step before a full-turn revolute may be taken round (a quarter).
+TURN_DEPTH = 2
+
+
+def _full_turns(model) -> np.ndarray:
+    """(nv,) the revolutes with one coordinate whose limits span at least a full turn
+    (a posture then has two coordinates near ±π; the limits cut the turn)."""
+    tree = model.tree
+    out = np.zeros(tree.nv, bool)
+    if tree.nq != tree.nv:
+        return out
+    span = tree.upperPositionLimit - tree.lowerPositionLimit
+    for j in tree.joints[1:]:
+        if j.nq == 1 and model.velocity_units[j.idx_v] == 1.0 \
+                and span[j.idx_q] >= 2 * np.pi - 1e-9:
+            out[j.idx_v] = True
+    return out
+
+
+def _scale_of(link, name: str) -> float:
+    """The velocity unit of an actuated joint (1 for radians, L for lengths)."""
+    model = link.model
+    return float(model.velocity_units[model.tree.joints[model.tree.getJointId(name)].idx_v])
+
+
 def _unit_of(link, name: str) -> str:
     model = link.model
     joint = model.tree.joints[model.tree.getJointId(name)]
@@ -767,14 +843,61 @@ def _limits(link, name: str, value: float, half: float) -> tuple[float, float]:
     return value - half, value + half
 
 
-def _grow(shape, start, q_start, solve, global_starts, progress) -> dict:
-    """Solve the cells from ``start`` outwards: each cell from a solved neighbour's
-    configuration (up to two neighbours), then from the solver's global starts (the
-    reference, neutral and mid-limits configurations); returns {flat index: q} of the
-    cells solved (the part of the workspace connected to ``start``)."""
+#: A cell's configuration is continuous with its neighbour's when the joint-space step
+#: (``pin.difference`` over the velocity units: radians, lengths / L, its largest
+#: component) is at most this many times the coordinate step (lengths / L, radians):
+#: otherwise the step is halved (:func:`_follow`).
+BRANCH_JUMP = 10.0
+#: Halvings of a cell step before a configuration is accepted as it converges
+#: (steps of 1/32 of a cell).
+BRANCH_DEPTH = 5
+
+
+def _follow(solve_at, jump, starts, p0, q0, p1):
+    """The configuration at ``p1`` on the branch of ``q0`` (at ``p0``), or None: an
+    adaptive continuation along the segment.
+
+    A step (first the whole way) is Newton from the last configuration, accepted when
+    its joint-space step is at most :data:`BRANCH_JUMP` times the coordinate step
+    (``jump(q, q_new, p, p_new)``); otherwise the step is halved, down to
+    ``2**-BRANCH_DEPTH`` of the way, where a converged solve is taken as it is (near a
+    type I locus the joints move fast, legitimately); after an accepted step the step
+    doubles again. A step that does not converge is halved down to a quarter of the
+    way only (the target is most likely out of reach). On steps of at most a quarter of
+    the way, Newton also starts from ``starts(q)`` (``q`` with its full-turn revolutes
+    near a limit taken round): the path is then checked at least every quarter, so
+    that it cannot go round through a type I locus."""
+    t, h, q, p = 0.0, 1.0, q0, p0
+    h_min, h_turn = 0.5 ** BRANCH_DEPTH, 0.5 ** TURN_DEPTH
+    while t < 1.0:
+        h = min(h, 1.0 - t)
+        p_new = p0 + (t + h) * (p1 - p0) if t + h < 1.0 else p1
+        found, converged = None, False
+        for s in starts(q) if h <= h_turn else (q,):
+            sol = solve_at(p_new, s)
+            converged |= sol.converged
+            if sol.converged and (h <= h_min or jump(q, sol.q, p, p_new) <= BRANCH_JUMP):
+                found = sol.q
+                break
+        if found is None:
+            if h <= (h_min if converged else h_turn):
+                return None
+            h *= 0.5
+            continue
+        t, q, p, h = t + h, found, p_new, 2.0 * h
+    return q
+
+
+def _grow(shape, start, q_start, point, follow, progress) -> dict:
+    """Solve the cells from ``start`` (configuration ``q_start``; None: not solved)
+    outwards on its branch (working mode): each cell is followed from a solved
+    neighbour's configuration (``follow(p0, q0, p1)``: continuation, :func:`_follow`),
+    one try per neighbour; a cell no neighbour reaches continuously is not on this
+    branch. Returns {flat index: q} of the cells solved (the part of the workspace
+    connected to ``start`` on its branch)."""
     k = len(shape)
     solved: dict = {}
-    tries = np.zeros(shape, np.int8)  # neighbour tries; 3: the global starts tried too
+    tried = np.zeros(shape, np.int8)  # neighbours tried
     bar = None
     if progress:
         from tqdm import tqdm
@@ -789,39 +912,21 @@ def _grow(shape, start, q_start, solve, global_starts, progress) -> dict:
             for s in (-1, 1):
                 nb = list(cell)
                 nb[d] += s
-                if 0 <= nb[d] < shape[d] and tries[tuple(nb)] < 2 \
+                if 0 <= nb[d] < shape[d] \
                         and int(np.ravel_multi_index(nb, shape)) not in solved:
-                    queue.append((tuple(nb), q))
-
-    def from_global(cell) -> bool:
-        tries[cell] = 3
-        for q1 in global_starts():
-            sol = solve(cell, q1)
-            if sol.converged:
-                accept(cell, sol.q)
-                return True
-        return False
+                    queue.append((tuple(nb), cell, q))
 
     queue: deque = deque()
-    sol = solve(tuple(start), q_start)
-    if sol.converged:
-        accept(tuple(start), sol.q)
-    else:
-        from_global(tuple(start))
+    if q_start is not None:
+        accept(tuple(start), q_start)
     while queue:
-        while queue:
-            cell, q0 = queue.popleft()
-            if int(np.ravel_multi_index(cell, shape)) in solved or tries[cell] >= 2:
-                continue
-            tries[cell] += 1
-            sol = solve(cell, q0)
-            if sol.converged:
-                accept(cell, sol.q)
-            elif tries[cell] == 2:
-                from_global(cell)
-        for cell in zip(*np.nonzero(tries == 1)):  # one neighbour only: global starts
-            if int(np.ravel_multi_index(cell, shape)) not in solved:
-                from_global(tuple(int(c) for c in cell))
+        cell, origin, q0 = queue.popleft()
+        if int(np.ravel_multi_index(cell, shape)) in solved or tried[cell] >= 2 * k:
+            continue
+        tried[cell] += 1
+        q = follow(point(origin), q0, point(cell))
+        if q is not None:
+            accept(cell, q)
     if bar is not None:
         bar.close()
     return solved
@@ -844,15 +949,21 @@ def _carried_det(an, P0_world: np.ndarray) -> float:
     return float(np.linalg.det(A @ carried[:, [3, 4, 5, 0, 1, 2]].T))
 
 
-def _linkage_values(link, Q: dict, shape, analyse: bool, ref) -> dict:
-    """The per-cell arrays of a linkage workspace (analyses only with ``analyse``)."""
+def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, ref) -> dict:
+    """The per-cell arrays of a linkage workspace (analyses only with ``analyse``, the
+    LTI of :meth:`Linkage.transmission` with ``transmission``); ``q``: each cell's
+    configuration (nan rows where not solved)."""
     N = int(np.prod(shape))
     ok = np.zeros(N, bool)
     cls = np.full(N, "", dtype="<U4")
-    det, dof = np.full(N, np.nan), np.full(N, -1)
+    det, dof, lti = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
+    q_all = np.full((N, link.model.nq), np.nan)
     generic = link.analyze(ref.q)
     for i, q in Q.items():
         ok[i] = True
+        q_all[i] = q
+        if transmission:
+            lti[i] = link.transmission(q).lti
         if not analyse:
             cls[i] = "none"
             dof[i] = generic.dof
@@ -862,8 +973,9 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, ref) -> dict:
         dof[i] = an.dof
         det[i] = _carried_det(an, generic.platform_twists)
     return {"ok": ok.reshape(shape), "singularity": cls.reshape(shape),
-            "det": det.reshape(shape), "lti": np.full(shape, np.nan),
-            "dof": dof.reshape(shape)}
+            "det": det.reshape(shape), "lti": lti.reshape(shape),
+            "cti": np.full(shape, np.nan), "dof": dof.reshape(shape),
+            "q": q_all.reshape(tuple(shape) + (link.model.nq,))}
 
 
 __all__ = ["COORDINATES", "KINDS", "Inscribed", "Volume", "Workspace", "boundary_cells",

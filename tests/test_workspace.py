@@ -74,7 +74,14 @@ def test_five_bar_reachable_area_is_the_annuli_intersection(five_bar):
     for n in (10, 20, 40):
         ws = five_bar.workspace(bounds=FIVE_BAR_BOX, n=n, kinds=["reachable"])
         assert ws.coords == ("x", "y") and ws.method == "linkage output"
-        np.testing.assert_array_equal(ws.masks["reachable"].ravel(), in_annuli(ws.points))
+        reach, ref = ws.masks["reachable"].ravel(), in_annuli(ws.points)
+        assert not (reach & ~ref).any()
+        # a cell missed is one that no step from a neighbour reaches on the home working
+        # mode without crossing the small holes |p − (∓a, 0)| < l2 − l1 (within a cell)
+        missed = ws.points[ref & ~reach]
+        near_hole = np.minimum(np.hypot(missed[:, 0] + A, missed[:, 1]),
+                               np.hypot(missed[:, 0] - A, missed[:, 1])) - abs(L2 - L1)
+        assert len(missed) <= 2 and np.all(near_hole < np.max(ws.spacing))
         v = ws.volumes["reachable"]
         assert v.lower <= exact <= v.upper and abs(v.value - exact) <= v.error
         errors.append(abs(v.value - exact))
@@ -92,6 +99,58 @@ def test_five_bar_singularity_free_part_stops_at_the_type_II_locus(five_bar):
     assert free.sum() < reach.sum()
     det = ws.values["det"][free]
     assert np.all(np.sign(det) == np.sign(det[0]))
+
+
+def _five_bar_closed_forms(P: np.ndarray):
+    """Home working mode (elbows −, +) configurations and LTI = min(|sin γ_i|, |sin ψ|)
+    at the points P (nan outside the annuli), by the closed forms."""
+    from test_transmission import five_bar_closed_form, five_bar_q
+
+    Q, lti = np.full((len(P), 4), np.nan), np.full(len(P), np.nan)
+    for i in np.flatnonzero(in_annuli(P)):
+        Q[i] = five_bar_q(P[i])
+        iti, oti = five_bar_closed_form(Q[i])
+        lti[i] = min(iti.min(), oti)
+    return Q, lti
+
+
+def test_five_bar_transmission_area_is_the_closed_forms_on_the_grid(five_bar):
+    """The five-bar's good-transmission cells are those of a brute-force evaluation of
+    ITI_i = |sin γ_i|, OTI = |sin ψ| on the same grid (LTI ≥ 0.7, connected to home):
+    same cells, same area; the lti values equal the closed forms."""
+    ws = five_bar.workspace(bounds=FIVE_BAR_BOX, n=16)
+    assert set(ws.masks) == {"reachable", "singularity-free", "transmission"}
+    _, lti = _five_bar_closed_forms(ws.points)
+    got = ws.values["lti"].ravel()
+    reach = ws.masks["reachable"].ravel()
+    np.testing.assert_allclose(got[reach], lti[reach], atol=1e-9)
+    start = tuple(int(np.argmin(np.abs(a - h))) for a, h in zip(ws.axes, ws.home))
+    brute = component((np.nan_to_num(lti, nan=-1) >= 0.7).reshape(ws.shape), start)
+    np.testing.assert_array_equal(ws.masks["transmission"], brute)
+    area = brute.sum() * np.prod(ws.spacing)
+    assert ws.volumes["transmission"].value == pytest.approx(area, rel=1e-12)
+    assert 0 < brute.sum() < ws.masks["singularity-free"].sum()
+    assert np.isnan(ws.values["cti"]).all()
+
+
+def test_five_bar_workspace_keeps_the_home_working_mode(five_bar):
+    """Grown cell by cell, the five-bar keeps its elbows' signs (the home working mode)
+    over its singularity-free workspace at every resolution: every cell's configuration
+    is the closed-form one of that mode, so neighbouring cells' configurations are
+    close (a joint moves at most a few times the cell step over L)."""
+    for n in (8, 13, 24):
+        ws = five_bar.workspace(bounds=FIVE_BAR_BOX, n=n, kinds=["singularity-free"])
+        free = ws.masks["singularity-free"]
+        q = ws.values["q"]
+        assert np.all(np.sin(q[free][:, 1]) < 0) and np.all(np.sin(q[free][:, 3]) > 0)
+        ref, _ = _five_bar_closed_forms(ws.points)
+        diff = (q.reshape(-1, 4) - ref + np.pi) % (2 * np.pi) - np.pi
+        np.testing.assert_allclose(diff[free.ravel()], 0.0, atol=1e-6)
+        for d in range(2):  # face neighbours both free
+            both = np.logical_and(np.delete(free, -1, axis=d), np.delete(free, 0, axis=d))
+            dq = np.diff(q, axis=d)[both]
+            dq = np.abs((dq + np.pi) % (2 * np.pi) - np.pi).max()
+            assert dq <= 10.0 * ws.spacing[d] / five_bar.model.length
 
 
 def test_delta_reachable_volume_matches_monte_carlo(delta):
