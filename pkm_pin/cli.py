@@ -814,7 +814,8 @@ def cmd_workspace(args) -> int:
     """Reachable, singularity-free and good-transmission workspaces
     (:func:`pkm_pin.workspace.workspace`): print (or ``--json``) the volumes with their
     errors, the inscribed shapes and the counts; write PREFIX.json, PREFIX.npz, the PNG
-    pictures and PREFIX.html (a meshcat point cloud)."""
+    pictures and PREFIX.html or ``--view FILE.html`` (a meshcat point cloud, with each
+    kind's boundary surface for three coordinates)."""
     from .plots import workspace_plots
     from .view import workspace_cloud
     from .workspace import workspace
@@ -859,7 +860,7 @@ def cmd_workspace(args) -> int:
                             **{k: v for k, v in ws.values.items()},
                             **{f"axis_{i}": a for i, a in enumerate(ws.axes)})
         files += workspace_plots(ws, prefix, title=mech.name)
-        html = prefix.with_name(prefix.name + ".html")
+        html = Path(args.view) if args.view else prefix.with_name(prefix.name + ".html")
         workspace_cloud(ws, html=html)
         files.append(html)
     except OSError as e:
@@ -1034,7 +1035,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "the independent ones; a linkage: its output point, or actuated joints) "
                        "on a grid; write PREFIX.json (volumes with errors, inscribed shapes, "
                        "counts), PREFIX.npz, PNG pictures and PREFIX.html (meshcat point "
-                       "cloud).")
+                       "cloud; with three coordinates, each workspace's boundary surface).")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
     p.add_argument("--coords", nargs="+", metavar="NAME",
                    help="1 to 3 of x y z roll pitch yaw (a linkage: x y z of its output "
@@ -1051,6 +1052,9 @@ def build_parser() -> argparse.ArgumentParser:
     _at_option(p, "values of other pose coordinates (default: home)")
     p.add_argument("--out", metavar="PREFIX", help="output prefix (default workspace_NAME)")
     p.add_argument("--json", action="store_true", help="print the JSON numbers")
+    p.add_argument("--view", metavar="FILE.html",
+                   help="write the browser view there (default PREFIX.html): point cloud "
+                   "and, for three coordinates, each workspace's boundary surface")
     p.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     p.add_argument("--chunk-size", type=int, default=2000, help="poses per task (2000)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -455,8 +455,10 @@ class Linkage:
         return self._assembly(sol, iterations + home.iterations)
 
     def workspace(self, coords=None, **options):
-        """Reachable and singularity-free workspaces of the output point or over actuated
-        coordinates: :func:`pkm_pin.workspace.linkage_workspace`."""
+        """Reachable, singularity-free and good-transmission (LTI of
+        :meth:`transmission` ≥ 0.7) workspaces of the output point or over actuated
+        coordinates, on the reference's working mode:
+        :func:`pkm_pin.workspace.linkage_workspace`."""
         from .workspace import linkage_workspace
 
         return linkage_workspace(self, coords, **options)

@@ -716,12 +716,17 @@ WORKSPACE_CLOUD_COLOURS = {"reachable": 0xFDB863, "singularity-free": 0x4393C3,
 
 
 def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=None,
-                    open: bool = False) -> SceneRecorder:  # noqa: A002
+                    open: bool = False, surfaces: bool = True) -> SceneRecorder:  # noqa: A002
     """A meshcat point cloud of a :class:`~pkm_pin.workspace.Workspace`: one point per
     sample in it, coloured by the smallest kind it belongs to (reachable,
     singularity-free, good transmission), one node per kind
     (``pkm/workspace/<kind>``) so each can be hidden in the viewer's controls. Two
     coordinates are drawn in a plane (the third at 0); the point size is the cell size.
+
+    With ``surfaces`` and a 3-D grid, each kind's boundary is drawn too, as a
+    translucent triangle mesh of its cells' exposed faces
+    (:func:`pkm_pin.workspace.voxel_surface`, exact for the cells;
+    ``pkm/workspace/<kind>_surface``).
 
     Returns:
         The :class:`SceneRecorder` holding the scene (``static_html()``); ``html``:
@@ -749,6 +754,8 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
         colour = np.tile(rgb[:, None], (1, len(pts)))
         root[node_name(k)].set_object(g.PointCloud(pts.T.astype(np.float32),
                                                    colour.astype(np.float32), size=size))
+    if surfaces and ws.sampling == "grid" and len(ws.coords) == 3:
+        _workspace_surfaces(ws, root, g, kinds)
     home = np.zeros(3)
     home[:len(ws.coords)] = ws.home
     root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=0x000000))
@@ -762,3 +769,19 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
         Path(name).write_text(recorder.static_html(), encoding="utf-8")
         webbrowser.open(Path(name).as_uri(), new=2)
     return recorder
+
+
+def _workspace_surfaces(ws, root, g, kinds) -> None:
+    """Each kind's voxel boundary mesh under ``root`` (translucent, its cloud's colour;
+    the larger kinds more transparent so the smaller ones show through)."""
+    from .workspace import voxel_surface
+
+    for i, k in enumerate(kinds):
+        vertices, faces = voxel_surface(ws.masks[k], ws.bounds)
+        if not len(faces):
+            continue
+        material = g.MeshLambertMaterial(color=WORKSPACE_CLOUD_COLOURS[k], transparent=True,
+                                         opacity=0.25 + 0.2 * i)
+        root[node_name(f"{k}_surface")].set_object(
+            g.TriangularMeshGeometry(vertices.astype(np.float32),
+                                     faces.astype(np.uint32)), material)

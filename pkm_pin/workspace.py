@@ -341,6 +341,58 @@ def inscribed_shapes(mask: np.ndarray, points: np.ndarray, centre: np.ndarray,
     return Inscribed(np.asarray(centre, float), cube, radius, half_height, coords[ax], err)
 
 
+# ============================================================ surfaces
+def voxel_surface(mask: np.ndarray, bounds: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary of a 3-D grid workspace as a triangle mesh: the exposed faces of its
+    cells (a face between a cell in ``mask`` and one out, or the box's outside), two
+    triangles each, oriented outwards (counter-clockwise seen from outside).
+
+    Exact for the voxel set: the mesh is closed (each directed edge is matched by its
+    reverse; where no two cells touch along an edge only, every edge bounds exactly two
+    triangles) and the volume it encloses is the cell count times the cell volume.
+
+    Args:
+        mask: (n1, n2, n3) the cells in the workspace; bounds: (3, 2) the box they tile.
+
+    Returns:
+        ((V, 3) vertices in the workspace coordinates, shared between faces; (F, 3)
+        vertex indices of each triangle).
+    """
+    mask = np.asarray(mask, bool)
+    if mask.ndim != 3:
+        raise InputError(f"a workspace surface needs 3 coordinates, got {mask.ndim}")
+    B = np.asarray(bounds, float)
+    spacing = (B[:, 1] - B[:, 0]) / np.array(mask.shape, float)
+    padded = np.pad(mask, 1)
+    corners, quads = [], []
+    for d in range(3):
+        a, b = (d + 1) % 3, (d + 2) % 3
+        e = np.eye(3, dtype=int)
+        for side in (1, -1):
+            shifted = np.roll(padded, -side, axis=d)
+            cells = np.argwhere(padded & ~shifted) - 1  # cells with this face exposed
+            if not len(cells):
+                continue
+            base = cells + (e[d] if side == 1 else 0)
+            ring = [0, e[a], e[a] + e[b], e[b]] if side == 1 else [0, e[b], e[a] + e[b], e[a]]
+            quads.append(np.stack([base + r for r in ring], axis=1))  # (k, 4, 3)
+    if not quads:
+        return np.zeros((0, 3)), np.zeros((0, 3), int)
+    Q = np.concatenate(quads)
+    lattice, inverse = np.unique(Q.reshape(-1, 3), axis=0, return_inverse=True)
+    idx = inverse.reshape(-1, 4)
+    faces = np.concatenate([idx[:, [0, 1, 2]], idx[:, [0, 2, 3]]])
+    corners = B[:, 0] + lattice * spacing
+    return corners, faces
+
+
+def mesh_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
+    """Volume enclosed by a closed, outward-oriented triangle mesh (divergence theorem:
+    the sum of the signed tetrahedra from the origin)."""
+    V = np.asarray(vertices, float)[np.asarray(faces, int)]
+    return float(np.einsum("ij,ij->i", V[:, 0], np.cross(V[:, 1], V[:, 2])).sum() / 6.0)
+
+
 # ============================================================ the coordinates
 def default_coordinates(mech) -> tuple[str, ...]:
     """The mechanism's independent coordinates at home (those
@@ -980,4 +1032,5 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, ref
 
 __all__ = ["COORDINATES", "KINDS", "Inscribed", "Volume", "Workspace", "boundary_cells",
            "component", "default_coordinates", "grid_axes", "grid_volume",
-           "inscribed_shapes", "linkage_workspace", "sample_volume", "workspace"]
+           "inscribed_shapes", "linkage_workspace", "mesh_volume", "sample_volume",
+           "voxel_surface", "workspace"]

@@ -16,6 +16,8 @@ from pkm_pin.workspace import (
     grid_points,
     grid_volume,
     inscribed_shapes,
+    mesh_volume,
+    voxel_surface,
     workspace,
 )
 
@@ -259,6 +261,59 @@ def test_inscribed_shapes_in_a_box_are_exact():
     assert np.isnan(mixed.cube) and mixed.cylinder_radius == pytest.approx(0.5)
 
 
+def _edge_counts(faces: np.ndarray):
+    """Directed edge → count, over the triangles."""
+    from collections import Counter
+
+    return Counter((int(a), int(b)) for f in faces for a, b in zip(f, np.roll(f, -1)))
+
+
+def test_voxel_surface_of_a_ball_is_closed_and_encloses_the_cell_volume():
+    """A ball's cells (no two touching along an edge only): every edge of the surface
+    bounds exactly two triangles, in opposite directions, and the enclosed volume is
+    the cell count times the cell volume; the box's faces close it too."""
+    n = 12
+    B = np.array([(-1.0, 1.0), (0.0, 3.0), (2.0, 2.5)])
+    P = grid_points(grid_axes(B, n))
+    c = B.mean(axis=1)
+    mask = (np.linalg.norm((P - c) / (B[:, 1] - B[:, 0]), axis=1) <= 0.45).reshape(n, n, n)
+    mask[:, :, -1] |= mask.any(axis=2)  # reaching the box's top face
+    V, F = voxel_surface(mask, B)
+    edges = _edge_counts(F)
+    assert all(k == 1 and edges.get((b, a)) == 1 for (a, b), k in edges.items())
+    cell = np.prod((B[:, 1] - B[:, 0]) / n)
+    assert mesh_volume(V, F) == pytest.approx(mask.sum() * cell, rel=1e-12)
+    assert np.all((V >= B[:, 0] - 1e-12) & (V <= B[:, 1] + 1e-12))
+
+
+def test_voxel_surface_of_any_cell_set_is_closed():
+    """Random cells (edge-only contacts included): each directed edge is matched by its
+    reverse as often, and the enclosed volume is the cells' volume."""
+    rng = np.random.default_rng(3)
+    mask = rng.random((6, 7, 5)) < 0.45
+    B = np.array([(0.0, 0.6), (-1.0, 0.4), (5.0, 5.5)])
+    V, F = voxel_surface(mask, B)
+    edges = _edge_counts(F)
+    assert all(edges.get((b, a)) == k for (a, b), k in edges.items())
+    cell = np.prod((B[:, 1] - B[:, 0]) / np.array(mask.shape))
+    assert mesh_volume(V, F) == pytest.approx(mask.sum() * cell, rel=1e-12)
+    empty = voxel_surface(np.zeros((2, 2, 2), bool), B)
+    assert empty[0].shape == (0, 3) and empty[1].shape == (0, 3)
+
+
+def test_the_browser_view_draws_each_kind_s_surface(delta):
+    """view.workspace_cloud of a 3-D workspace holds each kind's surface mesh, closed and
+    enclosing that kind's volume."""
+    from pkm_pin.view import workspace_cloud
+
+    ws = delta.workspace(bounds=DELTA_BOX, n=6, kinds=["reachable", "singularity-free"])
+    rec = workspace_cloud(ws)
+    for kind in ws.masks:
+        assert rec.node(f"/meshcat/pkm/workspace/{kind}_surface") is not None
+        V, F = voxel_surface(ws.masks[kind], ws.bounds)
+        assert mesh_volume(V, F) == pytest.approx(ws.volumes[kind].value, rel=1e-9)
+
+
 def test_volumes_scale_with_units_and_counts_do_not(delta):
     """The Delta in millimetres: the same cells, volumes × 1e9, inscribed sizes × 1e3."""
     mm = MECHANISMS["delta"](scale=1000.0).build()
@@ -320,4 +375,10 @@ def test_cli_writes_json_plots_and_view(tmp_path, capsys):
     assert "reachable" in text and "volume" in text
     for name in ("five.json", "five_workspace.png", "five.html"):
         assert (tmp_path / name).stat().st_size > 0
+    assert main(["workspace", "delta", "--coords", "x", "y", "z", "--range", "-0.6", "0.6",
+                 "-0.6", "0.6", "-1.3", "-0.3", "--n", "4", "--kind", "reachable", "--out",
+                 str(tmp_path / "d4"), "--view", str(tmp_path / "surface.html"),
+                 "--quiet"]) == 0
+    assert (tmp_path / "surface.html").stat().st_size > 0
+    assert not (tmp_path / "d4.html").exists()
     assert main(["workspace", "delta", "--range", "0", "1"]) == 2
