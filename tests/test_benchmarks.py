@@ -59,8 +59,8 @@ def test_equivalence_table_numbers_are_below_1e_9(capsys):
 
 
 def test_bench_workspace_runs_serial_and_on_dask(capsys):
-    """bench_workspace.main times a small 3-RPR workspace here and on a LocalCluster with
-    1 and 2 workers (same masks, checked inside) and prints the scaling."""
+    """bench_workspace.main times a small Delta workspace here and on a LocalCluster with
+    1 and 2 worker processes (same masks, checked inside) and prints the scaling."""
     import bench_workspace
 
     rows = bench_workspace.main(n=6, chunk=64)
