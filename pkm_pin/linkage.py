@@ -376,7 +376,7 @@ class Linkage:
     def transmission(self, q):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or
         :class:`LinkageAssembly`; :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010):
-        each actuator is its own "leg".
+        each actuator's side of its loops is its "leg".
 
         The transmission wrench of an actuator is the one its loop passes on to the
         output: reciprocal to every passive freedom of the loop (its passive joints and
@@ -387,11 +387,23 @@ class Linkage:
         the actuated link at the point of its axis nearest to the first revolute child
         of the actuated joint it is not parallel to (ITI), and on the output at the
         output point (a point output) or at the output body's joint nearest to its axis
-        (OTI). ``cti`` is nan: the constraint index is defined for the legs of a
-        platform (:attr:`pkm_pin.Analysis.transmission`).
+        (OTI).
+
+        The constraint transmission index (our generalisation of Liu et al. 2014,
+        docs/indices.md) is per actuator's side of its loops (the "leg" of
+        :func:`_loop_freedoms`; two actuators of one leg share it): its constraint
+        wrenches (reciprocal to all of the side's freedoms) against the output twists
+        reciprocal to every transmission wrench and to every other side's constraints
+        (and to those of the output body's own support joints): the twists the output
+        gains when that side's constraints are removed
+        (:func:`pkm_pin.transmission.constraint_transmission`, decided about the output
+        point, compared with the constraint rank of the reference assembly). For a point
+        output only forces through the point count (the point carries no couple). A side
+        without constraints, or whose constraints the others impose as well, has CTI 1.
 
         Returns:
-            :class:`~pkm_pin.transmission.Transmission`.
+            :class:`~pkm_pin.transmission.Transmission` (``legs``: each actuator's side,
+            ``leg_names``: the actuators of each side joined by ``+``).
         """
         from .transmission import Transmission, transmission_indices
 
@@ -415,8 +427,43 @@ class Linkage:
                                         model.length)
         lti = float(np.min(np.minimum(iti, np.where(np.isnan(oti), np.inf, oti)),
                            initial=np.inf)) if len(iti) else float("nan")
-        return Transmission(iti, oti, lti, np.zeros(0), float("nan"),
-                            np.arange(len(cols)), tuple(model.actuated))
+        leg_cti, side_of = self._constraint_transmission(kin, W, an.reference_point)
+        names = tuple("+".join(a for a, s in zip(model.actuated, side_of) if s == k)
+                      for k in range(len(leg_cti)))
+        return Transmission(iti, oti, lti, leg_cti,
+                            float(leg_cti.min()) if len(leg_cti) else 1.0,
+                            np.asarray(side_of, int), names)
+
+    def _constraint_transmission(self, kin: TreeKinematics, W: np.ndarray, p: np.ndarray
+                                 ) -> tuple[np.ndarray, list]:
+        """CTI of each actuator side (:meth:`transmission`) and the side of each actuator,
+        from the transmission wrenches ``W`` (world origin), decided about ``p``."""
+        from .transmission import about, constraint_transmission
+
+        C, points, side_of = _side_constraints(self._model, kin, self._loops, p)
+        generic = self._generic_constraint_rank()
+        value = constraint_transmission(about(W, p), [about(c, p) for c in C],
+                                        np.asarray(points) - p, self._model.length,
+                                        RANK_RTOL, generic)
+        return value[:-1], side_of
+
+    def _generic_constraint_rank(self) -> int | None:
+        """Rank of the union of the sides' constraints (and the fixed ones) at the
+        reference assembly (:meth:`assemble` without a guess), once; ``None`` (each
+        configuration's own) when it does not assemble."""
+        if not hasattr(self, "_cti_rank"):
+            from .transmission import about, constraint_rank
+
+            try:
+                q = self.assemble().q
+            except AssemblyError:
+                self._cti_rank = None
+                return None
+            kin = self._model.kinematics(q)
+            p = kin.output_placement.translation
+            C, _, _ = _side_constraints(self._model, kin, self._loops, p)
+            self._cti_rank = constraint_rank([about(c, p) for c in C], self._model.length)
+        return self._cti_rank
 
     def _signature(self, q) -> np.ndarray:
         """Every joint origin and the output placement at ``q``, divided by the length:
@@ -627,21 +674,36 @@ def _loop_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
     the closure leaves free (rotations about the point of a point closure, about the
     axis of a revolute one). Returns ``(passive, actuated)``: ``actuated`` is joint
     ``j``'s."""
+    rows, is_act, _ = _side_freedoms(model, kin, loops, j, support)
+    return rows[~is_act], rows[is_act]
+
+
+def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, support: set
+                   ) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """:func:`_loop_freedoms` in chain order: ``(rows, actuated, key)`` with ``rows``
+    (m × 6, world origin) loop after loop, each from the branching point to the closure
+    and the closure's freedoms last, ``actuated`` (m,) marking joint ``j``'s rows, and
+    ``key`` what identifies the side (its loops and joints: two actuators of one leg
+    share it)."""
     tree, J = model.tree, kin.joint_twists
-    passive, actuated = [], []
+    rows, is_act, joints = [], [], set()
     for c in loops:
         cl = model.closures[c]
         fa, fb = (tree.getFrameId(f) for f in (cl.frame_a, cl.frame_b))
         sa, sb = (set(tree.supports[tree.frames[f].parentJoint]) for f in (fa, fb))
         path = ((sa - sb) if j in sa else (sb - sa)) - support - {0}
+        joints |= path
         for k in sorted(path):
-            rows = J[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
-            (actuated if k == j else passive).extend(rows)
+            r = J[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
+            rows.extend(r)
+            is_act.extend([k == j] * len(r))
         C = kin.frame_placements[fa] * cl.placement_a
         axes = np.eye(3) if cl.kind == "point" else (
             C.rotation[:, 2:] .T if cl.kind == "revolute" else np.zeros((0, 3)))
-        passive.extend(np.r_[w, np.cross(C.translation, w)] for w in axes)
-    return np.array(passive).reshape(-1, 6), np.array(actuated).reshape(-1, 6)
+        rows.extend(np.r_[w, np.cross(C.translation, w)] for w in axes)
+        is_act.extend([False] * len(axes))
+    key = (tuple(sorted(loops)), tuple(sorted(joints)))
+    return np.array(rows).reshape(-1, 6), np.array(is_act, bool), key
 
 
 def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops,
@@ -671,6 +733,89 @@ def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops
     f, m = zeta[:3], zeta[3:]
     s = np.linalg.norm(f) if np.linalg.norm(f) * L > rtol * np.linalg.norm(m) else np.linalg.norm(m)
     return zeta / s
+
+
+def _reciprocal_wrenches(T: np.ndarray, p: np.ndarray, L: float, rtol: float = RANK_RTOL
+                         ) -> np.ndarray:
+    """A basis (rows, world origin) of the wrenches reciprocal to the twists ``T``
+    (rows, world origin), orthonormal once homogenised about ``p``; all six without
+    twists."""
+    if not len(T):
+        return from_homogenised(np.eye(6), p, L)
+    X = homogenised_about(T, p, L)[:, [3, 4, 5, 0, 1, 2]]
+    r = _svd_rank(X, rtol)[0]
+    Vt = np.linalg.svd(np.vstack([X, np.zeros((1, 6))]), full_matrices=True)[2]
+    return from_homogenised(Vt[r:], p, L).reshape(-1, 6)
+
+
+def _forces_through(C: np.ndarray, p: np.ndarray, L: float, rtol: float = RANK_RTOL
+                    ) -> np.ndarray:
+    """The wrenches of the span of ``C`` (rows, world origin) that are forces through
+    ``p`` (no moment about it), as rows (world origin)."""
+    if not len(C):
+        return C
+    r, _, _, Vt = _svd_rank(homogenised_about(C, p, L), rtol)
+    if not r:
+        return np.zeros((0, 6))
+    B = Vt[:r]  # orthonormal rows spanning C, homogenised about p
+    m, _, _, X = _svd_rank(B[:, 3:].T, rtol)  # combinations without a moment about p
+    F = X[m:] @ B
+    F[:, 3:] = 0.0  # zero up to rounding
+    return from_homogenised(F, p, L).reshape(-1, 6)
+
+
+def _constraint_point(c: np.ndarray, rows: np.ndarray, L: float, p: np.ndarray
+                      ) -> np.ndarray:
+    """Where a side's (single) constraint wrench ``c`` reaches the output: the point of
+    its axis nearest to the axis of the side's last rotation freedom that it is not
+    parallel to (chain order ``rows``: the rule of
+    :func:`pkm_pin.transmission.leg_points`), else its axis point nearest to ``p``."""
+    from .transmission import PARALLEL_SIN, ZERO_RTOL, nearest_point
+
+    for T in rows[::-1]:
+        if np.linalg.norm(T[:3]) * L <= ZERO_RTOL * np.linalg.norm(T[3:]):
+            continue
+        point, sin = nearest_point(c, T)
+        if sin > PARALLEL_SIN:
+            return point
+    f = c[:3]
+    if f @ f == 0.0:
+        return np.array(p, dtype=float)
+    foot, d = np.cross(f, c[3:]) / (f @ f), f / np.linalg.norm(f)
+    return foot + ((p - foot) @ d) * d
+
+
+def _side_constraints(model: ClosureModel, kin: TreeKinematics, loops_of: tuple,
+                      p: np.ndarray) -> tuple[list, list, list]:
+    """The constraint wrenches of each actuator side (rows, world origin; :meth:`Linkage.
+    transmission`), then those never removed as a last entry (the output body's support
+    joints' constraints; for a point output the three couples: it carries none), the
+    point where each side's constraint reaches the output (the last entry's: ``p``),
+    and each actuator's side."""
+    tree, L = model.tree, model.length
+    out_joint = tree.frames[tree.getFrameId(model.output)].parentJoint
+    support = set() if model.output_point else set(tree.supports[out_joint])
+    keys, sides, side_of = [], [], []
+    for k, name in enumerate(model.actuated):
+        rows, _, key = _side_freedoms(model, kin, loops_of[k], tree.getJointId(name),
+                                      support)
+        if key not in keys:
+            keys.append(key)
+            sides.append(rows)
+        side_of.append(keys.index(key))
+    C = [_reciprocal_wrenches(rows, p, L) for rows in sides]
+    if model.output_point:
+        C = [_forces_through(c, p, L) for c in C] + [np.hstack([np.zeros((3, 3)),
+                                                                  np.eye(3)])]
+        points = [np.array(p, dtype=float)] * len(C)
+    else:
+        J = kin.joint_twists
+        held = [J[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
+                for k in sorted(support - {0})]
+        points = [_constraint_point(c[0], rows, L, p) if len(c) else np.array(p, float)
+                  for c, rows in zip(C, sides)] + [np.array(p, dtype=float)]
+        C = C + [_reciprocal_wrenches(np.vstack(held + [np.zeros((0, 6))]), p, L)]
+    return C, points, side_of
 
 
 def _distance_to_axis(wrench: np.ndarray, p: np.ndarray) -> float:

@@ -183,8 +183,8 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
 
 
 def _transmission(link, assembly) -> dict | None:
-    """:meth:`Linkage.transmission` as plain data (ITI/OTI per actuator, LTI, the
-    weakest in words); ``None`` where it is not defined."""
+    """:meth:`Linkage.transmission` as plain data (ITI/OTI per actuator, LTI, CTI per
+    actuator side and their minimum, the weakest in words); ``None`` where it is not defined."""
     from .errors import PkmError
 
     try:
@@ -193,7 +193,9 @@ def _transmission(link, assembly) -> dict | None:
         return None
     return {"iti": [_finite_or_none(v) for v in tr.iti],
             "oti": [_finite_or_none(v) for v in tr.oti],
-            "lti": _finite_or_none(tr.lti), "good": tr.good, "words": tr.worst}
+            "lti": _finite_or_none(tr.lti), "cti": _finite_or_none(tr.cti),
+            "leg_cti": [_finite_or_none(v) for v in tr.leg_cti], "good": tr.good,
+            "words": tr.worst}
 
 
 def linkage_markdown(r: dict) -> str:

@@ -423,6 +423,34 @@ def constraint_transmissions(A, leg_constraints, output_points, length: float,
     return np.clip(out, 0.0, 1.0)
 
 
+def _padded_legs(leg_constraints) -> np.ndarray:
+    """Per-leg (k, 6) rows as one (1, legs, K, 6) array, zero rows as padding."""
+    Cs = [np.asarray(c, float).reshape(-1, 6) for c in leg_constraints]
+    C = np.zeros((1, len(Cs), max([len(c) for c in Cs] + [1]), 6))
+    for k, c in enumerate(Cs):
+        C[0, k, :len(c)] = c
+    return C
+
+
+def constraint_rank(leg_constraints, length: float, rtol: float = RANK_RTOL) -> int:
+    """Rank of the union of the legs' constraint wrenches, decided as
+    :func:`constraint_transmissions` decides it (each leg's rows orthonormalised once
+    homogenised, then their union): the ``generic_rank`` to pass for poses compared
+    with this one.
+
+    Args:
+        leg_constraints: per leg, (k, 6) its constraint wrenches about one common point,
+            world units; length: characteristic length [m]; rtol: relative tolerance.
+    """
+    C = _padded_legs(leg_constraints)
+    if not C.shape[1]:
+        return 0
+    OC, dims = _orthonormal_rows(_homogenised_rows(C, length), rtol)
+    if not dims.any():
+        return 0
+    return int(_orthonormal_rows(OC.reshape(1, -1, 6), rtol)[1][0])
+
+
 def constraint_transmission(A, leg_constraints, output_points, length: float,
                             rtol: float = RANK_RTOL, generic_rank: int | None = None
                             ) -> np.ndarray:
@@ -440,11 +468,8 @@ def constraint_transmission(A, leg_constraints, output_points, length: float,
         (legs,) values in [0, 1].
     """
     A = np.asarray(A, float).reshape(-1, 6)
-    Cs = [np.asarray(c, float).reshape(-1, 6) for c in leg_constraints]
-    C = np.zeros((1, len(Cs), max([len(c) for c in Cs] + [1]), 6))
-    for k, c in enumerate(Cs):
-        C[0, k, :len(c)] = c
-    P = np.asarray(output_points, float).reshape(1, len(Cs), 3)
+    C = _padded_legs(leg_constraints)
+    P = np.asarray(output_points, float).reshape(1, C.shape[1], 3)
     return constraint_transmissions(A[None], C, P, length, rtol, generic_rank)[0]
 
 
@@ -473,7 +498,7 @@ class Transmission:
     @property
     def good(self) -> bool:
         """Whether ``LTI`` and ``CTI`` are at least :data:`GOOD_LTI` (a ``CTI`` of nan,
-        not defined — a general linkage's —, is not held against it)."""
+        not defined, is not held against it)."""
         return bool(self.lti >= GOOD_LTI and (np.isnan(self.cti) or self.cti >= GOOD_LTI))
 
     @property

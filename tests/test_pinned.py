@@ -288,7 +288,7 @@ def test_linkage_transmission_of_the_five_bar_and_four_bar_closed_forms(five):
         tr = five.transmission(a)
         np.testing.assert_allclose(tr.iti, sin, atol=1e-10)
         np.testing.assert_allclose(tr.oti, [psi, psi], atol=1e-10)
-        assert tr.lti == pytest.approx(min(*sin, psi), abs=1e-10) and np.isnan(tr.cti)
+        assert tr.lti == pytest.approx(min(*sin, psi), abs=1e-10) and tr.cti == 1.0
     bar = load_mechanism(ROOT / "models" / "loops" / "four_bar.urdf")
     home = bar.assemble()
     t2_home = four_bar_home()[0]
@@ -308,3 +308,23 @@ def test_linkage_report_gives_the_transmission_in_words(five):
     tr = five.transmission(a)
     assert data["transmission"]["lti"] == pytest.approx(tr.lti, rel=1e-12)
     assert f"transmission       LTI = {tr.lti:.3g}: {tr.worst}" in linkage_text(data)
+
+
+def test_linkage_cti_of_planar_loops_is_one(five):
+    """Planar loops: every side's constraints (forces normal to the plane through the pin
+    for the five-bar's point output; out-of-plane wrenches for the four-bar's rocker) are
+    imposed by the other side, or the output's own support, as well, so no output twist
+    appears when one side's constraints are removed: CTI 1 per side (not nan), and the
+    linkage report carries it."""
+    from pkm_pin.report_linkage import linkage_report_data
+
+    bar = load_mechanism(ROOT / "models" / "loops" / "four_bar.urdf")
+    for link in (five, bar):
+        a = link.assemble()
+        for shift in (0.0, 0.3):
+            b = link.forward_kinematics(a.q_actuated + shift, guess=a)
+            tr = link.transmission(b)
+            np.testing.assert_array_equal(tr.leg_cti, 1.0)
+            assert tr.cti == 1.0 and len(tr.leg_names) == len(link.actuated)
+    data = linkage_report_data(five, five.assemble())["transmission"]
+    assert data["cti"] == 1.0 and data["leg_cti"] == [1.0, 1.0]

@@ -464,3 +464,67 @@ def test_worst_efforts_over_poses_is_the_largest_per_pose_effort():
     np.testing.assert_allclose(out["worst"], np.abs(per_pose).max(axis=0), rtol=1e-12)
     np.testing.assert_array_equal(out["pose_index"], np.abs(per_pose).argmax(axis=0))
     assert out["failures"] == []
+
+
+# ------------------------------------------------------- general linkages (CTI)
+def _linkage_and_assemblies(name, design=None):
+    from test_invariance import poses
+
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.model.closure_model import configuration, from_mechanism
+
+    mech = mechanism(name) if design is None else design.build()
+    link = Linkage(from_mechanism(mech))
+    return mech, link, [(mech.assemble(p), configuration) for p in poses(mech, n=3)]
+
+
+@pytest.mark.parametrize("name", sorted(MECHANISMS))
+def test_linkage_cti_equals_the_platform_cti(name):
+    """Every shipped mechanism read as a linkage (its tree plus one weld per leg): the
+    linkage's CTI per actuator side is Analysis.transmission's per leg, at home and at two
+    poses of forward kinematics (1e-9): the generalisation is the platform definition."""
+    mech, link, assemblies = _linkage_and_assemblies(name)
+    for a, configuration in assemblies:
+        tl, tp = link.transmission(configuration(mech, a)), mech.analyze(a).transmission
+        np.testing.assert_allclose(tl.leg_cti, tp.leg_cti, atol=1e-9)
+        assert tl.cti == pytest.approx(tp.cti, abs=1e-9)
+
+
+def test_linkage_cti_vanishes_at_the_upu3_constraint_singularity():
+    """3-UPU as a linkage: its CTI falls to 0 as the platform descends to the
+    constraint-singular pose, equal to the platform's all the way."""
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.model.closure_model import configuration, from_mechanism
+
+    mech = mechanism("upu3")
+    link = Linkage(from_mechanism(mech))
+    T = upu3_constraint_singular_pose()
+    values = []
+    for dz in (0.3, 0.05, 1e-3, 0.0):
+        a = mech.assemble(pin.SE3(T.rotation, T.translation + [0.0, 0.0, dz]))
+        tr = link.transmission(configuration(mech, a))
+        assert tr.cti == pytest.approx(mech.analyze(a).transmission.cti, abs=1e-9)
+        values.append(tr.cti)
+    assert values[0] > 0.5 and np.all(np.diff(values) < 0) and values[-1] < 1e-7
+    assert not tr.good and "transmits poorly" in tr.worst
+
+
+def test_linkage_cti_does_not_depend_on_units_or_on_where_the_linkage_stands():
+    """3-UPU as a linkage in millimetres and moved 100 m and turned: the same CTI per
+    side at home and at two poses of forward kinematics."""
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.model.closure_model import configuration, from_mechanism
+
+    mech, link, assemblies = _linkage_and_assemblies("upu3")
+    mm = mechanism("upu3", 1000.0)
+    far = moved(MECHANISMS["upu3"]()).build()
+    link_mm, link_far = Linkage(from_mechanism(mm)), Linkage(from_mechanism(far))
+    for a, _ in assemblies:
+        ref = link.transmission(configuration(mech, a)).leg_cti
+        p_mm = pin.SE3(a.pose.rotation, 1000.0 * a.pose.translation)
+        got_mm = link_mm.transmission(configuration(mm, mm.assemble(p_mm))).leg_cti
+        got_far = link_far.transmission(configuration(far, far.assemble(MOVE * a.pose))
+                                        ).leg_cti
+        assert np.all((ref > 0) & (ref < 1))
+        np.testing.assert_allclose(got_mm, ref, atol=1e-9)
+        np.testing.assert_allclose(got_far, ref, atol=1e-9)
