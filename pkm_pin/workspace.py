@@ -24,7 +24,7 @@ compiled legs, chunks, any executor including a Dask client, a progress bar). Ki
   LTI (:mod:`pkm_pin.transmission`) and, where it is defined, the constraint
   transmission index CTI are at least ``threshold`` (0.7): ``min(LTI, CTI) ≥ 0.7``; again
   the part connected to home (empty when home itself transmits worse). A general
-  linkage's CTI is not defined (nan): its LTI alone decides.
+  linkage's CTI is :meth:`Linkage.transmission`'s (per actuator side of its loops).
 
 Volumes (:class:`Volume`; an area for two coordinates, a product of units for mixed
 coordinates) on a grid are the cell count times the cell volume, with a bracket: a cell
@@ -57,7 +57,7 @@ import time
 from collections import deque
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pinocchio as pin
@@ -83,12 +83,18 @@ class Volume:
     """A workspace's volume (area for two coordinates) with its stated accuracy.
 
     Attributes:
-        value: Cell count × cell volume (grid), or inside fraction × box volume (Sobol).
-        error: Bound on ``|value − true volume|`` inside the box (module docstring).
-        lower, upper: The bracket (grid), or ``value ∓ error`` (Sobol).
+        value: Grid: the refined volume (the boundary cells counted by the fraction of
+            their ``subsamples``-per-coordinate sub-grid inside; module docstring), or
+            the cell count × cell volume without sub-sampling; Sobol: inside fraction ×
+            box volume.
+        error: Stated accuracy of ``value`` (module docstring): grid, the bracket's half
+            width on the sub-grid; Sobol, three binomial standard errors.
+        lower, upper: The bracket of the cells (grid), or ``value ∓ error`` (Sobol).
         cells: Samples inside.
         boundary_cells: Boundary cells (grid; 0 for Sobol).
         unit: Unit of the volume, e.g. ``"m^3"``, ``"m^2·rad"``.
+        count: Cell count × cell volume (grid; Sobol: ``value``).
+        subsamples: Sub-points per coordinate of each boundary cell (1: none).
     """
 
     value: float
@@ -98,12 +104,15 @@ class Volume:
     cells: int
     boundary_cells: int
     unit: str
+    count: float = float("nan")
+    subsamples: int = 1
 
     def as_dict(self) -> dict:
         """Plain data (for JSON)."""
         return {"value": self.value, "error": self.error, "lower": self.lower,
                 "upper": self.upper, "cells": self.cells,
-                "boundary_cells": self.boundary_cells, "unit": self.unit}
+                "boundary_cells": self.boundary_cells, "unit": self.unit,
+                "count": self.count, "subsamples": self.subsamples}
 
 
 @dataclass(frozen=True)
@@ -264,7 +273,62 @@ def grid_volume(mask: np.ndarray, spacing: np.ndarray, unit: str) -> Volume:
     value = n_in * cell
     lower, upper = (n_in - n_in_edge) * cell, (n_in + n_out_edge) * cell
     return Volume(value, max(value - lower, upper - value), lower, upper, n_in,
-                  n_in_edge + n_out_edge, unit)
+                  n_in_edge + n_out_edge, unit, value)
+
+
+def subcell_offsets(k: int, sub: int) -> np.ndarray:
+    """(sub^k, k) the centres of a ``sub``-per-coordinate sub-grid of a unit cell, in
+    cell units from its lower corner (C order, last coordinate fastest)."""
+    s = (np.arange(sub) + 0.5) / sub
+    return np.stack(np.meshgrid(*([s] * k), indexing="ij"), -1).reshape(-1, k)
+
+
+def refined_volume(mask: np.ndarray, spacing: np.ndarray, unit: str, sub: int,
+                   inside: Mapping) -> Volume:
+    """:class:`Volume` of ``mask`` with its boundary cells sub-sampled (module
+    docstring): ``inside`` maps each boundary cell's flat index to its (sub^k,) sub-grid
+    values (:func:`subcell_offsets` order; a cell missing keeps its own value). The value
+    is the count on the ``sub`` times finer grid whose cells are the sub-points (the
+    others take their cell's value), the error that grid's bracket half width, the
+    bracket the cells' (:func:`grid_volume`)."""
+    coarse = grid_volume(mask, spacing, unit)
+    if sub <= 1:
+        return coarse
+    mask = np.asarray(mask, bool)
+    k = mask.ndim
+    fine = mask
+    for d in range(k):
+        fine = np.repeat(fine, sub, axis=d)
+    block = (sub,) * k
+    for i, values in inside.items():
+        cell = np.unravel_index(int(i), mask.shape)
+        fine[tuple(slice(c * sub, (c + 1) * sub) for c in cell)] = \
+            np.asarray(values, bool).reshape(block)
+    f = grid_volume(fine, np.asarray(spacing, float) / sub, unit)
+    return replace(coarse, value=f.value, error=f.error, subsamples=int(sub))
+
+
+def _boundary_subpoints(masks: Mapping, B: np.ndarray, shape, sub: int
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """The boundary cells of any of ``masks`` (flat indices, sorted) and their
+    sub-points ((cells × sub^k, k), cell after cell)."""
+    edge = np.zeros(shape, bool)
+    for m in masks.values():
+        edge |= boundary_cells(m)
+    cells = np.flatnonzero(edge)
+    spacing = (B[:, 1] - B[:, 0]) / np.array(shape, float)
+    corner = B[:, 0] + np.array(np.unravel_index(cells, shape)).T * spacing
+    off = subcell_offsets(len(shape), sub) * spacing
+    return cells, (corner[:, None, :] + off[None]).reshape(-1, len(shape))
+
+
+def _default_subsamples(subsamples, k: int) -> int:
+    if subsamples is None:
+        return 4 if k <= 2 else 2
+    sub = int(subsamples)
+    if sub < 1 or sub != subsamples:
+        raise InputError(f"subsamples must be a positive integer, got {subsamples!r}")
+    return sub
 
 
 def sample_volume(inside: np.ndarray, box_volume: float, unit: str) -> Volume:
@@ -492,7 +556,7 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
               samples: int | None = None, seed: int = 0, at: Mapping | None = None,
               kinds: Sequence[str] | None = None, threshold: float | None = None,
               centre=None, executor: Executor | None = None, chunk_size: int = 2000,
-              progress: bool = False) -> Workspace:
+              progress: bool = False, subsamples: int | None = None) -> Workspace:
     """The workspaces of a mechanism over some of its pose coordinates (module docstring).
 
     Args:
@@ -514,6 +578,9 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
             :data:`pkm_pin.transmission.GOOD_LTI`, 0.7).
         centre: Centre of the inscribed shapes (k,) (default home).
         executor, chunk_size, progress: As :func:`pkm_pin.sweep.sweep`.
+        subsamples: Sub-points per coordinate of each boundary cell for the refined
+            volumes (grid; default 4 for one or two coordinates, 2 for three; 1: the
+            cell count alone), evaluated on the sweep engine like the cells.
 
     Raises:
         InputError: malformed coordinates, bounds or options; home outside the bounds
@@ -526,7 +593,8 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     if isinstance(mech, Linkage):
         return linkage_workspace(mech, coords, bounds=bounds, n=n, sampling=sampling,
                                  samples=samples, seed=seed, kinds=kinds,
-                                 threshold=threshold, centre=centre, progress=progress)
+                                 threshold=threshold, centre=centre, progress=progress,
+                                 subsamples=subsamples)
     t0 = time.perf_counter()
     kinds = _kinds(kinds, KINDS)
     threshold = GOOD_LTI if threshold is None else float(threshold)
@@ -548,9 +616,20 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
               "cti": res.cti.reshape(shape), "dof": res.dof.reshape(shape)}
     home_dof = mech.home_analysis.dof
     home_det = _home_det(mech)
+
+    def inside(P: np.ndarray) -> dict:
+        """The kinds' pointwise properties at the sub-points (the sweep engine)."""
+        _, Xs = _poses(mech, coords, plan, P, B, seed)
+        r = _sweep_samples(mech, Xs, method, "transmission" in kinds, executor,
+                           chunk_size, False)
+        return _pointwise({"ok": r.ok, "singularity": r.singularity, "det": r.det,
+                           "lti": r.lti, "cti": r.cti, "dof": r.dof}, kinds, home_dof,
+                          home_det, threshold)
+
     ws = _finish(mech.name, coords, _units(coords, mech.length_unit), B, sampling, axes,
                  shape, points, plan["fixed"], home, values, home_dof, home_det, kinds,
-                 threshold, centre, method, t0, t1, t2, len(res.failures))
+                 threshold, centre, method, t0, t1, t2, len(res.failures),
+                 _default_subsamples(subsamples, len(coords)), (kinds, inside))
     return ws
 
 
@@ -651,28 +730,45 @@ def _home_det(mech) -> float:
     return float(res.det[0])
 
 
-def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, values,
-            home_dof, home_det, kinds, threshold, centre, method, t0, t1, t2,
-            failures) -> Workspace:
-    """The masks, volumes and inscribed shapes from the per-sample values."""
+def _pointwise(values: Mapping, kinds, home_dof: int, home_det: float, threshold: float
+               ) -> dict:
+    """Per sample, whether it has each kind's properties (before the connection to
+    home): reachable; singularity-free (home DOF, class none, home's sign of the carried
+    determinant); transmission (that and ``min(LTI, CTI) ≥ threshold``, the CTI where
+    it is defined)."""
     ok, cls, det, lti = values["ok"], values["singularity"], values["det"], values["lti"]
-    grid = sampling == "grid"
-    masks = {"reachable": ok.astype(bool)}
-    start = _home_cell(axes, B, home) if grid else None
-    free = ok & (cls == "none") & (values["dof"] == home_dof)
+    out = {"reachable": np.asarray(ok, bool)}
+    if "singularity-free" not in kinds and "transmission" not in kinds:
+        return out
+    free = out["reachable"] & (cls == "none") & (values["dof"] == home_dof)
     if np.isfinite(home_det) and home_det != 0:
         free &= np.sign(np.nan_to_num(det, nan=home_det)) == np.sign(home_det)
-    if "singularity-free" in kinds or "transmission" in kinds:
-        if grid and start is None:
-            raise InputError(f"home {np.round(home, 6).tolist()} is outside the bounds "
-                             f"{B.tolist()}: the connected workspaces grow from home")
-        masks["singularity-free"] = component(free, start) if grid else free
+    out["singularity-free"] = free
     if "transmission" in kinds:
-        good = masks["singularity-free"] & (np.nan_to_num(lti, nan=-1.0) >= threshold)
+        good = free & (np.nan_to_num(lti, nan=-1.0) >= threshold)
         cti = values.get("cti")
         if cti is not None:  # min(LTI, CTI) where the CTI is defined
             good &= np.isnan(cti) | (cti >= threshold)
-        masks["transmission"] = component(good, start) if grid else good
+        out["transmission"] = good
+    return out
+
+
+def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, values,
+            home_dof, home_det, kinds, threshold, centre, method, t0, t1, t2,
+            failures, sub: int = 1, refine=None) -> Workspace:
+    """The masks, volumes and inscribed shapes from the per-sample values; ``refine``
+    ``(kinds, inside)``: the kinds whose boundary cells are sub-sampled (``sub`` points
+    per coordinate) and ``inside(points) -> {kind: (M,) bool}`` (:func:`_pointwise` at
+    those points)."""
+    grid = sampling == "grid"
+    start = _home_cell(axes, B, home) if grid else None
+    if grid and start is None and len(kinds) > 1:
+        raise InputError(f"home {np.round(home, 6).tolist()} is outside the bounds "
+                         f"{B.tolist()}: the connected workspaces grow from home")
+    masks = _pointwise(values, kinds, home_dof, home_det, threshold)
+    if grid:  # the parts connected to home
+        masks = {kind: m if kind == "reachable" else component(m, start)
+                 for kind, m in masks.items()}
     k = len(coords)
     spacing = (B[:, 1] - B[:, 0]) / np.array(shape, float) if grid else \
         (B[:, 1] - B[:, 0]) * len(points) ** (-1.0 / k)
@@ -680,6 +776,16 @@ def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, 
     box = float(np.prod(B[:, 1] - B[:, 0]))
     volumes = {kind: grid_volume(m, spacing, unit) if grid else sample_volume(m, box, unit)
                for kind, m in masks.items()}
+    if grid and refine is not None and sub > 1:
+        refinable = {kind: m for kind, m in masks.items() if kind in refine[0]}
+        cells, P = _boundary_subpoints(refinable, B, shape, sub)
+        inside = refine[1](P) if len(cells) else {}
+        per = sub ** k
+        for kind, m in refinable.items():
+            edge = boundary_cells(m).ravel()
+            sub_in = {int(c): inside[kind][i * per:(i + 1) * per]
+                      for i, c in enumerate(cells) if edge[c]}
+            volumes[kind] = refined_volume(m, spacing, unit, sub, sub_in)
     c = np.asarray(home if centre is None else centre, float)
     if c.shape != (k,) or not np.all(np.isfinite(c)):
         raise InputError(f"centre must be {k} finite numbers ({', '.join(coords)}), got "
@@ -695,6 +801,7 @@ def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, 
             sl[d] = [0, shape[d] - 1]
             edge[tuple(sl)] = True
         on_bounds = int((masks["reachable"] & edge).sum())
+    ok = values["ok"]
     counts = {"samples": int(ok.size), "assembled": int(ok.sum()), "failures": int(failures),
               **{kind: int(m.sum()) for kind, m in masks.items()}, "on_bounds": on_bounds}
     timing = {"evaluate": t2 - t1, "masks": t3 - t2, "total": t3 - t0,
@@ -708,7 +815,8 @@ def _finish(name, coords, units, B, sampling, axes, shape, points, fixed, home, 
 def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "grid",
                       samples: int | None = None, seed: int = 0,
                       kinds: Sequence[str] | None = None, threshold: float | None = None,
-                      centre=None, max_iter: int = 10, progress: bool = False) -> Workspace:
+                      centre=None, max_iter: int = 10, progress: bool = False,
+                      subsamples: int | None = None) -> Workspace:
     """The reachable, singularity-free and good-transmission workspaces of a general
     linkage (module docstring), on a grid, on the working mode of the reference
     assembly.
@@ -724,12 +832,18 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
             length, or the actuated joints' limits / ± π).
         kinds: Among :data:`KINDS` (default all): ``"transmission"`` uses
             :meth:`Linkage.transmission <pkm_pin.linkage.Linkage.transmission>` at each
-            cell (LTI; a linkage's CTI is not defined).
-        threshold: LTI of the transmission workspace (default
+            cell (``min(LTI, CTI)``).
+        threshold: ``min(LTI, CTI)`` of the transmission workspace (default
             :data:`pkm_pin.transmission.GOOD_LTI`, 0.7).
         centre: Of the inscribed shapes (default: the reference).
         max_iter: Newton iterations of each continuation step (a step from a
             neighbour converges in a few; one that does not is halved).
+        subsamples: As :func:`workspace` but default 1 (each sub-point costs a
+            continuation: 4 makes a 40 × 40 five-bar about 18 times slower), for the
+            reachable volume only: a sub-point is
+            inside when it is followed (continuation) from the configuration of its
+            cell, or of the nearest solved neighbour (diagonals included); the other
+            kinds' volumes are cell counts.
     """
     from .linkage import _pose_rows
     from .solve import iter_tree_starts, solve_tree
@@ -831,9 +945,36 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     t2 = time.perf_counter()
     home_an = link.analyze(ref.q)
     home_det = _carried_det(home_an, home_an.platform_twists)
+    sub = _default_subsamples(1 if subsamples is None else subsamples, len(coords))
     return _finish(link.name, coords, units, B, "grid", axes, shape, points, fixed, home,
                    values, home_an.dof, home_det, kinds, threshold, centre, method, t0, t1,
-                   t2, int((~values["ok"]).sum()))
+                   t2, int((~values["ok"]).sum()), sub,
+                   (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
+                                                                       sub, follow)}))
+
+
+def _followed(P: np.ndarray, Q: Mapping, points: np.ndarray, shape, sub: int, follow
+              ) -> np.ndarray:
+    """Whether each sub-point (sub^k per boundary cell, cell after cell) is reached by
+    continuation (``follow``) from its cell's configuration, or from the nearest solved
+    cell among its 3^k − 1 neighbours (none: outside)."""
+    k, per = len(shape), sub ** len(shape)
+    out = np.zeros(len(P), bool)
+    steps = np.array(list(np.ndindex(*(3,) * k))) - 1
+    steps = steps[np.argsort(np.abs(steps).sum(axis=1), kind="stable")]  # self first
+    spacing = (points.max(axis=0) - points.min(axis=0)) / np.maximum(np.array(shape) - 1, 1)
+    for b in range(len(P) // per):
+        sub_p = P[b * per:(b + 1) * per]
+        cell = np.floor((sub_p.mean(axis=0) - points.min(axis=0)) / spacing + 0.5).astype(int)
+        for step in steps:
+            nb = cell + step
+            if np.all((nb >= 0) & (nb < shape)):
+                i = int(np.ravel_multi_index(tuple(nb), shape))
+                if i in Q:
+                    out[b * per:(b + 1) * per] = [follow(points[i], Q[i], p) is not None
+                                                  for p in sub_p]
+                    break
+    return out
 
 
 def _default_linkage_coords(link, ref) -> tuple[str, ...]:
@@ -1003,19 +1144,21 @@ def _carried_det(an, P0_world: np.ndarray) -> float:
 
 def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, ref) -> dict:
     """The per-cell arrays of a linkage workspace (analyses only with ``analyse``, the
-    LTI of :meth:`Linkage.transmission` with ``transmission``); ``q``: each cell's
+    LTI and CTI of :meth:`Linkage.transmission` with ``transmission``); ``q``: each cell's
     configuration (nan rows where not solved)."""
     N = int(np.prod(shape))
     ok = np.zeros(N, bool)
     cls = np.full(N, "", dtype="<U4")
     det, dof, lti = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
+    cti = np.full(N, np.nan)
     q_all = np.full((N, link.model.nq), np.nan)
     generic = link.analyze(ref.q)
     for i, q in Q.items():
         ok[i] = True
         q_all[i] = q
         if transmission:
-            lti[i] = link.transmission(q).lti
+            tr = link.transmission(q)
+            lti[i], cti[i] = tr.lti, tr.cti
         if not analyse:
             cls[i] = "none"
             dof[i] = generic.dof
@@ -1026,7 +1169,7 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, ref
         det[i] = _carried_det(an, generic.platform_twists)
     return {"ok": ok.reshape(shape), "singularity": cls.reshape(shape),
             "det": det.reshape(shape), "lti": lti.reshape(shape),
-            "cti": np.full(shape, np.nan), "dof": dof.reshape(shape),
+            "cti": cti.reshape(shape), "dof": dof.reshape(shape),
             "q": q_all.reshape(tuple(shape) + (link.model.nq,))}
 
 
