@@ -45,6 +45,7 @@ from .transmission import (
     local_transmission_index,
     transmission_indices,
 )
+from .twists import joint_lines
 
 #: Dimensionless threshold below which a closeness index counts as singular (alias of
 #: :data:`pkm_pin.tolerances.CLOSENESS_SINGULAR_TOL`).
@@ -324,11 +325,12 @@ class Analysis:
         mech, L = self.mechanism, self.length
         lay = mech.engine_layout
         A, J = self._about_centre(self.A), self._about_centre(self.joint_twists)
+        lines = self._about_centre(joint_lines(mech, self.assembly.leg_q, self.joint_twists))
         P = screws.dehomogenise(self._results.platform[0, :self.dof], L)
-        p_in, p_out = leg_points(A, J, lay.coords, lay.act_col, lay.act_leg, L)
+        p_in, p_out = leg_points(A, lines, lay.coords, lay.act_col, lay.act_leg, L)
         iti, oti = transmission_indices(A, J[lay.act_col], P, p_in, p_out, L, self.rtol)
         C = [self._about_centre(ls.constraint_wrenches).reshape(-1, 6) for ls in self.legs]
-        points = [leg_points(c[:1], J, lay.coords, [lay.coords[k] - 1], [k], L)[1][0]
+        points = [leg_points(c[:1], lines, lay.coords, [lay.coords[k] - 1], [k], L)[1][0]
                   if len(c) else np.zeros(3) for k, c in enumerate(C)]
         generic = (None if self.assembly is mech.__dict__.get("home_assembly")
                    else mech.home_analysis.constraint_wrenches.shape[0])

@@ -832,15 +832,15 @@ def _distance_to_axis(wrench: np.ndarray, p: np.ndarray) -> float:
 def _input_point(tree: pin.Model, J: np.ndarray, wrench: np.ndarray, j: int,
                  fallback: np.ndarray) -> np.ndarray:
     """Where an actuation wrench acts on the actuated link (joint ``j``'s child body):
-    the point of its axis nearest to the axis of the first revolute child joint that
-    the wrench axis is not parallel to (the rule of
-    :func:`pkm_pin.transmission.leg_points`: a five-bar's elbow); else the axis point
-    nearest to ``fallback``."""
+    the point of its axis nearest to the axis of the first revolute joint after ``j``
+    down the tree (passing prismatic joints, as a 3-RPR leg's slider) that the wrench
+    axis is not parallel to — the rule of :func:`pkm_pin.transmission.leg_points` (a
+    five-bar's or a Delta's elbow); else the axis point nearest to ``fallback``."""
     from .transmission import PARALLEL_SIN, nearest_point
 
-    for k in range(1, tree.njoints):
+    for k in range(j + 1, tree.njoints):
         jk = tree.joints[k]
-        if tree.parents[k] != j or jk.nv != 1 or not np.any(J[jk.idx_v, :3]):
+        if j not in tree.supports[k] or jk.nv != 1 or not np.any(J[jk.idx_v, :3]):
             continue
         p, sin = nearest_point(wrench, J[jk.idx_v])
         if sin > PARALLEL_SIN:

@@ -41,7 +41,7 @@ from .errors import AssemblyError, InputError
 from .screws import as_float_array, as_fraction, homogenise
 from .tolerances import RANK_RTOL
 from .transmission import sweep_cti, sweep_lti
-from .twists import joint_twists, sweep_pass
+from .twists import joint_lines, joint_twists, sweep_pass
 
 
 @dataclass
@@ -217,19 +217,21 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
                                     transmission)
 
 
-def _analyse(J, layout, centres, transmission: bool, out: dict, idx) -> None:
+def _analyse(J, layout, centres, transmission: bool, out: dict, idx, lines=None) -> None:
     """The engine on the assembled poses ``idx`` (joint twists ``J``): fills ``out``'s
     scalar columns, and its ``lti`` and ``cti`` with ``transmission`` (the engine keeps
     A, the platform and leg constraint bases then, and
     :func:`pkm_pin.transmission.sweep_lti` and :func:`~pkm_pin.transmission.sweep_cti`
     run in NumPy; the home pose's constraint rank is 6 − the rows of the reference
-    platform basis)."""
+    platform basis). ``lines``: the joint lines (:func:`pkm_pin.twists.joint_lines`;
+    default ``J``)."""
     r = engine.analyse(J, layout, full=transmission, centres=centres)
     for key in ("dof", "type_I", "type_II", "condition", "det"):
         out[key][idx] = getattr(r, key)
     if transmission:
-        out["lti"][idx] = sweep_lti(r.A, r.platform, r.dof, J, centres, layout)
-        out["cti"][idx] = sweep_cti(r.A, r.leg_constraints, r.leg_dims, J, centres,
+        lines = J if lines is None else lines
+        out["lti"][idx] = sweep_lti(r.A, r.platform, r.dof, J, centres, layout, lines)
+        out["cti"][idx] = sweep_cti(r.A, r.leg_constraints, r.leg_dims, lines, centres,
                                     layout, 6 - len(layout.reference))
 
 
@@ -301,7 +303,11 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
     out["q_actuated"][idx] = np.concatenate(
         [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
     # 3. the analysis engine (compiled screw algebra) on every assembled pose
-    _analyse(Js, layout, X[idx, :3], transmission, out, idx)
+    lines = None
+    if transmission:  # legs with mimic joints: the owners' own lines (one more pass)
+        lines = np.stack([joint_lines(mech, [Q[i] for Q in Qs], Js[k])
+                          for k, i in enumerate(idx)])
+    _analyse(Js, layout, X[idx, :3], transmission, out, idx, lines)
     return out
 
 
@@ -356,8 +362,10 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts,
         return out
     J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
          for asm in solved]  # the assembly's verifying pass gave them, when it ran
+    lines = np.stack([joint_lines(mech, asm.leg_q, j) for asm, j in zip(solved, J)]
+                     ) if transmission else None
     _analyse(np.stack(J), layout, np.array([asm.pose.translation for asm in solved]),
-             transmission, out, ok)
+             transmission, out, ok, lines)
     return out
 
 

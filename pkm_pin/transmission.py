@@ -526,14 +526,16 @@ def about(S, centre) -> np.ndarray:
     return S
 
 
-def sweep_lti(A, platform_h, dof, J, centres, layout) -> np.ndarray:
+def sweep_lti(A, platform_h, dof, J, centres, layout, lines=None) -> np.ndarray:
     """LTI at N poses from the engine's arrays (:class:`pkm_pin.engine.Results`).
 
     Args:
         A: (N, n, 6) actuation wrenches about the world origin; platform_h: (N, 6, 6)
             homogenised platform bases about the centres (rows beyond ``dof`` unused);
             dof: (N,); J: (N, nv, 6) joint twists about the world origin; centres:
-            (N, 3); layout: the mechanism's :class:`~pkm_pin.engine.Layout`.
+            (N, 3); layout: the mechanism's :class:`~pkm_pin.engine.Layout`; lines:
+            (N, nv, 6) the twists of the joints owning each coordinate
+            (:func:`pkm_pin.twists.joint_lines`; default ``J``), where the wrenches act.
 
     Returns:
         (N,) LTI (nan without actuators).
@@ -543,11 +545,12 @@ def sweep_lti(A, platform_h, dof, J, centres, layout) -> np.ndarray:
     if A.shape[1] == 0 or not len(A):
         return out
     Ac, Jc = about(A, centres), about(J, centres)
+    Lc = Jc if lines is None else about(lines, centres)
     for d in np.unique(dof):
         i = np.flatnonzero(dof == d)
         P = np.array(platform_h[i, :d], copy=True)
         P[..., 3:] *= L
-        p_in, p_out = leg_points(Ac[i], Jc[i], layout.coords, layout.act_col,
+        p_in, p_out = leg_points(Ac[i], Lc[i], layout.coords, layout.act_col,
                                  layout.act_leg, L)
         iti, oti = transmission_indices(Ac[i], Jc[i][:, layout.act_col], P, p_in, p_out,
                                         L, rtol)
@@ -563,8 +566,9 @@ def sweep_cti(A, leg_constraints, leg_dims, J, centres, layout, generic_rank: in
     Args:
         A: (N, n, 6) actuation wrenches about the world origin; leg_constraints:
             (N, legs, 6, 6) each leg's homogenised orthonormal constraint basis about
-            the centres; leg_dims: (N, legs) their dimensions; J: (N, nv, 6) joint
-            twists about the world origin; centres: (N, 3); layout: the mechanism's
+            the centres; leg_dims: (N, legs) their dimensions; J: (N, nv, 6) the joint
+            lines (:func:`pkm_pin.twists.joint_lines`: where the constraint wrenches
+            act) about the world origin; centres: (N, 3); layout: the mechanism's
             :class:`~pkm_pin.engine.Layout`; generic_rank: the home pose's rank of the
             union of the constraints (6 − home DOF).
 

@@ -22,6 +22,7 @@ import numpy as np
 import pinocchio as pin
 from numba import njit
 
+from . import screws
 from .compiling import prefer_compiled
 from .kernels import _compose, pose_error
 from .screws import world_twist_rows
@@ -72,6 +73,39 @@ def joint_twists(mechanism, leg_q) -> np.ndarray:
     for leg, q in zip(mechanism.legs, leg_q):
         q = np.asarray(q, dtype=float)
         world_twist_rows(leg_jacobian(leg, q), leg.base.homogeneous, out[row:row + leg.nv])
+        row += leg.nv
+    return out
+
+
+def _has_mimic(leg) -> bool:
+    return any(j.shortname() == "JointModelMimic" for j in leg.model.joints)
+
+
+def joint_lines(mechanism, leg_q, J: np.ndarray) -> np.ndarray:
+    """The twist of the joint that owns each velocity coordinate, alone (nv × 6 rows,
+    axis-first, world origin): where joints mimic another (a Delta's parallelogram,
+    written ``R2 … R5 = −R2``), the coordinate's column of :func:`joint_twists` is the
+    sum of all their twists (there a translation), while the transmission indices need
+    the line of the joint where the force reaches the actuated link (the elbow).
+    ``J`` (:func:`joint_twists` at ``leg_q``) is returned as it is when no leg has a
+    mimic joint."""
+    legs = mechanism.legs
+    if not any(_has_mimic(leg) for leg in legs):
+        return J
+    out = np.array(J, dtype=float, copy=True)
+    row = 0
+    for leg, q in zip(legs, leg_q):
+        if _has_mimic(leg):
+            model = leg.model
+            data = model.createData()
+            pin.computeJointJacobians(model, data, np.asarray(q, dtype=float))
+            for j in range(1, model.njoints):
+                joint = model.joints[j]
+                if joint.nv == 1:  # the owner of its coordinate (mimics have none)
+                    col = np.reshape(pin.getJointJacobian(model, data, j, pin.WORLD),
+                                     (6, -1))[:, joint.idx_v]
+                    out[row + joint.idx_v] = screws.transform(screws.from_pinocchio(col),
+                                                              leg.base)
         row += leg.nv
     return out
 

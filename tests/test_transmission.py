@@ -528,3 +528,46 @@ def test_linkage_cti_does_not_depend_on_units_or_on_where_the_linkage_stands():
         assert np.all((ref > 0) & (ref < 1))
         np.testing.assert_allclose(got_mm, ref, atol=1e-9)
         np.testing.assert_allclose(got_far, ref, atol=1e-9)
+
+
+@pytest.mark.parametrize("name", sorted(MECHANISMS))
+def test_platform_and_linkage_readings_give_the_same_transmission(name):
+    """Analysis.transmission and Linkage.transmission of the same mechanism (tree +
+    closures) agree. The input point is the same rule in both (the first revolute after
+    the actuator, passing sliders, with the joint's own line where joints mimic it: a
+    Delta's elbow — the platform reading used the parallelogram's mimic-summed column,
+    a translation, and gave the Delta ITI 0.37 instead of 0.99). The output point is
+    chosen differently (the leg's last revolute vs the output body's joint nearest the
+    wrench axis): they coincide but for the quasi-Orthoglide, 1e-3 apart."""
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.model.closure_model import configuration
+
+    mech = MECHANISMS[name]().build()
+    tr = mech.home_analysis.transmission
+    tl = Linkage(mech.closure_model).transmission(configuration(mech, mech.home_assembly))
+    tol = 1e-3 if name == "orthoglide_quasi" else 1e-9
+    np.testing.assert_allclose(tl.iti, tr.iti, atol=tol)
+    np.testing.assert_allclose(tl.oti, tr.oti, atol=tol)
+    assert tl.cti == pytest.approx(tr.cti, abs=1e-9)
+    res = mech.sweep([mech.home], transmission=True)
+    assert res.lti[0] == pytest.approx(tr.lti, abs=1e-9)
+
+
+def test_delta_iti_is_the_elbow_transmission_angle():
+    """The Delta's ITI: the force along the forearm (the parallelogram's bars) against
+    the elbow's velocity, perpendicular to the upper arm about the actuated axis u:
+    |f̂ · v̂| with v = u × (E − B), E the elbow (the joint after R1), B on R1's axis."""
+    mech = MECHANISMS["delta"]().build()
+    a = mech.home_assembly
+    tr = mech.analyze(a).transmission
+    for k, leg in enumerate(mech.legs):
+        data = leg.model.createData()
+        pin.framesForwardKinematics(leg.model, data, a.leg_q[k])
+        B = (leg.base * data.oMi[1]).translation  # R1 (actuated)
+        u = (leg.base * data.oMi[1]).rotation @ np.array([0.0, 1.0, 0.0])
+        E = (leg.base * data.oMi[2]).translation  # R2: the elbow
+        # the forearm runs from the elbow bar to the platform bar: along R3's x axis
+        forearm = (leg.base * data.oMi[3]).rotation @ np.array([1.0, 0.0, 0.0])
+        v = np.cross(u, E - B)
+        expected = abs(forearm @ v) / np.linalg.norm(v)
+        assert tr.iti[k] == pytest.approx(expected, abs=1e-9)
