@@ -511,11 +511,13 @@ class Linkage:
         return linkage_workspace(self, coords, **options)
 
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
-              about: str = "output") -> LinkageSweep:
+              about: str = "output", transmission: bool = False) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×
         actuated), each warm-started from the previous assembly (continuation: the
         branch of ``guess``). A point that does not close is recorded as not converged
-        (NaN results) and the next starts again from the last good one."""
+        (NaN results) and the next starts again from the last good one. With
+        ``transmission``, the ``lti`` and ``cti`` columns too (:meth:`transmission`:
+        a few ms a point; nan otherwise)."""
         Q = screws.as_float_array(q_actuated, "q_actuated")
         if Q.ndim != 2 or Q.shape[1] != len(self.actuated):
             raise InputError(f"q_actuated must have shape (N, {len(self.actuated)}) "
@@ -533,6 +535,9 @@ class Linkage:
             an = self.analyze(a.q, about=about, generic=generic)
             generic = generic or an
             out.record(i, a, an)
+            if transmission:
+                tr = self.transmission(a)
+                out.lti[i], out.cti[i] = tr.lti, tr.cti
         return out.result()
 
 
@@ -1118,6 +1123,8 @@ class LinkageSweep:
         dof, output_dof: (N,) as :class:`LinkageAnalysis` (-1 where not converged).
         singularity: (N,) class strings; condition: (N,) ``condition_A``;
         forward, inverse: (N,) the general indices.
+        lti, cti: (N,) the transmission indices (``sweep(..., transmission=True)``;
+            else nan).
     """
 
     q_actuated: np.ndarray
@@ -1130,6 +1137,8 @@ class LinkageSweep:
     condition: np.ndarray
     forward: np.ndarray
     inverse: np.ndarray
+    lti: np.ndarray
+    cti: np.ndarray
 
 
 class _SweepRows:
@@ -1145,6 +1154,7 @@ class _SweepRows:
         self.odof = np.full(n, -1)
         self.cls = np.full(n, "", dtype=object)
         self.cond, self.fwd, self.inv = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+        self.lti, self.cti = np.full(n, np.nan), np.full(n, np.nan)
 
     def record(self, i: int, a: LinkageAssembly, an: LinkageAnalysis) -> None:
         self.ok[i] = True
@@ -1155,4 +1165,5 @@ class _SweepRows:
 
     def result(self) -> LinkageSweep:
         return LinkageSweep(self.qa, self.ok, self.q, self.poses, self.dof,
-                            self.odof, self.cls.astype(str), self.cond, self.fwd, self.inv)
+                            self.odof, self.cls.astype(str), self.cond, self.fwd, self.inv,
+                            self.lti, self.cti)

@@ -328,3 +328,17 @@ def test_linkage_cti_of_planar_loops_is_one(five):
             assert tr.cti == 1.0 and len(tr.leg_names) == len(link.actuated)
     data = linkage_report_data(five, five.assemble())["transmission"]
     assert data["cti"] == 1.0 and data["leg_cti"] == [1.0, 1.0]
+
+
+def test_linkage_sweep_gives_the_transmission_indices(five):
+    """Linkage.sweep(..., transmission=True): lti/cti columns equal Linkage.transmission
+    at each point (nan without the flag)."""
+    a = five.assemble()
+    Q = a.q_actuated + np.array([[0.0, 0.0], [0.1, -0.05], [0.2, -0.1]])
+    res = five.sweep(Q, guess=a, transmission=True)
+    assert res.converged.all()
+    for q, lti, cti in zip(res.q, res.lti, res.cti):
+        tr = five.transmission(q)
+        assert lti == pytest.approx(tr.lti, abs=1e-12)
+        assert cti == pytest.approx(tr.cti, abs=1e-12)
+    assert np.isnan(five.sweep(Q, guess=a).lti).all()
