@@ -25,22 +25,24 @@ def eye():
     return agile_eye().build()
 
 
-def _round_trip(mech, given: dict) -> None:
-    """FK(IK(partial)) has the given coordinates to 1e-10, and IK of that pose gives the
-    same actuated values."""
+def round_trip(mech, given: dict) -> tuple[float, float]:
+    """FK(IK(partial)): the largest error of the given coordinates in the pose FK
+    returns, and the largest difference between the actuated values of IK of that pose
+    and the first IK's."""
     q = mech.inverse_kinematics(given)
     back = mech.forward_kinematics(q)
     c = pose_coordinates(back.pose)
-    for name, value in given.items():
-        assert c[POSE_COORDINATES.index(name)] == pytest.approx(value, abs=1e-10), name
-    assert np.allclose(mech.inverse_kinematics(back.pose, guess=back), q, atol=1e-10, rtol=0)
+    coords = max(abs(c[POSE_COORDINATES.index(name)] - value) for name, value in given.items())
+    again = mech.inverse_kinematics(back.pose, guess=back)
+    return float(coords), float(np.max(np.abs(again - q)))
 
 
 @pytest.mark.parametrize("given", [dict(z=0.8, roll=0.1, pitch=0.0),
                                    dict(z=1.1, roll=-0.2, pitch=0.15)])
 def test_rps3_round_trip_by_z_roll_pitch(rps3, given):
     """A 3-RPS (1T2R) driven by z, roll, pitch: FK(IK) returns them to 1e-10."""
-    _round_trip(rps3, given)
+    coords, actuated = round_trip(rps3, given)
+    assert coords <= 1e-10 and actuated <= 1e-10
 
 
 def test_rps3_completion_solves_the_parasitic_motions(rps3):
@@ -57,7 +59,8 @@ def test_rps3_completion_solves_the_parasitic_motions(rps3):
                                    dict(roll=-0.4, pitch=0.3, yaw=-0.2)])
 def test_agile_eye_round_trip_by_roll_pitch_yaw(eye, given):
     """The agile eye (3R) driven by roll, pitch, yaw: FK(IK) returns them to 1e-10."""
-    _round_trip(eye, given)
+    coords, actuated = round_trip(eye, given)
+    assert coords <= 1e-10 and actuated <= 1e-10
 
 
 def test_delta_by_x_y_z():
@@ -65,7 +68,8 @@ def test_delta_by_x_y_z():
     delta = MECHANISMS["delta"]().build()
     pose = delta.complete_pose(x=0.05, y=-0.02, z=-0.8)
     assert pose_coordinates(pose) == pytest.approx([0.05, -0.02, -0.8, 0, 0, 0], abs=1e-12)
-    _round_trip(delta, dict(x=0.05, y=-0.02, z=-0.8))
+    coords, actuated = round_trip(delta, dict(x=0.05, y=-0.02, z=-0.8))
+    assert coords <= 1e-10 and actuated <= 1e-10
 
 
 def test_fewer_coordinates_than_dof_hold_the_others_at_the_guess(rps3):
