@@ -25,11 +25,11 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from test_partial_poses import round_trip
 
 from pkm_pin.builders import MECHANISMS, prs3
 from pkm_pin.cli import main
 from pkm_pin.errors import ForwardKinematicsError
-from pkm_pin.solve import POSE_COORDINATES, pose_coordinates
 
 #: The shipped geometry (the builder's defaults), spelled out for the reference [m].
 GEOMETRY = dict(base_radius=1.0, platform_radius=0.4, leg_length=1.0, height=1.0)
@@ -243,12 +243,9 @@ def test_round_trip_by_z_roll_pitch(mech, given):
     """Driven by z, roll, pitch: FK(IK(partial pose)) has them to 1e-10, and the
     completed pose lies on the reference's solution set (its sphere centres keep the
     platform's triangle for the actuated values)."""
+    coords, actuated = round_trip(mech, given)
+    assert coords <= 1e-10 and actuated <= 1e-10
     q = mech.inverse_kinematics(given)
-    back = mech.forward_kinematics(q)
-    c = pose_coordinates(back.pose)
-    for name, value in given.items():
-        assert c[POSE_COORDINATES.index(name)] == pytest.approx(value, abs=1e-10), name
-    np.testing.assert_allclose(mech.inverse_kinematics(back.pose, guess=back), q, atol=1e-10)
     pose = mech.complete_pose(**given)
     ref = [platform_pose(t, q, mech.anchors) for t in reference_modes(q) if within_limits(t)]
     assert min(_distance(pose, p) for p in ref) < 1e-9
