@@ -58,6 +58,7 @@ from collections import deque
 from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field, replace
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -845,8 +846,6 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
             cell, or of the nearest solved neighbour (diagonals included); the other
             kinds' volumes are cell counts.
     """
-    from .linkage import _pose_rows
-    from .solve import iter_tree_starts, solve_tree
     from .transmission import GOOD_LTI
 
     if sampling != "grid":
@@ -854,64 +853,123 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     t0 = time.perf_counter()
     kinds = _kinds(kinds, KINDS)
     threshold = GOOD_LTI if threshold is None else float(threshold)
-    model = link.model
     ref = link.assemble()
+    dom = _linkage_domain(link, ref, coords, bounds)
+    axes, shape, points = _samples(dom.bounds, "grid", n, None, seed)
+    start = _home_cell(axes, dom.bounds, dom.home)
+    if start is None:
+        raise InputError(f"the reference {np.round(dom.home, 6).tolist()} is outside the "
+                         f"bounds {dom.bounds.tolist()}: a linkage's workspace grows from it")
+    solve_at = _linkage_solver(link, ref, dom, max_iter)
+    follow = _continuation(link, dom, solve_at)
+    t1 = time.perf_counter()
+    q_start = _first_configuration(link.model, ref, dom.home,
+                                   points[np.ravel_multi_index(start, shape)], solve_at,
+                                   follow)
+    Q = _grow(shape, start, q_start, lambda cell: points[np.ravel_multi_index(cell, shape)],
+              follow, progress)
+    values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds, ref)
+    t2 = time.perf_counter()
+    home_an = link.analyze(ref.q)
+    home_det = _carried_det(home_an, home_an.platform_twists)
+    sub = _default_subsamples(1 if subsamples is None else subsamples, len(dom.coords))
+    return _finish(link.name, dom.coords, dom.units, dom.bounds, "grid", axes, shape, points,
+                   dom.fixed, dom.home, values, home_an.dof, home_det, kinds, threshold,
+                   centre, dom.method, t0, t1, t2, int((~values["ok"]).sum()), sub,
+                   (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
+                                                                       sub, follow)}))
+
+
+class _LinkageDomain(NamedTuple):
+    """What a linkage's workspace is taken over: the coordinates (actuated joints or the
+    output point's x, y, z), their indices, the reference's values (``home``), the
+    bounds, units, the coordinates held fixed, the method's name, the pose rows of an
+    output-point target (None over actuated joints), the reference output point and the
+    scale of each coordinate (the continuation's step measure)."""
+
+    coords: tuple
+    idx: list
+    actuated: bool
+    home: np.ndarray
+    bounds: np.ndarray
+    units: tuple
+    fixed: dict
+    method: str
+    rows: np.ndarray | None
+    out_xyz: np.ndarray
+    scale: np.ndarray
+
+
+def _linkage_domain(link, ref, coords, bounds) -> _LinkageDomain:
+    """The :class:`_LinkageDomain` of :func:`linkage_workspace`'s arguments."""
+    from .linkage import _pose_rows
+
+    model = link.model
     out_xyz = ref.output_pose.translation.copy()
     if coords is None:
         coords = _default_linkage_coords(link, ref)
     coords = (coords,) if isinstance(coords, str) else tuple(coords)
-    actuated = all(c in link.actuated for c in coords)
-    if actuated:
+    if all(c in link.actuated for c in coords):
         coords = _check_coords(coords, link.actuated)
         idx = [link.actuated.index(c) for c in coords]
         home = ref.q_actuated[idx].copy()
         half = np.array([np.pi if _unit_of(link, c) == "rad" else model.length
                          for c in coords])
-        units = tuple(_unit_of(link, c) for c in coords)
         B = _bounds(bounds, coords, home, half) if bounds is not None else \
             np.array([_limits(link, c, h, hf) for c, h, hf in zip(coords, home, half)])
         fixed = {a: float(v) for a, v in zip(link.actuated, ref.q_actuated)
                  if a not in coords}
-        method = "linkage actuated"
-    else:
-        if not model.output_point:
-            raise InputError("a linkage's workspace over output coordinates needs a point "
-                             "output (--point); give actuated joint names instead")
-        coords = _check_coords(coords, COORDINATES[:3])
-        idx = [COORDINATES.index(c) for c in coords]
-        home = out_xyz[idx]
-        B = _bounds(bounds, coords, home, np.full(len(coords), model.length))
-        units = ("m",) * len(coords)
-        fixed = {c: float(out_xyz[k]) for k, c in enumerate(COORDINATES[:3])
-                 if c not in coords}
-        method = "linkage output"
-        rows = _pose_rows(model, model.kinematics(ref.q))
-    axes, shape, points = _samples(B, "grid", n, None, seed)
-    start = _home_cell(axes, B, home)
-    if start is None:
-        raise InputError(f"the reference {np.round(home, 6).tolist()} is outside the bounds "
-                         f"{B.tolist()}: a linkage's workspace grows from it")
+        return _LinkageDomain(coords, idx, True, home, B,
+                              tuple(_unit_of(link, c) for c in coords), fixed,
+                              "linkage actuated", None, out_xyz,
+                              np.array([_scale_of(link, c) for c in coords]))
+    if not model.output_point:
+        raise InputError("a linkage's workspace over output coordinates needs a point "
+                         "output (--point); give actuated joint names instead")
+    coords = _check_coords(coords, COORDINATES[:3])
+    idx = [COORDINATES.index(c) for c in coords]
+    home = out_xyz[idx]
+    fixed = {c: float(out_xyz[k]) for k, c in enumerate(COORDINATES[:3]) if c not in coords}
+    return _LinkageDomain(coords, idx, False, home,
+                          _bounds(bounds, coords, home, np.full(len(coords), model.length)),
+                          ("m",) * len(coords), fixed, "linkage output",
+                          _pose_rows(model, model.kinematics(ref.q)), out_xyz,
+                          np.full(len(coords), model.length))
+
+
+def _linkage_solver(link, ref, dom: _LinkageDomain, max_iter: int):
+    """``solve_at(p, q0)``: the tree solver for the coordinates ``p`` of the domain
+    (actuated targets, or the output point's position) from ``q0``."""
+    from .solve import solve_tree
+
+    model = link.model
 
     def solve_at(p, q0):
-        if actuated:
+        if dom.actuated:
             targets = ref.q_actuated.copy()
-            targets[idx] = p
+            targets[dom.idx] = p
             return solve_tree(model, q0, targets=targets, max_iter=max_iter)
-        xyz = out_xyz.copy()
-        xyz[idx] = p
-        return solve_tree(model, q0, pose=pin.SE3(np.eye(3), xyz), pose_rows=rows,
+        xyz = dom.out_xyz.copy()
+        xyz[dom.idx] = p
+        return solve_tree(model, q0, pose=pin.SE3(np.eye(3), xyz), pose_rows=dom.rows,
                           max_iter=max_iter)
 
-    p_scale = np.array([_scale_of(link, c) for c in coords]) if actuated else \
-        np.full(len(coords), model.length)
+    return solve_at
 
+
+def _continuation(link, dom: _LinkageDomain, solve_at):
+    """``follow(p0, q0, p1)``: the configuration at ``p1`` continued from ``q0`` at
+    ``p0`` on the same working mode (:func:`_follow`): a step is accepted when the
+    joints move at most :data:`BRANCH_JUMP` times the coordinates (``jump``); a revolute
+    whose limits span a full turn is also tried round its limit (``starts``)."""
+    model = link.model
     turn = _full_turns(model)  # (nv,) revolutes whose limits span a full turn
 
     def jump(q0, q1, p0, p1) -> float:
         dq = pin.difference(model.tree, q0, q1)
         dq[turn] = (dq[turn] + np.pi) % (2 * np.pi) - np.pi  # the same posture
         dq = np.abs(dq / model.velocity_units).max()
-        dp = np.abs((p1 - p0) / p_scale).max()
+        dp = np.abs((p1 - p0) / dom.scale).max()
         return float(dq / dp) if dp > 0 else (0.0 if dq <= 1e-9 else np.inf)
 
     def starts(q0):
@@ -927,30 +985,20 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     def follow(p0, q0, p1):
         return _follow(solve_at, jump, starts, p0, q0, p1)
 
-    def first():
-        """The start cell's configuration: followed from the reference, else from the
-        solver's global starts (the reference, neutral, mid-limits)."""
-        p = points[np.ravel_multi_index(start, shape)]
-        q = follow(home, ref.q, p)
-        for q1 in () if q is not None else iter_tree_starts(model, None):
-            sol = solve_at(p, q1)
-            if sol.converged:
-                return sol.q
-        return q
+    return follow
 
-    t1 = time.perf_counter()
-    Q = _grow(shape, start, first(), lambda cell: points[np.ravel_multi_index(cell, shape)],
-              follow, progress)
-    values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds, ref)
-    t2 = time.perf_counter()
-    home_an = link.analyze(ref.q)
-    home_det = _carried_det(home_an, home_an.platform_twists)
-    sub = _default_subsamples(1 if subsamples is None else subsamples, len(coords))
-    return _finish(link.name, coords, units, B, "grid", axes, shape, points, fixed, home,
-                   values, home_an.dof, home_det, kinds, threshold, centre, method, t0, t1,
-                   t2, int((~values["ok"]).sum()), sub,
-                   (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
-                                                                       sub, follow)}))
+
+def _first_configuration(model, ref, home, p, solve_at, follow):
+    """The start cell's configuration (at ``p``): followed from the reference, else from
+    the solver's global starts (the reference, neutral, mid-limits); None if neither."""
+    from .solve import iter_tree_starts
+
+    q = follow(home, ref.q, p)
+    for q1 in () if q is not None else iter_tree_starts(model, None):
+        sol = solve_at(p, q1)
+        if sol.converged:
+            return sol.q
+    return q
 
 
 def _followed(P: np.ndarray, Q: Mapping, points: np.ndarray, shape, sub: int, follow
