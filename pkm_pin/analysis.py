@@ -438,7 +438,7 @@ class Analysis:
         U, sv, _ = np.linalg.svd(K)
         with np.errstate(divide="ignore"):
             semi = 1.0 / sv[::-1]
-        W_h = (U.T @ P_h)[::-1][:, [3, 4, 5, 0, 1, 2]]
+        W_h = (U.T @ P_h)[::-1] @ screws.DELTA
         return Ellipsoid(semi, self._to_origin(W_h), self.centre.copy(), self.length)
 
     def passive_rates(self, twist) -> list[np.ndarray]:

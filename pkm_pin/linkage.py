@@ -724,7 +724,7 @@ def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops
     passive, act = _loop_freedoms(model, kin, loops, j, support)
 
     def reciprocal(T):
-        X = homogenised_about(T, p, L)[:, [3, 4, 5, 0, 1, 2]] if len(T) else np.zeros((0, 6))
+        X = homogenised_about(T, p, L) @ screws.DELTA if len(T) else np.zeros((0, 6))
         r = _svd_rank(X, rtol)[0] if len(T) else 0
         return np.linalg.svd(np.vstack([X, np.zeros((1, 6))]), full_matrices=True)[2][r:]
 
@@ -747,7 +747,7 @@ def _reciprocal_wrenches(T: np.ndarray, p: np.ndarray, L: float, rtol: float = R
     twists."""
     if not len(T):
         return from_homogenised(np.eye(6), p, L)
-    X = homogenised_about(T, p, L)[:, [3, 4, 5, 0, 1, 2]]
+    X = homogenised_about(T, p, L) @ screws.DELTA
     r = _svd_rank(X, rtol)[0]
     Vt = np.linalg.svd(np.vstack([X, np.zeros((1, 6))]), full_matrices=True)[2]
     return from_homogenised(Vt[r:], p, L).reshape(-1, 6)
@@ -1005,7 +1005,7 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
     d, Uy, _, _ = _svd_rank(Yh, rtol) if Yh.size else (0, np.eye(6), None, None)
     P_h = Uy[:, :d].T
     rotations = int(np.sum(np.linalg.svd(P_h[:, :3], compute_uv=False) > ROTATION_COUNT_TOL))
-    _, _, _, Vc = _svd_rank(P_h[:, [3, 4, 5, 0, 1, 2]], rtol) if d else (0, 0, 0, np.eye(6))
+    _, _, _, Vc = _svd_rank(P_h @ screws.DELTA, rtol) if d else (0, 0, 0, np.eye(6))
     C_h = Vc[d:]  # homogenised wrenches (f; m_p / L) reciprocal to P
     A, B, type_I = _actuation(model, kin, link._loops, p, rtol)
     A_h = homogenised_about(A, p, L) if len(A) else np.zeros((0, 6))
@@ -1029,7 +1029,7 @@ def _transmission(A_n: np.ndarray, P_h: np.ndarray, d: int) -> tuple[float, floa
     n = A_n.shape[0]
     if n == 0 or d == 0:
         return 0.0, np.inf
-    sv = np.linalg.svd(A_n @ P_h[:, [3, 4, 5, 0, 1, 2]].T, compute_uv=False)
+    sv = np.linalg.svd(A_n @ (P_h @ screws.DELTA).T, compute_uv=False)
     t2 = float(sv[d - 1]) if d <= n else 0.0
     return t2, (float(sv[0] / t2) if t2 > 0 else np.inf)
 
@@ -1091,7 +1091,7 @@ def _actuation_row(G: np.ndarray, col: int, rtol: float) -> np.ndarray | None:
     b = W @ G[:, col]
     if np.linalg.norm(b) <= rtol * max(np.linalg.norm(G[:, col]), 1e-300):
         return None
-    Z = W[:, -6:][:, [3, 4, 5, 0, 1, 2]]  # ζ_h read from w_o
+    Z = W[:, -6:] @ screws.DELTA  # ζ_h read from w_o
     y0 = b / (b @ b)
     _, _, Vb = np.linalg.svd(b[None], full_matrices=True)
     Nb = Vb[1:].T

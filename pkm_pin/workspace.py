@@ -63,6 +63,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
+from . import screws
 from .errors import InputError, PkmError
 
 #: The pose coordinates, in the order of the sweep arrays.
@@ -1187,7 +1188,7 @@ def _carried_det(an, P0_world: np.ndarray) -> float:
     P = homogenised_about(an.platform_twists, p, L)
     P0 = homogenised_about(P0_world, p, L)
     carried = (P0 @ P.T) @ P
-    return float(np.linalg.det(A @ carried[:, [3, 4, 5, 0, 1, 2]].T))
+    return float(np.linalg.det(A @ (carried @ screws.DELTA).T))
 
 
 def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, ref) -> dict:
