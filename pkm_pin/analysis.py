@@ -31,7 +31,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-import pinocchio as pin
 
 from . import engine, screws
 from .assembly import checked_twists
@@ -104,12 +103,11 @@ class Analysis:
     def _to_origin(self, H: np.ndarray) -> np.ndarray:
         """Screws homogenised about :attr:`centre` (the engine's) in world units about
         the world origin."""
-        return screws.transform(screws.dehomogenise(H, self.length),
-                                pin.SE3(np.eye(3), self.centre)).reshape(np.shape(H))
+        return screws.from_point(screws.dehomogenise(H, self.length), self.centre)
 
     def _about_centre(self, S: np.ndarray) -> np.ndarray:
         """Screws about the world origin written about :attr:`centre`."""
-        return screws.transform(S, pin.SE3(np.eye(3), -self.centre)).reshape(np.shape(S))
+        return screws.about(S, self.centre)
 
     @cached_property
     def legs(self) -> list[LegScrews]:

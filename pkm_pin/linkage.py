@@ -154,9 +154,7 @@ class Mobility:
 def homogenised_about(S: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
     """Screws ``S`` (rows, world origin) about the point ``p``, moment part / ``length``:
     ``(a; b) → (a; (b + a × p) / length)`` (the velocity, or moment, at ``p``)."""
-    S = np.atleast_2d(S)
-    return np.hstack([S[:, :3], (S[:, 3:] + S[:, :3] @ pin.skew(np.asarray(p, float)))
-                      / length])
+    return screws.homogenise(screws.about(np.atleast_2d(S), p), length)
 
 
 def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
@@ -164,7 +162,7 @@ def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
     H = np.atleast_2d(H)
     if H.shape[0] == 0:
         return np.zeros((0, 6))
-    return np.hstack([H[:, :3], length * H[:, 3:] - H[:, :3] @ pin.skew(np.asarray(p, float))])
+    return screws.from_point(screws.dehomogenise(H, length), p)
 
 
 def _svd_rank(H: np.ndarray, rtol: float) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
@@ -438,11 +436,11 @@ class Linkage:
                                  ) -> tuple[np.ndarray, list]:
         """CTI of each actuator side (:meth:`transmission`) and the side of each actuator,
         from the transmission wrenches ``W`` (world origin), decided about ``p``."""
-        from .transmission import about, constraint_transmission
+        from .transmission import constraint_transmission
 
         C, points, side_of = _side_constraints(self._model, kin, self._loops, p)
         generic = self._generic_constraint_rank()
-        value = constraint_transmission(about(W, p), [about(c, p) for c in C],
+        value = constraint_transmission(screws.about(W, p), [screws.about(c, p) for c in C],
                                         np.asarray(points) - p, self._model.length,
                                         RANK_RTOL, generic)
         return value[:-1], side_of
@@ -452,7 +450,7 @@ class Linkage:
         reference assembly (:meth:`assemble` without a guess), once; ``None`` (each
         configuration's own) when it does not assemble."""
         if not hasattr(self, "_cti_rank"):
-            from .transmission import about, constraint_rank
+            from .transmission import constraint_rank
 
             try:
                 q = self.assemble().q
@@ -462,7 +460,8 @@ class Linkage:
             kin = self._model.kinematics(q)
             p = kin.output_placement.translation
             C, _, _ = _side_constraints(self._model, kin, self._loops, p)
-            self._cti_rank = constraint_rank([about(c, p) for c in C], self._model.length)
+            self._cti_rank = constraint_rank([screws.about(c, p) for c in C],
+                                             self._model.length)
         return self._cti_rank
 
     def _signature(self, q) -> np.ndarray:

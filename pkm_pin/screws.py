@@ -209,6 +209,25 @@ def characteristic_length(S) -> float:
     return float(np.median(d)) if d.size else 1.0
 
 
+def about(S, point) -> np.ndarray:
+    """Screws ``S`` (..., k, 6) given about the world origin written about ``point``
+    (..., 3) [m], twists and wrenches alike: ``(a; b) → (a; b + a × point)`` (the
+    velocity, or the moment, at the point). A copy."""
+    S = np.array(S, dtype=float, copy=True)
+    p = np.asarray(point, dtype=float)[..., None, :] if S.ndim > 1 else np.asarray(point, float)
+    S[..., 3:] += np.cross(S[..., :3], p)
+    return S
+
+
+def from_point(S, point) -> np.ndarray:
+    """Inverse of :func:`about`: screws given about ``point`` written about the world
+    origin, ``(a; b) → (a; b − a × point)``. A copy."""
+    S = np.array(S, dtype=float, copy=True)
+    p = np.asarray(point, dtype=float)[..., None, :] if S.ndim > 1 else np.asarray(point, float)
+    S[..., 3:] -= np.cross(S[..., :3], p)
+    return S
+
+
 def homogenise(S, length: float) -> np.ndarray:
     """Copy of screws ``S`` (…, 6) with the moment part divided by ``length`` [m]
     (twists and wrenches alike): dimensionless, and reciprocity is kept up to the factor

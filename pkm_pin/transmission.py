@@ -58,6 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import screws
 from .errors import InputError
 from .screws import DELTA, as_vector3
 from .tolerances import RANK_RTOL
@@ -517,15 +518,6 @@ class Transmission:
         return f"leg {label} {word}: {name} {value:.2f}"
 
 
-def about(S, centre) -> np.ndarray:
-    """Screws ``S`` (..., k, 6) about the world origin written about ``centre`` (..., 3)
-    (twists and wrenches alike: ``(a; b − c × a)``)."""
-    S = np.array(S, dtype=float, copy=True)
-    c = np.asarray(centre, float)[..., None, :]
-    S[..., 3:] -= _cross(c, S[..., :3])
-    return S
-
-
 def sweep_lti(A, platform_h, dof, J, centres, layout, lines=None) -> np.ndarray:
     """LTI at N poses from the engine's arrays (:class:`pkm_pin.engine.Results`).
 
@@ -544,8 +536,8 @@ def sweep_lti(A, platform_h, dof, J, centres, layout, lines=None) -> np.ndarray:
     out = np.full(len(A), np.nan)
     if A.shape[1] == 0 or not len(A):
         return out
-    Ac, Jc = about(A, centres), about(J, centres)
-    Lc = Jc if lines is None else about(lines, centres)
+    Ac, Jc = screws.about(A, centres), screws.about(J, centres)
+    Lc = Jc if lines is None else screws.about(lines, centres)
     for d in np.unique(dof):
         i = np.flatnonzero(dof == d)
         P = np.array(platform_h[i, :d], copy=True)
@@ -581,7 +573,7 @@ def sweep_cti(A, leg_constraints, leg_dims, J, centres, layout, generic_rank: in
         return np.ones(N)
     C = np.array(leg_constraints, dtype=float, copy=True)
     C[..., 3:] *= L  # world units about the centres
-    Ac, Jc = about(A, centres), about(J, centres)
+    Ac, Jc = screws.about(A, centres), screws.about(J, centres)
     points = np.zeros((N, legs, 3))
     for k in range(legs):
         if np.any(leg_dims[:, k] == 1):  # the point is used for one wrench only

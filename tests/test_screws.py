@@ -786,3 +786,18 @@ def test_exp_of_screw_advances_pitch_times_angle(p, d, h, angle):
     """exp(θ · screw(p, d, h)) moves points of the axis by h·θ along it."""
     D = screws.exp(angle * screws.screw(p, d, h))
     np.testing.assert_allclose(D.act(p), p + h * angle * d, atol=1e-11)
+
+
+def test_about_a_point_is_the_translated_frame_and_from_point_undoes_it():
+    """screws.about(S, p): the screws written about p — the same numbers as transforming
+    into a frame at p with the world's axes; for a line, the moment about a point on it
+    is zero. screws.from_point is its inverse, batched over poses too."""
+    rng = np.random.default_rng(3)
+    S, p = rng.normal(size=(4, 6)), rng.normal(size=3)
+    np.testing.assert_allclose(screws.about(S, p),
+                               screws.transform(S, pin.SE3(np.eye(3), -p)), atol=1e-15)
+    line = np.r_[[0.0, 0.0, 1.0], np.cross(p, [0.0, 0.0, 1.0])]  # through p along z
+    np.testing.assert_allclose(screws.about(line, p)[3:], 0.0, atol=1e-15)
+    B, P = rng.normal(size=(2, 5, 6)), rng.normal(size=(2, 3))
+    np.testing.assert_allclose(screws.from_point(screws.about(B, P), P), B, atol=1e-14)
+    np.testing.assert_allclose(screws.about(B, P)[1], screws.about(B[1], P[1]), atol=1e-15)
