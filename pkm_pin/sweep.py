@@ -41,7 +41,7 @@ from .errors import AssemblyError, InputError
 from .screws import as_float_array, as_fraction, homogenise
 from .tolerances import RANK_RTOL
 from .transmission import sweep_cti, sweep_lti
-from .twists import joint_lines, joint_twists, sweep_pass
+from .twists import has_mimic, joint_lines, joint_twists, sweep_pass
 
 
 @dataclass
@@ -304,7 +304,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
         [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
     # 3. the analysis engine (compiled screw algebra) on every assembled pose
     lines = None
-    if transmission:  # legs with mimic joints: the owners' own lines (one more pass)
+    if transmission and has_mimic(mech):  # the owners' own lines (one more pass)
         lines = np.stack([joint_lines(mech, [Q[i] for Q in Qs], Js[k])
                           for k, i in enumerate(idx)])
     _analyse(Js, layout, X[idx, :3], transmission, out, idx, lines)
@@ -363,7 +363,7 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts,
     J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
          for asm in solved]  # the assembly's verifying pass gave them, when it ran
     lines = np.stack([joint_lines(mech, asm.leg_q, j) for asm, j in zip(solved, J)]
-                     ) if transmission else None
+                     ) if transmission and has_mimic(mech) else None
     _analyse(np.stack(J), layout, np.array([asm.pose.translation for asm in solved]),
              transmission, out, ok, lines)
     return out

@@ -81,6 +81,12 @@ def _has_mimic(leg) -> bool:
     return any(j.shortname() == "JointModelMimic" for j in leg.model.joints)
 
 
+def has_mimic(mechanism) -> bool:
+    """Whether a leg of ``mechanism`` has a joint mimicking another (then
+    :func:`joint_lines` differ from :func:`joint_twists`)."""
+    return any(_has_mimic(leg) for leg in mechanism.legs)
+
+
 def joint_lines(mechanism, leg_q, J: np.ndarray) -> np.ndarray:
     """The twist of the joint that owns each velocity coordinate, alone (nv × 6 rows,
     axis-first, world origin): where joints mimic another (a Delta's parallelogram,
@@ -90,7 +96,7 @@ def joint_lines(mechanism, leg_q, J: np.ndarray) -> np.ndarray:
     ``J`` (:func:`joint_twists` at ``leg_q``) is returned as it is when no leg has a
     mimic joint."""
     legs = mechanism.legs
-    if not any(_has_mimic(leg) for leg in legs):
+    if not has_mimic(mechanism):
         return J
     out = np.array(J, dtype=float, copy=True)
     row = 0
