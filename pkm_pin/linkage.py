@@ -417,10 +417,9 @@ class Linkage:
                      ).reshape(-1, 6)
         p_in = np.array([_input_point(tree, J, W[k], j, an.reference_point)
                          for k, j in enumerate(ids)]).reshape(-1, 3)
-        points = ([an.reference_point] if model.output_point
-                  else _body_points(model, kin, out_joint) or [an.reference_point])
-        p_out = np.array([min(points, key=lambda p: _distance_to_axis(w, p))
-                          for w in W]).reshape(-1, 3)
+        p_out = np.array([an.reference_point if model.output_point else
+                          _output_point(model, kin, W[k], j, self._loops[k], out_joint)
+                          for k, j in enumerate(ids)]).reshape(-1, 3)
         iti, oti = transmission_indices(W, J[cols], an.platform_twists, p_in, p_out,
                                         model.length)
         lti = float(np.min(np.minimum(iti, np.where(np.isnan(oti), np.inf, oti)),
@@ -820,6 +819,27 @@ def _side_constraints(model: ClosureModel, kin: TreeKinematics, loops_of: tuple,
                   for c, rows in zip(C, sides)] + [np.array(p, dtype=float)]
         C = C + [_reciprocal_wrenches(np.vstack(held + [np.zeros((0, 6))]), p, L)]
     return C, points, side_of
+
+
+def _output_point(model: ClosureModel, kin: TreeKinematics, wrench: np.ndarray, j: int,
+                  loops, out_joint: int) -> np.ndarray:
+    """Where actuator ``j``'s transmission wrench acts on the output body: the point of
+    its axis nearest to the last rotation of its side of the loop (the closure's own
+    rotations first: a point closure's point; then the side's joints from the closure
+    back) that the wrench axis is not parallel to — the rule of
+    :func:`pkm_pin.transmission.leg_points` for a platform's leg; else the output body's
+    joint nearest to the wrench axis."""
+    from .transmission import PARALLEL_SIN, nearest_point
+
+    support = set(model.tree.supports[out_joint])
+    rows, _, _ = _side_freedoms(model, kin, loops, j, support)
+    for row in rows[::-1]:
+        if np.any(row[:3]):
+            p, sin = nearest_point(wrench, row)
+            if sin > PARALLEL_SIN:
+                return p
+    points = _body_points(model, kin, out_joint) or [kin.output_placement.translation]
+    return min(points, key=lambda p: _distance_to_axis(wrench, p))
 
 
 def _distance_to_axis(wrench: np.ndarray, p: np.ndarray) -> float:
