@@ -536,9 +536,10 @@ def test_platform_and_linkage_readings_give_the_same_transmission(name):
     closures) agree. The input point is the same rule in both (the first revolute after
     the actuator, passing sliders, with the joint's own line where joints mimic it: a
     Delta's elbow — the platform reading used the parallelogram's mimic-summed column,
-    a translation, and gave the Delta ITI 0.37 instead of 0.99). The output point is
-    chosen differently (the leg's last revolute vs the output body's joint nearest the
-    wrench axis): they coincide but for the quasi-Orthoglide, 1e-3 apart."""
+    a translation, and gave the Delta ITI 0.37 instead of 0.99), and so is the output
+    point (the last rotation of the leg). The quasi-Orthoglide's readings are 1e-3
+    apart: its two transmission wrenches differ by ~1° (the linkage's is reciprocal to
+    the parallelogram joints' own lines, the engine's to their mimic-summed columns)."""
     from pkm_pin.linkage import Linkage
     from pkm_pin.model.closure_model import configuration
 
