@@ -685,10 +685,10 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
                    ) -> tuple[np.ndarray, np.ndarray, tuple]:
     """:func:`_loop_freedoms` in chain order: ``(rows, actuated, key)`` with ``rows``
     (m × 6, world origin) loop after loop, each from the branching point to the closure
-    and the closure's freedoms last, ``actuated`` (m,) marking joint ``j``'s rows, and
-    ``key`` what identifies the side (its loops and joints: two actuators of one leg
-    share it)."""
-    tree, J = model.tree, kin.joint_twists
+    (each coordinate's twist of the side's end body) and the closure's freedoms last,
+    ``actuated`` (m,) marking joint ``j``'s rows, and ``key`` what identifies the side
+    (its loops and joints: two actuators of one leg share it)."""
+    tree = model.tree
     rows, is_act, joints = [], [], set()
     for c in loops:
         cl = model.closures[c]
@@ -696,8 +696,12 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
         sa, sb = (set(tree.supports[tree.frames[f].parentJoint]) for f in (fa, fb))
         path = ((sa - sb) if j in sa else (sb - sa)) - support - {0}
         joints |= path
+        # each coordinate's motion of the side's end body (the leg's Jacobian columns:
+        # a parallelogram's mimicking joints included, as the platform reading has them)
+        end = tree.frames[fa if j in sa else fb].parentJoint
+        E = kin.body_jacobians[end].T
         for k in sorted(path):
-            r = J[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
+            r = E[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
             rows.extend(r)
             is_act.extend([k == j] * len(r))
         C = kin.frame_placements[fa] * cl.placement_a

@@ -537,18 +537,18 @@ def test_platform_and_linkage_readings_give_the_same_transmission(name):
     the actuator, passing sliders, with the joint's own line where joints mimic it: a
     Delta's elbow — the platform reading used the parallelogram's mimic-summed column,
     a translation, and gave the Delta ITI 0.37 instead of 0.99), and so is the output
-    point (the last rotation of the leg). The quasi-Orthoglide's readings are 1e-3
-    apart: its two transmission wrenches differ by ~1° (the linkage's is reciprocal to
-    the parallelogram joints' own lines, the engine's to their mimic-summed columns)."""
+    point (the last rotation of the leg). The transmission wrench is reciprocal to the
+    leg's passive freedoms as its end body sees them (a parallelogram's mimicking joints
+    included) in both: the linkage reading used the joints' own lines and was 1e-3 off
+    on the quasi-Orthoglide."""
     from pkm_pin.linkage import Linkage
     from pkm_pin.model.closure_model import configuration
 
     mech = MECHANISMS[name]().build()
     tr = mech.home_analysis.transmission
     tl = Linkage(mech.closure_model).transmission(configuration(mech, mech.home_assembly))
-    tol = 1e-3 if name == "orthoglide_quasi" else 1e-9
-    np.testing.assert_allclose(tl.iti, tr.iti, atol=tol)
-    np.testing.assert_allclose(tl.oti, tr.oti, atol=tol)
+    np.testing.assert_allclose(tl.iti, tr.iti, atol=1e-9)
+    np.testing.assert_allclose(tl.oti, tr.oti, atol=1e-9)
     assert tl.cti == pytest.approx(tr.cti, abs=1e-9)
     res = mech.sweep([mech.home], transmission=True)
     assert res.lti[0] == pytest.approx(tr.lti, abs=1e-9)
