@@ -187,7 +187,10 @@ class Analysis:
     @property
     def B(self) -> np.ndarray:
         """Serial Jacobian (n × n, diagonal): ``B_ii = ζ_i ∘ $_a,i``."""
-        return np.diag(self._results.B[0])
+        b = self._results.B[0]
+        out = np.zeros((b.shape[0], b.shape[0]))
+        out.flat[::b.shape[0] + 1] = b
+        return out
 
     @property
     def actuated_twists(self) -> np.ndarray:
@@ -217,7 +220,8 @@ class Analysis:
     @property
     def singularity(self) -> str:
         """``"none"``, ``"I"`` (B singular), ``"II"`` (A Δ singular), or ``"III"`` (both)."""
-        return classify(self.indices["type_I"], self.indices["type_II"], self.singular_tol)
+        r = self._results
+        return classify(float(r.type_I[0]), float(r.type_II[0]), self.singular_tol)
 
     @cached_property
     def constraint_singular(self) -> bool:

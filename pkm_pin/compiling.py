@@ -26,6 +26,7 @@ import sys
 import threading
 import time
 
+from numba import typeof
 from numba.core import event
 
 #: Seconds of compilation after which the notice is printed.
@@ -121,3 +122,46 @@ def is_ready(dispatcher) -> bool:
         return os.path.exists(dispatcher._cache._cache_file._index_path)
     except AttributeError:
         return False
+
+
+class SameTypes:
+    """Calls of a numba function from a caller whose arguments keep their types: all but
+    one are arrays and numbers the caller makes itself (canonical dtype, layout and
+    dimension), and the ``key`` argument (at position ``key``) is an object of a
+    mechanism made once and reused for every pose (an engine
+    :class:`~pkm_pin.engine.Layout`, a kernel's :class:`~pkm_pin.kernels.Chains`: named
+    tuples of a dozen arrays or more).
+
+    numba types every argument of every call (for a named tuple of 20 arrays, ~3 µs:
+    more than the analysis of a pose). The first call with a given key object goes
+    through the dispatcher (compiling or loading the code if needed); the calls that
+    follow with the same object go straight to the machine code of the signature that
+    call was typed to. Only the key object's identity is checked, so the caller must
+    keep its promise on the other arguments (the machine code converts them as its
+    signature says and does not check). With ``plain``, the function runs as plain
+    Python until its code is ready (:func:`prefer_compiled`: a one-off call on a fresh
+    installation does not wait for a compilation).
+    """
+
+    __slots__ = ("dispatcher", "key", "plain", "_known")
+
+    def __init__(self, dispatcher, key: int, plain: bool = False):
+        self.dispatcher = dispatcher
+        self.key = key
+        self.plain = plain
+        self._known = (_NOTHING, None)  # (key object, entry point), replaced as one
+
+    def __call__(self, *args):
+        obj, entry = self._known
+        if args[self.key] is obj:
+            return entry(*args)
+        if self.plain and not prefer_compiled(self.dispatcher):
+            return self.dispatcher.py_func(*args)
+        result = self.dispatcher(*args)
+        compiled = self.dispatcher.overloads.get(tuple(typeof(a) for a in args))
+        if compiled is not None:
+            self._known = (args[self.key], compiled.entry_point)
+        return result
+
+
+_NOTHING = object()

@@ -484,6 +484,9 @@ class MechanismKernel:
     def __post_init__(self) -> None:
         # the Chains' fields as plain attributes (a hot path reads them per pose)
         self.__dict__.update(self.chains._asdict())
+        c = self.chains.coords
+        #: each leg's slice of the concatenated configurations
+        self.__dict__["slices"] = tuple(slice(int(a), int(b)) for a, b in zip(c[:-1], c[1:]))
 
 
 def mechanism_kernel(mech, scales: np.ndarray) -> MechanismKernel | None:

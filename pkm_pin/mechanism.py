@@ -71,7 +71,7 @@ from .tolerances import (
     TYPE_I_CLOSURE_TOL,
     TYPE_I_STALL_FACTOR,
 )
-from .twists import LegFrames, leg_frames, verified_twists
+from .twists import LegFrames, TreePass, has_mimic, leg_frames, verified_twists
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -149,7 +149,7 @@ class Mechanism:
         demand; the closure model's Pinocchio tree may hold mimic joints, which
         Pinocchio 4.1 does not unpickle soundly: see :meth:`Leg.__getstate__`)."""
         return {k: v for k, v in self.__dict__.items()
-                if k not in ("home_analysis", "closure_model")}
+                if k not in ("home_analysis", "closure_model", "tree_pass")}
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, legs={[leg.name for leg in self.legs]})"
@@ -206,6 +206,13 @@ class Mechanism:
         from .model import from_mechanism
 
         return from_mechanism(self)
+
+    @cached_property
+    def tree_pass(self) -> TreePass | None:
+        """Pinocchio's pass over every leg in one call (:class:`pkm_pin.twists.TreePass`,
+        on :attr:`closure_model`'s tree), or ``None`` when a leg has mimic joints (then
+        each leg is evaluated on its own); cached."""
+        return None if has_mimic(self) else TreePass(self)
 
     @cached_property
     def engine_layout(self) -> Layout:
@@ -266,7 +273,7 @@ class Mechanism:
         if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) \
                 or restarts < 0:
             raise InputError(f"restarts must be a non-negative integer, got {restarts!r}")
-        if isinstance(pose, Mapping):
+        if not isinstance(pose, pin.SE3) and isinstance(pose, Mapping):
             done = position.complete(self, pose, guess, tol=tol)
             asm = self._assemble_pose(done.pose, done.leg_q, tol, restarts)
             asm.info.update(done.info)
@@ -329,9 +336,8 @@ class Mechanism:
         Q = np.concatenate(starts)
         M = pose.homogeneous
         solve_kernel(kernel, LEGS, M, Q, tol=tol, max_iter=50)
-        c = kernel.coords
-        leg_q = [Q[c[i]:c[i + 1]] for i in range(len(self.legs))]
-        J, errors, worst = verified_twists(self, leg_q, M)
+        leg_q = [Q[s] for s in kernel.slices]
+        J, errors, worst = verified_twists(self, leg_q, M, flat=Q)
         boundary = []
         if not worst <= tol:  # a leg Pinocchio does not confirm: Leg.solve, restarts
             for i in np.flatnonzero(~(errors <= tol)):

@@ -61,6 +61,8 @@ def as_float_array(x, name: str = "value") -> np.ndarray:
 def as_fraction(value, name: str) -> float:
     """``value`` as a float in (0, 1) — a relative tolerance or a dimensionless
     threshold — or an :class:`InputError` naming ``name``."""
+    if type(value) is float and 0.0 < value < 1.0:  # the common case (nan fails it)
+        return value
     if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) \
             or not (np.isfinite(value) and 0 < value < 1):
         raise InputError(f"{name} must be a number between 0 and 1 (exclusive), got {value!r}")

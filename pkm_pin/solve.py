@@ -72,7 +72,7 @@ from numba.core.errors import NumbaIRAssumptionWarning
 from numba.extending import register_jitable
 
 from . import screws
-from .compiling import prefer_compiled
+from .compiling import SameTypes, prefer_compiled
 from .engine.linalg import jacobi
 from .kernels import _compose, _fk, chain_of, twist_exp
 from .kernels import pose_error as closure_error
@@ -647,6 +647,10 @@ def solve_system(chains, mask, pose, Q, target, tol, max_iter, residual, out):
     out[0], out[1], out[2], out[3], out[4] = closure, act, it, ratio, contracted
 
 
+#: :func:`solve_system` as :func:`solve_kernel` calls it (its arguments keep their types)
+_solve_system = SameTypes(solve_system, key=0)
+
+
 # =============================================================== Python driver
 def _evaluate(legs, anchors, pose, leg_q, ws) -> None:
     """The Python driver's evaluation: one Pinocchio pass per leg (joint Jacobians and
@@ -770,11 +774,15 @@ def solve_kernel(kernel, mask: Mask, pose: np.ndarray, Q: np.ndarray, target=Non
     ``pose`` (4 × 4) and ``Q`` (concatenated leg configurations). Returns ``(residual,
     out)``: each leg's closure error and (closure, actuated error, iterations, Schur
     ratio, contracted)."""
+    if not (pose.dtype == Q.dtype == np.float64 and pose.ndim == 2 and Q.ndim == 1
+            and pose.flags.c_contiguous and Q.flags.c_contiguous):  # solved in place
+        raise TypeError("solve_kernel: pose and Q must be C-ordered float64 arrays of "
+                        "dimensions 2 and 1")
     residual, out = np.empty(len(kernel.lengths)), np.empty(5)
     # without actuated targets any float array of their length will do (not read)
-    target = kernel.scales if target is None else np.asarray(target, dtype=float)
-    solve_system(kernel.chains, int(mask), pose, Q, target, tol, max_iter, residual,
-                 out)
+    target = kernel.scales if target is None else np.ascontiguousarray(target, dtype=float)
+    _solve_system(kernel.chains, int(mask), pose, Q, target, float(tol), int(max_iter),
+                  residual, out)
     return residual, out
 
 

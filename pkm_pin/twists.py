@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import io
 import math
+import threading
 from typing import NamedTuple
 
 import numpy as np
@@ -23,7 +24,7 @@ import pinocchio as pin
 from numba import njit
 
 from . import screws
-from .compiling import prefer_compiled
+from .compiling import SameTypes, prefer_compiled
 from .kernels import _compose, pose_error
 from .screws import world_twist_rows
 
@@ -116,26 +117,29 @@ def joint_lines(mechanism, leg_q, J: np.ndarray) -> np.ndarray:
     return out
 
 
-def verified_twists(mechanism, leg_q, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def verified_twists(mechanism, leg_q, pose: np.ndarray, flat=None
+                    ) -> tuple[np.ndarray, np.ndarray, float]:
     """The joint twists at one configuration (as :func:`joint_twists`) and each leg's
     closure error against the platform pose (4×4): :func:`pkm_pin.kernels.pose_error`
-    of Pinocchio's tip placement from ``pose · anchor``, from the same single pass.
+    of Pinocchio's tip placement from ``pose · anchor``, from the same single pass:
+    :class:`TreePass` (every leg in one Pinocchio call) when the mechanism has no
+    mimic joint, else one pass per leg. ``flat``: the legs' configurations already
+    concatenated (saves a copy).
 
     Returns ``(J, errors, worst)``: (nv, 6) rows, (legs,) errors and the largest (nan
     when one is)."""
+    tree_pass = mechanism.tree_pass
+    if tree_pass is not None:
+        return tree_pass.run(np.concatenate(leg_q) if flat is None else flat, pose)
     legs = mechanism.legs
     f = mechanism.leg_frames
     # Pinocchio's Jacobian and tip placement of each leg, one after the other, copied
     # as they come into one byte buffer (as in _leg_pass), read by pose_outputs
     buf = io.BytesIO()
-    write, place, jacobians = buf.write, pin.updateFramePlacement, pin.computeJointJacobians
+    write, place = buf.write, pin.updateFramePlacement
     for leg, q in zip(legs, leg_q):
-        model, data, q = leg.model, leg.data, np.asarray(q, dtype=float)
-        if model.nvExtended == model.nv:  # the chain's WORLD Jacobian (see leg_jacobian)
-            write(jacobians(model, data, q))
-        else:
-            write(leg_jacobian(leg, q, data))
-        write(place(model, data, leg.tip_id).homogeneous)
+        write(leg_jacobian(leg, np.asarray(q, dtype=float)))
+        write(place(leg.model, leg.data, leg.tip_id).homogeneous)
     flat = np.frombuffer(buf.getbuffer(), dtype=np.float64)
     if flat.shape[0] != 6 * f.coords[-1] + 16 * len(legs):
         raise RuntimeError("Pinocchio's Jacobians and placements do not add up to the legs'")
@@ -172,6 +176,104 @@ def pose_outputs(flat, bases, anchors, coords, lengths, pose, J_out, errors):
             worst = errors[k]
         world_twist_rows(Jp, bases[k], J_out[c0:c1])
     return worst
+
+
+class TreePass:
+    """Pinocchio's pass over every leg of a mechanism at one configuration, in one call.
+
+    The tree is :attr:`Mechanism.closure_model`'s (each leg under the universe at its
+    base placement, so the columns of the tree's WORLD joint Jacobian are the joint
+    twists about the world origin) with one more joint per leg: a free flyer at the
+    leg's tip frame, held at rest, that moves nothing (a *probe*). Its six columns of
+    the WORLD Jacobian are the twists of the tip frame's body axes: unit translations
+    ``(v; ω) = (r_a; 0)`` and unit rotations ``(p × r_a; r_a)``, where ``r_a`` are the
+    columns of the tip's rotation and ``p`` its origin (``p = ½ Σ_a r_a × (p × r_a)``).
+    One ``computeJointJacobians`` thus gives the joint twists and every tip placement,
+    where reading each placement back costs as much as the pass.
+
+    For mechanisms without mimic joints (whose tree Jacobian has one column per
+    velocity coordinate). ``Data`` per thread, as :attr:`Leg.data`; safe to use from
+    several threads.
+    """
+
+    def __init__(self, mechanism):
+        tree = pin.Model(mechanism.closure_model.tree)
+        legs = mechanism.legs
+        nq, nv = sum(leg.nq for leg in legs), sum(leg.nv for leg in legs)
+        for leg in legs:
+            tip = tree.frames[tree.getFrameId(f"{leg.name}/{leg.tip}")]
+            tree.addJoint(tip.parentJoint, pin.JointModelFreeFlyer(), tip.placement,
+                          f"{leg.name}/{leg.tip}/probe")
+        self.tree = tree
+        #: velocity column of each leg's probe
+        self.probes = np.array([tree.joints[j].idx_v
+                                for j in range(tree.njoints - len(legs), tree.njoints)],
+                               dtype=np.int64)
+        #: the platform's free flyer and the probes, at rest (their motion is not read)
+        self.rest_q = pin.neutral(tree)[nq:]
+        self.frames = mechanism.leg_frames
+        self.nv, self.shape = nv, (6, tree.nv)
+        if nv != self.frames.coords[-1]:
+            raise ValueError("the tree's legs do not have the mechanism's coordinates")
+        self._local = threading.local()
+
+    def __getstate__(self) -> dict:
+        return {k: v for k, v in self.__dict__.items() if k != "_local"}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._local = threading.local()
+
+    def run(self, Q: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """:func:`verified_twists` at the legs' configurations ``Q`` (concatenated)."""
+        try:
+            data = self._local.data
+        except AttributeError:
+            data = self._local.data = self.tree.createData()
+        Jt = pin.computeJointJacobians(self.tree, data, np.concatenate((Q, self.rest_q)))
+        if Jt.shape != self.shape or Jt.dtype != np.float64 or not Jt.flags.c_contiguous:
+            raise RuntimeError(f"Pinocchio's Jacobian has shape {Jt.shape}, type {Jt.dtype}: "
+                               f"expected C-ordered float64 {self.shape}")
+        J = np.empty((self.nv, 6))
+        errors = np.empty(len(self.probes))
+        f = self.frames
+        worst = _tree_outputs(self.probes, Jt, f.anchors, f.lengths, pose, J, errors)
+        return J, errors, worst
+
+
+@njit(cache=True, nogil=True)
+def tree_outputs(probes, Jt, anchors, lengths, pose, J_out, errors):
+    """:meth:`TreePass.run` in compiled code: ``J_out`` (nv × 6) receives the axis-first
+    twists of the first nv columns of the tree's WORLD Jacobian ``Jt`` (6 × nv_tree);
+    ``errors[k]`` is leg k's :func:`~pkm_pin.kernels.pose_error` from ``pose ·
+    anchors[k]`` of its tip placement, read from the columns of its probe (from
+    ``probes[k]``: three unit translations, three unit rotations). Returns the largest
+    error (nan if one is)."""
+    world_twist_rows(Jt[:, :J_out.shape[0]], np.eye(4), J_out)
+    worst = 0.0
+    tip = np.zeros((4, 4))
+    target = np.empty((4, 4))
+    e = np.empty(6)
+    for k in range(probes.shape[0]):
+        c = probes[k]
+        p0 = p1 = p2 = 0.0
+        for a in range(3):
+            tip[0, a], tip[1, a], tip[2, a] = Jt[0, c + a], Jt[1, c + a], Jt[2, c + a]
+            r0, r1, r2 = Jt[3, c + 3 + a], Jt[4, c + 3 + a], Jt[5, c + 3 + a]
+            v0, v1, v2 = Jt[0, c + 3 + a], Jt[1, c + 3 + a], Jt[2, c + 3 + a]
+            p0 += 0.5 * (r1 * v2 - r2 * v1)
+            p1 += 0.5 * (r2 * v0 - r0 * v2)
+            p2 += 0.5 * (r0 * v1 - r1 * v0)
+        tip[0, 3], tip[1, 3], tip[2, 3], tip[3, 3] = p0, p1, p2, 1.0
+        _compose(pose, anchors[k], target)
+        errors[k] = pose_error(tip, target, lengths[k], e)
+        if errors[k] > worst or errors[k] != errors[k]:  # a nan stays the worst
+            worst = errors[k]
+    return worst
+
+
+#: :func:`tree_outputs` as :meth:`TreePass.run` calls it (its arguments keep their types)
+_tree_outputs = SameTypes(tree_outputs, key=0, plain=True)
 
 
 def sweep_pass(mechanism, Qs, targets, idx, tol: float):

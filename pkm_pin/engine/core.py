@@ -20,7 +20,7 @@ import numpy as np
 from numba import njit
 from numba.extending import register_jitable
 
-from ..compiling import prefer_compiled
+from ..compiling import SameTypes
 from .linalg import reset
 from .stages import (
     SQUARE,
@@ -140,18 +140,19 @@ def analyse(J: np.ndarray, layout: Layout, full: bool = True,
             depend on where the mechanism stands in the world; default: the world origin.
     """
     J = np.ascontiguousarray(J, dtype=float)
-    if J.ndim != 3 or J.shape[2] != 6 or J.shape[1] != int(layout.coords[-1]):
+    N = J.shape[0]
+    if J.ndim != 3 or J.shape[1:] != (layout.coords[-1], 6):
         raise ValueError(f"joint twists of shape {J.shape}: expected (N, "
                          f"{int(layout.coords[-1])}, 6)")
-    centres = (np.zeros((len(J), 3)) if centres is None
-               else np.ascontiguousarray(centres, dtype=float))
-    if centres.shape != (len(J), 3):
-        raise ValueError(f"centres of shape {centres.shape}: expected ({len(J)}, 3)")
-    out = allocate(len(J), layout, full)
-    if len(J) > 1 or prefer_compiled(analyse_into):
-        analyse_into(J, centres, layout, out, full)
+    centres = np.zeros((N, 3)) if centres is None else np.ascontiguousarray(centres,
+                                                                            dtype=float)
+    if centres.shape != (N, 3):
+        raise ValueError(f"centres of shape {centres.shape}: expected ({N}, 3)")
+    out = allocate(N, layout, full)
+    if N == 1:  # plain Python until the compiled code is ready (no compilation here)
+        _analyse_into(J, centres, layout, out, bool(full))
     else:
-        analyse_into.py_func(J, centres, layout, out, full)
+        analyse_into(J, centres, layout, out, bool(full))
     return out
 
 
@@ -285,3 +286,7 @@ def analyse_into(J, centres, layout, out, full):
             out.constraints[i, :rank_c] = cons[:rank_c]
             out.platform[i] = 0.0
             out.platform[i, :d] = P[:d]
+
+
+#: :func:`analyse_into` as :func:`analyse` calls it (its arguments keep their types)
+_analyse_into = SameTypes(analyse_into, key=2, plain=True)

@@ -1,0 +1,117 @@
+"""The single-pose Pinocchio pass (twists.TreePass) and the fixed-type compiled calls
+(compiling.SameTypes) of the per-pose path."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from helpers import shipped_mechanisms
+from numba import njit
+
+from pkm_pin import twists
+from pkm_pin.builders import MECHANISMS
+from pkm_pin.compiling import SameTypes
+from pkm_pin.kernels import pose_error
+
+mechanism = shipped_mechanisms()
+
+
+def _reference(mech, leg_q, pose: np.ndarray):
+    """Each leg's own Pinocchio pass: the joint twists and the closure errors."""
+    errors = []
+    for leg, q, anchor in zip(mech.legs, leg_q, mech.anchors):
+        data = leg.model.createData()
+        pin.framesForwardKinematics(leg.model, data, q)
+        tip = (leg.base * data.oMf[leg.tip_id]).homogeneous
+        errors.append(pose_error(tip, pose @ anchor.homogeneous, leg.characteristic_length,
+                                 np.empty(6)))
+    return twists.joint_twists(mech, leg_q), np.array(errors)
+
+
+@pytest.mark.parametrize("name", sorted(MECHANISMS))
+def test_tree_pass_equals_each_legs_pass(name):
+    """Twists and closure errors of the one-call pass equal the per-leg pass, closed
+    (errors at round-off) and off by a displacement of the pose (errors of 1e-2)."""
+    mech = mechanism(name)
+    if twists.has_mimic(mech):
+        assert mech.tree_pass is None  # mimic joints: each leg on its own
+        return
+    asm = mech.home_assembly
+    rng = np.random.default_rng(3)
+    # a configuration off home too: every joint moved
+    moved = [leg.clip(q + 0.05 * rng.standard_normal(q.shape)) if leg.nq == leg.nv else q
+             for leg, q in zip(mech.legs, asm.leg_q)]
+    for leg_q in (asm.leg_q, moved):
+        off = pin.SE3(pin.rpy.rpyToMatrix(0.01, -0.02, 0.03), np.array([2e-3, -1e-3, 3e-3]))
+        for offset in (pin.SE3.Identity(), off):
+            M = (asm.pose * offset).homogeneous
+            J, errors, worst = mech.tree_pass.run(np.concatenate(leg_q), M)
+            J_ref, errors_ref = _reference(mech, leg_q, M)
+            np.testing.assert_allclose(J, J_ref, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(errors, errors_ref, rtol=1e-9, atol=1e-14)
+            assert worst == errors.max()
+
+
+def test_tree_pass_reports_nan():
+    """A configuration with a nan gives a nan error (the worst), not a small one."""
+    mech = mechanism("stewart")
+    Q = np.concatenate(mech.home_assembly.leg_q)
+    Q[3] = np.nan
+    _, errors, worst = mech.tree_pass.run(Q, mech.home.homogeneous)
+    assert np.isnan(worst) and np.isnan(errors).any()
+
+
+def test_mechanism_pickles_without_its_tree_pass():
+    """The pass holds per-thread data: a pickled mechanism drops it and makes it again."""
+    mech = MECHANISMS["stewart"]().build()
+    asm = mech.assemble(mech.home)
+    assert "tree_pass" in mech.__dict__
+    copy = pickle.loads(pickle.dumps(mech))
+    assert "tree_pass" not in copy.__dict__
+    again = copy.assemble(mech.home)
+    np.testing.assert_allclose(again.joint_twists, asm.joint_twists, atol=1e-14)
+    # and the pass itself pickles (its data is made again on first use)
+    tp = pickle.loads(pickle.dumps(mech.tree_pass))
+    J, _, _ = tp.run(np.concatenate(asm.leg_q), asm.pose.homogeneous)
+    np.testing.assert_allclose(J, asm.joint_twists, atol=1e-14)
+
+
+@njit(cache=False)
+def _weighted_sum(weights, x, out):
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += weights[i] * x[i]
+    out[0] = s
+    return s
+
+
+def test_same_types_calls_the_machine_code_and_checks_the_key():
+    """After a first call through the dispatcher, calls with the same key object give the
+    dispatcher's results; another key object goes through the dispatcher again."""
+    call = SameTypes(_weighted_sum, key=0)
+    w1, w2 = np.arange(4.0), np.ones(4)
+    x, out = np.linspace(0, 1, 4), np.empty(1)
+    assert call(w1, x, out) == pytest.approx(w1 @ x)
+    assert call._known[0] is w1
+    for k in range(3):  # the machine code, on new values of the other arguments
+        y = x + k
+        assert call(w1, y, out) == pytest.approx(w1 @ y) and out[0] == pytest.approx(w1 @ y)
+    assert call(w2, x, out) == pytest.approx(x.sum())  # a new key: typed again
+    assert call._known[0] is w2
+
+
+def test_same_types_runs_plain_python_before_compiling():
+    """With ``plain``, a function not compiled yet runs as plain Python (no compilation)
+    for a one-off call."""
+
+    @njit(cache=False)
+    def fresh(weights, x, out):
+        return _weighted_sum(weights, x, out) + 1.0
+
+    call = SameTypes(fresh, key=0, plain=True)
+    w, x, out = np.arange(3.0), np.ones(3), np.empty(1)
+    assert call(w, x, out) == pytest.approx(4.0)
+    assert not fresh.overloads  # nothing compiled
