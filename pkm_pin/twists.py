@@ -22,6 +22,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 from numba import njit
+from numba.extending import register_jitable
 
 from . import screws
 from .compiling import SameTypes, prefer_compiled
@@ -183,13 +184,13 @@ class TreePass:
 
     The tree is :attr:`Mechanism.closure_model`'s (each leg under the universe at its
     base placement, so the columns of the tree's WORLD joint Jacobian are the joint
-    twists about the world origin) with one more joint per leg: a free flyer at the
-    leg's tip frame, held at rest, that moves nothing (a *probe*). Its six columns of
-    the WORLD Jacobian are the twists of the tip frame's body axes: unit translations
-    ``(v; ω) = (r_a; 0)`` and unit rotations ``(p × r_a; r_a)``, where ``r_a`` are the
-    columns of the tip's rotation and ``p`` its origin (``p = ½ Σ_a r_a × (p × r_a)``).
-    One ``computeJointJacobians`` thus gives the joint twists and every tip placement,
-    where reading each placement back costs as much as the pass.
+    twists about the world origin) with one more joint per leg: a spherical joint at
+    the leg's tip frame, held at rest, that moves nothing (a *probe*). Its three columns
+    of the WORLD Jacobian are the unit rotations about the tip frame's axes, ``(v; ω) =
+    (p × r_a; r_a)``, where ``r_a`` are the columns of the tip's rotation and ``p`` its
+    origin (``p = ½ Σ_a r_a × (p × r_a)``). One ``computeJointJacobians`` thus gives the
+    joint twists and every tip placement, where reading each placement back costs as
+    much as the pass.
 
     For mechanisms without mimic joints (whose tree Jacobian has one column per
     velocity coordinate). ``Data`` per thread, as :attr:`Leg.data`; safe to use from
@@ -202,7 +203,7 @@ class TreePass:
         nq, nv = sum(leg.nq for leg in legs), sum(leg.nv for leg in legs)
         for leg in legs:
             tip = tree.frames[tree.getFrameId(f"{leg.name}/{leg.tip}")]
-            tree.addJoint(tip.parentJoint, pin.JointModelFreeFlyer(), tip.placement,
+            tree.addJoint(tip.parentJoint, pin.JointModelSpherical(), tip.placement,
                           f"{leg.name}/{leg.tip}/probe")
         self.tree = tree
         #: velocity column of each leg's probe
@@ -224,21 +225,78 @@ class TreePass:
         self.__dict__.update(state)
         self._local = threading.local()
 
-    def run(self, Q: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
-        """:func:`verified_twists` at the legs' configurations ``Q`` (concatenated)."""
+    def _data(self) -> pin.Data:
+        """The calling thread's ``Data`` of the tree."""
         try:
-            data = self._local.data
+            return self._local.data
         except AttributeError:
-            data = self._local.data = self.tree.createData()
-        Jt = pin.computeJointJacobians(self.tree, data, np.concatenate((Q, self.rest_q)))
+            self._local.data = self.tree.createData()
+            return self._local.data
+
+    def _check(self, Jt: np.ndarray) -> None:
+        """Pinocchio's Jacobian is read by compiled code that trusts its type
+        (:class:`~pkm_pin.compiling.SameTypes`)."""
         if Jt.shape != self.shape or Jt.dtype != np.float64 or not Jt.flags.c_contiguous:
             raise RuntimeError(f"Pinocchio's Jacobian has shape {Jt.shape}, type {Jt.dtype}: "
                                f"expected C-ordered float64 {self.shape}")
+
+    def run(self, Q: np.ndarray, pose: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """:func:`verified_twists` at the legs' configurations ``Q`` (concatenated)."""
+        Jt = pin.computeJointJacobians(self.tree, self._data(),
+                                       np.concatenate((Q, self.rest_q)))
+        self._check(Jt)
         J = np.empty((self.nv, 6))
         errors = np.empty(len(self.probes))
         f = self.frames
         worst = _tree_outputs(self.probes, Jt, f.anchors, f.lengths, pose, J, errors)
         return J, errors, worst
+
+    def many(self, Qs, targets: np.ndarray, idx: np.ndarray, tol: float
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`sweep_pass`: one call per pose.
+
+        Pinocchio returns a new array per call; each is copied at once into one byte
+        buffer and freed, so the allocator recycles its memory (as :func:`_leg_pass`)."""
+        M = len(idx)
+        rows = np.empty((M, self.tree.nq))
+        c = 0
+        for Q in Qs:
+            rows[:, c:c + Q.shape[1]] = Q[idx]
+            c += Q.shape[1]
+        rows[:, c:] = self.rest_q
+        data, tree, jacobians = self._data(), self.tree, pin.computeJointJacobians
+        buf = io.BytesIO()
+        write = buf.write
+        if M:
+            self._check(jacobians(tree, data, rows[0]))
+        for q in rows:
+            write(jacobians(tree, data, q))
+        if buf.tell() != 8 * M * 6 * self.shape[1]:
+            raise RuntimeError("Pinocchio's Jacobians do not add up to the poses'")
+        Jt = np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(M, 6, self.shape[1])
+        J = np.empty((M, self.nv, 6))
+        bad = np.zeros(M, bool)
+        tree_outputs_many(self.probes, Jt, targets, np.asarray(idx, dtype=np.int64),
+                          self.frames.lengths, float(tol), J, bad)
+        return J, bad
+
+
+@register_jitable
+def probe_tip(Jt, c, tip):
+    """The world placement ``tip`` (4 × 4) of the frame of a :class:`TreePass` probe
+    whose columns of the WORLD Jacobian ``Jt`` start at ``c``: three unit rotations
+    ``(v; ω) = (p × r_a; r_a)``, ``r_a`` the columns of the rotation, ``p = ½ Σ_a r_a ×
+    (p × r_a)``."""
+    p0 = p1 = p2 = 0.0
+    for a in range(3):
+        r0, r1, r2 = Jt[3, c + a], Jt[4, c + a], Jt[5, c + a]
+        v0, v1, v2 = Jt[0, c + a], Jt[1, c + a], Jt[2, c + a]
+        tip[0, a], tip[1, a], tip[2, a] = r0, r1, r2
+        p0 += 0.5 * (r1 * v2 - r2 * v1)
+        p1 += 0.5 * (r2 * v0 - r0 * v2)
+        p2 += 0.5 * (r0 * v1 - r1 * v0)
+    tip[0, 3], tip[1, 3], tip[2, 3] = p0, p1, p2
+    tip[3, 0], tip[3, 1], tip[3, 2], tip[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 @njit(cache=True, nogil=True)
@@ -246,25 +304,15 @@ def tree_outputs(probes, Jt, anchors, lengths, pose, J_out, errors):
     """:meth:`TreePass.run` in compiled code: ``J_out`` (nv × 6) receives the axis-first
     twists of the first nv columns of the tree's WORLD Jacobian ``Jt`` (6 × nv_tree);
     ``errors[k]`` is leg k's :func:`~pkm_pin.kernels.pose_error` from ``pose ·
-    anchors[k]`` of its tip placement, read from the columns of its probe (from
-    ``probes[k]``: three unit translations, three unit rotations). Returns the largest
-    error (nan if one is)."""
+    anchors[k]`` of its tip placement (:func:`probe_tip`, its probe's columns from
+    ``probes[k]``). Returns the largest error (nan if one is)."""
     world_twist_rows(Jt[:, :J_out.shape[0]], np.eye(4), J_out)
     worst = 0.0
-    tip = np.zeros((4, 4))
+    tip = np.empty((4, 4))
     target = np.empty((4, 4))
     e = np.empty(6)
     for k in range(probes.shape[0]):
-        c = probes[k]
-        p0 = p1 = p2 = 0.0
-        for a in range(3):
-            tip[0, a], tip[1, a], tip[2, a] = Jt[0, c + a], Jt[1, c + a], Jt[2, c + a]
-            r0, r1, r2 = Jt[3, c + 3 + a], Jt[4, c + 3 + a], Jt[5, c + 3 + a]
-            v0, v1, v2 = Jt[0, c + 3 + a], Jt[1, c + 3 + a], Jt[2, c + 3 + a]
-            p0 += 0.5 * (r1 * v2 - r2 * v1)
-            p1 += 0.5 * (r2 * v0 - r0 * v2)
-            p2 += 0.5 * (r0 * v1 - r1 * v0)
-        tip[0, 3], tip[1, 3], tip[2, 3], tip[3, 3] = p0, p1, p2, 1.0
+        probe_tip(Jt, probes[k], tip)
         _compose(pose, anchors[k], target)
         errors[k] = pose_error(tip, target, lengths[k], e)
         if errors[k] > worst or errors[k] != errors[k]:  # a nan stays the worst
@@ -272,12 +320,33 @@ def tree_outputs(probes, Jt, anchors, lengths, pose, J_out, errors):
     return worst
 
 
+@njit(cache=True, nogil=True)
+def tree_outputs_many(probes, Jt, targets, idx, lengths, tol, J_out, bad):
+    """:meth:`TreePass.many` in compiled code: for each pose ``m`` (``Jt[m]``, the tree's
+    WORLD Jacobian at pose ``idx[m]``), ``J_out[m]`` receives the joint twists as
+    :func:`tree_outputs`, and ``bad[m]`` is set when a leg's tip misses its target
+    ``targets[k, idx[m]]`` by more than ``tol`` (:func:`~pkm_pin.kernels.pose_error`, or
+    nan)."""
+    I4 = np.eye(4)
+    tip = np.empty((4, 4))
+    e = np.empty(6)
+    nv = J_out.shape[1]
+    for m in range(Jt.shape[0]):
+        world_twist_rows(Jt[m, :, :nv], I4, J_out[m])
+        for k in range(probes.shape[0]):
+            probe_tip(Jt[m], probes[k], tip)
+            if not pose_error(tip, targets[k, idx[m]], lengths[k], e) <= tol:
+                bad[m] = True
+
+
 #: :func:`tree_outputs` as :meth:`TreePass.run` calls it (its arguments keep their types)
 _tree_outputs = SameTypes(tree_outputs, key=0, plain=True)
 
 
 def sweep_pass(mechanism, Qs, targets, idx, tol: float):
-    """One Pinocchio pass per leg at the poses ``idx`` (increasing) of a sweep.
+    """Pinocchio's pass at the poses ``idx`` (increasing) of a sweep: one call per pose
+    on the legs' tree (:meth:`TreePass.many`) when no leg has mimic joints, else one
+    pass per leg and pose.
 
     Args:
         Qs: Per leg, the (N, nq) configurations.
@@ -290,6 +359,8 @@ def sweep_pass(mechanism, Qs, targets, idx, tol: float):
         (M,) whether a leg's tip (Pinocchio's placement) misses its target by more than
         ``tol``.
     """
+    if mechanism.tree_pass is not None:
+        return mechanism.tree_pass.many(Qs, targets, idx, tol)
     M = len(idx)
     nv = sum(leg.nv for leg in mechanism.legs)
     J = np.empty((M, nv, 6))

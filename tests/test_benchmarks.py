@@ -22,13 +22,13 @@ pytestmark = pytest.mark.benchmark
 
 
 def test_bench_analysis_runs_and_reports_every_figure(capsys):
-    """bench_analysis.main times the four figures for both mechanisms."""
+    """bench_analysis.main times the five figures for both mechanisms."""
     rows = bench_analysis.main(n=20, n_loop=5)
     assert set(rows) == {"stewart", "rpr3"}
     for figures in rows.values():
-        assert len(figures) == 4 and all(t > 0 for t in figures)
+        assert len(figures) == 5 and all(t > 0 for t in figures)
     out = capsys.readouterr().out
-    assert "Pinocchio-call floor" in out and "hand-written" in out
+    assert "Pinocchio-call floor" in out and "hand-written" in out and "one call per pose" in out
 
 
 def test_bench_fk_solves_to_the_same_poses(capsys):
