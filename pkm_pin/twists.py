@@ -265,7 +265,7 @@ class TreePass:
             c += Q.shape[1]
         rows[:, c:] = self.rest_q
         data, tree, jacobians = self._data(), self.tree, pin.computeJointJacobians
-        buf = io.BytesIO()
+        buf = io.BytesIO(bytes(8 * M * 6 * self.shape[1]))  # written over: no regrowth
         write = buf.write
         if M:
             self._check(jacobians(tree, data, rows[0]))
