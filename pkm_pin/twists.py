@@ -15,7 +15,6 @@ legs one after the other are the input of the analysis engine (:mod:`pkm_pin.eng
 from __future__ import annotations
 
 import io
-import math
 import threading
 from typing import NamedTuple
 
@@ -422,35 +421,15 @@ def leg_outputs(H, Jp, base, targets, idx, length, tol, J_out, c0, bad):
         base: root placement in the world (4×4).
         targets: (N, 4, 4) world placements the tip must reach (pose · anchor).
         J_out: (M, nv_total, 6) receives the axis-first twists in rows c0:c0+nv.
-        bad: (M,) set where the closure error exceeds ``tol`` (or is nan): the rotation
-            angle between tip and target (π beyond 90°) and their distance / length, in
-            quadrature.
+        bad: (M,) set where the closure error exceeds ``tol`` (or is nan):
+            :func:`~pkm_pin.kernels.pose_error`, the residual of every solver.
     """
     M = H.shape[0]
     nv = Jp.shape[2]
-    tip = np.empty((3, 4))
-    R = np.empty((3, 3))
-    il = 1.0 / length
+    tip = np.empty((4, 4))
+    e = np.empty(6)
     for j in range(M):
-        tgt = targets[idx[j]]
-        for a in range(3):  # tip in the world: base · H
-            for b in range(4):
-                s = base[a, 3] if b == 3 else 0.0
-                for k in range(3):
-                    s += base[a, k] * H[j, k, b]
-                tip[a, b] = s
-        tr = 0.0  # R = tipᵀ tgt: skew part and trace
-        for a in range(3):
-            for b in range(3):
-                R[a, b] = tip[0, a] * tgt[0, b] + tip[1, a] * tgt[1, b] + tip[2, a] * tgt[2, b]
-            tr += R[a, a]
-        x = R[2, 1] - R[1, 2]
-        y = R[0, 2] - R[2, 0]
-        z = R[1, 0] - R[0, 1]
-        angle = 0.5 * math.sqrt(x * x + y * y + z * z) if tr >= 1.0 else math.pi
-        dx = (tip[0, 3] - tgt[0, 3]) * il
-        dy = (tip[1, 3] - tgt[1, 3]) * il
-        dz = (tip[2, 3] - tgt[2, 3]) * il
-        if not math.sqrt(angle * angle + dx * dx + dy * dy + dz * dz) <= tol:
+        _compose(base, H[j], tip)  # tip in the world
+        if not pose_error(tip, targets[idx[j]], length, e) <= tol:
             bad[j] = True
         world_twist_rows(Jp[j], base, J_out[j, c0:c0 + nv])
