@@ -175,11 +175,12 @@ def main(n: int = 1000, n_loop: int = 200) -> dict:
             "joints": lambda: pinocchio_floor_joints(mech, solutions),
             "warm": lambda: pinocchio_floor_joints(mech, warm + solutions),
             "tree": lambda: pinocchio_floor_tree(mech, rows),
+            "hand": lambda: HANDWRITTEN[name](mech, poses),
         }, repeat=15)
         t_sweep, t_floor2 = t["sweep"] / n, t["warm"] / n
         t_floor = min(t["frames"], t["joints"]) / n
         t_tree = t["tree"] / n
-        t_hand = best_of(lambda: HANDWRITTEN[name](mech, poses), repeat=5) / n
+        t_hand = t["hand"] / n
         figures[name] = (t_loop, t_sweep, t_hand, t_floor, t_tree)
         print(f"\n{mech.name}: {n} poses, time per pose [µs]")
         target = {"stewart": 1.0, "rpr3": 1.5}[name]

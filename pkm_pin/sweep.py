@@ -276,8 +276,41 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
                 failures.append((int(i), str(AssemblyError(leg.name, r))))
                 ok[i] = False
         Qs.append(Q)
-    # 2. one Pinocchio pass per leg and pose: closure check and joint twists
+    out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
+           "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
+           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
+           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
+    # 2., 3. by blocks of poses (their arrays stay in the processor's caches): the
+    #    Pinocchio pass (closure check and joint twists), then the analysis engine
+    for start in range(0, N, BLOCK):
+        idx = start + np.flatnonzero(ok[start:start + BLOCK])
+        Js, idx = _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures)
+        if not len(idx):
+            continue
+        lines = None
+        if transmission and has_mimic(mech):  # the owners' own lines (one more pass)
+            lines = np.stack([joint_lines(mech, [Q[i] for Q in Qs], Js[k])
+                              for k, i in enumerate(idx)])
+        _analyse(Js, layout, X[idx, :3], transmission, out, idx, lines)
     idx = np.flatnonzero(ok)
+    out["q_actuated"][idx] = np.concatenate([Q[idx][:, leg.actuated_q]
+                                             for leg, Q in zip(legs, Qs)], axis=1)
+    if progress is not None:
+        progress(N)
+    return out
+
+
+#: Poses per block of a sweep chunk's Pinocchio pass and analysis: the block's arrays
+#: (~0.5 MB for a 6-UPS) stay in the processor's caches (2000 poses at once: 6-UPS 13.1 →
+#: 15.1 µs a pose, 3-RPR 5.9 → 6.9).
+BLOCK = 256
+
+
+def _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures):
+    """The Pinocchio pass at the poses ``idx`` (:func:`pkm_pin.twists.sweep_pass`); a
+    closure Pinocchio does not confirm is assembled again by :meth:`Mechanism.assemble`
+    (:func:`_assemble_again`), then checked again, or recorded in ``failures`` (``ok``
+    cleared). Returns the joint twists and the poses that passed."""
     Js, bad = sweep_pass(mech, Qs, Ts, idx, SWEEP_TOL)
     if bad.any():  # a closure Pinocchio does not confirm: Leg.solve from there
         for i in idx[bad]:
@@ -288,27 +321,8 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
         for i in idx[rows][bad2]:
             failures.append((int(i), "the closure found is not confirmed by Pinocchio"))
             ok[i] = False
-    if progress is not None:
-        progress(N)
-    out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
-           "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
-    if not ok[idx].all():
-        Js = Js[ok[idx]]
-        idx = idx[ok[idx]]
-    if not len(idx):
-        return out
-    every = len(idx) == N
-    out["q_actuated"][idx] = np.concatenate(
-        [(Q if every else Q[idx])[:, leg.actuated_q] for leg, Q in zip(legs, Qs)], axis=1)
-    # 3. the analysis engine (compiled screw algebra) on every assembled pose
-    lines = None
-    if transmission and has_mimic(mech):  # the owners' own lines (one more pass)
-        lines = np.stack([joint_lines(mech, [Q[i] for Q in Qs], Js[k])
-                          for k, i in enumerate(idx)])
-    _analyse(Js, layout, X[idx, :3], transmission, out, idx, lines)
-    return out
+    keep = ok[idx]
+    return (Js, idx) if keep.all() else (Js[keep], idx[keep])
 
 
 def _assemble_again(mech, pose, guess, restarts, Qs, i, ok, failures) -> None:

@@ -56,6 +56,28 @@ def test_unreachable_poses_are_recorded_not_raised():
     assert res.dof[1:].tolist() == [-1, -1] and res.singularity[1:].tolist() == ["", ""]
 
 
+@pytest.mark.parametrize("name", ["stewart", "delta"])
+def test_blocks_of_a_chunk_give_the_same_results(name, monkeypatch):
+    """The Pinocchio pass and the engine run by blocks of a chunk's poses (sweep.BLOCK):
+    blocks of 3 poses, with unreachable poses among them, give the results of one
+    block."""
+    from pkm_pin import sweep as sweep_module
+
+    mech = mechanism(name)
+    X = grid_around_home(mech, n=4)
+    X[[2, 7]] += [100.0, 0, 0, 0, 0, 0]  # out of reach
+    whole = mech.sweep(X)
+    monkeypatch.setattr(sweep_module, "BLOCK", 3)
+    blocks = mech.sweep(X)
+    assert whole.ok.tolist() == blocks.ok.tolist() and whole.ok.sum() == len(X) - 2
+    assert [i for i, _ in whole.failures] == [i for i, _ in blocks.failures] == [2, 7]
+    for key in ("dof", "singularity"):
+        assert getattr(whole, key).tolist() == getattr(blocks, key).tolist()
+    for key in ("type_I", "type_II", "condition", "det", "q_actuated"):
+        np.testing.assert_allclose(getattr(blocks, key), getattr(whole, key), rtol=1e-12,
+                                   atol=1e-14)
+
+
 def test_order_of_the_poses_does_not_matter():
     """Shuffling the poses shuffles the results and nothing else."""
     mech = mechanism("rrr3")
