@@ -64,6 +64,12 @@ class Layout(NamedTuple):
     rot_tol: float
 
 
+#: Columns of :attr:`Results.counts` …
+DOF, TRANSLATIONS, REDUNDANT = 0, 1, 2
+#: … and of :attr:`Results.scalars`.
+TYPE_I, TYPE_II, CONDITION, DET = 0, 1, 2, 3
+
+
 class Results(NamedTuple):
     """The engine's output for N poses (first axis: the pose).
 
@@ -72,10 +78,15 @@ class Results(NamedTuple):
     dimension are zero.
 
     Attributes:
-        dof: (N,) degrees of freedom of the platform (dimension of its twist system).
-        translations: (N,) dimension of the pure translations among them.
-        redundant: (N,) Σ leg constraint dimensions − rank of their union.
-        type_I, type_II, condition, det: (N,) closeness indices and carried determinant.
+        counts: (N, 3) integers, read as the properties :attr:`dof` (degrees of freedom
+            of the platform: dimension of its twist system), :attr:`translations`
+            (dimension of the pure translations among them) and :attr:`redundant` (Σ
+            leg constraint dimensions − rank of their union); columns ``DOF``,
+            ``TRANSLATIONS``, ``REDUNDANT``.
+        scalars: (N, 4), read as :attr:`type_I`, :attr:`type_II`, :attr:`condition`
+            (closeness indices) and :attr:`det` (carried determinant); columns
+            ``TYPE_I``, ``TYPE_II``, ``CONDITION``, ``DET``. (Two arrays rather than
+            seven: a single pose's analysis allocates and passes every array.)
         independent: (N, n) whether each actuated joint's twist is independent of the
             other joint twists of its leg.
         leg_dims: (N, legs) dimension of each leg's constraint wrench system.
@@ -89,13 +100,8 @@ class Results(NamedTuple):
             norm.
     """
 
-    dof: np.ndarray
-    translations: np.ndarray
-    redundant: np.ndarray
-    type_I: np.ndarray
-    type_II: np.ndarray
-    condition: np.ndarray
-    det: np.ndarray
+    counts: np.ndarray
+    scalars: np.ndarray
     independent: np.ndarray
     leg_dims: np.ndarray
     leg_constraints: np.ndarray
@@ -104,6 +110,41 @@ class Results(NamedTuple):
     A: np.ndarray
     B: np.ndarray
     A_h: np.ndarray
+
+    @property
+    def dof(self) -> np.ndarray:
+        """(N,) degrees of freedom of the platform."""
+        return self.counts[:, DOF]
+
+    @property
+    def translations(self) -> np.ndarray:
+        """(N,) dimension of the pure translations among the platform twists."""
+        return self.counts[:, TRANSLATIONS]
+
+    @property
+    def redundant(self) -> np.ndarray:
+        """(N,) Σ leg constraint dimensions − rank of their union."""
+        return self.counts[:, REDUNDANT]
+
+    @property
+    def type_I(self) -> np.ndarray:
+        """(N,) type I closeness index."""
+        return self.scalars[:, TYPE_I]
+
+    @property
+    def type_II(self) -> np.ndarray:
+        """(N,) type II closeness index."""
+        return self.scalars[:, TYPE_II]
+
+    @property
+    def condition(self) -> np.ndarray:
+        """(N,) condition number of ``A_h Δ Pᵀ``."""
+        return self.scalars[:, CONDITION]
+
+    @property
+    def det(self) -> np.ndarray:
+        """(N,) carried determinant."""
+        return self.scalars[:, DET]
 
 
 def allocate(N: int, layout: Layout, full: bool = True) -> Results:
@@ -116,9 +157,9 @@ def allocate(N: int, layout: Layout, full: bool = True) -> Results:
     F = N if full else 0
     e = np.empty
     return Results(
-        e(N, np.int64), e(N, np.int64), e(N, np.int64), e(N), e(N), e(N), e(N),
-        e((F, n), np.bool_), e((F, legs), np.int64), np.zeros((F, legs, 6, 6)), e((F, 6, 6)),
-        e((F, 6, 6)), e((F, n, 6)), e((F, n)), e((F, n, 6)))
+        e((N, 3), np.int64), e((N, 4)), e((F, n), np.bool_), e((F, legs), np.int64),
+        np.zeros((F, legs, 6, 6)), e((F, 6, 6)), e((F, 6, 6)), e((F, n, 6)), e((F, n)),
+        e((F, n, 6)))
 
 
 def analyse(J: np.ndarray, layout: Layout, full: bool = True,
@@ -258,7 +299,8 @@ def analyse_into(J, centres, layout, out, full):
                                             order, cons, P, Pw, W3, V3,
                                             sv3)
         d = 6 - rank_c
-        out.dof[i], out.translations[i], out.redundant[i] = d, d - rotations, m_c - rank_c
+        counts = out.counts[i]
+        counts[DOF], counts[TRANSLATIONS], counts[REDUNDANT] = d, d - rotations, m_c - rank_c
         # stage 5: actuation wrenches in world units, B, type I
         t1 = np.inf
         for a_i in range(n):
@@ -269,18 +311,18 @@ def analyse_into(J, centres, layout, out, full):
                 out.B[i, a_i], out.independent[i, a_i] = B, ok[a_i]
                 wrench_about_origin(A, p, out.A[i, a_i])
                 out.A_h[i, a_i] = Ah[a_i]
-        out.type_I[i] = t1
+        out.scalars[i, TYPE_I] = t1
         # stage 6: A_h Δ Pᵀ, type II index, condition, carried determinant
         if d != d_prev:  # a new platform dimension: the warm start of V_M is void
             reset(V_M, 6)
             d_prev = d
-        out.type_II[i], out.condition[i] = transmission(Ah, n, P, d, M, W, V_M, sv,
-                                                        order)
+        out.scalars[i, TYPE_II], out.scalars[i, CONDITION] = transmission(
+            Ah, n, P, d, M, W, V_M, sv, order)
         if not ok[:n].all():  # an actuation wrench is not defined: the locked motions
-            out.type_II[i] = locked_motion_index(T, coords, act_col, rtol, P, d, X, W, V2,
-                                                 sv2, C, Xi, work6, order)
-        out.det[i] = carried_determinant(Ah, n, P, d, layout.reference, M, P_loc,
-                                         work)
+            out.scalars[i, TYPE_II] = locked_motion_index(T, coords, act_col, rtol, P, d, X,
+                                                          W, V2, sv2, C, Xi, work6, order)
+        out.scalars[i, DET] = carried_determinant(Ah, n, P, d, layout.reference, M, P_loc,
+                                                  work)
         if full:
             out.constraints[i] = 0.0
             out.constraints[i, :rank_c] = cons[:rank_c]
