@@ -181,15 +181,15 @@ def pose_outputs(flat, bases, anchors, coords, lengths, pose, J_out, errors):
 class TreePass:
     """Pinocchio's pass over every leg of a mechanism at one configuration, in one call.
 
-    The tree is :attr:`Mechanism.closure_model`'s (each leg under the universe at its
-    base placement, so the columns of the tree's WORLD joint Jacobian are the joint
-    twists about the world origin) with one more joint per leg: a spherical joint at
-    the leg's tip frame, held at rest, that moves nothing (a *probe*). Its three columns
-    of the WORLD Jacobian are the unit rotations about the tip frame's axes, ``(v; ω) =
-    (p × r_a; r_a)``, where ``r_a`` are the columns of the tip's rotation and ``p`` its
-    origin (``p = ½ Σ_a r_a × (p × r_a)``). One ``computeJointJacobians`` thus gives the
-    joint twists and every tip placement, where reading each placement back costs as
-    much as the pass.
+    The tree is :attr:`Mechanism.closure_model`'s without the platform (each leg under
+    the universe at its base placement, so the columns of the tree's WORLD joint
+    Jacobian are the joint twists about the world origin) with one more joint per leg:
+    a spherical joint at the leg's tip frame, held at rest, that moves nothing (a
+    *probe*). Its three columns of the WORLD Jacobian are the unit rotations about the
+    tip frame's axes, ``(v; ω) = (p × r_a; r_a)``, where ``r_a`` are the columns of the
+    tip's rotation and ``p`` its origin (``p = ½ Σ_a r_a × (p × r_a)``). One
+    ``computeJointJacobians`` thus gives the joint twists and every tip placement,
+    where reading each placement back costs as much as the pass.
 
     For mechanisms without mimic joints (whose tree Jacobian has one column per
     velocity coordinate). ``Data`` per thread, as :attr:`Leg.data`; safe to use from
@@ -197,7 +197,10 @@ class TreePass:
     """
 
     def __init__(self, mechanism):
-        tree = pin.Model(mechanism.closure_model.tree)
+        from .model.closure_model import PLATFORM_JOINT
+
+        full = mechanism.closure_model.tree  # the legs alone: the platform's joint locked
+        tree = pin.buildReducedModel(full, [full.getJointId(PLATFORM_JOINT)], pin.neutral(full))
         legs = mechanism.legs
         nq, nv = sum(leg.nq for leg in legs), sum(leg.nv for leg in legs)
         for leg in legs:
@@ -209,7 +212,7 @@ class TreePass:
         self.probes = np.array([tree.joints[j].idx_v
                                 for j in range(tree.njoints - len(legs), tree.njoints)],
                                dtype=np.int64)
-        #: the platform's free flyer and the probes, at rest (their motion is not read)
+        #: the probes, at rest (their motion is not read)
         self.rest_q = pin.neutral(tree)[nq:]
         self.frames = mechanism.leg_frames
         self.nv, self.shape = nv, (6, tree.nv)
