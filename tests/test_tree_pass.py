@@ -13,7 +13,7 @@ from numba import njit
 
 from pkm_pin import twists
 from pkm_pin.builders import MECHANISMS
-from pkm_pin.compiling import SameTypes
+from pkm_pin.compiling import PLAIN_CALLS, SameTypes
 from pkm_pin.kernels import pose_error
 
 mechanism = shipped_mechanisms()
@@ -134,3 +134,22 @@ def test_tree_outputs_source_equals_compiled():
     np.testing.assert_array_equal(out[0][0], out[1][0])
     np.testing.assert_array_equal(out[0][1], out[1][1])
     assert out[0][2] == out[1][2] > 1e-3
+
+
+def test_per_pose_calls_skip_numba_typing():
+    """After an assembly and an analysis, the per-pose compiled calls (closure solver,
+    closure check, engine) hold the machine code of their signature for this
+    mechanism's arrays: later poses are not typed again."""
+    from pkm_pin.engine.core import _analyse_into
+    from pkm_pin.solve import _solve_system
+    from pkm_pin.twists import _tree_outputs
+
+    mech = mechanism("stewart")
+    # the first calls of a process may run plain Python (compiling.PLAIN_CALLS)
+    for _ in range(PLAIN_CALLS + 2):
+        asm = mech.assemble(mech.home, mech.home_assembly)
+        mech.analyze(asm)
+    assert _solve_system._known[0] is mech.kernel.chains
+    assert _tree_outputs._known[0] is mech.tree_pass.probes
+    assert _analyse_into._known[0] is mech.engine_layout
+    assert all(f._known[1] is not None for f in (_solve_system, _tree_outputs, _analyse_into))
