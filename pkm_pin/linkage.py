@@ -73,6 +73,7 @@ from . import screws
 from .analysis import classify
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .model.closure_model import ClosureModel, TreeKinematics
+from .screws import svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
@@ -163,13 +164,6 @@ def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
     if H.shape[0] == 0:
         return np.zeros((0, 6))
     return screws.from_point(screws.dehomogenise(H, length), p)
-
-
-def _svd_rank(H: np.ndarray, rtol: float) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
-    """``(rank, U, sv, Vt)`` of ``H`` (full matrices), rank relative to the largest."""
-    U, sv, Vt = np.linalg.svd(H, full_matrices=True)
-    rank = int(np.sum(sv > rtol * sv[0])) if sv.size and sv[0] > 0 else 0
-    return rank, U, sv, Vt
 
 
 class Linkage:
@@ -572,7 +566,7 @@ def _pose_rows(model: ClosureModel, kin: TreeKinematics) -> np.ndarray:
     M = kin.output_placement  # a point's error is in world axes (solve.pose_error_rows)
     M = pin.SE3(np.eye(3), M.translation) if model.output_point else M
     local = screws.homogenise(screws.transform(ns.Y_world.T, M.inverse()), model.length)
-    rank, _, _, Vt = _svd_rank(local, RANK_RTOL)
+    rank, _, _, Vt = svd_rank(local, RANK_RTOL)
     return np.eye(6) if rank == 6 else Vt[:rank]
 
 
@@ -585,26 +579,27 @@ class _NullSpace:
 
     def __init__(self, model: ClosureModel, kin: TreeKinematics, rtol: float):
         U = model.velocity_units
-        H = kin.closure_jacobian * U
-        if H.shape[0]:
-            rank, _, _, Vt = _svd_rank(H, rtol)
-        else:
-            rank, Vt = 0, np.eye(model.nv)
+        rank, _, _, Vt = svd_rank(kin.closure_jacobian * U, rtol)
         self.rank, self.N = rank, Vt[rank:].T
         self.X = self.N[list(model.actuated_v)]
         self.Y_world = kin.output_jacobian @ (U[:, None] * self.N)
         self.units = U
+
+    def idle(self, rtol: float) -> np.ndarray:
+        """(nv × k) orthonormal basis of the idle motions (dimensionless columns): the
+        allowed motions that leave every actuated joint still."""
+        rank_x, _, _, Vt = svd_rank(self.X, rtol)
+        return self.N @ Vt[rank_x:].T
 
 
 # ====================================================================== mobility
 def _mobility(link: Linkage, kin: TreeKinematics, ns: _NullSpace, rtol: float) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
-    rank_x, _, _, Vt = _svd_rank(ns.X, rtol) if ns.X.size else (0, None, None, np.eye(dof))
-    idle = ns.N @ Vt[rank_x:].T if dof else np.zeros((model.nv, 0))
+    idle = ns.idle(rtol)
     words = tuple(describe_motion(model, kin, ns.units * idle[:, k])
                   for k in range(idle.shape[1]))
-    return Mobility(dof, model.n_rows - ns.rank, dof - rank_x, words,
+    return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], words,
                     _independent(model, ns.X, rtol), link.grubler)
 
 
@@ -725,13 +720,8 @@ def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops
     support = set() if model.output_point else set(model.tree.supports[out_joint])
     passive, act = _loop_freedoms(model, kin, loops, j, support)
 
-    def reciprocal(T):
-        X = homogenised_about(T, p, L) @ screws.DELTA if len(T) else np.zeros((0, 6))
-        r = _svd_rank(X, rtol)[0] if len(T) else 0
-        return np.linalg.svd(np.vstack([X, np.zeros((1, 6))]), full_matrices=True)[2][r:]
-
-    free = reciprocal(passive)
-    cons = reciprocal(np.vstack([passive, act]))
+    free = _reciprocal_homogenised(passive, p, L, rtol)
+    cons = _reciprocal_homogenised(np.vstack([passive, act]), p, L, rtol)
     W = free - (free @ cons.T) @ cons if len(cons) else free
     _, sv, Vt = np.linalg.svd(W)
     if not len(sv) or sv[0] <= rtol:
@@ -742,17 +732,19 @@ def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops
     return zeta / s
 
 
+def _reciprocal_homogenised(T: np.ndarray, p: np.ndarray, L: float, rtol: float
+                            ) -> np.ndarray:
+    """An orthonormal basis (rows, homogenised about ``p``) of the wrenches reciprocal
+    to the twists ``T`` (rows, world origin); all six without twists."""
+    X = homogenised_about(T, p, L).reshape(-1, 6) @ screws.DELTA
+    r, _, _, Vt = svd_rank(X, rtol)
+    return Vt[r:]
+
+
 def _reciprocal_wrenches(T: np.ndarray, p: np.ndarray, L: float, rtol: float = RANK_RTOL
                          ) -> np.ndarray:
-    """A basis (rows, world origin) of the wrenches reciprocal to the twists ``T``
-    (rows, world origin), orthonormal once homogenised about ``p``; all six without
-    twists."""
-    if not len(T):
-        return from_homogenised(np.eye(6), p, L)
-    X = homogenised_about(T, p, L) @ screws.DELTA
-    r = _svd_rank(X, rtol)[0]
-    Vt = np.linalg.svd(np.vstack([X, np.zeros((1, 6))]), full_matrices=True)[2]
-    return from_homogenised(Vt[r:], p, L).reshape(-1, 6)
+    """:func:`_reciprocal_homogenised` in world units about the world origin."""
+    return from_homogenised(_reciprocal_homogenised(T, p, L, rtol), p, L).reshape(-1, 6)
 
 
 def _forces_through(C: np.ndarray, p: np.ndarray, L: float, rtol: float = RANK_RTOL
@@ -761,11 +753,11 @@ def _forces_through(C: np.ndarray, p: np.ndarray, L: float, rtol: float = RANK_R
     ``p`` (no moment about it), as rows (world origin)."""
     if not len(C):
         return C
-    r, _, _, Vt = _svd_rank(homogenised_about(C, p, L), rtol)
+    r, _, _, Vt = svd_rank(homogenised_about(C, p, L), rtol)
     if not r:
         return np.zeros((0, 6))
     B = Vt[:r]  # orthonormal rows spanning C, homogenised about p
-    m, _, _, X = _svd_rank(B[:, 3:].T, rtol)  # combinations without a moment about p
+    m, _, _, X = svd_rank(B[:, 3:].T, rtol)  # combinations without a moment about p
     F = X[m:] @ B
     F[:, 3:] = 0.0  # zero up to rounding
     return from_homogenised(F, p, L).reshape(-1, 6)
@@ -1025,10 +1017,10 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
     ns = _NullSpace(model, kin, rtol)
     mob = _mobility(link, kin, ns, rtol)
     Yh = homogenised_about(ns.Y_world.T, p, L).T  # 6 × dof
-    d, Uy, _, _ = _svd_rank(Yh, rtol) if Yh.size else (0, np.eye(6), None, None)
+    d, Uy, _, _ = svd_rank(Yh, rtol)
     P_h = Uy[:, :d].T
     rotations = int(np.sum(np.linalg.svd(P_h[:, :3], compute_uv=False) > ROTATION_COUNT_TOL))
-    _, _, _, Vc = _svd_rank(P_h @ screws.DELTA, rtol) if d else (0, 0, 0, np.eye(6))
+    _, _, _, Vc = svd_rank(P_h @ screws.DELTA, rtol)
     C_h = Vc[d:]  # homogenised wrenches (f; m_p / L) reciprocal to P
     A, B, type_I = _actuation(model, kin, link._loops, p, rtol)
     A_h = homogenised_about(A, p, L) if len(A) else np.zeros((0, 6))
@@ -1065,7 +1057,7 @@ def _generalised(ns: _NullSpace, Yh: np.ndarray, rtol: float):
     S = np.vstack([ns.X, Yh])
     if S.shape[1] == 0:
         return ns.X, Yh, ns.N, 1.0, 1.0
-    m, _, _, Vt = _svd_rank(S, rtol)
+    m, _, _, Vt = svd_rank(S, rtol)
     M = ns.N @ Vt[:m].T
     Xr, Yr = ns.X @ Vt[:m].T, Yh @ Vt[:m].T
     if m == 0:
@@ -1109,7 +1101,7 @@ def _actuation_row(G: np.ndarray, col: int, rtol: float) -> np.ndarray | None:
     """The homogenised wrench ``ζ_h = (f; m_p / L)`` with ``β = 1`` orthogonal to the
     admissible ζ with β = 0 (``None`` when column ``col`` depends on the others)."""
     others = np.delete(G, col, axis=1)
-    rank, Ul, sv, _ = _svd_rank(others, rtol) if others.size else (0, np.eye(len(G)), 0, 0)
+    rank, Ul, _, _ = svd_rank(others, rtol)
     W = Ul[:, rank:].T
     b = W @ G[:, col]
     if np.linalg.norm(b) <= rtol * max(np.linalg.norm(G[:, col]), 1e-300):

@@ -270,20 +270,25 @@ def _length(S: np.ndarray, length: float | None) -> float:
     return L
 
 
-def _svd(H: np.ndarray, rtol: float) -> tuple[int, np.ndarray]:
-    """Rank and full right singular vectors (rows) of a row-normalised matrix."""
-    if H.shape[0] == 0:
-        return 0, np.eye(6)
-    _, sv, Vt = np.linalg.svd(H, full_matrices=True)
-    r = int(np.sum(sv > rtol * sv[0])) if sv[0] > 0 else 0
-    return r, Vt
+def svd_rank(H, rtol: float) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """``(rank, U, sv, Vt)``: numpy's SVD of the m × n matrix ``H`` (full matrices) and
+    its rank, the number of singular values above ``rtol`` times the largest. The one
+    rank rule of the numpy code (the compiled engine applies the same rule to its Jacobi
+    SVD, :mod:`pkm_pin.engine.linalg`). ``H`` without rows or columns has rank 0,
+    ``U = I_m``, no singular values and ``Vt = I_n``."""
+    H = np.asarray(H, dtype=float)
+    m, n = H.shape
+    if m == 0 or n == 0:
+        return 0, np.eye(m), np.zeros(0), np.eye(n)
+    U, sv, Vt = np.linalg.svd(H, full_matrices=True)
+    return (int(np.sum(sv > rtol * sv[0])) if sv[0] > 0 else 0), U, sv, Vt
 
 
 def rank(S, length: float | None = None, rtol: float = RTOL) -> int:
     """Number of linearly independent screws among the rows of ``S``."""
     S = as_screws(S)
     L = _length(S, length)
-    return _svd(normalised_rows(S, L), rtol)[0]
+    return svd_rank(normalised_rows(S, L).reshape(-1, 6), rtol)[0]
 
 
 def basis(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
@@ -293,7 +298,7 @@ def basis(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray:
     """
     S = as_screws(S)
     L = _length(S, length)
-    r, Vt = _svd(normalised_rows(S, L), rtol)
+    r, _, _, Vt = svd_rank(normalised_rows(S, L).reshape(-1, 6), rtol)
     return dehomogenise(Vt[:r], L)
 
 
@@ -307,7 +312,7 @@ def reciprocal(S, length: float | None = None, rtol: float = RTOL) -> np.ndarray
     L = _length(S, length)
     H = normalised_rows(S, L)
     # a_h Δ b_h = (a Δ b) / L for homogenised a_h, b_h: reciprocity is preserved.
-    r, Vt = _svd(H @ DELTA, rtol)
+    r, _, _, Vt = svd_rank(H.reshape(-1, 6) @ DELTA, rtol)
     return dehomogenise(Vt[r:], L)
 
 

@@ -45,7 +45,7 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError
-from .linkage import Linkage, LinkageAssembly, _body_points, _NullSpace, _svd_rank
+from .linkage import Linkage, LinkageAssembly, _body_points, _NullSpace
 from .report import readable_basis
 from .tolerances import RANK_RTOL
 from .view import (
@@ -100,10 +100,7 @@ def idle_velocities(link: Linkage, q) -> np.ndarray:
     :attr:`Mobility.idle_motions` describes, same rank decisions)."""
     model = link.model
     ns = _NullSpace(model, model.kinematics(q), RANK_RTOL)
-    dof = ns.N.shape[1]
-    rank_x, _, _, Vt = _svd_rank(ns.X, RANK_RTOL) if ns.X.size else (0, None, None, np.eye(dof))
-    idle = ns.N @ Vt[rank_x:].T if dof else np.zeros((model.nv, 0))
-    return (ns.units[:, None] * idle).T
+    return (ns.units[:, None] * ns.idle(RANK_RTOL)).T
 
 
 def _assembly(link: Linkage, where) -> LinkageAssembly:

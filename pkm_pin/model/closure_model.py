@@ -537,11 +537,7 @@ class TreeKinematics:
 def _rank_and_null(H: np.ndarray, rtol: float) -> tuple[int, np.ndarray]:
     """Rank of the dimensionless ``H`` (singular values above ``rtol`` times the
     largest) and an orthonormal basis (columns) of its null space."""
-    n = H.shape[1]
-    if H.shape[0] == 0:
-        return 0, np.eye(n)
-    _, sv, Vt = np.linalg.svd(H, full_matrices=True)
-    rank = int(np.sum(sv > rtol * sv[0])) if sv.size and sv[0] > 0 else 0
+    rank, _, _, Vt = screws.svd_rank(H, rtol)
     return rank, Vt[rank:].T
 
 
