@@ -392,7 +392,7 @@ class Leg(SerialChain):
             jm = m.joints[j]
             if jm.nv == 1:
                 S = np.reshape(pin.getJointJacobian(m, data, j, pin.LOCAL), (6, -1))[:, jm.idx_v]
-                w = S[3:]
+                w = screws.from_pinocchio(S)[:3]
                 axes[j] = w / np.linalg.norm(w) if np.linalg.norm(w) > 0 else w
         return axes
 

@@ -371,8 +371,7 @@ class _Plan:
     def world_jacobians(self, data: pin.Data, model: ClosureModel) -> np.ndarray:
         """(2C + 1) × 6 × nv axis-first world Jacobians ``(ω; v_O)`` of the frames."""
         if not self.mimic:
-            J = data.J
-            return np.concatenate([J[3:], J[:3]])[None] * self.support[:, None, :]
+            return screws.from_pinocchio(data.J)[None] * self.support[:, None, :]
         return np.array([screws.from_pinocchio(pin.getFrameJacobian(model.tree, data, f,
                                                                     pin.WORLD))
                          for f in self.frames])
@@ -424,10 +423,11 @@ class _Plan:
             M = pin.SE3(Cw[c][:3, :3].T @ Cw[C + c][:3, :3],
                         Cw[c][:3, :3].T @ (pb[c] - pa[c]))
             Rb_T = Rb[c].T
-            nu = np.vstack([Rb_T @ V[c], Rb_T @ W[c]])  # body twist of C_b in C_b, (v; ω)
-            log, rates = pin.log6(M).vector, pin.Jlog6(M) @ nu
-            residual[rows[k]] = np.r_[log[3:], log[:3] / L]
-            jacobian[rows[k]] = np.vstack([rates[3:], rates[:3] / L])
+            nu = screws.to_pinocchio(np.vstack([Rb_T @ W[c], Rb_T @ V[c]]))  # body twist in C_b
+            log = screws.from_pinocchio(pin.log6(M))  # (θ; ρ)
+            rates = screws.from_pinocchio(pin.Jlog6(M) @ nu)
+            residual[rows[k]] = np.r_[log[:3], log[3:] / L]
+            jacobian[rows[k]] = np.vstack([rates[:3], rates[3:] / L])
         return residual, jacobian
 
 
@@ -506,9 +506,8 @@ class TreeKinematics:
 
     @cached_property
     def joint_twists(self) -> np.ndarray:
-        if not self._mimic:  # data.J: every coordinate's world twist, (v; ω)
-            J = self._data.J
-            return np.concatenate([J[3:], J[:3]]).T.copy()
+        if not self._mimic:  # data.J: every coordinate's world twist
+            return screws.from_pinocchio(self._data.J).T.copy()
         twists = np.zeros((self._tree.nv, 6))
         for j, J in enumerate(self.body_jacobians):
             joint = self._tree.joints[j]
