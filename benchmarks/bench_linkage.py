@@ -22,11 +22,11 @@ pkm_pin at most the hand-written loop, ratio ≤ 1).
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from timing import best_of_each
 
 from pkm_pin.mechanism import load_mechanism
 
@@ -38,16 +38,6 @@ def motor_path(n: int, size: float = 0.2) -> np.ndarray:
     s = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
     return np.column_stack([size * np.sin(s), 0.7 * size * np.sin(2 * s + 0.4)])
 
-
-def best_of_each(fns: dict, repeat: int) -> dict:
-    """Smallest wall time [s] of each callable over ``repeat`` interleaved rounds."""
-    best = dict.fromkeys(fns, float("inf"))
-    for _ in range(repeat):
-        for key, fn in fns.items():
-            t = time.perf_counter()
-            fn()
-            best[key] = min(best[key], time.perf_counter() - t)
-    return best
 
 
 # ============================================================ the hand-written loop

@@ -282,13 +282,14 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
            "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
     # 2., 3. by blocks of poses (their arrays stay in the processor's caches): the
     #    Pinocchio pass (closure check and joint twists), then the analysis engine
+    own_lines = transmission and has_mimic(mech)  # the owners' own lines (one more pass)
     for start in range(0, N, BLOCK):
         idx = start + np.flatnonzero(ok[start:start + BLOCK])
         Js, idx = _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures)
         if not len(idx):
             continue
         lines = None
-        if transmission and has_mimic(mech):  # the owners' own lines (one more pass)
+        if own_lines:
             lines = np.stack([joint_lines(mech, [Q[i] for Q in Qs], Js[k])
                               for k, i in enumerate(idx)])
         _analyse(Js, layout, X[idx, :3], transmission, out, idx, lines)

@@ -269,10 +269,11 @@ class TreePass:
         data, tree, jacobians = self._data(), self.tree, pin.computeJointJacobians
         buf = io.BytesIO(bytes(8 * M * 6 * self.shape[1]))  # written over: no regrowth
         write = buf.write
-        if M:
-            self._check(jacobians(tree, data, rows[0]))
-        for q in rows:
-            write(jacobians(tree, data, q))
+        for k, q in enumerate(rows):
+            Jt = jacobians(tree, data, q)
+            if not k:
+                self._check(Jt)
+            write(Jt)
         if buf.tell() != 8 * M * 6 * self.shape[1]:
             raise RuntimeError("Pinocchio's Jacobians do not add up to the poses'")
         Jt = np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(M, 6, self.shape[1])
