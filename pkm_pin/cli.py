@@ -584,11 +584,7 @@ def cmd_map(args) -> int:
                 mechanism=np.array(mech.name), actuated=np.array(mech.actuated_names),
                 failure_index=np.array([f[0] for f in result.failures], dtype=int),
                 failure_reason=np.array([f[1] for f in result.failures], dtype=str))
-    npz = prefix.with_name(prefix.name + ".npz")
-    try:
-        np.savez_compressed(npz, **data)
-    except OSError as e:
-        raise InputError(f"cannot write {npz}: {e.strerror or e}") from e
+    npz = _save_npz(prefix, data)
     pngs = save_maps(data, prefix, title=mech.name)
     _print_map(mech, axes, u, v, at, held, result, isinstance(poses, list))
     for path in [npz, *pngs]:
@@ -613,6 +609,17 @@ def _sweep_map(mech, args, poses, n_u: int, n_v: int):
         if executor is not None:
             executor.shutdown()
     return result.unordered(order) if isinstance(poses, list) else result
+
+
+def _save_npz(prefix: Path, data: dict) -> Path:
+    """``data`` saved as ``<prefix>.npz`` (compressed); an unwritable place is an
+    :class:`InputError`."""
+    npz = prefix.with_name(prefix.name + ".npz")
+    try:
+        np.savez_compressed(npz, **data)
+    except OSError as e:
+        raise InputError(f"cannot write {npz}: {e.strerror or e}") from e
+    return npz
 
 
 def _print_map(mech, axes, u, v, at, held, result, completed: bool) -> None:
@@ -746,11 +753,7 @@ def _map_linkage(args, link) -> int:
                 varied=np.array(names), output=np.array(link.output))
     if len(varied) == 2:
         data["v"] = v
-    npz = prefix.with_name(prefix.name + ".npz")
-    try:
-        np.savez_compressed(npz, **data)
-    except OSError as e:
-        raise InputError(f"cannot write {npz}: {e.strerror or e}") from e
+    npz = _save_npz(prefix, data)
     pngs = save_linkage_maps(data, prefix, title=link.name)
     ok, cls = data["converged"], data["singularity"]
     print(f"mechanism  {link.name}  (output {link.output})")

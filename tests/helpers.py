@@ -136,3 +136,13 @@ def spans_equal(A, B, length: float = 1.0, tol: float = 1e-9,
     rB = screw_rank(B, length, tol, relative_zero)
     both = np.vstack([np.reshape(A, (-1, 6)), np.reshape(B, (-1, 6))])
     return rA == rB == screw_rank(both, length, tol, relative_zero)
+
+
+# ------------------------------------------------------------------------ CLI
+def one_error_line(capsys) -> str:
+    """The stderr of the last command, checked to be one 'pkm-pin: error:' line."""
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("pkm-pin: error:")
+    return lines[0]

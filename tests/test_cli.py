@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 import pytest
-from helpers import MECHANISM_DIR
+from helpers import MECHANISM_DIR, one_error_line
 
 from pkm_pin.builders import DESCRIPTIONS
 from pkm_pin.cli import main
@@ -61,15 +61,6 @@ def test_user_mistakes_give_one_line_and_status_2(tmp_path):
 
 
 # ----------------------------------------------------------------------- helpers
-def _one_error_line(capsys) -> str:
-    """The stderr of the last command, checked to be one 'pkm-pin: error:' line."""
-    err = capsys.readouterr().err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("pkm-pin: error:")
-    return lines[0]
-
-
 RPR3_TOML = MECHANISM_DIR / "rpr3.toml"
 
 
@@ -84,13 +75,13 @@ def test_every_command_has_help(command, capsys):
 def test_usage_errors_are_one_line(capsys):
     """A wrong number of --pose values is one error line naming --help, status 2."""
     assert main(["analyze", "--pose", "1", "2"]) == 2
-    assert "--help" in _one_error_line(capsys)
+    assert "--help" in one_error_line(capsys)
 
 
 def test_no_command_is_a_usage_error(capsys):
     """pkm-pin without a command is one error line, status 2."""
     assert main([]) == 2
-    _one_error_line(capsys)
+    one_error_line(capsys)
 
 
 # --------------------------------------------------------------------------- list
@@ -135,14 +126,14 @@ def test_analyze_writes_markdown(tmp_path, capsys):
 def test_unknown_model_lists_the_shipped_ones(capsys):
     """An unknown name is one line that lists the shipped models."""
     assert main(["analyze", "no_such_model"]) == 2
-    line = _one_error_line(capsys)
+    line = one_error_line(capsys)
     assert "stewart" in line and "pkm-pin list" in line
 
 
 def test_nan_pose_is_refused(capsys):
     """--pose with NaN is one line saying the pose must be finite."""
     assert main(["analyze", "--pose", "nan", "0", "0", "0", "0", "0"]) == 2
-    assert "finite" in _one_error_line(capsys)
+    assert "finite" in one_error_line(capsys)
 
 
 # -------------------------------------------------------------------------- check
@@ -160,7 +151,7 @@ def test_check_reports_a_broken_file_in_one_line(tmp_path, capsys):
     path = tmp_path / "broken.toml"
     path.write_text(text)
     assert main(["check", str(path)]) == 2
-    line = _one_error_line(capsys)
+    line = one_error_line(capsys)
     assert str(path) in line and "tip" in line and "no_such_link" in line
 
 
@@ -208,7 +199,7 @@ def test_fk_all_prints_modes(capsys):
 def test_fk_wrong_count_names_the_actuated_joints(capsys):
     """fk with too few coordinates is one line naming the actuated joints."""
     assert main(["fk", "rpr3", "0.7", "-1.5"]) == 2
-    assert "A/A1, B/B0, C/C1" in _one_error_line(capsys)
+    assert "A/A1, B/B0, C/C1" in one_error_line(capsys)
 
 
 # ---------------------------------------------------------------------------- map
@@ -233,7 +224,7 @@ def test_map_writes_npz_and_pngs_with_a_progress_bar(tmp_path, capsys):
 def test_map_refuses_a_fixed_varied_coordinate(capsys):
     """--fixed of a coordinate of the plane is one error line."""
     assert main(["map", "rpr3", "--plane", "xz", "--fixed", "x=1", "--quiet"]) == 2
-    assert "varied" in _one_error_line(capsys)
+    assert "varied" in one_error_line(capsys)
 
 
 # --------------------------------------------------------------------------- view

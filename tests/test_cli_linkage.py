@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import one_error_line
 
 from pkm_pin.builders.loops import four_bar_home
 from pkm_pin.cli import main
@@ -30,14 +31,6 @@ Q_ACTUATED = {FOUR_BAR: [0.3], FIVE_BAR_XML: [0.1, 0.2], ANKLE: [0.1, -0.05],
 def _json(capsys, argv) -> dict:
     assert main(argv) == 0
     return json.loads(capsys.readouterr().out)
-
-
-def _one_error_line(capsys) -> str:
-    err = capsys.readouterr().err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("pkm-pin: error:")
-    return lines[0]
 
 
 def _pose_args(pose: dict) -> list[str]:
@@ -218,9 +211,9 @@ def test_ik_defaults_to_the_reference_output_pose(capsys):
 def test_fk_all_and_wrong_counts_are_refused(capsys):
     """fk --all (platforms only) and a wrong number of values are one error line."""
     assert main(["fk", str(FOUR_BAR), "0.3", "--all"]) == 2
-    assert "--all" in _one_error_line(capsys)
+    assert "--all" in one_error_line(capsys)
     assert main(["fk", str(FIVE_BAR_XML), "0.3"]) == 2
-    assert "mot1, mot2" in _one_error_line(capsys)
+    assert "mot1, mot2" in one_error_line(capsys)
 
 
 # ------------------------------------------------------------------------- errors
@@ -231,28 +224,28 @@ def test_missing_closures_file_is_one_line(tmp_path, capsys):
         argv = [*command, str(tmp_path / "four_bar.urdf")] + (["0.1"] if command == ["fk"]
                                                              else [])
         assert main(argv) == 2
-        line = _one_error_line(capsys)
+        line = one_error_line(capsys)
         assert str(tmp_path / "four_bar.urdf") in line and "closures file" in line
     assert main(["analyze", str(FOUR_BAR), "--closures", str(tmp_path / "no.yaml")]) == 2
-    assert "no.yaml" in _one_error_line(capsys)
+    assert "no.yaml" in one_error_line(capsys)
 
 
 def test_unknown_output_frame_is_one_line(capsys):
     """--output naming no frame: one line naming the file, the entry and the frames."""
     assert main(["analyze", str(FOUR_BAR), "--output", "nope"]) == 2
-    line = _one_error_line(capsys)
+    line = one_error_line(capsys)
     assert str(FOUR_BAR) in line and "output" in line and "'nope'" in line
     assert "'rocker'" in line
     assert main(["analyze", str(FIVE_BAR_XML), "--output", "nope", "--json"]) == 2
-    assert "'nope'" in _one_error_line(capsys)
+    assert "'nope'" in one_error_line(capsys)
 
 
 def test_linkage_options_on_a_platform_mechanism_are_refused(capsys):
     """--output / --point on a platform mechanism: one error line."""
     assert main(["analyze", "rpr3", "--point"]) == 2
-    assert "--point" in _one_error_line(capsys)
+    assert "--point" in one_error_line(capsys)
     assert main(["analyze", str(MODELS / "mechanisms" / "rpr3.toml"), "--output", "x"]) == 2
-    assert "output" in _one_error_line(capsys)
+    assert "output" in one_error_line(capsys)
 
 
 def test_point_and_body_are_exclusive(capsys):
@@ -301,11 +294,11 @@ def test_map_options_of_a_linkage_are_checked(tmp_path, capsys):
     """--plane, a wrong --actuated or a wrong number of bounds are one error line."""
     out = str(tmp_path / "x")
     assert main(["map", str(FIVE_BAR_XML), "--plane", "xz", "--out", out]) == 2
-    assert "--plane" in _one_error_line(capsys)
+    assert "--plane" in one_error_line(capsys)
     assert main(["map", str(FIVE_BAR_XML), "--actuated", "nope", "--out", out]) == 2
-    assert "mot1, mot2" in _one_error_line(capsys)
+    assert "mot1, mot2" in one_error_line(capsys)
     assert main(["map", str(FIVE_BAR_XML), "--range", "0", "1", "--out", out]) == 2
-    assert "4 bounds" in _one_error_line(capsys)
+    assert "4 bounds" in one_error_line(capsys)
 
 
 def test_map_one_motor_with_the_other_fixed(tmp_path, capsys):
