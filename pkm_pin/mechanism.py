@@ -61,7 +61,7 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
-from .screws import as_fraction, as_vector
+from .screws import as_fraction, as_vector, homogenise
 from .solve import LEGS, solve_kernel, solve_system
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
@@ -219,6 +219,16 @@ class Mechanism:
         """The analysis engine's :class:`~pkm_pin.engine.Layout` of this mechanism at the
         default rank tolerance (cached)."""
         return layout_of(self)
+
+    @cached_property
+    def sweep_layout(self) -> Layout:
+        """:attr:`engine_layout` with the reference of the carried determinant: the home
+        pose's platform twists, homogenised about the home centre (what
+        :meth:`sweep` analyses with at the default rank tolerance; cached)."""
+        home = self.home_analysis
+        reference = homogenise(home._about_centre(home.platform_twists),
+                               self.characteristic_length)
+        return self.engine_layout._replace(reference=reference)
 
     @property
     def grubler(self) -> int:

@@ -38,7 +38,7 @@ import pinocchio as pin
 from . import engine
 from .analysis import SINGULAR_TOL, classify, layout_of
 from .errors import AssemblyError, InputError
-from .screws import as_float_array, as_fraction, homogenise
+from .screws import as_float_array, as_fraction
 from .tolerances import RANK_RTOL
 from .transmission import sweep_cti, sweep_lti
 from .twists import has_mimic, joint_lines, joint_twists, sweep_pass
@@ -210,7 +210,9 @@ def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
 
     Module-level so that process-based executors can pickle it."""
     kernel = mech.kernel
-    layout = layout_of(mech, rtol, reference)
+    layout = mech.sweep_layout  # cached: the default tolerance and reference
+    if rtol != layout.rtol or not np.array_equal(reference, layout.reference):
+        layout = layout_of(mech, rtol, reference)
     if kernel is None:
         return _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts, transmission)
     return _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
@@ -283,9 +285,10 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
     # 2., 3. by blocks of poses (their arrays stay in the processor's caches): the
     #    Pinocchio pass (closure check and joint twists), then the analysis engine
     own_lines = transmission and has_mimic(mech)  # the owners' own lines (one more pass)
+    J_block = np.empty((min(N, BLOCK), sum(leg.nv for leg in legs), 6))  # reused per block
     for start in range(0, N, BLOCK):
         idx = start + np.flatnonzero(ok[start:start + BLOCK])
-        Js, idx = _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures)
+        Js, idx = _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures, J_block)
         if not len(idx):
             continue
         lines = None
@@ -307,12 +310,13 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
 BLOCK = 256
 
 
-def _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures):
-    """The Pinocchio pass at the poses ``idx`` (:func:`pkm_pin.twists.sweep_pass`); a
+def _verified(mech, Qs, Ts, poses, idx, restarts, ok, failures, out=None):
+    """The Pinocchio pass at the poses ``idx`` (:func:`pkm_pin.twists.sweep_pass`, joint
+    twists written in ``out`` when given); a
     closure Pinocchio does not confirm is assembled again by :meth:`Mechanism.assemble`
     (:func:`_assemble_again`), then checked again, or recorded in ``failures`` (``ok``
     cleared). Returns the joint twists and the poses that passed."""
-    Js, bad = sweep_pass(mech, Qs, Ts, idx, SWEEP_TOL)
+    Js, bad = sweep_pass(mech, Qs, Ts, idx, SWEEP_TOL, out)
     if bad.any():  # a closure Pinocchio does not confirm: Leg.solve from there
         for i in idx[bad]:
             _assemble_again(mech, poses[i], [Q[i] for Q in Qs], restarts, Qs, i, ok,
@@ -442,8 +446,7 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
     rtol = RANK_RTOL if rtol is None else as_fraction(rtol, "rtol")
     singular_tol = as_fraction(singular_tol, "singular_tol")
     order = visiting_order(X, mech.characteristic_length)
-    home = mech.home_analysis
-    reference = homogenise(home._about_centre(home.platform_twists), mech.characteristic_length)
+    reference = mech.sweep_layout.reference  # the home platform basis (carried determinant)
     chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
     bar = _progress_bar(len(X)) if progress else None
     if executor is None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import io
 import threading
+from contextlib import contextmanager
 from typing import NamedTuple
 
 import numpy as np
@@ -27,6 +28,35 @@ from . import screws
 from .compiling import SameTypes, prefer_compiled
 from .kernels import _compose, pose_error
 from .screws import world_twist_rows
+
+#: The calling thread's scratch buffer of :func:`_scratch`.
+_SCRATCH = threading.local()
+
+
+@contextmanager
+def _scratch(size: int):
+    """A byte buffer of at least ``size`` bytes, at position 0, that the calling thread
+    reuses from one sweep block to the next, for Pinocchio's arrays as they come.
+
+    A fresh buffer per block (0.7 MB for 256 poses of a 6-UPS) may be new memory from
+    the system each time, depending on the allocator's history in the process: ~700
+    page faults per 1000-pose sweep, 0.5–1 µs a pose (measured). Arrays read from the
+    buffer must be dropped inside the ``with`` block; a buffer still exported then (an
+    exception) is not reused."""
+    buf = getattr(_SCRATCH, "buf", None)
+    if buf is None or _SCRATCH.size < size:
+        buf, _SCRATCH.size = io.BytesIO(bytes(size)), size
+    _SCRATCH.buf = None  # taken (a nested use makes its own)
+    buf.seek(0)
+    try:
+        yield buf
+    finally:
+        try:
+            buf.write(b"")  # raises while an array still reads the buffer
+        except BufferError:
+            pass
+        else:
+            _SCRATCH.buf = buf
 
 
 class LegFrames(NamedTuple):
@@ -253,12 +283,13 @@ class TreePass:
         worst = _tree_outputs(self.probes, Jt, f.anchors, f.lengths, pose, J, errors)
         return J, errors, worst
 
-    def many(self, Qs, targets: np.ndarray, idx: np.ndarray, tol: float
+    def many(self, Qs, targets: np.ndarray, idx: np.ndarray, tol: float, out=None
              ) -> tuple[np.ndarray, np.ndarray]:
         """:func:`sweep_pass`: one call per pose.
 
-        Pinocchio returns a new array per call; each is copied at once into one byte
-        buffer and freed, so the allocator recycles its memory (as :func:`_leg_pass`)."""
+        Pinocchio returns a new array per call; each is copied at once into the
+        thread's scratch buffer (:func:`_scratch`) and freed, so the allocator recycles
+        its memory (as :func:`_leg_pass`)."""
         M = len(idx)
         rows = np.empty((M, self.tree.nq))
         c = 0
@@ -267,20 +298,23 @@ class TreePass:
             c += Q.shape[1]
         rows[:, c:] = self.rest_q
         data, tree, jacobians = self._data(), self.tree, pin.computeJointJacobians
-        buf = io.BytesIO(bytes(8 * M * 6 * self.shape[1]))  # written over: no regrowth
-        write = buf.write
-        for k, q in enumerate(rows):
-            Jt = jacobians(tree, data, q)
-            if not k:
-                self._check(Jt)
-            write(Jt)
-        if buf.tell() != 8 * M * 6 * self.shape[1]:
-            raise RuntimeError("Pinocchio's Jacobians do not add up to the poses'")
-        Jt = np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(M, 6, self.shape[1])
-        J = np.empty((M, self.nv, 6))
+        J = np.empty((M, self.nv, 6)) if out is None else out[:M]
         bad = np.zeros(M, bool)
-        tree_outputs_many(self.probes, Jt, targets, np.asarray(idx, dtype=np.int64),
-                          self.frames.lengths, float(tol), J, bad)
+        size = 8 * M * 6 * self.shape[1]
+        with _scratch(size) as buf:
+            write = buf.write
+            for k, q in enumerate(rows):
+                Jt = jacobians(tree, data, q)
+                if not k:
+                    self._check(Jt)
+                write(Jt)
+            if buf.tell() != size:
+                raise RuntimeError("Pinocchio's Jacobians do not add up to the poses'")
+            Jt = np.frombuffer(buf.getbuffer(), dtype=np.float64, count=size // 8)
+            tree_outputs_many(self.probes, Jt.reshape(M, 6, self.shape[1]), targets,
+                              np.asarray(idx, dtype=np.int64), self.frames.lengths,
+                              float(tol), J, bad)
+            del Jt  # the buffer is read: free for the next block
         return J, bad
 
 
@@ -346,7 +380,7 @@ def tree_outputs_many(probes, Jt, targets, idx, lengths, tol, J_out, bad):
 _tree_outputs = SameTypes(tree_outputs, key=0, plain=True)
 
 
-def sweep_pass(mechanism, Qs, targets, idx, tol: float):
+def sweep_pass(mechanism, Qs, targets, idx, tol: float, out=None):
     """Pinocchio's pass at the poses ``idx`` (increasing) of a sweep: one call per pose
     on the legs' tree (:meth:`TreePass.many`) when no leg has mimic joints, else one
     pass per leg and pose.
@@ -356,6 +390,8 @@ def sweep_pass(mechanism, Qs, targets, idx, tol: float):
         targets: (legs, N, 4, 4) world placements each leg's tip must reach.
         idx: Indices of the poses to evaluate.
         tol: Closure tolerance (as :func:`pkm_pin.leg.pose_error`).
+        out: An (at least M, nv, 6) array to write the joint twists in (its first M
+            rows, returned), so that a sweep's blocks reuse one array; default: a new one.
 
     Returns:
         ``(J, bad)``: the (M, nv, 6) joint twists of the legs one after the other, and
@@ -363,32 +399,34 @@ def sweep_pass(mechanism, Qs, targets, idx, tol: float):
         ``tol``.
     """
     if mechanism.tree_pass is not None:
-        return mechanism.tree_pass.many(Qs, targets, idx, tol)
+        return mechanism.tree_pass.many(Qs, targets, idx, tol, out)
     M = len(idx)
     nv = sum(leg.nv for leg in mechanism.legs)
-    J = np.empty((M, nv, 6))
+    J = np.empty((M, nv, 6)) if out is None else out[:M]
     bad = np.zeros(M, bool)
     row = 0
     for k, (leg, Q) in enumerate(zip(mechanism.legs, Qs)):
-        Jp, H = _leg_pass(leg, list(np.ascontiguousarray(Q[idx], dtype=float)))
-        leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx, float(leg.characteristic_length),
-                    tol, J, row, bad)
+        with _scratch(8 * M * (6 * leg.nv + 16)) as buf:
+            Jp, H = _leg_pass(leg, list(np.ascontiguousarray(Q[idx], dtype=float)), buf)
+            leg_outputs(H, Jp, leg.base.homogeneous, targets[k], idx,
+                        float(leg.characteristic_length), tol, J, row, bad)
+            del Jp, H  # the buffer is read: free for the next leg
         row += leg.nv
     return J, bad
 
 
-def _leg_pass(leg, rows: list) -> tuple[np.ndarray, np.ndarray]:
+def _leg_pass(leg, rows: list, buf: io.BytesIO) -> tuple[np.ndarray, np.ndarray]:
     """Pinocchio's WORLD Jacobians (M, 6, nv) and tip placements (M, 4, 4) of one leg at
-    the configurations ``rows``.
+    the configurations ``rows``: views of ``buf`` (:func:`_scratch`, from its position
+    0).
 
-    Pinocchio returns a new array per call; each is copied at once into one byte buffer
-    of the final size and freed, so the allocator recycles its memory: 2–3 µs per
-    6-UPS pose cheaper than assigning into numpy rows or stacking a list (measured).
-    Pinocchio's arrays must be C-ordered float64 of the expected shapes: checked on the
-    first pose, and the number of bytes at the end."""
+    Pinocchio returns a new array per call; each is copied at once into the byte buffer
+    and freed, so the allocator recycles its memory: 2–3 µs per 6-UPS pose cheaper than
+    assigning into numpy rows or stacking a list (measured). Pinocchio's arrays must be
+    C-ordered float64 of the expected shapes: checked on the first pose, and the number
+    of bytes at the end."""
     model, data, tip = leg.model, leg.data, leg.tip_id
     M, nj = len(rows), 6 * leg.nv
-    buf = io.BytesIO(bytes(8 * M * (nj + 16)))
     if M:
         first = (leg_jacobian(leg, rows[0]), pin.updateFramePlacement(model, data, tip).homogeneous)
         for a, shape in zip(first, ((6, leg.nv), (4, 4))):
@@ -411,7 +449,8 @@ def _leg_pass(leg, rows: list) -> tuple[np.ndarray, np.ndarray]:
     if buf.tell() != 8 * M * (nj + 16):
         raise RuntimeError(f"leg {leg.name!r}: Pinocchio's arrays do not add up to "
                            f"{M} Jacobians and placements")
-    B = np.frombuffer(buf.getbuffer(), dtype=np.float64).reshape(M, nj + 16)
+    B = np.frombuffer(buf.getbuffer(), dtype=np.float64, count=M * (nj + 16))
+    B = B.reshape(M, nj + 16)
     return B[:, :nj].reshape(M, 6, leg.nv), B[:, nj:].reshape(M, 4, 4)
 
 

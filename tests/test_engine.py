@@ -20,9 +20,9 @@ from pkm_pin.builders.spatial import upu3_constraint_singular_pose
 from pkm_pin.engine.linalg import (
     certainly_invertible,
     descending,
-    determinant,
-    inverse,
     jacobi,
+    lu,
+    lu_column,
 )
 from pkm_pin.engine.stages import (
     SQUARE,
@@ -237,7 +237,9 @@ def test_closures_pinocchio_does_not_confirm_are_solved_again(monkeypatch):
 def test_pinocchio_pass_gives_the_legs_twists_and_closure(name):
     """The sweep's Pinocchio pass returns each leg's axis-first world Jacobian (the
     twists ``Leg.jacobian`` gives, base placement included) as rows, and closure errors
-    at round-off; a leg configuration moved off its solution is reported."""
+    at round-off; a leg configuration moved off its solution is reported. Written into
+    a caller's array (a sweep's blocks reuse one), the rows are the same, in its first
+    rows."""
     from pkm_pin.sweep import pose_matrices
 
     mech = mechanism(name)
@@ -260,6 +262,48 @@ def test_pinocchio_pass_gives_the_legs_twists_and_closure(name):
     Js, bads = sweep_pass(mech, Qs, targets, some, 1e-12)
     np.testing.assert_array_equal(Js, J[some])
     np.testing.assert_array_equal(bads, bad[some])
+    out = np.full((len(X) + 2, *J.shape[1:]), np.nan)
+    Jo, bado = sweep_pass(mech, Qs, targets, some, 1e-12, out)
+    assert np.shares_memory(Jo, out) and len(Jo) == len(some)
+    np.testing.assert_array_equal(out[:len(some)], J[some])
+    np.testing.assert_array_equal(bado, bad[some])
+    assert np.isnan(out[len(some):]).all()
+
+
+def test_scratch_buffer_is_reused_unless_still_read(monkeypatch):
+    """The sweep's Pinocchio pass copies its arrays into a per-thread scratch buffer
+    that the next block reuses (a fresh one per block could be new pages from the
+    system each time); it grows for a larger block, and one still read when its block
+    ends (an exception) is not reused; another thread has its own."""
+    import threading
+
+    from pkm_pin import twists
+    from pkm_pin.twists import _scratch
+
+    monkeypatch.setattr(twists, "_SCRATCH", threading.local())  # no buffer yet
+    with _scratch(64) as a:
+        a.write(b"x" * 64)
+    with _scratch(32) as b:
+        assert b is a and b.tell() == 0
+    with _scratch(128) as c:
+        assert c is not a
+    try:
+        with _scratch(16) as d:
+            view = np.frombuffer(d.getbuffer(), dtype=np.uint8)
+            raise KeyError("a failure while the buffer is read")
+    except KeyError:
+        pass
+    assert d is c and view.size >= 128
+    with _scratch(16) as e:
+        assert e is not d
+        e.write(b"y" * 16)  # usable
+    del view
+    other = []
+    thread = threading.Thread(target=lambda: other.append(_scratch(16).__enter__()))
+    thread.start()
+    thread.join()
+    with _scratch(16) as f:
+        assert f is e and other[0] is not f
 
 
 # ------------------------------------------------------------------------- stages
@@ -272,16 +316,20 @@ def _random_twists(rng, k, rank, L=1.0):
 def test_leg_stage_gives_the_reciprocal_system_and_its_rank():
     """leg_constraints: rank of the twists and an orthonormal basis of their reciprocal
     (every constraint row c has T Δ c = 0), for 1 to 7 twists of every rank; a leg of
-    six independent twists is certified without SVD and gives X⁻¹."""
+    six independent twists is certified without SVD and gives the LU factors of
+    X = T Δ."""
     rng = np.random.default_rng(0)
     for k in range(1, 8):
         for rank in range(1, min(k, 6) + 1):
             T = _random_twists(rng, k, rank)
             X, W, V, sv = np.empty((8, 6)), np.empty((48, 6)), np.eye(6), np.empty(6)
-            C, Xi, work = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
-            r, m, mode = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, Xi, work)
+            C, LU, perm = np.empty((6, 6)), np.empty((6, 6)), np.empty(6, np.int64)
+            r, m, mode = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, LU, perm)
             assert r == rank and m == 6 - rank
             assert (mode == SQUARE) == (k == 6 and rank == 6)
+            if mode == SQUARE:
+                L, U = np.tril(LU, -1) + np.eye(6), np.triu(LU)
+                np.testing.assert_allclose(L @ U, (T @ screws.DELTA)[perm], atol=1e-14)
             np.testing.assert_allclose(T @ screws.DELTA @ C[:m].T, 0.0, atol=1e-12)
             np.testing.assert_allclose(C[:m] @ C[:m].T, np.eye(m), atol=1e-12)
 
@@ -303,10 +351,10 @@ def test_actuation_stage_is_reciprocal_to_the_other_joints_and_does_work():
         T = T / np.linalg.norm(T, axis=1, keepdims=True)
         ka = k - 1
         X, W, V, sv = np.empty((8, 6)), np.empty((48, 6)), np.eye(6), np.empty(6)
-        C, Xi, work = np.empty((6, 6)), np.empty((6, 6)), np.empty((6, 6))
-        r, m, mode = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, Xi, work)
+        C, LU, perm = np.empty((6, 6)), np.empty((6, 6)), np.empty(6, np.int64)
+        r, m, mode = leg_constraints(T, 0, k, RTOL, X, W, V, sv, C, 0, LU, perm)
         w = np.empty(6)
-        ok = actuation_wrench(T, 0, k, ka, r, mode, Xi, RTOL, X, W, V, sv, C, 0, m,
+        ok = actuation_wrench(T, 0, k, ka, r, mode, LU, perm, RTOL, X, W, V, sv, C, 0, m,
                               np.empty((8, 6)), np.eye(6), np.empty(6), w)
         assert ok == independent
         products = T @ screws.DELTA @ w
@@ -389,30 +437,34 @@ def test_jacobi_singular_values_and_right_basis():
     np.testing.assert_allclose(np.sort(sv)[::-1], np.sort(chosen)[::-1], rtol=0, atol=1e-14)
 
 
-def test_inverse_certificate_and_determinant():
-    """Gauss–Jordan inverse and elimination determinant against numpy; a 6×6 is
-    certified of full rank at σ_min/σ_max = 1e-3 and left to the SVD at 1e-8 and 1e-12
-    (within the factor-6 slack of the Frobenius bound times the margin)."""
+def test_lu_certificate_and_determinant():
+    """LU factors, determinant and columns of the inverse against numpy; a singular
+    matrix has determinant 0 and no certificate; a 6×6 is certified of full rank at
+    σ_min/σ_max = 1e-3 and left to the SVD at 1e-8 and 1e-12 (the bound |det| / ‖X‖_F⁶
+    times the margin)."""
     rng = np.random.default_rng(3)
-    Xi, W = np.empty((6, 6)), np.empty((6, 6))
+    LU, perm, x = np.empty((6, 6)), np.empty(6, np.int64), np.empty(6)
     for n in (1, 3, 6):
         X = rng.normal(size=(6, 6))
-        assert inverse(X, n, Xi, W)
-        np.testing.assert_allclose(Xi[:n, :n], np.linalg.inv(X[:n, :n]), rtol=1e-12,
-                                   atol=1e-12)
-        assert determinant(X, n, W) == pytest.approx(np.linalg.det(X[:n, :n]), rel=1e-12)
+        assert lu(X, n, LU, perm) == pytest.approx(np.linalg.det(X[:n, :n]), rel=1e-12)
+        inv = np.linalg.inv(X[:n, :n])
+        for col in range(n):
+            lu_column(LU, perm, n, col, x)
+            np.testing.assert_allclose(x[:n], inv[:, col], rtol=1e-12, atol=1e-12)
     S = rng.normal(size=(6, 6))
     S[4] = 0.0
-    assert not inverse(S, 6, Xi, W)
-    assert not certainly_invertible(S, 6, Xi, W, RTOL)
-    assert determinant(np.zeros((3, 3)), 3, W) == 0.0
+    assert lu(S, 6, LU, perm) == 0.0
+    assert not certainly_invertible(S, 6, LU, perm, RTOL)
+    assert lu(np.zeros((3, 3)), 3, LU, perm) == 0.0
     U, _ = np.linalg.qr(rng.normal(size=(6, 6)))
     V, _ = np.linalg.qr(rng.normal(size=(6, 6)))
     for small, certified in ((1e-3, True), (1e-8, False), (1e-12, False)):
         X = U @ np.diag([1.0, 0.9, 0.8, 0.5, 0.3, small]) @ V.T
-        assert bool(certainly_invertible(X, 6, Xi, W, RTOL)) is certified
+        assert bool(certainly_invertible(X, 6, LU, perm, RTOL)) is certified
         if certified:
-            np.testing.assert_allclose(Xi @ X, np.eye(6), atol=1e-10)
+            for col in range(6):
+                lu_column(LU, perm, 6, col, x)
+                np.testing.assert_allclose(X @ x, np.eye(6)[col], atol=1e-10)
 
 
 # ------------------------------------------------------------- compiled or not

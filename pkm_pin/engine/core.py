@@ -21,7 +21,7 @@ from numba import njit
 from numba.extending import register_jitable
 
 from ..compiling import SameTypes
-from .linalg import reset
+from .linalg import lu_column, reset
 from .stages import (
     SQUARE,
     actuation_wrench,
@@ -214,7 +214,8 @@ class Workspace(NamedTuple):
     sv: np.ndarray
     sv2: np.ndarray
     order: np.ndarray
-    Xi: np.ndarray
+    LU: np.ndarray
+    perm: np.ndarray
     work6: np.ndarray
     C: np.ndarray
     V_legs: np.ndarray
@@ -252,7 +253,7 @@ def workspace(nv, legs, n, n_ref):
     return Workspace(
         np.empty((nv, 6)), np.empty((max(nv, 6), 6)), np.empty((max(6 * legs, nv, nn, 6), 6)),
         np.empty((max(nv, 6), 6)), np.empty((6, 6)), np.empty(6), np.empty(6),
-        np.empty(6, np.int64), np.empty((6, 6)), np.empty((6, 6)),
+        np.empty(6, np.int64), np.empty((6, 6)), np.empty(6, np.int64), np.empty((6, 6)),
         np.empty((max(6 * legs, 1), 6)), V_legs, np.eye(6), np.eye(6), np.empty((6, 3)),
         np.eye(3), np.empty(3), np.empty((3, 3)), np.empty(3), np.empty(3),
         np.empty((nn, 6)), np.empty(nn, np.bool_), np.empty((nn, 6)), np.empty(6),
@@ -266,7 +267,7 @@ def analyse_into(J, centres, layout, out, full):
     coords, act_col, act_leg = layout.coords, layout.act_col, layout.act_leg
     L, rtol = layout.length, layout.rtol
     n = act_col.shape[0]
-    (T, X, W, W2, V2, sv, sv2, order, Xi, work6, C, V_legs, V_union, V_M, W3, V3, sv3, G, gb,
+    (T, X, W, W2, V2, sv, sv2, order, LU, perm, work6, C, V_legs, V_union, V_M, W3, V3, sv3, G, gb,
      centre, wh, ok, Ah, A, t_h, B, cons, P, Pw, M, P_loc, work) = workspace(
         J.shape[1], coords.shape[0] - 1, n, layout.reference.shape[0])
     d_prev = -1
@@ -279,7 +280,7 @@ def analyse_into(J, centres, layout, out, full):
         for l in range(coords.shape[0] - 1):
             c0, k, first = coords[l], coords[l + 1] - coords[l], m_c
             r, m_c, mode = leg_constraints(T, c0, k, rtol, X, W, V_legs[l], sv, C,
-                                           m_c, Xi, work6)
+                                           m_c, LU, perm)
             if full:
                 out.leg_dims[i, l] = m_c - first
                 out.leg_constraints[i, l, :m_c - first] = C[first:m_c]
@@ -287,12 +288,11 @@ def analyse_into(J, centres, layout, out, full):
                 if act_leg[a_i] != l:
                     continue
                 if mode == SQUARE:  # a six-twist leg's wrench: a column of X⁻¹ (stage 3)
-                    for a in range(6):
-                        wh[a_i, a] = Xi[a, act_col[a_i] - c0]
+                    lu_column(LU, perm, 6, act_col[a_i] - c0, wh[a_i])
                     ok[a_i] = True
                 else:
                     ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, mode,
-                                                  Xi, rtol, X, W, V_legs[l], sv, C,
+                                                  LU, perm, rtol, X, W, V_legs[l], sv, C,
                                                   first, m_c, W2, V2, sv2, wh[a_i])
         # stage 4: the platform twist system
         rank_c, rotations = platform_system(C, m_c, rtol, layout.rot_tol, W, V_union, sv,
@@ -320,9 +320,9 @@ def analyse_into(J, centres, layout, out, full):
             Ah, n, P, d, M, W, V_M, sv, order)
         if not ok[:n].all():  # an actuation wrench is not defined: the locked motions
             out.scalars[i, TYPE_II] = locked_motion_index(T, coords, act_col, rtol, P, d, X,
-                                                          W, V2, sv2, C, Xi, work6, order)
+                                                          W, V2, sv2, C, LU, work6, order)
         out.scalars[i, DET] = carried_determinant(Ah, n, P, d, layout.reference, M, P_loc,
-                                                  work)
+                                                  work, perm)
         if full:
             out.constraints[i] = 0.0
             out.constraints[i, :rank_c] = cons[:rank_c]

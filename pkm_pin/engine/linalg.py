@@ -12,7 +12,10 @@ engine factorises its screw systems here, one pose at a time:
   ``numpy.linalg.svd``. ``V`` is updated in place: the previous pose's basis is a warm
   start that leaves few rotations along a path of poses.
 * :func:`descending` — the order of the singular values.
-* :func:`determinant` — Gaussian elimination with partial pivoting.
+* :func:`lu`, :func:`lu_column` — the LU factors of a square matrix (partial
+  pivoting), its determinant and a column of its inverse;
+  :func:`certainly_invertible` certifies from them that the matrix has full rank
+  without an SVD.
 """
 
 from __future__ import annotations
@@ -127,84 +130,74 @@ def reset(V, n):
             V[a, b] = 1.0 if a == b else 0.0
 
 
-@register_jitable(inline="always")
-def pivot_row(A, j, n):
-    """Partial pivoting: the row ``r ≥ j`` (among the first n) of the largest
-    ``|A[r, j]|``."""
-    p = j
-    for r in range(j + 1, n):
-        if abs(A[r, j]) > abs(A[p, j]):
-            p = r
-    return p
-
-
 @register_jitable
-def inverse(X, n, Xi, work):
-    """``Xi = X⁻¹`` for the leading ``n × n`` block (Gauss–Jordan, partial pivoting;
-    ``work``: at least ``n × n``). Returns False when a pivot is zero."""
+def lu(X, n, LU, perm):
+    """LU factors of the leading ``n × n`` block of ``X`` with partial pivoting, in
+    ``LU`` (the unit lower factor below the diagonal, the upper factor on and above it):
+    row ``perm[i]`` of ``X`` is row ``i`` of ``L U``. Returns the determinant of ``X``
+    (0 when a pivot is zero, and the factors are then incomplete)."""
     for r in range(n):
+        perm[r] = r
         for c in range(n):
-            work[r, c] = X[r, c]
-            Xi[r, c] = 1.0 if r == c else 0.0
-    for j in range(n):
-        p = pivot_row(work, j, n)
-        if work[p, j] == 0.0:
-            return False
-        if p != j:
-            for c in range(n):
-                work[j, c], work[p, c] = work[p, c], work[j, c]
-                Xi[j, c], Xi[p, c] = Xi[p, c], Xi[j, c]
-        f = 1.0 / work[j, j]
-        for c in range(n):
-            work[j, c] *= f
-            Xi[j, c] *= f
-        for r in range(n):
-            if r != j:
-                g = work[r, j]
-                if g != 0.0:
-                    for c in range(n):
-                        work[r, c] -= g * work[j, c]
-                        Xi[r, c] -= g * Xi[j, c]
-    return True
-
-
-@register_jitable
-def certainly_invertible(X, n, Xi, work, rtol):
-    """``Xi = X⁻¹`` and whether ``σ_min / σ_max > rtol`` is certain without an SVD:
-    ``σ_min / σ_max ≥ 1 / (‖X‖_F ‖X⁻¹‖_F)``, asked to exceed ``rtol`` by a factor
-    :data:`CERTIFY_MARGIN` (which covers the round-off of the computed inverse). The
-    bound is within a factor n of the ratio, so only matrices near the threshold are
-    left to :func:`jacobi`; a certified rank is the one the SVD would give."""
-    if not inverse(X, n, Xi, work):
-        return False
-    a = 0.0
-    b = 0.0
-    for r in range(n):
-        for c in range(n):
-            a += X[r, c] * X[r, c]
-            b += Xi[r, c] * Xi[r, c]
-    return a * b * (rtol * CERTIFY_MARGIN) ** 2 <= 1.0
-
-
-@register_jitable
-def determinant(M, n, work):
-    """Determinant of the leading ``n × n`` block of ``M`` (partial pivoting; ``work``:
-    at least ``n × n``)."""
-    for r in range(n):
-        for c in range(n):
-            work[r, c] = M[r, c]
+            LU[r, c] = X[r, c]
     d = 1.0
     for j in range(n):
-        p = pivot_row(work, j, n)
-        if work[p, j] == 0.0:
+        p = j  # partial pivoting: the largest |LU[r, j]|, r ≥ j
+        big = abs(LU[j, j])
+        for r in range(j + 1, n):
+            if abs(LU[r, j]) > big:
+                p = r
+                big = abs(LU[r, j])
+        if big == 0.0:
             return 0.0
         if p != j:
             for c in range(n):
-                work[j, c], work[p, c] = work[p, c], work[j, c]
+                LU[j, c], LU[p, c] = LU[p, c], LU[j, c]
+            perm[j], perm[p] = perm[p], perm[j]
             d = -d
-        d *= work[j, j]
+        d *= LU[j, j]
+        f = 1.0 / LU[j, j]
         for r in range(j + 1, n):
-            f = work[r, j] / work[j, j]
-            for c in range(j, n):
-                work[r, c] -= f * work[j, c]
+            g = LU[r, j] * f
+            LU[r, j] = g
+            for c in range(j + 1, n):
+                LU[r, c] -= g * LU[j, c]
     return d
+
+
+@register_jitable
+def lu_column(LU, perm, n, col, x):
+    """``x``: column ``col`` of ``X⁻¹`` from the factors of :func:`lu` (the solution of
+    ``X x = e_col``)."""
+    for i in range(n):  # L y = P e_col
+        s = 1.0 if perm[i] == col else 0.0
+        for k in range(i):
+            s -= LU[i, k] * x[k]
+        x[i] = s
+    for i in range(n - 1, -1, -1):  # U x = y
+        s = x[i]
+        for k in range(i + 1, n):
+            s -= LU[i, k] * x[k]
+        x[i] = s / LU[i, i]
+
+
+@register_jitable
+def certainly_invertible(X, n, LU, perm, rtol):
+    """The factors of :func:`lu` of ``X`` in ``LU`` and ``perm``, and whether ``σ_min /
+    σ_max > rtol`` is certain without an SVD. With ``σ_i ≤ σ_max ≤ ‖X‖_F`` and ``Π σ_i
+    = |det X|``, ``σ_min / σ_max ≥ |det X| / σ_max^n ≥ |det X| / ‖X‖_F^n``, asked to
+    exceed ``rtol`` by a factor :data:`CERTIFY_MARGIN` (which covers the round-off of the
+    determinant). A matrix the bound does not certify is left to :func:`jacobi`; a
+    certified rank is the one the SVD would give."""
+    d = lu(X, n, LU, perm)
+    if d == 0.0:
+        return False
+    f = 0.0
+    for r in range(n):
+        for c in range(n):
+            f += X[r, c] * X[r, c]
+    bound = rtol * CERTIFY_MARGIN
+    bound *= bound
+    for _ in range(n):
+        bound *= f
+    return d * d >= bound

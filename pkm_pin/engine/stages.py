@@ -37,7 +37,7 @@ import math
 
 from numba.extending import register_jitable
 
-from .linalg import certainly_invertible, descending, determinant, jacobi, largest, reset
+from .linalg import certainly_invertible, descending, jacobi, largest, lu, lu_column, reset
 
 
 @register_jitable
@@ -151,18 +151,19 @@ def motion_twists(J, groups, L, p, T, G, b, centre):
 
 
 #: How :func:`leg_constraints` factorised a leg (read by :func:`actuation_wrench`): the
-#: Jacobi SVD of ``X``, or the inverse of a square ``X``.
+#: Jacobi SVD of ``X``, or the LU factors of a square ``X``.
 WIDE, SQUARE = 0, 1
 
 
 @register_jitable(inline="always")
-def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, Xi, work):
+def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, LU, perm):
     """Stage 2. One leg, twists ``T[c0:c0+k]``: the rank of ``X = T_h Δ`` (its rows are
     the reciprocal products with a wrench) and an orthonormal basis of the wrenches
     reciprocal to every joint twist (its null space), written as rows ``C[m_c:]``.
 
     * ``k == 6`` and a full rank :func:`~.linalg.certainly_invertible` certifies: no
-      constraint, ``Xi = X⁻¹`` (the decision the SVD would take) — ``SQUARE``;
+      constraint, the LU factors of ``X`` in ``LU`` and ``perm`` (the decision the SVD
+      would take) — ``SQUARE``;
     * otherwise the Jacobi SVD of ``X`` (``W = X V``, k × 6): the constraints are the
       right singular vectors of the singular values ``≤ rtol · σ_max`` — ``WIDE``.
 
@@ -173,7 +174,7 @@ def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, Xi, work):
         for a in range(3):
             X[c, a] = T[c0 + c, 3 + a]
             X[c, 3 + a] = T[c0 + c, a]
-    if k == 6 and certainly_invertible(X, 6, Xi, work, rtol):
+    if k == 6 and certainly_invertible(X, 6, LU, perm, rtol):
         return 6, m_c, SQUARE
     jacobi(X, k, 6, W, V, sv)
     threshold = rtol * largest(sv, 6)
@@ -189,8 +190,8 @@ def leg_constraints(T, c0, k, rtol, X, W, V, sv, C, m_c, Xi, work):
 
 
 @register_jitable
-def actuation_wrench(T, c0, k, ka, r, mode, Xi, rtol, X, W, V, sv, C, c_first, c_last, W2, V2,
-                     sv2, w):
+def actuation_wrench(T, c0, k, ka, r, mode, LU, perm, rtol, X, W, V, sv, C, c_first, c_last,
+                     W2, V2, sv2, w):
     """Stage 3. The actuation wrench ``w`` (homogenised, in/out of unit scale) of joint
     ``ka`` (0-based in its leg), defined as the wrench reciprocal to every other joint
     twist of the leg and orthogonal to the leg's constraint wrenches (rows
@@ -199,8 +200,8 @@ def actuation_wrench(T, c0, k, ka, r, mode, Xi, rtol, X, W, V, sv, C, c_first, c
 
     When the leg's twists are independent (``r == k``) it is the minimum-norm solution
     of ``(T_h Δ) w = e_ka``, read from the factorisation of :func:`leg_constraints`
-    (``mode``): column ``ka`` of ``Xi = X⁻¹`` (``SQUARE``), or ``w = Σ_j V_j W[ka, j] /
-    σ_j²`` from ``X = W Vᵀ`` (``WIDE``). Otherwise the reciprocal
+    (``mode``): column ``ka`` of ``X⁻¹`` from its LU factors (``SQUARE``), or ``w = Σ_j
+    V_j W[ka, j] / σ_j²`` from ``X = W Vᵀ`` (``WIDE``). Otherwise the reciprocal
     of the other joint twists is computed by a second SVD and its component orthogonal
     to the constraints taken; when the joint's twist depends on the others there is none
     (a type I singularity of the leg) and ``w`` is the first constraint wrench of the
@@ -208,8 +209,7 @@ def actuation_wrench(T, c0, k, ka, r, mode, Xi, rtol, X, W, V, sv, C, c_first, c
 
     Returns whether the joint's twist is independent of the others."""
     if mode == SQUARE:
-        for a in range(6):
-            w[a] = Xi[a, ka]
+        lu_column(LU, perm, 6, ka, w)
         return True
     if r == k:
         for a in range(6):
@@ -409,7 +409,7 @@ def locked_motion_index(T, coords, act_col, rtol, P, d, X, W, V, sv, S, R, M, or
 
 
 @register_jitable(inline="always")
-def carried_determinant(Ah, n, P, d, reference, M, P_loc, work):
+def carried_determinant(Ah, n, P, d, reference, M, P_loc, work, perm):
     """``det(A_h Δ P_locᵀ)`` with ``P_loc`` the reference (home) platform basis
     projected on this pose's platform twists: a signed index whose sign change along a
     path marks a crossed type II singularity. nan when the actuators and the reference
@@ -427,4 +427,4 @@ def carried_determinant(Ah, n, P, d, reference, M, P_loc, work):
             for a in range(6):
                 P_loc[j, a] += proj * P[jj, a]
     reciprocal_products(Ah, n, P_loc, n_ref, M)
-    return determinant(M, n, work)
+    return lu(M, n, work, perm)
