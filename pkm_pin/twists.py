@@ -17,6 +17,7 @@ from __future__ import annotations
 import io
 import threading
 from contextlib import contextmanager
+from itertools import repeat
 from typing import NamedTuple
 
 import numpy as np
@@ -302,12 +303,11 @@ class TreePass:
         bad = np.zeros(M, bool)
         size = 8 * M * 6 * self.shape[1]
         with _scratch(size) as buf:
-            write = buf.write
-            for k, q in enumerate(rows):
-                Jt = jacobians(tree, data, q)
-                if not k:
-                    self._check(Jt)
-                write(Jt)
+            if M:
+                Jt = jacobians(tree, data, rows[0])
+                self._check(Jt)
+                buf.write(Jt)
+                buf.writelines(map(jacobians, repeat(tree), repeat(data), rows[1:]))
             if buf.tell() != size:
                 raise RuntimeError("Pinocchio's Jacobians do not add up to the poses'")
             Jt = np.frombuffer(buf.getbuffer(), dtype=np.float64, count=size // 8)

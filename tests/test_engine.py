@@ -328,7 +328,7 @@ def test_leg_stage_gives_the_reciprocal_system_and_its_rank():
             assert r == rank and m == 6 - rank
             assert (mode == SQUARE) == (k == 6 and rank == 6)
             if mode == SQUARE:
-                L, U = np.tril(LU, -1) + np.eye(6), np.triu(LU)
+                L, U = np.tril(LU, -1) + np.eye(6), np.triu(LU, 1) + np.diag(1 / np.diag(LU))
                 np.testing.assert_allclose(L @ U, (T @ screws.DELTA)[perm], atol=1e-14)
             np.testing.assert_allclose(T @ screws.DELTA @ C[:m].T, 0.0, atol=1e-12)
             np.testing.assert_allclose(C[:m] @ C[:m].T, np.eye(m), atol=1e-12)

@@ -42,13 +42,16 @@ JACOBI_SWEEPS = 60
 
 
 @register_jitable
-def jacobi(X, m, n, W, V, sv):
+def jacobi(X, m, n, W, V, sv, skip=JACOBI_SKIP):
     """One-sided Jacobi SVD of the leading ``m × n`` block of ``X``.
 
     Computes ``W = X V`` with orthogonal columns: ``X = W Vᵀ``, ``W_j = σ_j u_j``.
     ``V`` (``n × n``, in/out) must be orthogonal on entry (identity, or the previous
     pose's basis as a warm start). On exit ``sv[j] = |W_j|`` (not sorted: use
-    :func:`descending`). ``W``: at least ``m × n``.
+    :func:`descending`). ``W``: at least ``m × n``. ``skip``: a pair of columns whose
+    cosine is below it is left as it is (:data:`JACOBI_SKIP`: ``V`` orthogonalises
+    to round-off, for bases; :data:`JACOBI_TOL` where only the singular values are read
+    and ``V`` is a warm start, which spares the polishing rotations).
     """
     for a in range(m):
         for b in range(n):
@@ -73,12 +76,16 @@ def jacobi(X, m, n, W, V, sv):
                     b += W[r, q] * W[r, q]
                     c += W[r, p] * W[r, q]
                 cc = c * c
-                if cc <= JACOBI_SKIP * JACOBI_SKIP * a * b or abs(c) <= floor:
+                if cc <= skip * skip * a * b or abs(c) <= floor:
                     continue
                 if cc > JACOBI_TOL * JACOBI_TOL * a * b:
                     rotated = True
-                zeta = (b - a) / (2.0 * c)
-                t = (1.0 if zeta >= 0 else -1.0) / (abs(zeta) + math.sqrt(1.0 + zeta * zeta))
+                # tan θ of the rotation that makes the pair orthogonal, the smaller root
+                # of t² + 2ζt − 1 = 0 (ζ = (b − a) / 2c), written without dividing by c
+                h = b - a
+                t = 2.0 * c / (abs(h) + math.sqrt(h * h + 4.0 * cc))
+                if h < 0.0:
+                    t = -t
                 cs = 1.0 / math.sqrt(1.0 + t * t)
                 sn = cs * t
                 for r in range(m):
@@ -133,9 +140,10 @@ def reset(V, n):
 @register_jitable
 def lu(X, n, LU, perm):
     """LU factors of the leading ``n × n`` block of ``X`` with partial pivoting, in
-    ``LU`` (the unit lower factor below the diagonal, the upper factor on and above it):
-    row ``perm[i]`` of ``X`` is row ``i`` of ``L U``. Returns the determinant of ``X``
-    (0 when a pivot is zero, and the factors are then incomplete)."""
+    ``LU``: the unit lower factor below the diagonal, the upper factor above it and the
+    reciprocals of its diagonal on it (:func:`lu_column` multiplies by them); row
+    ``perm[i]`` of ``X`` is row ``i`` of ``L U``. Returns the determinant of ``X`` (0
+    when a pivot is zero, and the factors are then incomplete)."""
     for r in range(n):
         perm[r] = r
         for c in range(n):
@@ -157,6 +165,7 @@ def lu(X, n, LU, perm):
             d = -d
         d *= LU[j, j]
         f = 1.0 / LU[j, j]
+        LU[j, j] = f
         for r in range(j + 1, n):
             g = LU[r, j] * f
             LU[r, j] = g
@@ -169,16 +178,22 @@ def lu(X, n, LU, perm):
 def lu_column(LU, perm, n, col, x):
     """``x``: column ``col`` of ``X⁻¹`` from the factors of :func:`lu` (the solution of
     ``X x = e_col``)."""
-    for i in range(n):  # L y = P e_col
-        s = 1.0 if perm[i] == col else 0.0
-        for k in range(i):
+    start = 0  # L y = P e_col: y is zero above the row that e_col moved to
+    for i in range(n):
+        x[i] = 0.0
+        if perm[i] == col:
+            start = i
+    x[start] = 1.0
+    for i in range(start + 1, n):
+        s = 0.0
+        for k in range(start, i):
             s -= LU[i, k] * x[k]
         x[i] = s
     for i in range(n - 1, -1, -1):  # U x = y
         s = x[i]
         for k in range(i + 1, n):
             s -= LU[i, k] * x[k]
-        x[i] = s / LU[i, i]
+        x[i] = s * LU[i, i]
 
 
 @register_jitable

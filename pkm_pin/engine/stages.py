@@ -37,7 +37,16 @@ import math
 
 from numba.extending import register_jitable
 
-from .linalg import certainly_invertible, descending, jacobi, largest, lu, lu_column, reset
+from .linalg import (
+    JACOBI_TOL,
+    certainly_invertible,
+    descending,
+    jacobi,
+    largest,
+    lu,
+    lu_column,
+    reset,
+)
 
 
 @register_jitable
@@ -352,7 +361,7 @@ def transmission(Ah, n, P, d, M, W, V, sv, order):
     if n == 0 or d == 0:
         return 0.0, math.inf
     reciprocal_products(Ah, n, P, d, M)
-    jacobi(M, n, d, W, V, sv)
+    jacobi(M, n, d, W, V, sv, JACOBI_TOL)  # the singular values only
     descending(sv, d, order)
     t2 = sv[order[d - 1]] if d <= n else 0.0
     return t2, (sv[order[0]] / t2 if t2 > 0 else math.inf)
@@ -403,7 +412,7 @@ def locked_motion_index(T, coords, act_col, rtol, P, d, X, W, V, sv, S, R, M, or
         return 0.0
     reciprocal_products(R, r, P, d, M)
     reset(V, 6)
-    jacobi(M, r, d, W, V, sv)
+    jacobi(M, r, d, W, V, sv, JACOBI_TOL)  # the singular values only
     descending(sv, d, order)
     return sv[order[d - 1]]
 
