@@ -5,9 +5,10 @@ wrenches ``(f; m_O)`` about the world origin (see :mod:`pkm_pin.screws`, the one
 that converts to and from Pinocchio's linear-first order).
 """
 
-from .compiling import install_notice
+from .compiling import install_notice, install_stamp
 
 install_notice()  # a compilation of pkm_pin's numba code that lasts says so on stderr
+install_stamp()  # its cached machine code is stale once a module compiled into it changes
 
 from . import position, screws  # noqa: E402
 from .analysis import Analysis  # noqa: E402

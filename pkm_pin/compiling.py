@@ -12,19 +12,24 @@ has run in this process, or numba's cache holds it), which lets a caller take a
 plain-Python path for a one-off call rather than compile (see
 :func:`pkm_pin.engine.analyse`).
 
-For developers: numba's cache of a function is invalidated by changes to the file that
-defines it, not by changes to the files of the functions it compiles in. After editing
-``engine/stages.py`` or ``engine/linalg.py`` (compiled into ``engine/core.py``), or the
-``register_jitable`` steps of ``solve.py``'s callers, delete the caches
-(``find pkm_pin -name '*.nb[ic]' -delete``); a fresh installation (CI) has none.
+numba's cache of a function is stamped with the file that defines it only, not with
+the files of the functions it compiles in: an edit of ``engine/linalg.py`` would leave
+``engine/core.py``'s cached machine code running the old algebra. pkm_pin's functions
+are therefore cached by locators of their own (:func:`install_stamp`) whose stamp also
+holds :func:`package_stamp`, a hash of every module of the package that numba compiles
+code from: an edit of any of them recompiles pkm_pin's cached functions on their next
+call (with the notice).
 """
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import os
 import sys
 import threading
 import time
+from pathlib import Path
 
 from numba import typeof
 from numba.core import event
@@ -92,6 +97,69 @@ def install_notice(stream=None) -> None:
         listener = _Notice(stream)
         event.register("numba:compile", listener)
         _INSTALLED.append(listener)
+
+
+def compiled_sources(root: Path) -> list[Path]:
+    """The modules under ``root`` that numba compiles code from: those that import numba,
+    and ``tolerances.py`` (its constants are written into compiled code)."""
+    out = []
+    for path in sorted(root.rglob("*.py")):
+        text = path.read_bytes()
+        if path.name == "tolerances.py" or b"from numba" in text or b"import numba" in text:
+            out.append(path)
+    return out
+
+
+def source_stamp(root: Path) -> str:
+    """SHA-256 of the names and contents of :func:`compiled_sources` under ``root``."""
+    digest = hashlib.sha256()
+    for path in compiled_sources(root):
+        digest.update(path.relative_to(root).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+@functools.cache
+def package_stamp() -> str:
+    """:func:`source_stamp` of pkm_pin's own modules (computed once per process)."""
+    return source_stamp(Path(__file__).resolve().parent)
+
+
+class _PackageStamped:
+    """Mixin of a numba cache locator for pkm_pin's functions: the source stamp is the
+    defining file's and :func:`package_stamp`; other functions are left to numba's own
+    locators."""
+
+    @classmethod
+    def from_function(cls, py_func, py_file):
+        if not (getattr(py_func, "__module__", "") or "").startswith("pkm_pin."):
+            return None
+        return super().from_function(py_func, py_file)
+
+    def get_source_stamp(self):
+        return (super().get_source_stamp(), package_stamp())
+
+
+def install_stamp() -> bool:
+    """Put a :class:`_PackageStamped` variant of each of numba's file-backed cache
+    locators first in its list, in numba's order (once per process). Returns whether
+    they are in place: numba's private caching layout may change, and another version
+    keeps its own stamps (then delete ``pkm_pin``'s ``*.nbi``/``*.nbc`` files after an
+    edit)."""
+    try:
+        from numba.core import caching
+
+        impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # numba ≥ 0.68
+        mixin = caching._SourceFileBackedLocatorMixin
+        classes = list(impl._locator_classes)
+    except (ImportError, AttributeError):
+        return False
+    if any(issubclass(c, _PackageStamped) for c in classes):
+        return True
+    ours = [type(f"PkmPin{c.__name__}", (_PackageStamped, c), {})
+            for c in classes if issubclass(c, mixin)]
+    impl._locator_classes = ours + classes
+    return True
 
 
 #: Calls a caller may make on a plain-Python path before :func:`prefer_compiled` says
