@@ -36,7 +36,7 @@ L_i)``, the platform twist moves its target by ``(ω; (L v' + ω × p_W) / L_i)`
 ``H_i Δq_i − X_i ξ = e_i``. The normal equations of the masked unknowns get the
 Levenberg–Marquardt damping ``λ = damping(r)`` (:func:`pkm_pin.tolerances.damping`,
 written out in :func:`lm_damping`) on every unknown; each leg's block is eliminated
-(Cholesky of its nv × nv block), then the 6 × 6 Schur complement gives ξ; the joint
+(L D Lᵀ of its nv × nv block), then the 6 × 6 Schur complement gives ξ; the joint
 increments are projected onto the joint limits.
 
 Stopping rules (:mod:`pkm_pin.tolerances`): ``r ≤ tol``; ``max_iter`` steps;
@@ -222,39 +222,43 @@ def normal_equations(H, e, nv, lam, N, g):
 
 
 @register_jitable
-def cholesky(A, n, inv):
-    """Cholesky factor of the symmetric positive definite ``A[:n, :n]`` in place on its
-    lower triangle; ``inv`` receives the reciprocals of its diagonal. False if ``A`` is
-    not positive definite."""
+def ldl(A, n, inv):
+    """``A[:n, :n] = L D Lᵀ`` for the symmetric positive definite ``A``, in place on its
+    lower triangle: the unit factor ``L`` below the diagonal, ``D`` on it; ``inv``
+    receives ``1 / D``. No square roots (one division per column, off the critical
+    path of the substitutions). False if ``A`` is not positive definite."""
     for j in range(n):
-        s = A[j, j]
+        d = A[j, j]
         for k in range(j):
-            s -= A[j, k] * A[j, k]
-        if not 0.0 < s < np.inf:
+            d -= A[j, k] * A[j, k] * A[k, k]
+        if not 0.0 < d < np.inf:
             return False
-        d = 1.0 / math.sqrt(s)
-        inv[j] = d
+        A[j, j] = d
+        f = 1.0 / d
+        inv[j] = f
         for i in range(j + 1, n):
             s = A[i, j]
             for k in range(j):
-                s -= A[i, k] * A[j, k]
-            A[i, j] = s * d
+                s -= A[i, k] * A[j, k] * A[k, k]
+            A[i, j] = s * f
     return True
 
 
 @register_jitable
-def substitute(A, n, inv, b, x):
-    """``x = A⁻¹ b`` from the factor of :func:`cholesky` (``x`` may be ``b``)."""
+def ldl_solve(A, n, inv, b, x):
+    """``x = A⁻¹ b`` from the factors of :func:`ldl` (``x`` may be ``b``)."""
     for i in range(n):
         s = b[i]
         for k in range(i):
             s -= A[i, k] * x[k]
-        x[i] = s * inv[i]
+        x[i] = s
+    for i in range(n):
+        x[i] *= inv[i]
     for i in range(n - 1, -1, -1):
         s = x[i]
         for k in range(i + 1, n):
             s -= A[k, i] * x[k]
-        x[i] = s * inv[i]
+        x[i] = s
 
 
 @register_jitable
@@ -264,9 +268,9 @@ def leg_step(T, J, e, r, units, length, nv, H, N, g, dq, inv):
     equations are not positive definite."""
     leg_rows(T, J, units, length, nv, H)
     normal_equations(H, e, nv, lm_damping(r), N, g)
-    if not cholesky(N, nv, inv):
+    if not ldl(N, nv, inv):
         return False
-    substitute(N, nv, inv, g, dq)
+    ldl_solve(N, nv, inv, g, dq)
     return True
 
 
@@ -371,10 +375,10 @@ def system_step(coords, units, platform, act_v, qa, scales, target, lam, ws):
                 Gi[k, 6] += w * (target[a] - qa[a]) / scales[a]
         if platform:
             _couple(ws.H[i], ws.X[i], nv, Gi, ws.B)
-        if not cholesky(N, nv, inv):
+        if not ldl(N, nv, inv):
             return False
         for c in range(first, 7):
-            substitute(N, nv, inv, Gi[:, c], Gi[:, c])
+            ldl_solve(N, nv, inv, Gi[:, c], Gi[:, c])
         if platform:
             _schur_update(ws.X[i], ws.e[i], ws.B, Gi, nv, S, rhs)
     xi = ws.xi
@@ -384,9 +388,9 @@ def system_step(coords, units, platform, act_v, qa, scales, target, lam, ws):
         for k in range(6):
             S[k, k] += lam
         ws.S_last[:, :] = S
-        if not cholesky(S, 6, inv):
+        if not ldl(S, 6, inv):
             return False
-        substitute(S, 6, inv, rhs, xi)
+        ldl_solve(S, 6, inv, rhs, xi)
     for i in range(coords.shape[0] - 1):
         c0 = coords[i]
         for k in range(coords[i + 1] - c0):

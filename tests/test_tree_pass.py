@@ -139,8 +139,10 @@ def test_tree_outputs_source_equals_compiled():
 def test_per_pose_calls_skip_numba_typing():
     """After an assembly and an analysis, the per-pose compiled calls (closure solver,
     closure check, engine) hold the machine code of their signature for this
-    mechanism's arrays: later poses are not typed again."""
-    from pkm_pin.engine.core import _analyse_into
+    mechanism's arrays: later poses are not typed again; so does a sweep's engine call
+    for its layout (once per block), with the numbers of numba's own dispatch."""
+    from pkm_pin.engine import core
+    from pkm_pin.engine.core import _analyse_into, _analyse_many
     from pkm_pin.solve import _solve_system
     from pkm_pin.twists import _tree_outputs
 
@@ -153,3 +155,17 @@ def test_per_pose_calls_skip_numba_typing():
     assert _tree_outputs._known[0] is mech.tree_pass.probes
     assert _analyse_into._known[0] is mech.engine_layout
     assert all(f._known[1] is not None for f in (_solve_system, _tree_outputs, _analyse_into))
+    X = np.array([[0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.01, 0.0, 0.0, 0.0, 0.02, 0.0]])
+    X[:, :3] += mech.home.translation
+    first = mech.sweep(X)
+    assert _analyse_many._known[0] is mech.sweep_layout and _analyse_many._known[1] is not None
+    again = mech.sweep(X)
+    np.testing.assert_array_equal(first.condition, again.condition)
+    poses = [pin.SE3(pin.rpy.rpyToMatrix(*x[3:]), x[:3]) for x in X]
+    Js = np.stack([twists.joint_twists(mech, mech.assemble(pose).leg_q) for pose in poses])
+    layout, p = mech.sweep_layout, np.ascontiguousarray(X[:, :3])
+    a, b = core.allocate(2, layout, False), core.allocate(2, layout, False)
+    core.analyse_into(Js, p, layout, a, False)
+    _analyse_many(Js, p, layout, b, False)
+    np.testing.assert_array_equal(a.scalars, b.scalars)
+    np.testing.assert_array_equal(a.counts, b.counts)

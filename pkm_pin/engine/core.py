@@ -193,7 +193,7 @@ def analyse(J: np.ndarray, layout: Layout, full: bool = True,
     if N == 1:  # plain Python until the compiled code is ready (no compilation here)
         _analyse_into(J, centres, layout, out, bool(full))
     else:
-        analyse_into(J, centres, layout, out, bool(full))
+        _analyse_many(J, centres, layout, out, bool(full))
     return out
 
 
@@ -330,5 +330,7 @@ def analyse_into(J, centres, layout, out, full):
             out.platform[i, :d] = P[:d]
 
 
-#: :func:`analyse_into` as :func:`analyse` calls it (its arguments keep their types)
+#: :func:`analyse_into` as :func:`analyse` calls it (its arguments keep their types),
+#: for one pose (plain Python until compiled) and for several (a sweep's blocks)
 _analyse_into = SameTypes(analyse_into, key=2, plain=True)
+_analyse_many = SameTypes(analyse_into, key=2)
