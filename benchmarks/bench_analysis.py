@@ -168,7 +168,7 @@ def main(n: int = 1000, n_loop: int = 200) -> dict:
               f"x{t_loop / t_floor:6.1f} floor   x{t_loop / t_hand_loop:6.2f} hand-written"
               f"   (target: x{target:g} hand-written; {m} poses, interleaved with it)")
         print(f"  framework, batched sweep   {1e6 * t_sweep:9.1f}   "
-              f"x{t_sweep / t_floor:6.1f} floor   x{t_sweep / t_hand:6.2f} hand-written"
+              f"x{t_sweep / t_floor:6.1f} floor   x{t_sweep / t_hand:6.3f} hand-written"
               f"   (targets: x3 floor, x0.3 hand-written)")
         if n >= 20:  # the cost of one more pose, and the fixed cost of a sweep call
             m10 = n // 10

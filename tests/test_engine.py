@@ -18,6 +18,8 @@ from pkm_pin.analysis import SINGULAR_TOL, layout_of
 from pkm_pin.builders.planar import rpr3_type2_pose
 from pkm_pin.builders.spatial import upu3_constraint_singular_pose
 from pkm_pin.engine.linalg import (
+    JACOBI_SKIP,
+    JACOBI_TOL,
     certainly_invertible,
     descending,
     jacobi,
@@ -435,6 +437,27 @@ def test_jacobi_singular_values_and_right_basis():
     W, V, sv = np.empty((6, 6)), np.eye(6), np.empty(6)
     jacobi(U @ np.diag(chosen) @ Vr.T, 6, 6, W, V, sv)
     np.testing.assert_allclose(np.sort(sv)[::-1], np.sort(chosen)[::-1], rtol=0, atol=1e-14)
+    # a warm start a small rotation away from the singular basis: every rotation is in
+    # the small-angle regime (tan θ and cos θ from their series), to round-off; with
+    # skip = JACOBI_TOL (singular values only) the same values
+    spread = np.array([3.0, 2.0, 1.5, 1.0, 0.3, 1e-4])
+    A = U @ np.diag(spread) @ Vr.T
+    for angle in (1e-7, 1e-9):
+        S = angle * rng.normal(size=(6, 6))
+        start = Vr @ (np.eye(6) + S - S.T)
+        start, _ = np.linalg.qr(start)
+        start *= np.sign(np.diag(start.T @ Vr))  # the columns of Vr, a little turned
+        for skip in (JACOBI_SKIP, JACOBI_TOL):
+            V = start.copy()
+            jacobi(A, 6, 6, W, V, sv, skip)
+            np.testing.assert_allclose(np.sort(sv)[::-1], spread, rtol=0, atol=1e-15 * spread[0])
+            np.testing.assert_allclose(V.T @ V, np.eye(6), atol=1e-14)
+            np.testing.assert_allclose(W @ V.T, A, atol=1e-14)
+            if skip == JACOBI_SKIP:  # the columns orthogonal to round-off (cosines, or
+                # inner products at the floor relative to ‖A‖_F², for the tiny column)
+                off = np.abs(W.T @ W - np.diag(sv ** 2))
+                bound = np.maximum(2e-15 * np.outer(sv, sv), 1e-15 * (A ** 2).sum())
+                assert (off <= bound).all()
 
 
 def test_lu_certificate_and_determinant():

@@ -37,6 +37,11 @@ JACOBI_SKIP = 1e-15
 JACOBI_FLOOR = 1e-15
 #: See :func:`certainly_invertible`.
 CERTIFY_MARGIN = 10.0
+#: A rotation whose ``ρ = c / (b − a)`` is below ``SMALL_ANGLE^(−1/2)`` (1e-5) takes
+#: ``tan θ = ρ (1 − ρ²)`` and ``cos θ = 1 − t²/2``, exact to round-off, without the
+#: square roots and divisions of the general formula (the rotations of a warm start's
+#: later sweeps).
+SMALL_ANGLE = 1e10
 #: Upper bound on the Jacobi sweeps (6 columns converge in 3–6 from a cold start).
 JACOBI_SWEEPS = 60
 
@@ -83,10 +88,15 @@ def jacobi(X, m, n, W, V, sv, skip=JACOBI_SKIP):
                 # tan θ of the rotation that makes the pair orthogonal, the smaller root
                 # of t² + 2ζt − 1 = 0 (ζ = (b − a) / 2c), written without dividing by c
                 h = b - a
-                t = 2.0 * c / (abs(h) + math.sqrt(h * h + 4.0 * cc))
-                if h < 0.0:
-                    t = -t
-                cs = 1.0 / math.sqrt(1.0 + t * t)
+                if cc * SMALL_ANGLE < h * h:  # ρ = c / h below 1e-5: the series of t
+                    rho = c / h  # and cos θ to round-off (next terms 2ρ⁵, 3t⁴/8)
+                    t = rho * (1.0 - rho * rho)
+                    cs = 1.0 - 0.5 * t * t
+                else:
+                    t = 2.0 * c / (abs(h) + math.sqrt(h * h + 4.0 * cc))
+                    if h < 0.0:
+                        t = -t
+                    cs = 1.0 / math.sqrt(1.0 + t * t)
                 sn = cs * t
                 for r in range(m):
                     x, y = W[r, p], W[r, q]
