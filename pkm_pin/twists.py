@@ -398,10 +398,12 @@ def sweep_pass(mechanism, Qs, targets, idx, tol: float, out=None):
         (M,) whether a leg's tip (Pinocchio's placement) misses its target by more than
         ``tol``.
     """
-    if mechanism.tree_pass is not None:
-        return mechanism.tree_pass.many(Qs, targets, idx, tol, out)
     M = len(idx)
     nv = sum(leg.nv for leg in mechanism.legs)
+    if out is not None and (out.shape[0] < M or out.shape[1:] != (nv, 6)):
+        raise ValueError(f"out of shape {out.shape}: expected at least ({M}, {nv}, 6)")
+    if mechanism.tree_pass is not None:
+        return mechanism.tree_pass.many(Qs, targets, idx, tol, out)
     J = np.empty((M, nv, 6)) if out is None else out[:M]
     bad = np.zeros(M, bool)
     row = 0

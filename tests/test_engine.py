@@ -270,6 +270,8 @@ def test_pinocchio_pass_gives_the_legs_twists_and_closure(name):
     np.testing.assert_array_equal(out[:len(some)], J[some])
     np.testing.assert_array_equal(bado, bad[some])
     assert np.isnan(out[len(some):]).all()
+    with pytest.raises(ValueError, match="out of shape"):
+        sweep_pass(mech, Qs, targets, some, 1e-12, out[:2])
 
 
 def test_scratch_buffer_is_reused_unless_still_read(monkeypatch):

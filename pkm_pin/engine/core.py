@@ -21,9 +21,8 @@ from numba import njit
 from numba.extending import register_jitable
 
 from ..compiling import SameTypes
-from .linalg import lu_column, reset
+from .linalg import reset
 from .stages import (
-    SQUARE,
     actuation_wrench,
     carried_determinant,
     leg_constraints,
@@ -287,13 +286,9 @@ def analyse_into(J, centres, layout, out, full):
             for a_i in range(n):
                 if act_leg[a_i] != l:
                     continue
-                if mode == SQUARE:  # a six-twist leg's wrench: a column of X⁻¹ (stage 3)
-                    lu_column(LU, perm, 6, act_col[a_i] - c0, wh[a_i])
-                    ok[a_i] = True
-                else:
-                    ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, mode,
-                                                  LU, perm, rtol, X, W, V_legs[l], sv, C,
-                                                  first, m_c, W2, V2, sv2, wh[a_i])
+                ok[a_i] = actuation_wrench(T, c0, k, act_col[a_i] - c0, r, mode, LU, perm,
+                                           rtol, X, W, V_legs[l], sv, C, first, m_c, W2, V2,
+                                           sv2, wh[a_i])
         # stage 4: the platform twist system
         rank_c, rotations = platform_system(C, m_c, rtol, layout.rot_tol, W, V_union, sv,
                                             order, cons, P, Pw, W3, V3,
