@@ -365,10 +365,11 @@ class Linkage:
                              {"starts": tried, "batches": batch, "modes": len(found)},
                              perf_counter() - t0)
 
-    def transmission(self, q):
+    def transmission(self, q, *, analysis: LinkageAnalysis | None = None):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or
         :class:`LinkageAssembly`; :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010):
-        each actuator's side of its loops is its "leg".
+        each actuator's side of its loops is its "leg". ``analysis``: :meth:`analyze` of
+        the same ``q`` about the output, when the caller has made it (not made again).
 
         The transmission wrench of an actuator is the one its loop passes on to the
         output: reciprocal to every passive freedom of the loop (its passive joints and
@@ -400,8 +401,14 @@ class Linkage:
         from .transmission import Transmission, transmission_indices
 
         q = q.q if isinstance(q, LinkageAssembly) else self._model.check_q(q)
-        an = self.analyze(q)
         model, kin = self._model, self._model.kinematics(q)
+        an = analysis
+        if an is None:
+            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL)
+        elif not (np.array_equal(an.q, q) and np.array_equal(
+                an.reference_point, kin.output_placement.translation)):
+            raise InputError("analysis: not this linkage's analysis of q about its output "
+                             "(Linkage.analyze(q))")
         tree, J = model.tree, kin.joint_twists
         cols = list(model.actuated_v)
         ids = [tree.getJointId(name) for name in model.actuated]
@@ -528,7 +535,7 @@ class Linkage:
             generic = generic or an
             out.record(i, a, an)
             if transmission:
-                tr = self.transmission(a)
+                tr = self.transmission(a, analysis=an if about == "output" else None)
                 out.lti[i], out.cti[i] = tr.lti, tr.cti
         return out.result()
 
@@ -777,11 +784,7 @@ def _constraint_point(c: np.ndarray, rows: np.ndarray, L: float, p: np.ndarray
         point, sin = nearest_point(c, T)
         if sin > PARALLEL_SIN:
             return point
-    f = c[:3]
-    if f @ f == 0.0:
-        return np.array(p, dtype=float)
-    foot, d = np.cross(f, c[3:]) / (f @ f), f / np.linalg.norm(f)
-    return foot + ((p - foot) @ d) * d
+    return _axis_point_nearest(c, p)
 
 
 def _side_constraints(model: ClosureModel, kin: TreeKinematics, loops_of: tuple,
@@ -838,15 +841,21 @@ def _output_point(model: ClosureModel, kin: TreeKinematics, wrench: np.ndarray, 
     return min(points, key=lambda p: _distance_to_axis(wrench, p))
 
 
+def _axis_point_nearest(wrench: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The point of the axis of ``wrench`` (axis-first, world origin) nearest to the
+    point ``p``; ``p`` itself for a couple (its axis has no location)."""
+    f = wrench[:3]
+    ff = f @ f
+    if ff == 0.0:
+        return np.array(p, dtype=float)
+    foot = np.cross(f, wrench[3:]) / ff  # the axis point nearest the origin
+    return foot + ((p - foot) @ f / ff) * f
+
+
 def _distance_to_axis(wrench: np.ndarray, p: np.ndarray) -> float:
     """Distance from the point ``p`` to the axis of ``wrench`` (axis-first, world
     origin); for a couple, 0."""
-    f, m = wrench[:3], wrench[3:]
-    ff = f @ f
-    if ff == 0.0:
-        return 0.0
-    foot = np.cross(f, m) / ff  # the axis point nearest the origin
-    return float(np.linalg.norm(np.cross(p - foot, f)) / np.sqrt(ff))
+    return float(np.linalg.norm(p - _axis_point_nearest(wrench, p)))
 
 
 def _input_point(tree: pin.Model, J: np.ndarray, wrench: np.ndarray, j: int,
@@ -865,11 +874,7 @@ def _input_point(tree: pin.Model, J: np.ndarray, wrench: np.ndarray, j: int,
         p, sin = nearest_point(wrench, J[jk.idx_v])
         if sin > PARALLEL_SIN:
             return p
-    f = wrench[:3]
-    if f @ f == 0.0:
-        return np.array(fallback, dtype=float)
-    foot, d = np.cross(f, wrench[3:]) / (f @ f), f / np.linalg.norm(f)
-    return foot + ((fallback - foot) @ d) * d
+    return _axis_point_nearest(wrench, fallback)
 
 
 def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:

@@ -869,9 +869,10 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
                                    follow)
     Q = _grow(shape, start, q_start, lambda cell: points[np.ravel_multi_index(cell, shape)],
               follow, progress)
-    values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds, ref)
-    t2 = time.perf_counter()
     home_an = link.analyze(ref.q)
+    values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds,
+                             home_an)
+    t2 = time.perf_counter()
     home_det = _carried_det(home_an, home_an.platform_twists)
     sub = _default_subsamples(1 if subsamples is None else subsamples, len(dom.coords))
     return _finish(link.name, dom.coords, dom.units, dom.bounds, "grid", axes, shape, points,
@@ -1191,28 +1192,29 @@ def _carried_det(an, P0_world: np.ndarray) -> float:
     return float(np.linalg.det(A @ (carried @ screws.DELTA).T))
 
 
-def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, ref) -> dict:
+def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, generic
+                    ) -> dict:
     """The per-cell arrays of a linkage workspace (analyses only with ``analyse``, the
     LTI and CTI of :meth:`Linkage.transmission` with ``transmission``); ``q``: each cell's
-    configuration (nan rows where not solved)."""
+    configuration (nan rows where not solved); ``generic``: the reference assembly's
+    analysis."""
     N = int(np.prod(shape))
     ok = np.zeros(N, bool)
     cls = np.full(N, "", dtype="<U4")
     det, dof, lti = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
     cti = np.full(N, np.nan)
     q_all = np.full((N, link.model.nq), np.nan)
-    generic = link.analyze(ref.q)
     for i, q in Q.items():
         ok[i] = True
         q_all[i] = q
-        if transmission:
-            tr = link.transmission(q)
+        an = link.analyze(q, generic=generic) if analyse else None
+        if transmission:  # from the cell's analysis when made (not made twice)
+            tr = link.transmission(q, analysis=an)
             lti[i], cti[i] = tr.lti, tr.cti
         if not analyse:
             cls[i] = "none"
             dof[i] = generic.dof
             continue
-        an = link.analyze(q, generic=generic)
         cls[i] = an.singularity if not an.constraint_singular else "III"
         dof[i] = an.dof
         det[i] = _carried_det(an, generic.platform_twists)

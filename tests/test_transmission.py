@@ -488,6 +488,18 @@ def test_linkage_cti_equals_the_platform_cti(name):
         tl, tp = link.transmission(configuration(mech, a)), mech.analyze(a).transmission
         np.testing.assert_allclose(tl.leg_cti, tp.leg_cti, atol=1e-9)
         assert tl.cti == pytest.approx(tp.cti, abs=1e-9)
+    # the caller's analysis of the same configuration gives the same indices; another
+    # configuration's is refused
+    q = configuration(mech, assemblies[-1][0])
+    given = link.transmission(q, analysis=link.analyze(q))
+    tl = link.transmission(q)
+    for field in ("iti", "oti", "leg_cti"):
+        np.testing.assert_array_equal(getattr(given, field), getattr(tl, field))
+    assert given.lti == tl.lti or (np.isnan(given.lti) and np.isnan(tl.lti))
+    other = link.analyze(configuration(mech, assemblies[0][0]))
+    if not np.array_equal(other.q, q):
+        with pytest.raises(InputError, match="not this linkage's analysis"):
+            link.transmission(q, analysis=other)
 
 
 def test_linkage_cti_vanishes_at_the_upu3_constraint_singularity():
