@@ -709,7 +709,7 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
         C = kin.frame_placements[fa] * cl.placement_a
         axes = np.eye(3) if cl.kind == "point" else (
             C.rotation[:, 2:] .T if cl.kind == "revolute" else np.zeros((0, 3)))
-        rows.extend(np.r_[w, np.cross(C.translation, w)] for w in axes)
+        rows.extend(screws.line(C.translation, w) for w in axes)  # unit axes
         is_act.extend([False] * len(axes))
     key = (tuple(sorted(loops)), tuple(sorted(joints)))
     return np.array(rows).reshape(-1, 6), np.array(is_act, bool), key
@@ -784,7 +784,7 @@ def _constraint_point(c: np.ndarray, rows: np.ndarray, L: float, p: np.ndarray
         point, sin = nearest_point(c, T)
         if sin > PARALLEL_SIN:
             return point
-    return _axis_point_nearest(c, p)
+    return screws.axis_point_nearest(c, p)
 
 
 def _side_constraints(model: ClosureModel, kin: TreeKinematics, loops_of: tuple,
@@ -841,21 +841,10 @@ def _output_point(model: ClosureModel, kin: TreeKinematics, wrench: np.ndarray, 
     return min(points, key=lambda p: _distance_to_axis(wrench, p))
 
 
-def _axis_point_nearest(wrench: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """The point of the axis of ``wrench`` (axis-first, world origin) nearest to the
-    point ``p``; ``p`` itself for a couple (its axis has no location)."""
-    f = wrench[:3]
-    ff = f @ f
-    if ff == 0.0:
-        return np.array(p, dtype=float)
-    foot = np.cross(f, wrench[3:]) / ff  # the axis point nearest the origin
-    return foot + ((p - foot) @ f / ff) * f
-
-
 def _distance_to_axis(wrench: np.ndarray, p: np.ndarray) -> float:
     """Distance from the point ``p`` to the axis of ``wrench`` (axis-first, world
     origin); for a couple, 0."""
-    return float(np.linalg.norm(p - _axis_point_nearest(wrench, p)))
+    return float(np.linalg.norm(p - screws.axis_point_nearest(wrench, p)))
 
 
 def _input_point(tree: pin.Model, J: np.ndarray, wrench: np.ndarray, j: int,
@@ -874,7 +863,7 @@ def _input_point(tree: pin.Model, J: np.ndarray, wrench: np.ndarray, j: int,
         p, sin = nearest_point(wrench, J[jk.idx_v])
         if sin > PARALLEL_SIN:
             return p
-    return _axis_point_nearest(wrench, fallback)
+    return screws.axis_point_nearest(wrench, fallback)
 
 
 def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:
@@ -1126,7 +1115,7 @@ def _scaled_wrench(zeta_h: np.ndarray, p: np.ndarray, L: float, unit: float,
     f, m_p = zeta_h[:3], zeta_h[3:] * L
     s = np.linalg.norm(f) if np.linalg.norm(f) * L > rtol * np.linalg.norm(m_p) \
         else np.linalg.norm(m_p)
-    wrench = np.r_[f, m_p - np.cross(f, p)] / s  # the moment about the world origin
+    wrench = screws.from_point(np.r_[f, m_p], p) / s  # the moment about the world origin
     return wrench, L / unit / s
 
 

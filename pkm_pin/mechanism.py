@@ -578,21 +578,16 @@ def stalled_at_boundary(leg: Leg, q: np.ndarray, residual: float) -> bool:
     its workspace boundary and close enough to be accepted: ``residual ≤``
     :data:`~pkm_pin.tolerances.TYPE_I_CLOSURE_TOL` and either a joint at a finite limit
     (within :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK`) or the leg at its type I
-    singularity: the smallest singular value of its homogenised Jacobian (columns per
-    unit of each coordinate, moments about the tip / the leg's length) relative to the
-    largest at most ``TYPE_I_STALL_FACTOR · √residual`` (Newton's square-root
-    convergence there)."""
+    singularity: its :meth:`~pkm_pin.serial.SerialChain.serial_singularity_index` (the
+    smallest singular value of its homogenised Jacobian relative to the largest) at most
+    ``TYPE_I_STALL_FACTOR · √residual`` (Newton's square-root convergence there)."""
     if not residual <= TYPE_I_CLOSURE_TOL:
         return False
     lo, up = leg._bounds
     finite = np.isfinite(lo) & np.isfinite(up)
     if np.any(finite & ((q <= lo + JOINT_LIMIT_SLACK) | (q >= up - JOINT_LIMIT_SLACK))):
         return True
-    tip, J = leg.kinematics(q)
-    w = J[:3] * leg._velocity_units
-    v = J[3:] * leg._velocity_units + np.cross(w.T, tip.translation).T
-    s = np.linalg.svd(np.vstack([w, v / leg.characteristic_length]), compute_uv=False)
-    return bool(s[0] > 0 and s[-1] <= TYPE_I_STALL_FACTOR * np.sqrt(residual) * s[0])
+    return bool(leg.serial_singularity_index(q) <= TYPE_I_STALL_FACTOR * np.sqrt(residual))
 
 
 # --------------------------------------------------------------------- TOML files

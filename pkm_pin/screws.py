@@ -191,6 +191,20 @@ def axis(s, length: float = 1.0, rtol: float = RTOL) -> tuple[np.ndarray, np.nda
     return np.cross(w, v) / w.dot(w), w / np.linalg.norm(w)
 
 
+
+def axis_point_nearest(S, point) -> np.ndarray:
+    """The point of the axis of each screw ``S`` (…, 6) nearest to ``point`` (…, 3)
+    [m]: the foot ``a × b / |a|²`` of the axis moved along ``a``; ``point`` itself for
+    a couple (``a = 0``: its axis has no location)."""
+    S = np.asarray(S, dtype=float)
+    p = np.broadcast_to(np.asarray(point, dtype=float), S.shape[:-1] + (3,))
+    a = S[..., :3]
+    aa = np.einsum("...i,...i->...", a, a)
+    safe = np.where(aa > 0, aa, 1.0)[..., None]
+    foot = np.cross(a, S[..., 3:]) / safe
+    along = np.einsum("...i,...i->...", p - foot, a)[..., None] / safe
+    return np.where((aa > 0)[..., None], foot + along * a, p)
+
 # -------------------------------------------------------------------- linear algebra
 def characteristic_length(S) -> float:
     """A length [m] that scales with the geometry of ``S``, for homogenising.
@@ -224,10 +238,7 @@ def about(S, point) -> np.ndarray:
 def from_point(S, point) -> np.ndarray:
     """Inverse of :func:`about`: screws given about ``point`` written about the world
     origin, ``(a; b) → (a; b − a × point)``. A copy."""
-    S = np.array(S, dtype=float, copy=True)
-    p = np.asarray(point, dtype=float)[..., None, :] if S.ndim > 1 else np.asarray(point, float)
-    S[..., 3:] -= np.cross(S[..., :3], p)
-    return S
+    return about(S, -np.asarray(point, dtype=float))
 
 
 def homogenise(S, length: float) -> np.ndarray:

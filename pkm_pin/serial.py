@@ -286,10 +286,8 @@ class SerialChain(abc.ABC):
         decisions do not depend on where the chain stands in the world), linear rows
         divided by ``L``, prismatic columns times ``L``."""
         L = self.characteristic_length
-        H = J * self._column_scales(J)[None, :]
-        H[3:] += np.cross(H[:3].T, tip).T  # v_tip = v_O + ω × tip
-        H[3:] /= L
-        return H
+        H = (J * self._column_scales(J)[None, :]).T  # twists as rows
+        return screws.homogenise(screws.about(H, tip), L).T  # v_tip = v_O + ω × tip
 
     def _tip_jacobian(self, q) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(J, H, tip)``: the world Jacobian, its :meth:`_homogenise` d form and the tip
@@ -348,8 +346,7 @@ class SerialChain(abc.ABC):
             )
         L = self.characteristic_length
         J, H, tip = self._tip_jacobian(q)
-        row = np.r_[np.ones(3), np.full(3, 1.0 / L)]
-        Vh = row * np.r_[V[:3], V[3:] + np.cross(V[:3], tip)]  # about the tip, as H
+        Vh = screws.homogenise(screws.about(V, tip), L)  # about the tip, as H
         x, *_ = np.linalg.lstsq(H, Vh, rcond=None)
         residual = np.linalg.norm(H @ x - Vh)
         if residual > LINK_TWIST_RTOL * max(np.linalg.norm(Vh), np.finfo(float).tiny):

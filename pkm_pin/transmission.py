@@ -107,9 +107,7 @@ def power_coefficient(wrench, twist, point, length: float) -> np.ndarray:
     wn = np.linalg.norm(w, axis=-1)
     couple = fn * length <= ZERO_RTOL * mn
     ff = np.where(couple, 1.0, fn * fn)[..., None]
-    p0 = _cross(f, m) / ff  # the axis point nearest the common origin
-    fhat = f / np.sqrt(ff)
-    P = p0 + _dot(P - p0, fhat)[..., None] * fhat  # onto the axis
+    P = screws.axis_point_nearest(W, P)  # onto the axis (not used for a couple)
     h = (_dot(f, m) / ff[..., 0])[..., None]
     u = v + _cross(w, P) + h * w
     un = np.linalg.norm(u, axis=-1)
@@ -154,15 +152,15 @@ def _is_rotation(T: np.ndarray, length: float) -> np.ndarray:
             > ZERO_RTOL * np.linalg.norm(T[..., 3:], axis=-1))
 
 
-def leg_points(A, J, coords, act_col, act_leg, length: float,
-               centre=None) -> tuple[np.ndarray, np.ndarray]:
+def leg_points(A, J, coords, act_col, act_leg, length: float
+               ) -> tuple[np.ndarray, np.ndarray]:
     """Application points of the actuation wrenches: on the actuated link and on the
     platform (module docstring).
 
     The input point is the point of ``A_i``'s axis nearest to the axis of the first
     rotation joint after the actuated one in its leg that is not parallel to it; the
     output point the one nearest to the leg's last such joint. A leg without one uses
-    the point of the wrench axis nearest to ``centre``.
+    the point of the wrench axis nearest to the origin of the coordinates.
 
     Args:
         A: (..., n, 6) actuation wrenches; J: (..., nv, 6) joint twists of every leg, one
@@ -170,23 +168,17 @@ def leg_points(A, J, coords, act_col, act_leg, length: float,
         coords: (legs + 1,) row offsets of the legs in ``J``; act_col: (n,) row of each
             actuated joint; act_leg: (n,) its leg.
         length: Characteristic length [m].
-        centre: (..., 3) fallback point (default: the origin of the coordinates).
 
     Returns:
         ((..., n, 3) input points, (..., n, 3) output points).
     """
     A, J = np.asarray(A, float), np.asarray(J, float)
     batch = A.shape[:-2]
-    c = np.zeros(batch + (3,)) if centre is None else np.broadcast_to(centre, batch + (3,))
     p_in = np.empty(batch + (A.shape[-2], 3))
     p_out = np.empty_like(p_in)
     for a in range(A.shape[-2]):
         W = A[..., a, :]
-        # fallback: the wrench axis point nearest to the centre
-        p0, _ = nearest_point(W - np.concatenate([np.zeros(batch + (3,)),
-                                                  _cross(c, W[..., :3])], axis=-1),
-                              np.zeros(batch + (6,)))
-        p0 = p0 + c
+        p0 = screws.axis_point_nearest(W, np.zeros(3))  # the fallback
         end = int(coords[int(act_leg[a]) + 1])
         rows = range(int(act_col[a]) + 1, end)
         for out, order in ((p_in, rows), (p_out, reversed(rows))):
@@ -199,12 +191,6 @@ def leg_points(A, J, coords, act_col, act_leg, length: float,
                 out[..., a, :] = np.where(take[..., None], p, out[..., a, :])
                 found |= take
     return p_in, p_out
-
-
-def _homogenised_rows(S: np.ndarray, length: float) -> np.ndarray:
-    H = np.array(S, dtype=float, copy=True)
-    H[..., 3:] /= length
-    return H
 
 
 def output_twists(A, platform, length: float, rtol: float = RANK_RTOL) -> np.ndarray:
@@ -225,9 +211,9 @@ def output_twists(A, platform, length: float, rtol: float = RANK_RTOL) -> np.nda
     """
     A, P = np.asarray(A, float), np.asarray(platform, float)
     n, d = A.shape[-2], P.shape[-2]
-    Ah = _homogenised_rows(A, length)
+    Ah = screws.homogenise(A, length)
     Ah = Ah / np.maximum(np.linalg.norm(Ah, axis=-1, keepdims=True), 1e-300)
-    Ph = _homogenised_rows(P, length)
+    Ph = screws.homogenise(P, length)
     Q = np.linalg.qr(np.swapaxes(Ph, -1, -2))[0]  # (..., 6, d) orthonormal columns
     M = Ah @ DELTA @ Q  # (..., n, d)
     if n == d and n > 1:
@@ -245,8 +231,7 @@ def output_twists(A, platform, length: float, rtol: float = RANK_RTOL) -> np.nda
             null = d - rank
             X = np.swapaxes(Vt, -1, -2)  # columns: right singular vectors
         x = X[..., :, -1]  # the last right singular vector
-        t = np.einsum("...kd,...d->...k", Q, x)
-        t[..., 3:] *= length
+        t = screws.dehomogenise(np.einsum("...kd,...d->...k", Q, x), length)
         t = np.where((null == 1)[..., None], t, np.where((null > 1)[..., None], 0.0, np.nan))
         out[..., i, :] = t
     return out
@@ -267,8 +252,7 @@ def _adjugate_twists(M, Q, length: float, rtol: float) -> np.ndarray:
     adj = np.where((r[..., -2] <= rtol)[..., None, None], 0.0, adj)
     T = np.einsum("...ed,...id->...ie", Q, adj)  # row i: column i of adj, as a twist
     T = T / np.maximum(np.linalg.norm(T, axis=-1, keepdims=True), 1e-300)
-    T[..., 3:] *= length
-    return T
+    return screws.dehomogenise(T, length)
 
 
 def transmission_indices(A, input_twists, platform, input_points, output_points,
@@ -390,8 +374,8 @@ def constraint_transmissions(A, leg_constraints, output_points, length: float,
     out = np.ones((N, legs))
     if not N or not legs:
         return out
-    OA, r_a = _orthonormal_rows(_homogenised_rows(A, length), rtol)
-    OC, dims = _orthonormal_rows(_homogenised_rows(C, length), rtol)  # (N, legs, 6, 6)
+    OA, r_a = _orthonormal_rows(screws.homogenise(A, length), rtol)
+    OC, dims = _orthonormal_rows(screws.homogenise(C, length), rtol)  # (N, legs, 6, 6)
     # the rows beyond every pose's rank are zero: left out of the products below
     if not dims.any():
         return out
@@ -416,9 +400,8 @@ def constraint_transmissions(A, leg_constraints, output_points, length: float,
         value = np.where(n_r <= m, s[rows, np.clip(n_r - 1, 0, s.shape[-1] - 1)], 0.0)
         single = (m == 1) & (n_r == 1)
         if single.any():  # one wrench, one twist: the power coefficient at the point
-            w, t = OC[single, k, 0].copy(), R[single, 0].copy()
-            w[:, 3:] *= length
-            t[:, 3:] *= length
+            w = screws.dehomogenise(OC[single, k, 0], length)
+            t = screws.dehomogenise(R[single, 0], length)
             value[single] = power_coefficient(w, t, P[single, k], length)
         out[:, k] = np.where((m == 0) | (n_r == 0), 1.0, value)
     return np.clip(out, 0.0, 1.0)
@@ -446,7 +429,7 @@ def constraint_rank(leg_constraints, length: float, rtol: float = RANK_RTOL) -> 
     C = _padded_legs(leg_constraints)
     if not C.shape[1]:
         return 0
-    OC, dims = _orthonormal_rows(_homogenised_rows(C, length), rtol)
+    OC, dims = _orthonormal_rows(screws.homogenise(C, length), rtol)
     if not dims.any():
         return 0
     return int(_orthonormal_rows(OC.reshape(1, -1, 6), rtol)[1][0])
@@ -540,8 +523,7 @@ def sweep_lti(A, platform_h, dof, J, centres, layout, lines=None) -> np.ndarray:
     Lc = Jc if lines is None else screws.about(lines, centres)
     for d in np.unique(dof):
         i = np.flatnonzero(dof == d)
-        P = np.array(platform_h[i, :d], copy=True)
-        P[..., 3:] *= L
+        P = screws.dehomogenise(platform_h[i, :d], L)
         p_in, p_out = leg_points(Ac[i], Lc[i], layout.coords, layout.act_col,
                                  layout.act_leg, L)
         iti, oti = transmission_indices(Ac[i], Jc[i][:, layout.act_col], P, p_in, p_out,
@@ -571,8 +553,7 @@ def sweep_cti(A, leg_constraints, leg_dims, J, centres, layout, generic_rank: in
     N, legs = len(A), len(layout.coords) - 1
     if not N or not legs or not np.any(leg_dims):
         return np.ones(N)
-    C = np.array(leg_constraints, dtype=float, copy=True)
-    C[..., 3:] *= L  # world units about the centres
+    C = screws.dehomogenise(leg_constraints, L)  # world units about the centres
     Ac, Jc = screws.about(A, centres), screws.about(J, centres)
     points = np.zeros((N, legs, 3))
     for k in range(legs):

@@ -169,6 +169,19 @@ def test_axis_round_trips(p, d, h, scale):
 
 
 @SETTINGS
+@given(points, directions, st.floats(-3.0, 3.0), st.floats(0.1, 10.0), points)
+def test_axis_point_nearest_a_point(p, d, h, scale, x):
+    """axis_point_nearest(k·screw(p, d, h), x) is the foot of x on the axis (a point of
+    the axis, x − it orthogonal to d); x itself for a couple; rows of a stack alike."""
+    s = scale * screws.screw(p, d, h)
+    got = screws.axis_point_nearest(s, x)
+    np.testing.assert_allclose(got, p + (x - p).dot(d) * d, atol=1e-10 * (1 + abs(x).max()))
+    np.testing.assert_allclose(screws.axis_point_nearest(screws.couple(d), x), x, atol=0)
+    stack = np.stack([s, screws.couple(d), s])
+    np.testing.assert_allclose(screws.axis_point_nearest(stack, x), [got, x, got], atol=0)
+
+
+@SETTINGS
 @given(directions, st.floats(0.1, 10.0))
 def test_couple_has_infinite_pitch_and_axis_through_origin(d, scale):
     """A couple has pitch inf and its axis is returned through the origin."""
