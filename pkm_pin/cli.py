@@ -44,10 +44,11 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError, PkmError
+from .solve import POSE_COORDINATES
 from .tolerances import CROSSCHECK_TOL
 
 #: Pose coordinates in the order of ``--pose`` and of the sweep arrays.
-POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
+POSE_NAMES = POSE_COORDINATES
 #: Varied coordinates of each ``map --plane`` (``--axes`` takes any two).
 PLANES = {"xy": (0, 1), "xz": (0, 2), "yz": (1, 2)}
 
@@ -442,38 +443,6 @@ def _ik_linkage(args, link) -> int:
     print(f"target     xyz {_fmt(data['target']['xyz'])}  rpy {_fmt(data['target']['rpy'])}")
     print(fk_text(data))
     return 0
-
-
-def _fixed_values(items, home: np.ndarray, varied: tuple[int, int]) -> np.ndarray:
-    """The pose coordinates held fixed: home, overridden by ``NAME=VALUE`` items."""
-    values = home.copy()
-    for name, value in at_values(items, "--fixed").items():
-        k = POSE_NAMES.index(name)
-        if k in varied:
-            raise InputError(f"--fixed {name}: {name} is varied over the plane")
-        values[k] = value
-    return values
-
-
-def map_slice(mech, plane: str, ranges, n: int, fixed=()) -> tuple[np.ndarray, np.ndarray,
-                                                                     np.ndarray]:
-    """Grid of full poses over a plane of the pose coordinates (the others at home or
-    ``fixed``, NAME=VALUE items).
-
-    Returns:
-        ``(u, v, poses)``: coordinates of the columns (n_u,), of the rows (n_v,), and the
-        poses (n_v · n_u, 6) in row-major order (row ``j`` at ``v[j]``).
-    """
-    import pinocchio as pin
-
-    i, j = PLANES[plane]
-    home = np.r_[mech.home.translation, pin.rpy.matrixToRpy(mech.home.rotation)]
-    base = _fixed_values(fixed, home, (i, j))
-    u, v = _grid_axes(mech, (i, j), home, ranges, n)
-    V, U = np.meshgrid(v, u, indexing="ij")
-    poses = np.tile(base, (U.size, 1))
-    poses[:, i], poses[:, j] = U.ravel(), V.ravel()
-    return u, v, poses
 
 
 def _grid_axes(mech, axes, home: np.ndarray, ranges, n: int) -> tuple[np.ndarray, np.ndarray]:

@@ -62,7 +62,7 @@ from .errors import (
 )
 from .leg import Leg
 from .screws import as_fraction, as_vector, homogenise
-from .solve import LEGS, solve_kernel, solve_system
+from .solve import LEGS, POSE_COORDINATES, solve_kernel, solve_system
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
@@ -495,11 +495,11 @@ class Mechanism:
             except PkmError as e:
                 failures.append((i, f"not completed: {e}"))
                 for name, value in position.partial_pose(coords).items():
-                    full[i, _POSE_NAMES.index(name)] = value
+                    full[i, POSE_COORDINATES.index(name)] = value
                 continue
             full[i] = position.pose_coordinates(done.pose)
             for name, value in done.info["given"].items():  # exactly as given
-                full[i, _POSE_NAMES.index(name)] = value
+                full[i, POSE_COORDINATES.index(name)] = value
             previous = done
         done_idx = np.flatnonzero(np.isfinite(full).all(axis=1))
         if not len(done_idx):
@@ -508,7 +508,6 @@ class Mechanism:
                         failures)
 
 
-_POSE_NAMES = ("x", "y", "z", "roll", "pitch", "yaw")
 
 
 def _partial_poses(poses) -> list | None:

@@ -66,6 +66,7 @@ from .solve import (
     ClosureSolution,
     CoordinateSystem,
     closure_error,
+    coordinate_errors,
     pose_coordinates,
     solve_closure,
     solve_coordinates,
@@ -1044,11 +1045,8 @@ def project_pose(mech, pose, guess=None, *, tol: float = POSE_PROJECTION_TOL,
         raise AssemblyError(mech.legs[0].name, np.nan, "a mechanism with 6 DOF has no "
                             "lower-dimensional motion to project a pose onto")
     sol = solve_coordinates(mech, pose0, leg_q0, range(6), target, tol=closure_tol)
-    scales = np.r_[[mech.characteristic_length] * 3, 1.0, 1.0, 1.0]
-    reached = pose_coordinates(sol.pose)
-    diff = np.abs(reached - target)
-    diff[3:] = np.abs((diff[3:] + np.pi) % (2 * np.pi) - np.pi)
-    distance = float(np.max(diff / scales))
+    distance = float(np.max(np.abs(coordinate_errors(sol.pose, range(6), target,
+                                                     mech.characteristic_length))))
     k = int(np.argmax(sol.residuals)) if len(sol.residuals) else 0
     if not (sol.closure <= closure_tol and _in_limits(mech, sol.leg_q)):
         raise AssemblyError(mech.legs[k].name, sol.residuals[k],

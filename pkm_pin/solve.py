@@ -1158,8 +1158,7 @@ class CoordinateSystem:
         self.C = np.zeros((6, ntot + 6))
         self.C[:, ntot:] = coordinate_rates(pose, L)
         self.coords, self.units, self.length, self.ws = coords, units, L, ws
-        U, s, Vt = np.linalg.svd(A)
-        rank = int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0 else 0
+        rank, U, s, Vt = screws.svd_rank(A, RANK_RTOL)
         self._U, self._s, self._V = U[:, :rank], s[:rank], Vt[:rank].T
         self.free = Vt[rank:].T
 

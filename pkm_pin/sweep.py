@@ -39,6 +39,7 @@ from . import engine
 from .analysis import SINGULAR_TOL, classify, layout_of
 from .errors import AssemblyError, InputError
 from .screws import as_float_array, as_fraction
+from .solve import pose_coordinates
 from .tolerances import RANK_RTOL
 from .transmission import sweep_cti, sweep_lti
 from .twists import has_mimic, joint_lines, joint_twists, sweep_pass
@@ -120,7 +121,7 @@ def pose_array(poses) -> np.ndarray:
     else:
         poses = list(poses)
         if poses and all(isinstance(p, pin.SE3) for p in poses):
-            X = np.array([np.r_[p.translation, pin.rpy.matrixToRpy(p.rotation)] for p in poses])
+            X = np.array([pose_coordinates(p) for p in poses])
         else:
             X = as_float_array(poses, "poses")
     if X.ndim != 2 or X.shape[1] != 6:

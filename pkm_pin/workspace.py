@@ -65,9 +65,10 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError, PkmError
+from .solve import POSE_COORDINATES
 
 #: The pose coordinates, in the order of the sweep arrays.
-COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
+COORDINATES = POSE_COORDINATES
 #: Workspace kinds.
 KINDS = ("reachable", "singularity-free", "transmission")
 #: Largest number of coordinates sampled at once.
@@ -598,7 +599,7 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
                                  threshold=threshold, centre=centre, progress=progress,
                                  subsamples=subsamples)
     t0 = time.perf_counter()
-    kinds = _kinds(kinds, KINDS)
+    kinds = _kinds(kinds)
     threshold = GOOD_LTI if threshold is None else float(threshold)
     coords = default_coordinates(mech) if coords is None else _check_coords(coords, COORDINATES)
     at = dict(at or {})
@@ -621,7 +622,7 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
 
     def inside(P: np.ndarray) -> dict:
         """The kinds' pointwise properties at the sub-points (the sweep engine)."""
-        _, Xs = _poses(mech, coords, plan, P, B, seed)
+        _, Xs = _poses(mech, coords, plan, P, B, seed, method)  # no second probe
         r = _sweep_samples(mech, Xs, method, "transmission" in kinds, executor,
                            chunk_size, False)
         return _pointwise({"ok": r.ok, "singularity": r.singularity, "det": r.det,
@@ -635,17 +636,13 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     return ws
 
 
-def _kinds(kinds, allowed) -> tuple[str, ...]:
+def _kinds(kinds) -> tuple[str, ...]:
     if kinds is None:
-        return tuple(allowed)
+        return KINDS
     kinds = (kinds,) if isinstance(kinds, str) else tuple(kinds)
     bad = [k for k in kinds if k not in KINDS]
     if bad or not kinds:
         raise InputError(f"workspace kinds are {', '.join(KINDS)}; got {', '.join(kinds)}")
-    missing = [k for k in kinds if k not in allowed]
-    if missing:
-        raise InputError(f"{', '.join(missing)}: not available here (available: "
-                         f"{', '.join(allowed)})")
     return tuple(k for k in KINDS if k in kinds or k == "reachable")
 
 
@@ -667,19 +664,23 @@ def _pose_plan(mech, coords, at: dict) -> dict:
     return {"home": home, "fixed": fixed, "solved": solved}
 
 
-def _poses(mech, coords, plan, points, bounds, seed) -> tuple[str, object]:
+def _poses(mech, coords, plan, points, bounds, seed, method=None) -> tuple[str, object]:
     """The samples as full poses (N, 6) when the solved-for coordinates are constant
-    over the box (probed), else as partial poses (a list of mappings)."""
+    over the box (probed, unless ``method`` gives the answer of an earlier probe), else
+    as partial poses (a list of mappings)."""
     home, fixed, solved = plan["home"], plan["fixed"], plan["solved"]
+    if method is None:
+        constant = not solved or _constant(mech, coords, plan, bounds, seed)
+        method = "poses" if constant else "completed poses"
+    if method == "completed poses":
+        return method, [{**{c: float(p[j]) for j, c in enumerate(coords)}, **fixed}
+                        for p in points]
     full = np.tile(home, (len(points), 1))
     for name, value in fixed.items():
         full[:, COORDINATES.index(name)] = value
     for j, c in enumerate(coords):
         full[:, COORDINATES.index(c)] = points[:, j]
-    if not solved or _constant(mech, coords, plan, bounds, seed):
-        return "poses", full
-    return "completed poses", [{**{c: float(p[j]) for j, c in enumerate(coords)}, **fixed}
-                               for p in points]
+    return method, full
 
 
 def _constant(mech, coords, plan, bounds, seed, probes: int = 6) -> bool:
@@ -688,13 +689,12 @@ def _constant(mech, coords, plan, bounds, seed, probes: int = 6) -> bool:
     mechanism's orientation; not a 3-RPS's parasitic motions). At least two probes must
     complete."""
     from .position import complete
-    from .solve import pose_coordinates
+    from .solve import coordinate_errors
 
     rng = np.random.default_rng(seed)
     span = bounds[:, 1] - bounds[:, 0]
     home, idx = plan["home"], [COORDINATES.index(c) for c in plan["solved"]]
     mid = home[[COORDINATES.index(c) for c in coords]]
-    scale = np.array([mech.characteristic_length] * 3 + [1.0] * 3)[idx]
     done = 0
     for _ in range(probes):
         p = mid + (rng.random(len(coords)) - 0.5) * 0.2 * span
@@ -702,10 +702,8 @@ def _constant(mech, coords, plan, bounds, seed, probes: int = 6) -> bool:
             asm = complete(mech, {**{c: float(v) for c, v in zip(coords, p)}, **plan["fixed"]})
         except PkmError:
             continue
-        got = pose_coordinates(asm.pose)[idx]
-        diff = np.abs(got - home[idx])
-        diff = np.where(np.array(idx) >= 3, np.abs((diff + np.pi) % (2 * np.pi) - np.pi), diff)
-        if np.any(diff / scale > CONSTANT_COORDINATE_TOL):
+        diff = coordinate_errors(asm.pose, idx, home[idx], mech.characteristic_length)
+        if np.any(np.abs(diff) > CONSTANT_COORDINATE_TOL):
             return False
         done += 1
     return done >= 2
@@ -852,7 +850,7 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     if sampling != "grid":
         raise InputError("a linkage's workspace grows from cell to cell: sampling='grid'")
     t0 = time.perf_counter()
-    kinds = _kinds(kinds, KINDS)
+    kinds = _kinds(kinds)
     threshold = GOOD_LTI if threshold is None else float(threshold)
     ref = link.assemble()
     dom = _linkage_domain(link, ref, coords, bounds)
