@@ -503,7 +503,7 @@ class Mechanism:
             previous = done
         done_idx = np.flatnonzero(np.isfinite(full).all(axis=1))
         if not len(done_idx):
-            return _failed_sweep(self, full, failures)
+            return _failed_sweep(self, full, failures, singular_tol)
         return _scatter(_sweep.sweep(self, full[done_idx], **options), full, done_idx,
                         failures)
 
@@ -533,9 +533,8 @@ def _partial_poses(poses) -> list | None:
 
 def _scatter(result: _sweep.SweepResult, full: np.ndarray, idx: np.ndarray,
              failures: list) -> _sweep.SweepResult:
-    """A sweep result over every pose from the result over the rows ``idx`` (none:
-    ``result`` is only a template): each per-pose array scattered (nan, −1, "" or False
-    elsewhere), failures merged."""
+    """A sweep result over every pose from the result over the rows ``idx``: each
+    per-pose array scattered (nan, −1, "" or False elsewhere), failures merged."""
     rows, out = len(result.poses), {}
     for f in dataclasses.fields(result):
         a = getattr(result, f.name)
@@ -544,12 +543,10 @@ def _scatter(result: _sweep.SweepResult, full: np.ndarray, idx: np.ndarray,
         elif isinstance(a, np.ndarray) and a.ndim >= 1 and a.shape[0] == rows:
             b = np.empty((len(full),) + a.shape[1:], dtype=a.dtype)
             b[...] = _fill_value(a.dtype)
-            if len(idx):
-                b[idx] = a
+            b[idx] = a
             out[f.name] = b
         elif f.name == "failures":
-            out[f.name] = sorted(failures + ([(int(idx[i]), r) for i, r in a] if len(idx)
-                                             else []))
+            out[f.name] = sorted(failures + [(int(idx[i]), r) for i, r in a])
         else:
             out[f.name] = a
     return type(result)(**out)
@@ -566,10 +563,11 @@ def _fill_value(dtype):
     return np.nan
 
 
-def _failed_sweep(mech, full: np.ndarray, failures: list) -> _sweep.SweepResult:
-    """The sweep result of poses none of which was completed (the arrays of a one-pose
-    sweep of home as the template)."""
-    return _scatter(_sweep.sweep(mech, [mech.home]), full, np.empty(0, int), failures)
+def _failed_sweep(mech, full: np.ndarray, failures: list, singular_tol: float
+                  ) -> _sweep.SweepResult:
+    """The sweep result of poses none of which was completed."""
+    result = _sweep._gather(full, [], [], mech.n_actuated, singular_tol)
+    return dataclasses.replace(result, failures=sorted(failures))
 
 
 def stalled_at_boundary(leg: Leg, q: np.ndarray, residual: float) -> bool:

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 from numba import njit
+from numba.extending import register_jitable
 
 from .errors import InputError
 from .tolerances import HELICAL_PITCH_RTOL, RANK_RTOL, SPAN_RTOL, ZERO_SCREW_RTOL
@@ -390,8 +391,9 @@ def from_pinocchio(x) -> np.ndarray:
     Works on a 6-vector, a ``pin.Motion``, and on a 6×n Jacobian (the rows are swapped;
     the result is still 6×n). A ``pin.Force`` is ``(f; τ)``: force first, which is
     already the axis-first order of a wrench, so it is returned unchanged. This,
-    :func:`world_twist_rows` (its compiled form for Jacobians) and :func:`to_pinocchio`
-    are the only place where the two orders meet.
+    :func:`world_twist_rows` (its compiled form for Jacobians), :func:`probe_tip` (a
+    probe's placement read from its columns) and :func:`to_pinocchio` are the only place
+    where the two orders meet.
     """
     if isinstance(x, pin.Force):
         return x.vector.copy()
@@ -401,6 +403,26 @@ def from_pinocchio(x) -> np.ndarray:
     if a.shape[0] != 6:
         raise InputError(f"expected 6 rows in Pinocchio order (v; w), got shape {a.shape}")
     return a[_SWAP].copy()
+
+
+@register_jitable
+def probe_tip(Jt, c, tip):
+    """The world placement ``tip`` (4 × 4) of the frame of a
+    :class:`~pkm_pin.twists.TreePass` probe (a spherical joint at rest) whose columns of
+    Pinocchio's WORLD Jacobian ``Jt`` start at ``c``: three unit rotations in
+    Pinocchio's order ``(v; ω) = (p × r_a; r_a)``, ``r_a`` the columns of the rotation,
+    ``p = ½ Σ_a r_a × (p × r_a)``. Compiled code; with :func:`world_twist_rows`, the
+    compiled reading of Pinocchio's ``(v; ω)``."""
+    p0 = p1 = p2 = 0.0
+    for a in range(3):
+        r0, r1, r2 = Jt[3, c + a], Jt[4, c + a], Jt[5, c + a]
+        v0, v1, v2 = Jt[0, c + a], Jt[1, c + a], Jt[2, c + a]
+        tip[0, a], tip[1, a], tip[2, a] = r0, r1, r2
+        p0 += 0.5 * (r1 * v2 - r2 * v1)
+        p1 += 0.5 * (r2 * v0 - r0 * v2)
+        p2 += 0.5 * (r0 * v1 - r1 * v0)
+    tip[0, 3], tip[1, 3], tip[2, 3] = p0, p1, p2
+    tip[3, 0], tip[3, 1], tip[3, 2], tip[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 @njit(cache=True, nogil=True)

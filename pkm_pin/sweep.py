@@ -279,10 +279,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
                 failures.append((int(i), str(AssemblyError(leg.name, r))))
                 ok[i] = False
         Qs.append(Q)
-    out = {"ok": ok, "q_actuated": np.full((N, n), np.nan), "failures": failures,
-           "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
+    out = {**_unassembled(N, n), "ok": ok, "failures": failures}
     # 2., 3. by blocks of poses (their arrays stay in the processor's caches): the
     #    Pinocchio pass (closure check and joint twists), then the analysis engine
     own_lines = transmission and has_mimic(mech)  # the owners' own lines (one more pass)
@@ -374,10 +371,7 @@ def _evaluate_chunk_pinocchio(mech, X, layout, progress, restarts,
             previous = asm
         if progress is not None:
             progress(1)
-    out = {"ok": ok, "q_actuated": q_act, "failures": failures,
-           "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
+    out = {**_unassembled(N, n), "ok": ok, "q_actuated": q_act, "failures": failures}
     if not solved:
         return out
     J = [joint_twists(mech, asm.leg_q) if asm.joint_twists is None else asm.joint_twists
@@ -477,6 +471,16 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
     return _gather(X, chunks, parts, mech.n_actuated, singular_tol)
 
 
+def _unassembled(N: int, n: int) -> dict:
+    """The per-pose arrays of N poses none of which is assembled yet (n actuators):
+    ``ok`` False, −1 degrees of freedom, nan elsewhere."""
+    nan = np.full(N, np.nan)
+    return {"ok": np.zeros(N, bool), "q_actuated": np.full((N, n), np.nan),
+            "dof": np.full(N, -1), "type_I": nan, "type_II": nan.copy(),
+            "condition": nan.copy(), "det": nan.copy(), "lti": nan.copy(),
+            "cti": nan.copy()}
+
+
 def _progress_bar(total: int):
     from tqdm import tqdm
 
@@ -484,11 +488,7 @@ def _progress_bar(total: int):
 
 
 def _gather(X, chunks, parts, n, singular_tol) -> SweepResult:
-    N = len(X)
-    res = {"ok": np.zeros(N, bool), "q_actuated": np.full((N, n), np.nan),
-           "dof": np.full(N, -1), "type_I": np.full(N, np.nan), "type_II": np.full(N, np.nan),
-           "condition": np.full(N, np.nan), "det": np.full(N, np.nan),
-           "lti": np.full(N, np.nan), "cti": np.full(N, np.nan)}
+    res = _unassembled(len(X), n)
     failures = []
     for idx, part in zip(chunks, parts):
         for key in res:

@@ -23,12 +23,11 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 from numba import njit
-from numba.extending import register_jitable
 
 from . import screws
 from .compiling import SameTypes, prefer_compiled
 from .kernels import _compose, pose_error
-from .screws import world_twist_rows
+from .screws import probe_tip, world_twist_rows
 
 #: The calling thread's scratch buffer of :func:`_scratch`.
 _SCRATCH = threading.local()
@@ -316,24 +315,6 @@ class TreePass:
                               float(tol), J, bad)
             del Jt  # the buffer is read: free for the next block
         return J, bad
-
-
-@register_jitable
-def probe_tip(Jt, c, tip):
-    """The world placement ``tip`` (4 × 4) of the frame of a :class:`TreePass` probe
-    whose columns of the WORLD Jacobian ``Jt`` start at ``c``: three unit rotations
-    ``(v; ω) = (p × r_a; r_a)``, ``r_a`` the columns of the rotation, ``p = ½ Σ_a r_a ×
-    (p × r_a)``."""
-    p0 = p1 = p2 = 0.0
-    for a in range(3):
-        r0, r1, r2 = Jt[3, c + a], Jt[4, c + a], Jt[5, c + a]
-        v0, v1, v2 = Jt[0, c + a], Jt[1, c + a], Jt[2, c + a]
-        tip[0, a], tip[1, a], tip[2, a] = r0, r1, r2
-        p0 += 0.5 * (r1 * v2 - r2 * v1)
-        p1 += 0.5 * (r2 * v0 - r0 * v2)
-        p2 += 0.5 * (r0 * v1 - r1 * v0)
-    tip[0, 3], tip[1, 3], tip[2, 3] = p0, p1, p2
-    tip[3, 0], tip[3, 1], tip[3, 2], tip[3, 3] = 0.0, 0.0, 0.0, 1.0
 
 
 @njit(cache=True, nogil=True)

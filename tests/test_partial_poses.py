@@ -134,6 +134,11 @@ def test_sweep_of_partial_poses_30x30(rps3):
     bad = rps3.sweep([{"z": 0.9, "roll": 0.0, "pitch": 0.0}, {"x": 0.1, "z": 0.8}])
     assert bad.ok.tolist() == [True, False]
     assert bad.failures[0][0] == 1 and "not completed" in bad.failures[0][1]
+    none = rps3.sweep([{"x": 0.1, "z": 0.8}, {"y": 0.2, "z": 0.8}])  # none completes
+    assert not none.ok.any() and [i for i, _ in none.failures] == [0, 1]
+    assert (none.dof == -1).all() and np.isnan(none.condition).all()
+    assert none.singularity.tolist() == ["", ""] and none.q_actuated.shape == (2, 3)
+    assert none.poses[0, 0] == 0.1 and none.poses[1, 1] == 0.2
 
 
 def test_type_I_boundary_pose_assembles_and_is_analysed():
