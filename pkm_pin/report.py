@@ -225,10 +225,23 @@ def _transmission(analysis) -> dict | None:
         tr = analysis.transmission
     except PkmError:
         return None
-    clean = [None if not np.isfinite(v) else float(v) for v in tr.iti]
-    return {"iti": clean, "oti": [None if not np.isfinite(v) else float(v) for v in tr.oti],
-            "lti": float(tr.lti), "cti": float(tr.cti),
-            "leg_cti": [float(v) for v in tr.leg_cti], "good": tr.good, "words": tr.worst}
+    return transmission_data(tr)
+
+
+def finite_or_none(x: float) -> float | None:
+    """``x`` as a float, or ``None`` when it is not finite (JSON has no nan)."""
+    x = float(x)
+    return x if np.isfinite(x) else None
+
+
+def transmission_data(tr) -> dict:
+    """A :class:`~pkm_pin.transmission.Transmission` as plain data (JSON-ready: nan is
+    ``None``), with the weakest index in words."""
+    return {"iti": [finite_or_none(v) for v in tr.iti],
+            "oti": [finite_or_none(v) for v in tr.oti],
+            "lti": finite_or_none(tr.lti), "cti": finite_or_none(tr.cti),
+            "leg_cti": [finite_or_none(v) for v in tr.leg_cti], "good": tr.good,
+            "words": tr.worst}
 
 
 def _idle(analysis) -> list[str]:
@@ -294,11 +307,10 @@ def markdown(analysis, plots: Sequence[str | Path] = (), data: dict | None = Non
     if tr is not None:
         lines += ["", "## Motion/force transmission", "", f"{tr['words']}.", "",
                   "| actuator | ITI | OTI |", "|---|---|---|"]
-        lines += [f"| {a} | {_num(i) if i is not None else '—'} | "
-                  f"{_num(o) if o is not None else '—'} |"
+        lines += [f"| {a} | {_index(i, '—')} | {_index(o, '—')} |"
                   for a, i, o in zip(r["actuated"], tr["iti"], tr["oti"])]
-        lines += ["", f"LTI = {_num(tr['lti'])} (good transmission: ≥ 0.7), "
-                  f"CTI = {_num(tr['cti'])}"]
+        lines += ["", f"LTI = {_index(tr['lti'])} (good transmission: ≥ 0.7), "
+                  f"CTI = {_index(tr['cti'])}"]
     lines += ["", "## Cross-check against the hand-written formulas", ""]
     if r["crosscheck"] is None:
         lines += ["No hand-written formulas exist for this mechanism."]
@@ -345,7 +357,8 @@ def text(r: dict) -> str:
     out += ["indices            " + ", ".join(f"{k} = {v:.6g}" for k, v in r["indices"].items())]
     tr = r.get("transmission")
     if tr is not None:
-        out += [f"transmission       LTI = {tr['lti']:.3g}, CTI = {tr['cti']:.3g}: {tr['words']}"]
+        out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}, "
+                f"CTI = {_index(tr['cti'], fmt='.3g')}: {tr['words']}"]
     if r["crosscheck"] is None:
         out += ["cross-check        no hand-written formulas for this mechanism"]
     else:
@@ -357,6 +370,14 @@ def text(r: dict) -> str:
 
 
 # ------------------------------------------------------------------------ numbers
+def _index(x: float | None, missing: str = "n/a", fmt: str = "") -> str:
+    """An index of :func:`transmission_data` in words: ``missing`` where it is not
+    defined (``None``), else :func:`_num` (or ``format(x, fmt)``)."""
+    if x is None:
+        return missing
+    return format(x, fmt) if fmt else _num(x)
+
+
 def _num(x: float) -> str:
     """A number with 4 significant digits, no ``-0``."""
     x = float(x)

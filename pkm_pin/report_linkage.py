@@ -24,7 +24,16 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .report import _list, _num, _row, _vec, readable_basis
+from .report import (
+    _index,
+    _list,
+    _num,
+    _row,
+    _vec,
+    finite_or_none,
+    readable_basis,
+    transmission_data,
+)
 
 #: Colours of the singularity classes in the maps.
 CLASS_COLOURS = {"none": "#ffffff", "I": "#f4a582", "II": "#92c5de", "III": "#b2abd2"}
@@ -79,11 +88,6 @@ def assembly_data(link, assembly) -> dict:
     }
 
 
-def _finite_or_none(x: float):
-    x = float(x)
-    return x if np.isfinite(x) else None
-
-
 def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Path] = ()) -> dict:
     """Plain-data summary (JSON-ready) of a linkage at an assembly.
 
@@ -120,7 +124,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "B": an.B.tolist(),
         "singularity": an.singularity,
         "constraint_singular": an.constraint_singular,
-        "indices": {k: _finite_or_none(v) for k, v in an.indices.items()},
+        "indices": {k: finite_or_none(v) for k, v in an.indices.items()},
         "transmission": _transmission(link, assembly),
         "uncontrolled_twist": None,
         "crosscheck": None,
@@ -177,7 +181,7 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
     out += [f"singularity        {r['singularity']}", f"indices            {idx}"]
     tr = r.get("transmission")
     if tr is not None:
-        out += [f"transmission       LTI = {tr['lti']:.3g}: {tr['words']}"]
+        out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}: {tr['words']}"]
     out += [f"plot               {p}" for p in r.get("plots", [])]
     return "\n".join(out)
 
@@ -191,11 +195,7 @@ def _transmission(link, assembly) -> dict | None:
         tr = link.transmission(assembly)
     except (PkmError, np.linalg.LinAlgError):
         return None
-    return {"iti": [_finite_or_none(v) for v in tr.iti],
-            "oti": [_finite_or_none(v) for v in tr.oti],
-            "lti": _finite_or_none(tr.lti), "cti": _finite_or_none(tr.cti),
-            "leg_cti": [_finite_or_none(v) for v in tr.leg_cti], "good": tr.good,
-            "words": tr.worst}
+    return transmission_data(tr)
 
 
 def linkage_markdown(r: dict) -> str:

@@ -146,3 +146,16 @@ def test_report_gives_the_transmission_indices_in_words():
     assert data["transmission"]["words"] == tr.worst == "leg B transmits poorly: OTI 0.59"
     assert "transmission       LTI = 0.587, CTI = 1: leg B transmits poorly" in text(data)
     assert "## Motion/force transmission" in markdown(an, data=data)
+    # an index that is not defined (nan: redundant actuation) is None in the data (JSON
+    # has no nan) and "n/a" / "—" in words, in the platform's report and the linkage's
+    from dataclasses import replace
+
+    from pkm_pin.report import transmission_data
+
+    odd = transmission_data(replace(tr, oti=np.r_[np.nan, tr.oti[1:]], lti=np.nan))
+    assert odd["oti"][0] is None and odd["lti"] is None
+    assert odd["iti"] == data["transmission"]["iti"]
+    json.dumps(odd, allow_nan=False)
+    data["transmission"] = odd
+    assert "transmission       LTI = n/a, CTI = 1:" in text(data)
+    assert "LTI = n/a (good transmission" in markdown(an, data=data)
