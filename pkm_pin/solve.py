@@ -700,17 +700,9 @@ def _newton_pinocchio(legs, anchors, pose: pin.SE3, leg_q, mask, target, scales,
         if stop or not (np.all(np.isfinite(ws.dq)) and np.all(np.isfinite(ws.xi))):
             break
         it += 1
-        step, size = float(ws.xi @ ws.xi), 0.0
-        for i, leg in enumerate(legs):
-            u, q = units[coords[i]:coords[i + 1]], leg_q[i]
-            new = leg.clip(pin.integrate(leg.model, q, u * ws.dq[coords[i]:coords[i + 1]]))
-            d = pin.difference(leg.model, q, new) / u
-            step += float(d @ d)
-            size += float(q @ q) if leg.nq != leg.nv else float(np.sum((q / u) ** 2))
-            leg_q[i] = new
-        if platform:
-            pose = screws.exp(np.r_[ws.xi[:3], length * ws.xi[3:]]) * pose
-        stalled = step < 1e-30 * (1.0 + size)
+        pose, leg_q, step, size = _apply(legs, pose, leg_q, ws.dq, ws.xi if platform else None,
+                                         coords, units, length)
+        stalled = step < NEWTON_STALL_RTOL * (1.0 + size)
         contracted = contracted and not (it > 1 and math.sqrt(step) > 0.5 * prev)
         prev = math.sqrt(step)
     ratio = 0.0
@@ -1176,21 +1168,26 @@ class CoordinateSystem:
         return z
 
 
-def _apply(mech, pose: pin.SE3, leg_q: list, z: np.ndarray, coords, units,
-           length: float) -> tuple[pin.SE3, list, float]:
-    """Move the legs by ``units · Δq`` (``pin.integrate``, projected onto the limits) and
-    the platform to ``exp(ξ) · pose``. Returns the new pose, the legs and the squared
-    dimensionless step taken."""
-    ntot = int(coords[-1])
-    xi = z[ntot:]
-    new_q, step = [], float(xi @ xi)
-    for i, leg in enumerate(mech.legs):
+def _apply(legs, pose: pin.SE3, leg_q: list, dq: np.ndarray, xi, coords, units,
+           length: float) -> tuple[pin.SE3, list, float, float]:
+    """The step of the Python drivers: each leg moved by ``units · Δq`` (``dq``,
+    dimensionless; ``pin.integrate``, projected onto the limits) and, unless ``xi`` is
+    ``None``, the platform to ``exp(ξ) · pose``. Returns the new pose and legs, the
+    squared dimensionless step taken and the squared size of the legs' coordinates
+    before it (``|q / units|²``; ``|q|²`` for a leg whose nq ≠ nv), for the stall test
+    ``step < NEWTON_STALL_RTOL · (1 + size)``."""
+    step = 0.0 if xi is None else float(xi @ xi)
+    new_q, size = [], 0.0
+    for i, leg in enumerate(legs):
         u, q = units[coords[i]:coords[i + 1]], leg_q[i]
-        new = leg.clip(pin.integrate(leg.model, q, u * z[coords[i]:coords[i + 1]]))
-        dd = pin.difference(leg.model, q, new) / u
-        step += float(dd @ dd)
+        new = leg.clip(pin.integrate(leg.model, q, u * dq[coords[i]:coords[i + 1]]))
+        d = pin.difference(leg.model, q, new) / u
+        step += float(d @ d)
+        size += float(q @ q) if leg.nq != leg.nv else float(np.sum((q / u) ** 2))
         new_q.append(new)
-    return screws.exp(np.r_[xi[:3], length * xi[3:]]) * pose, new_q, step
+    if xi is not None:
+        pose = screws.exp(np.r_[xi[:3], length * xi[3:]]) * pose
+    return pose, new_q, step, size
 
 
 def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = CLOSURE_TOL,
@@ -1223,9 +1220,9 @@ def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = 
         if stop or not np.all(np.isfinite(z)):
             break
         it += 1
-        pose, leg_q, step = _apply(mech, pose, leg_q, z, system.coords, system.units, L)
-        size = sum(float(np.sum((q / u) ** 2)) for q, u in zip(
-            leg_q, np.split(system.units, system.coords[1:-1])))
+        ntot = int(system.coords[-1])
+        pose, leg_q, step, size = _apply(mech.legs, pose, leg_q, z[:ntot], z[ntot:],
+                                         system.coords, system.units, L)
         if step < NEWTON_STALL_RTOL * (1.0 + size):
             system = CoordinateSystem(mech, pose, leg_q, ws)
             d = coordinate_errors(pose, rows, values, L)

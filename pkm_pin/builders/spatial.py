@@ -207,16 +207,17 @@ def delta(
         legs=legs, home=home, home_q=home_q, slug="delta")
 
 
-def three_arms(xml: str, q: np.ndarray, home: pin.SE3, radius: float, urdf_file: str
+def three_arms(xml: str, q: np.ndarray, home: pin.SE3, radius: float, urdf_file: str,
+               actuated: tuple[str, ...] = ("R1",)
                ) -> tuple[list[LegDesign], list[np.ndarray]]:
-    """A Delta's three legs (the URDF ``xml``, actuated ``R1``, tip ``tip``) at
-    azimuths 0°, 120°, 240° on the base circle of ``radius``, each assembled at ``home``
-    with joint values ``q``: ``(legs, home_q)``."""
+    """Three legs (the URDF ``xml``, tip ``tip``, ``actuated`` joints: a Delta's ``R1``)
+    at azimuths 0°, 120°, 240° on the base circle of ``radius``, each assembled at
+    ``home`` with joint values ``q``: ``(legs, home_q)``."""
     legs, home_q = [], []
     for i, phi in enumerate(_AZIMUTHS):
         Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
         base = pin.SE3(Rz, Rz @ np.array([radius, 0.0, 0.0]))
-        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("R1",), base, q, home,
+        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", actuated, base, q, home,
                                         urdf_file))
         home_q.append(q.copy())
     return legs, home_q
@@ -390,14 +391,8 @@ def prs3(
     ]
     xml = chain_urdf("prs_leg", joints, tip="tip")
     home = pin.SE3(np.eye(3), np.array([0.0, 0.0, h]))
-    legs, home_q = [], []
-    for i, phi in enumerate(_AZIMUTHS):
-        Rz = pin.rpy.rpyToMatrix(0.0, 0.0, phi)
-        base = pin.SE3(Rz, Rz @ np.array([Rb, 0.0, 0.0]))
-        q = np.array([s0, 0.0, 0.0, 0.0, 0.0])
-        legs.append(LegDesign.assembled(str(i + 1), xml, "tip", ("P",), base, q, home,
-                                        "prs_leg.urdf"))
-        home_q.append(q)
+    legs, home_q = three_arms(xml, np.array([s0, 0.0, 0.0, 0.0, 0.0]), home, Rb,
+                              "prs_leg.urdf", ("P",))
     return MechanismDesign(
         name="3-PRS",
         description="3-PRS parallel mechanism; prismatic actuators on the base; 1T2R",
