@@ -41,7 +41,6 @@ from .transmission import (
     Transmission,
     constraint_transmission,
     leg_points,
-    local_transmission_index,
     transmission_indices,
 )
 from .twists import joint_lines
@@ -226,10 +225,16 @@ class Analysis:
     @cached_property
     def constraint_singular(self) -> bool:
         """Whether the constraint system has lost rank compared with the home assembly."""
-        mech = self.mechanism
-        if self.assembly is mech.__dict__.get("home_assembly"):
+        if self._is_home:
             return False
-        return self.constraint_wrenches.shape[0] < mech.home_analysis.constraint_wrenches.shape[0]
+        home = self.mechanism.home_analysis
+        return self.constraint_wrenches.shape[0] < home.constraint_wrenches.shape[0]
+
+    @property
+    def _is_home(self) -> bool:
+        """Whether this is the analysis of the mechanism's home assembly (the reference
+        of the constraint singularities: compared with nothing)."""
+        return self.assembly is self.mechanism.__dict__.get("home_assembly")
 
     @cached_property
     def uncontrolled_twist(self) -> np.ndarray | None:
@@ -334,12 +339,9 @@ class Analysis:
         C = [self._about_centre(ls.constraint_wrenches).reshape(-1, 6) for ls in self.legs]
         points = [leg_points(c[:1], lines, lay.coords, [lay.coords[k] - 1], [k], L)[1][0]
                   if len(c) else np.zeros(3) for k, c in enumerate(C)]
-        generic = (None if self.assembly is mech.__dict__.get("home_assembly")
-                   else mech.home_analysis.constraint_wrenches.shape[0])
+        generic = None if self._is_home else mech.home_analysis.constraint_wrenches.shape[0]
         leg_cti = constraint_transmission(A, C, points, L, self.rtol, generic)
-        return Transmission(iti, oti, float(local_transmission_index(iti, oti)), leg_cti,
-                            float(leg_cti.min()) if len(leg_cti) else 1.0,
-                            np.asarray(lay.act_leg), tuple(leg.name for leg in mech.legs))
+        return Transmission.of(iti, oti, leg_cti, lay.act_leg, [leg.name for leg in mech.legs])
 
     # -------------------------------------------------------------------- statics
     def _balance(self, wrench) -> tuple[np.ndarray, np.ndarray]:

@@ -423,14 +423,10 @@ class Linkage:
                           for k, j in enumerate(ids)]).reshape(-1, 3)
         iti, oti = transmission_indices(W, J[cols], an.platform_twists, p_in, p_out,
                                         model.length)
-        lti = float(np.min(np.minimum(iti, np.where(np.isnan(oti), np.inf, oti)),
-                           initial=np.inf)) if len(iti) else float("nan")
         leg_cti, side_of = self._constraint_transmission(kin, W, an.reference_point)
         names = tuple("+".join(a for a, s in zip(model.actuated, side_of) if s == k)
                       for k in range(len(leg_cti)))
-        return Transmission(iti, oti, lti, leg_cti,
-                            float(leg_cti.min()) if len(leg_cti) else 1.0,
-                            np.asarray(side_of, int), names)
+        return Transmission.of(iti, oti, leg_cti, side_of, names)
 
     def _constraint_transmission(self, kin: TreeKinematics, W: np.ndarray, p: np.ndarray
                                  ) -> tuple[np.ndarray, list]:

@@ -479,6 +479,15 @@ class Transmission:
     legs: np.ndarray
     leg_names: tuple
 
+    @classmethod
+    def of(cls, iti, oti, leg_cti, legs, leg_names) -> Transmission:
+        """The indices with ``lti`` (:func:`local_transmission_index`) and ``cti`` (the
+        smallest leg's; 1 without legs) derived from the others."""
+        leg_cti = np.asarray(leg_cti, float)
+        return cls(iti, oti, float(local_transmission_index(iti, oti)), leg_cti,
+                   float(leg_cti.min()) if len(leg_cti) else 1.0, np.asarray(legs, int),
+                   tuple(leg_names))
+
     @property
     def good(self) -> bool:
         """Whether ``LTI`` and ``CTI`` are at least :data:`GOOD_LTI` (a ``CTI`` of nan,
