@@ -31,6 +31,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
 from .errors import InputError
+from .workspace import KIND_COLOURS
 
 #: Default level of the type I closeness index drawn as the "near type I" iso-line.
 TYPE_I_LEVEL = 0.02
@@ -213,22 +214,14 @@ def save_maps(data: Mapping, prefix: str | Path, title: str = "") -> list[Path]:
 
 
 # ------------------------------------------------------------------- workspaces
-#: Colours of the workspace kinds, from the largest to the smallest set.
-WORKSPACE_COLOURS = {"reachable": "#fdb863", "singularity-free": "#92c5de",
-                     "transmission": "#1a9850"}
-
-
 def _workspace_codes(ws) -> tuple[np.ndarray, list[str]]:
     """Per cell, the index of the smallest kind it belongs to (nan: not reachable)."""
-    kinds = [k for k in WORKSPACE_COLOURS if k in ws.masks]
-    codes = np.full(ws.shape, np.nan)
-    for i, k in enumerate(kinds):
-        codes[ws.masks[k]] = i
-    return codes, kinds
+    codes, kinds = ws.smallest_kind()
+    return np.where(codes >= 0, codes, np.nan), kinds
 
 
 def _workspace_panel(ax, ws, codes2, kinds, u, v, labels, centre=None) -> None:
-    cmap = ListedColormap([WORKSPACE_COLOURS[k] for k in kinds])
+    cmap = ListedColormap([KIND_COLOURS[k] for k in kinds])
     ax.set_facecolor(_NOT_ASSEMBLED)
     ax.pcolormesh(u, v, np.ma.masked_invalid(codes2.T), cmap=cmap, vmin=-0.5,
                   vmax=len(kinds) - 0.5, shading="nearest")
@@ -253,7 +246,7 @@ def workspace_plots(ws, prefix: str | Path, title: str = "") -> list[Path]:
     prefix = Path(prefix)
     codes, kinds = _workspace_codes(ws)
     labels = [f"{c} [{u}]" for c, u in zip(ws.coords, ws.units)]
-    handles = [Patch(color=WORKSPACE_COLOURS[k], label=k) for k in kinds]
+    handles = [Patch(color=KIND_COLOURS[k], label=k) for k in kinds]
     handles.append(Patch(color=_NOT_ASSEMBLED, label="not reachable"))
     head = f"{title}: " if title else ""
     k = len(ws.coords)
@@ -264,7 +257,7 @@ def workspace_plots(ws, prefix: str | Path, title: str = "") -> list[Path]:
         flat = codes.ravel()
         for i, kind in enumerate(kinds):
             hit = flat == i
-            ax.plot(P[hit, 0], y[hit], ".", color=WORKSPACE_COLOURS[kind], ms=3)
+            ax.plot(P[hit, 0], y[hit], ".", color=KIND_COLOURS[kind], ms=3)
         ax.legend(handles=handles, loc="upper right", fontsize=8)
         path = prefix.with_name(prefix.name + "_workspace.png")
         fig.savefig(path)

@@ -66,6 +66,7 @@ from . import screws
 from .errors import AssemblyError, InputError, PkmError
 from .mechanism import Assembly, Mechanism, as_pose
 from .report import readable_basis
+from .workspace import KIND_COLOURS
 
 #: Leg colours (0xRRGGBB), cycled, for legs whose URDF gives no material.
 LEG_COLOURS = (0x377EB8, 0x4DAF4A, 0x17BECF, 0xA65628, 0xF781BF, 0xBCBD22)
@@ -296,10 +297,7 @@ class Scene:
         if self.recorder.forward is not None:
             self.visualizer.open()
             return
-        fd, name = tempfile.mkstemp(prefix="pkm_pin_", suffix=".html")
-        os.close(fd)
-        self.to_html(name)
-        webbrowser.open(Path(name).as_uri(), new=2)
+        _open_page(self.to_html(), "pkm_pin_")
 
 
 def view(
@@ -400,6 +398,14 @@ def grid_scale(length: float) -> float:
     ``length``: the power of ten at or below it (1 for a metre-sized model in metres,
     1000 for the same in millimetres, 0.1 for a 30 cm model)."""
     return float(10.0 ** np.floor(np.log10(length)))
+
+
+def _open_page(page: str, prefix: str) -> None:
+    """The HTML ``page`` written to a temporary file and opened in the browser."""
+    fd, name = tempfile.mkstemp(prefix=prefix, suffix=".html")
+    os.close(fd)
+    Path(name).write_text(page, encoding="utf-8")
+    webbrowser.open(Path(name).as_uri(), new=2)
 
 
 def _translation(p) -> np.ndarray:
@@ -520,7 +526,7 @@ class _Painter:
         viz.initViewer(viewer=self.vis)
         rgba = None
         if "<material" not in leg.xml:
-            rgba = [((colour >> s) & 0xFF) / 255.0 for s in (16, 8, 0)] + [1.0]
+            rgba = _rgb(colour) + [1.0]
         viz.loadViewerModel(rootNodeName=path, visual_color=rgba)
         return viz
 
@@ -710,9 +716,14 @@ def _polygon_faces(pts: np.ndarray, tol: float) -> np.ndarray | None:
 
 
 # --------------------------------------------------------------- workspace cloud
-#: Colours of the workspace kinds in the point cloud (0xRRGGBB).
-WORKSPACE_CLOUD_COLOURS = {"reachable": 0xFDB863, "singularity-free": 0x4393C3,
-                           "transmission": 0x1A9850}
+def _hex_colour(colour: str) -> int:
+    """``"#rrggbb"`` as meshcat's 0xRRGGBB."""
+    return int(colour.lstrip("#"), 16)
+
+
+def _rgb(colour: int) -> list[float]:
+    """0xRRGGBB as three fractions."""
+    return [((colour >> s) & 0xFF) / 255.0 for s in (16, 8, 0)]
 
 
 def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=None,
@@ -739,19 +750,17 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     P[:, :len(ws.coords)] = ws.points
     span = float(np.max(ws.bounds[:, 1] - ws.bounds[:, 0]))
     size = float(np.min(ws.spacing)) if len(ws.points) else span / 100
-    kinds = [k for k in WORKSPACE_CLOUD_COLOURS if k in ws.masks]
-    smallest = np.full(len(P), -1)
-    for i, k in enumerate(kinds):
-        smallest[np.asarray(ws.masks[k]).ravel()] = i
+    codes, kinds = ws.smallest_kind()
+    smallest = codes.ravel()
     centre = P.mean(axis=0) if len(P) else np.zeros(3)
     root = vis["pkm"]["workspace"]
-    root.set_transform(pin.SE3(np.eye(3), -centre).homogeneous)
+    root.set_transform(_translation(-centre))
     for i, k in enumerate(kinds):
         pts = P[smallest == i]
         if not len(pts):
             continue
-        rgb = np.array([(WORKSPACE_CLOUD_COLOURS[k] >> s) & 0xFF for s in (16, 8, 0)]) / 255
-        colour = np.tile(rgb[:, None], (1, len(pts)))
+        colour = np.tile(np.array(_rgb(_hex_colour(KIND_COLOURS[k])))[:, None],
+                         (1, len(pts)))
         root[node_name(k)].set_object(g.PointCloud(pts.T.astype(np.float32),
                                                    colour.astype(np.float32), size=size))
     if surfaces and ws.sampling == "grid" and len(ws.coords) == 3:
@@ -759,15 +768,12 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     home = np.zeros(3)
     home[:len(ws.coords)] = ws.home
     root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=0x000000))
-    root["home"].set_transform(pin.SE3(np.eye(3), home).homogeneous)
+    root["home"].set_transform(_translation(home))
     if html is not None:
         Path(html).write_text(recorder.static_html(title=f"pkm_pin workspace: {ws.mechanism}"),
                               encoding="utf-8")
     if open:
-        fd, name = tempfile.mkstemp(prefix="pkm_pin_ws_", suffix=".html")
-        os.close(fd)
-        Path(name).write_text(recorder.static_html(), encoding="utf-8")
-        webbrowser.open(Path(name).as_uri(), new=2)
+        _open_page(recorder.static_html(), "pkm_pin_ws_")
     return recorder
 
 
@@ -780,7 +786,7 @@ def _workspace_surfaces(ws, root, g, kinds) -> None:
         vertices, faces = voxel_surface(ws.masks[k], ws.bounds)
         if not len(faces):
             continue
-        material = g.MeshLambertMaterial(color=WORKSPACE_CLOUD_COLOURS[k], transparent=True,
+        material = g.MeshLambertMaterial(color=_hex_colour(KIND_COLOURS[k]), transparent=True,
                                          opacity=0.25 + 0.2 * i)
         root[node_name(f"{k}_surface")].set_object(
             g.TriangularMeshGeometry(vertices.astype(np.float32),

@@ -69,8 +69,11 @@ from .solve import POSE_COORDINATES
 
 #: The pose coordinates, in the order of the sweep arrays.
 COORDINATES = POSE_COORDINATES
-#: Workspace kinds.
+#: Workspace kinds, from the largest set to the smallest.
 KINDS = ("reachable", "singularity-free", "transmission")
+#: Their colours in pictures (the plots and the 3-D cloud).
+KIND_COLOURS = {"reachable": "#fdb863", "singularity-free": "#4393c3",
+                "transmission": "#1a9850"}
 #: Largest number of coordinates sampled at once.
 MAX_COORDINATES = 3
 #: Default half range of an angle [rad] when no bounds are given.
@@ -206,6 +209,16 @@ class Workspace:
         if self.sampling == "grid":
             return span / np.array(self.shape, float)
         return span * len(self.points) ** (-1.0 / len(self.coords))
+
+    def smallest_kind(self) -> tuple[np.ndarray, list[str]]:
+        """``(codes, kinds)``: the kinds computed, largest set first, and per sample
+        (the samples' shape) the index in ``kinds`` of the smallest it belongs to
+        (−1: not reachable)."""
+        kinds = [k for k in KINDS if k in self.masks]
+        codes = np.full(np.shape(self.masks[kinds[0]]) if kinds else len(self.points), -1)
+        for i, k in enumerate(kinds):
+            codes[np.asarray(self.masks[k])] = i
+        return codes, kinds
 
     def as_dict(self) -> dict:
         """Plain data (JSON; nan and inf as None): coordinates, bounds, volumes,
@@ -1222,7 +1235,7 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, gen
             "q": q_all.reshape(tuple(shape) + (link.model.nq,))}
 
 
-__all__ = ["COORDINATES", "KINDS", "Inscribed", "Volume", "Workspace", "boundary_cells",
-           "component", "default_coordinates", "grid_axes", "grid_volume",
+__all__ = ["COORDINATES", "KINDS", "KIND_COLOURS", "Inscribed", "Volume", "Workspace",
+           "boundary_cells", "component", "default_coordinates", "grid_axes", "grid_volume",
            "inscribed_shapes", "linkage_workspace", "mesh_volume", "sample_volume",
            "voxel_surface", "workspace"]

@@ -136,6 +136,13 @@ def test_five_bar_transmission_area_is_the_closed_forms_on_the_grid(five_bar):
     assert ws.volumes["transmission"].value == pytest.approx(area, rel=1e-12)
     assert 0 < brute.sum() < ws.masks["singularity-free"].sum()
     assert np.all(ws.values["cti"][ws.masks["reachable"]] == 1.0)  # planar: CTI 1
+    # the smallest kind of each cell (what the plots and the 3-D view colour)
+    codes, kinds = ws.smallest_kind()
+    assert kinds == ["reachable", "singularity-free", "transmission"]
+    expected = np.where(ws.masks["transmission"], 2,
+                        np.where(ws.masks["singularity-free"], 1,
+                                 np.where(ws.masks["reachable"], 0, -1)))
+    np.testing.assert_array_equal(codes, expected)
 
 
 def test_five_bar_workspace_keeps_the_home_working_mode(five_bar):
