@@ -425,8 +425,7 @@ class Leg(SerialChain):
         state = {k: v for k, v in self.__dict__.items()
                  if k != "_local"
                  and not isinstance(getattr(type(self), k, None), cached_property)}
-        if self.xml is not None and any(j.shortname() == "JointModelMimic"
-                                        for j in self.model.joints):
+        if self.xml is not None and self.has_mimic:
             state["model"] = None
         return state
 
@@ -496,6 +495,12 @@ class Leg(SerialChain):
         from .kernels import chain_kernel
 
         return chain_kernel(self)
+
+    @cached_property
+    def has_mimic(self) -> bool:
+        """Whether a joint of the chain mimics another (a parallelogram written as a
+        revolute and its mimicking revolute; cached)."""
+        return any(j.shortname() == "JointModelMimic" for j in self.model.joints)
 
     @cached_property
     def _velocity_units(self) -> np.ndarray:

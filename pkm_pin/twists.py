@@ -108,14 +108,10 @@ def joint_twists(mechanism, leg_q) -> np.ndarray:
     return out
 
 
-def _has_mimic(leg) -> bool:
-    return any(j.shortname() == "JointModelMimic" for j in leg.model.joints)
-
-
 def has_mimic(mechanism) -> bool:
     """Whether a leg of ``mechanism`` has a joint mimicking another (then
     :func:`joint_lines` differ from :func:`joint_twists`)."""
-    return any(_has_mimic(leg) for leg in mechanism.legs)
+    return any(leg.has_mimic for leg in mechanism.legs)
 
 
 def joint_lines(mechanism, leg_q, J: np.ndarray) -> np.ndarray:
@@ -132,9 +128,8 @@ def joint_lines(mechanism, leg_q, J: np.ndarray) -> np.ndarray:
     out = np.array(J, dtype=float, copy=True)
     row = 0
     for leg, q in zip(legs, leg_q):
-        if _has_mimic(leg):
-            model = leg.model
-            data = model.createData()
+        if leg.has_mimic:
+            model, data = leg.model, leg.data  # the thread's data
             pin.computeJointJacobians(model, data, np.asarray(q, dtype=float))
             for j in range(1, model.njoints):
                 joint = model.joints[j]
