@@ -328,9 +328,8 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
     L = mech.characteristic_length
     # every screw about the platform's centre: the rank decision and the compatibility
     # do not depend on where the mechanism stands in the world
-    to_centre = pin.SE3(np.eye(3), -assembly.pose.translation)
-    W = [np.atleast_2d(screws.transform(w, to_centre)).reshape(-1, 6) if len(w) else w
-         for w in _leg_wrench_rows(mech, assembly)]
+    centre = assembly.pose.translation
+    W = [screws.about(w, centre) if len(w) else w for w in _leg_wrench_rows(mech, assembly)]
     offs = np.r_[0, np.cumsum([w.shape[0] for w in W])]
     M = np.vstack([w @ screws.DELTA for w in W])  # ζ ∘ t = (ζᵀ Δ) t
     D = np.r_[np.ones(3), np.full(3, L)]          # t = D t_h (homogenised unknown)
@@ -353,17 +352,16 @@ def sensitivity(mech, assembly=None, parameters=None) -> Sensitivity:
     for i, ks in columns.items():
         data = _frames_placed(mech.legs[i], assembly.leg_q[i])
         for k in ks:
-            xi[:, k] = screws.transform(_virtual_twist_placed(mech, assembly, names[k], data),
-                                        to_centre)
+            xi[:, k] = screws.about(_virtual_twist_placed(mech, assembly, names[k], data),
+                                    centre)
             R[offs[i]:offs[i + 1], k] = W[i] @ screws.DELTA @ xi[:, k]
     Rh = R / scale[:, None]
     X = Vt.T @ ((U.T @ Rh) / sv[:, None])
     resid = np.linalg.norm(Mh @ X - Rh, axis=0)
     norm = np.linalg.norm(xi / D[:, None], axis=0)  # |ξ| homogenised bounds every |Rh| row
     compat = np.where(norm > 0, resid / np.where(norm > 0, norm, 1.0), 0.0)
-    back = pin.SE3(np.eye(3), assembly.pose.translation)  # twists about the world origin
-    X, xi = (np.atleast_2d(screws.transform((Y * d).T, back)).reshape(-1, 6).T
-             for Y, d in ((X, D[:, None]), (xi, 1.0)))
+    # twists about the world origin
+    X, xi = (screws.from_point((Y * d).T, centre).T for Y, d in ((X, D[:, None]), (xi, 1.0)))
     return Sensitivity(names, X, xi, compat, assembly)
 
 
