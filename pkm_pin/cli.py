@@ -650,9 +650,12 @@ def _map_axes(args, link) -> tuple[list[int], np.ndarray, list[np.ndarray]]:
                          f"{', '.join(chosen)}, got {len(args.range)}")
     if not 2 <= args.n <= 2000:
         raise InputError(f"--n must be between 2 and 2000, got {args.n}")
+    from .workspace import actuated_range
+
     grids = []
     for k, a in enumerate(varied):
-        lo, hi = args.range[2 * k:2 * k + 2] if args.range else _default_range(link, a, base[a])
+        lo, hi = (args.range[2 * k:2 * k + 2] if args.range
+                  else actuated_range(link, link.actuated[a], base[a]))
         if not np.isfinite([lo, hi]).all() or lo == hi:
             raise InputError(f"--range needs finite bounds with A != B, got {lo}, {hi}")
         grids.append(np.linspace(lo, hi, args.n))
@@ -667,18 +670,6 @@ def _number(text: str, what: str) -> float:
     if not np.isfinite(value):
         raise InputError(f"{what}: the value must be finite, got {text!r}")
     return value
-
-
-def _default_range(link, k: int, value: float) -> tuple[float, float]:
-    """Joint limits of actuated joint ``k`` when finite, else ``value`` ± π or ± L."""
-    model = link.model
-    joint = model.tree.joints[model.tree.getJointId(link.actuated[k])]
-    lo = float(model.tree.lowerPositionLimit[joint.idx_q])
-    hi = float(model.tree.upperPositionLimit[joint.idx_q])
-    if joint.nq == 1 and np.isfinite([lo, hi]).all() and 0 < hi - lo < 1e6 * model.length:
-        return lo, hi
-    half = np.pi if model.velocity_units[joint.idx_v] == 1.0 else model.length
-    return value - half, value + half
 
 
 def _snake(n_u: int, n_v: int) -> np.ndarray:

@@ -926,10 +926,9 @@ def _linkage_domain(link, ref, coords, bounds) -> _LinkageDomain:
         coords = _check_coords(coords, link.actuated)
         idx = [link.actuated.index(c) for c in coords]
         home = ref.q_actuated[idx].copy()
-        half = np.array([np.pi if _unit_of(link, c) == "rad" else model.length
-                         for c in coords])
+        half = np.array([_half_range(link, c) for c in coords])
         B = _bounds(bounds, coords, home, half) if bounds is not None else \
-            np.array([_limits(link, c, h, hf) for c, h, hf in zip(coords, home, half)])
+            np.array([actuated_range(link, c, h) for c, h in zip(coords, home)])
         fixed = {a: float(v) for a, v in zip(link.actuated, ref.q_actuated)
                  if a not in coords}
         return _LinkageDomain(coords, idx, True, home, B,
@@ -1082,18 +1081,26 @@ def _scale_of(link, name: str) -> float:
 
 
 def _unit_of(link, name: str) -> str:
-    model = link.model
-    joint = model.tree.joints[model.tree.getJointId(name)]
-    return "rad" if model.velocity_units[joint.idx_v] == 1.0 else "m"
+    return "rad" if _scale_of(link, name) == 1.0 else "m"
 
 
-def _limits(link, name: str, value: float, half: float) -> tuple[float, float]:
+def _half_range(link, name: str) -> float:
+    """Half the default range of an actuated joint without finite limits: π for an
+    angle, the characteristic length for a length."""
+    return np.pi if _scale_of(link, name) == 1.0 else link.model.length
+
+
+def actuated_range(link, name: str, value: float) -> tuple[float, float]:
+    """The default range of the actuated joint ``name`` of a linkage: its position
+    limits when finite (and narrower than 1e6 characteristic lengths), else ``value`` ±
+    π (an angle) or ± L (a length); the CLI's maps and the linkage workspace alike."""
     model = link.model
     joint = model.tree.joints[model.tree.getJointId(name)]
     lo = float(model.tree.lowerPositionLimit[joint.idx_q])
     hi = float(model.tree.upperPositionLimit[joint.idx_q])
-    if np.isfinite([lo, hi]).all() and 0 < hi - lo < 1e6 * model.length:
+    if joint.nq == 1 and np.isfinite([lo, hi]).all() and 0 < hi - lo < 1e6 * model.length:
         return lo, hi
+    half = _half_range(link, name)
     return value - half, value + half
 
 
@@ -1236,6 +1243,7 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, gen
 
 
 __all__ = ["COORDINATES", "KINDS", "KIND_COLOURS", "Inscribed", "Volume", "Workspace",
-           "boundary_cells", "component", "default_coordinates", "grid_axes", "grid_volume",
+           "actuated_range", "boundary_cells", "component", "default_coordinates", "grid_axes",
+           "grid_volume",
            "inscribed_shapes", "linkage_workspace", "mesh_volume", "sample_volume",
            "voxel_surface", "workspace"]

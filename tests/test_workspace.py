@@ -431,3 +431,29 @@ def test_five_bar_refined_area_follows_the_closed_form(five_bar):
         "reachable"]
     assert v.subsamples == 4 and abs(v.value - exact) <= v.error
     assert abs(v.value - _refined_annuli(10).value) <= 0.02 * exact
+
+
+def test_actuated_range_is_the_joint_limits_or_a_turn_or_a_length():
+    """The default range of a linkage's actuated joint (the CLI's maps, the linkage
+    workspace): its limits when finite, else its value ± π (an angle) or ± L."""
+    from linkage_models import five_bar as five_bar_model
+
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.workspace import actuated_range
+
+    link = Linkage(five_bar_model())
+    tree, L = link.model.tree, link.model.length
+    for name in link.actuated:
+        joint = tree.joints[tree.getJointId(name)]
+        lo = float(tree.lowerPositionLimit[joint.idx_q])
+        hi = float(tree.upperPositionLimit[joint.idx_q])
+        got = actuated_range(link, name, 0.25)
+        if np.isfinite([lo, hi]).all() and 0 < hi - lo < 1e6 * L:
+            assert got == (lo, hi)
+        else:
+            assert got == pytest.approx((0.25 - np.pi, 0.25 + np.pi))
+        tree.lowerPositionLimit[joint.idx_q], tree.upperPositionLimit[joint.idx_q] = -0.5, 0.7
+        assert actuated_range(link, name, 0.25) == (-0.5, 0.7)
+        tree.lowerPositionLimit[joint.idx_q], tree.upperPositionLimit[joint.idx_q] = -np.inf, np.inf
+        assert actuated_range(link, name, 0.25) == pytest.approx((0.25 - np.pi, 0.25 + np.pi))
+        tree.lowerPositionLimit[joint.idx_q], tree.upperPositionLimit[joint.idx_q] = lo, hi
