@@ -108,12 +108,13 @@ def shipped_models() -> dict[str, dict]:
 
 
 def load(spec: str | None, closures: str | None = None, output: str | None = None,
-         point: bool | None = None):
+         point: bool | None = None, backend: str | None = None):
     """The mechanism named by ``spec``: a file path, a shipped model name, or ``None``
     (the 3-RPR of seed 000, Michalková & Guldan, see docs/references.md).
 
     Args:
         closures, output, point: For a linkage file, as :func:`pkm_pin.load_mechanism`.
+        backend: ``"legs"`` or ``"general"``, as :func:`pkm_pin.load_mechanism`.
 
     Returns:
         A :class:`~pkm_pin.Mechanism`, or a :class:`~pkm_pin.linkage.Linkage` for a
@@ -124,6 +125,7 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
         InputError: ``spec`` is neither a file nor a shipped model.
     """
     from .builders import MECHANISMS
+    from .linkage import Linkage
     from .mechanism import load_mechanism
 
     options = {"closures": closures, "output": output, "point": point}
@@ -133,14 +135,15 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
         if given:
             raise InputError(f"{', '.join(given)}: for a linkage file (.urdf, .xml, pinned "
                              ".toml); a shipped platform mechanism's output is its platform")
-        return MECHANISMS["rpr3" if spec is None else spec]().build()
+        mech = MECHANISMS["rpr3" if spec is None else spec]().build()
+        return mech if backend != "general" else Linkage(mech.closure_model)
     path = Path(spec)
     if _is_file(path) or spec.endswith(LINKAGE_SUFFIXES + (".toml",)) or "/" in spec \
             or "\\" in spec:
-        return load_mechanism(path, **options)
+        return load_mechanism(path, backend=backend, **options)
     shipped = models_dir() / f"{spec}.toml"
     if _is_file(shipped):
-        return load_mechanism(shipped, **options)
+        return load_mechanism(shipped, backend=backend, **options)
     shown = spec if len(spec) <= 80 else spec[:77] + "..."
     raise InputError(f"{shown!r} is neither a mechanism file nor a shipped model; the shipped "
                      f"models are: {', '.join(sorted(shipped_models()))} (see 'pkm-pin list')")
@@ -157,7 +160,8 @@ def _is_file(path: Path) -> bool:
 def _load(args, spec: str | None = None):
     """:func:`load` of ``spec`` (default ``args.mechanism``) with the linkage options."""
     return load(args.mechanism if spec is None else spec, getattr(args, "closures", None),
-                getattr(args, "output", None), getattr(args, "point", None))
+                getattr(args, "output", None), getattr(args, "point", None),
+                getattr(args, "backend", None))
 
 
 def _is_linkage(mech) -> bool:
@@ -272,7 +276,8 @@ def cmd_check(args) -> int:
     path = Path(args.file)
     if not _is_file(path) and _is_file(models_dir() / f"{args.file}.toml"):
         path = models_dir() / f"{args.file}.toml"
-    mech = load_mechanism(path, closures=args.closures, output=args.output, point=args.point)
+    mech = load_mechanism(path, closures=args.closures, output=args.output, point=args.point,
+                          backend=args.backend)
     if _is_linkage(mech):
         return _check_linkage(path, mech)
     print(f"ok    loads: {mech.name!r}, {len(mech.legs)} legs "
@@ -892,6 +897,10 @@ def _linkage_options(p, q: bool = False) -> None:
                      help="analyse the output frame as a body")
     g.add_argument("--closures", metavar="FILE",
                    help="closures file (.yaml / .toml) of a .urdf (default: found beside it)")
+    g.add_argument("--backend", choices=("legs", "general"),
+                   help="legs: the per-leg screw engine, also for a .urdf/.xml in which a "
+                   "base-legs-platform machine is detected (same numbers as TOML legs); "
+                   "general: the general elimination for any file (default: by file)")
     if q:
         g.add_argument("--q", nargs="+", type=float, metavar="Q",
                        help="actuated values [rad or m]: forward kinematics first (also for "

@@ -143,6 +143,77 @@ class Mechanism:
             home_q = [None if q is None else leg.check_q(q, "home_q")
                       for leg, q in zip(self.legs, home_q)]
         self.home_q = home_q
+        #: The closure model this mechanism was detected in (:meth:`from_closure_model`:
+        #: an Extended URDF, an MJCF file), and its structure; ``None`` for legs given
+        #: directly (TOML).
+        self.source_model = None
+        self.structure = None
+
+    @classmethod
+    def from_closure_model(cls, model, q=None, *, description: str = "") -> Mechanism:
+        """The mechanism of a closure model in which a base–legs–platform structure is
+        detected (:func:`pkm_pin.model.structure.detect_platform`): one
+        :class:`~pkm_pin.leg.Leg` per chain from the base to the platform, whatever tree
+        the file wrote (TOML legs, an Extended URDF through one leg with point closures
+        for the others, MJCF welds), so that the same machine gets the same analysis.
+
+        Each closure leg ends as its closure says: a weld fixes its last body to the
+        platform, a point closure becomes a spherical joint (three revolutes about x, y,
+        z of a frame chosen so that their angles are zero at the home assembly, far from
+        their gimbal lock), a revolute closure one revolute about the common z axis.
+        The leg's first joint placement is its :attr:`~pkm_pin.leg.Leg.base`. The
+        platform frame is the model's output frame; home is its placement at ``q``.
+
+        Args:
+            model: The :class:`~pkm_pin.model.ClosureModel`.
+            q: An assembled configuration of the model's tree (default: the model's
+                assembly from its reference, the file's intended working mode).
+            description: One line saying what it is.
+
+        Raises:
+            InputError: no platform structure (the reason names the joint or closure
+                that breaks it), or ``q`` does not close the loops.
+        """
+        from .model.structure import detect_platform
+
+        structure, reason = detect_platform(model)
+        if structure is None:
+            raise InputError(f"{model.name or 'the model'}: not a base–legs–platform "
+                             f"machine: {reason}")
+        q = _assembled(model, q)
+        data = model.tree.createData()
+        pin.framesForwardKinematics(model.tree, data, q)
+        home = data.oMf[model.tree.getFrameId(model.output)].copy()
+        built = [_structure_leg(model, leg, q, data, home) for leg in structure.legs]
+        legs, anchors, home_q = (list(x) for x in zip(*built))
+        mech = cls(legs, anchors, name=model.name or "mechanism", home=home, home_q=home_q,
+                   description=description)
+        mech.source_model, mech.structure = model, structure
+        return mech
+
+    def source_configuration(self, assembly: Assembly | None = None) -> np.ndarray:
+        """The configuration of :attr:`source_model`'s tree at ``assembly`` (default:
+        home): each leg's joints from the leg's configuration, the platform's free flyer
+        (if any) from the pose. Only for a mechanism made by
+        :meth:`from_closure_model`."""
+        if self.source_model is None:
+            raise InputError(f"{self.name!r} was not detected in a closure model: its "
+                             "configuration is per leg (Assembly.leg_q)")
+        assembly = self.home_assembly if assembly is None else assembly
+        tree, structure = self.source_model.tree, self.structure
+        q = np.array(self.source_model.reference, dtype=float)
+        for leg, q_leg in zip(structure.legs, assembly.leg_q):
+            k = 0
+            for j in leg.joints:
+                nq = tree.joints[j].nq
+                q[tree.joints[j].idx_q:tree.joints[j].idx_q + nq] = q_leg[k:k + nq]
+                k += nq
+        if structure.free_flyer:
+            j = structure.platform_joint
+            output = tree.frames[tree.getFrameId(self.source_model.output)].placement
+            M = tree.jointPlacements[j].actInv(assembly.pose * output.inverse())
+            q[tree.joints[j].idx_q:tree.joints[j].idx_q + 7] = pin.SE3ToXYZQUAT(M)
+        return q
 
     def __getstate__(self) -> dict:
         """Pickle without the cached home analysis and closure model (recomputed on
@@ -587,6 +658,111 @@ def stalled_at_boundary(leg: Leg, q: np.ndarray, residual: float) -> bool:
     return bool(leg.serial_singularity_index(q) <= TYPE_I_STALL_FACTOR * np.sqrt(residual))
 
 
+# ----------------------------------------------------- legs of a detected structure
+#: Names of the revolutes that stand for a point closure's spherical joint.
+_SPHERICAL = (("x", pin.JointModelRX), ("y", pin.JointModelRY), ("z", pin.JointModelRZ))
+
+
+def _assembled(model, q) -> np.ndarray:
+    """``q`` checked to close ``model``'s loops, or the model's assembly from its
+    reference."""
+    if q is None:
+        from .linkage import Linkage
+
+        return np.array(Linkage(model).assemble().q)
+    q = as_vector(q, model.nq, "q", "the tree's configuration vector")
+    residual = float(np.abs(model.closure_residual(q)).max(initial=0.0))
+    if residual > CLOSURE_TOL:
+        raise InputError(f"q does not close the loops of {model.name!r} (largest "
+                         f"dimensionless residual {residual:.3g} > {CLOSURE_TOL:g})")
+    return q
+
+
+def _structure_leg(model, leg, q: np.ndarray, data, home: pin.SE3):
+    """``(Leg, anchor, home_q)`` of one :class:`~pkm_pin.model.structure.PlatformLeg`:
+    the leg's joints copied from the tree (the first one's placement is the leg's base),
+    the closure's joint(s) and a tip frame appended."""
+    tree = model.tree
+    chain, base = _chain_of(tree, leg)
+    home_q = [q[tree.joints[j].idx_q:tree.joints[j].idx_q + tree.joints[j].nq]
+              for j in leg.joints]
+    anchor = home.actInv(data.oMf[tree.getFrameId(leg.platform_frame)]
+                         * leg.platform_placement)
+    if leg.kind == "tree":  # the tip at the platform joint's origin, as a TOML leg's
+        output = chain.frames[chain.getFrameId(leg.frame)]
+        tip = _unique(chain, f"{leg.name}_tip")
+        chain.addBodyFrame(tip, output.parentJoint, pin.SE3.Identity(), output.parentFrame)
+        anchor = output.placement.inverse()
+    else:
+        tip = _closure_tip(chain, leg, data, anchor, home, tree)
+        home_q.append(np.zeros(chain.nq - sum(len(x) for x in home_q)))
+    actuated = tuple(tree.names[j] for j in leg.joints if tree.names[j] in model.actuated)
+    return (Leg(chain, tip, actuated, base=base, name=leg.name, source=model.name or "<model>"),
+            anchor, np.concatenate(home_q) if home_q else np.zeros(0))
+
+
+def _chain_of(tree: pin.Model, leg) -> tuple[pin.Model, pin.SE3]:
+    """The Pinocchio model of the leg's joints (same joint models, placements, limits
+    and inertias as in ``tree``; the first joint at the origin) with the leg-side frame
+    of its closure, and the leg's base (its first joint's placement)."""
+    chain = pin.Model()
+    chain.name = leg.name
+    base, parent, previous = pin.SE3.Identity(), 0, 0
+    new = {0: 0}
+    for j in leg.joints:
+        placement = tree.jointPlacements[j]
+        if parent == 0:
+            base, placement = placement.copy(), pin.SE3.Identity()
+        iq, nq, iv, nv = tree.joints[j].idx_q, tree.joints[j].nq, tree.joints[j].idx_v, \
+            tree.joints[j].nv
+        parent = chain.addJoint(parent, tree.joints[j], placement, tree.names[j],
+                                tree.effortLimit[iv:iv + nv], tree.velocityLimit[iv:iv + nv],
+                                tree.lowerPositionLimit[iq:iq + nq],
+                                tree.upperPositionLimit[iq:iq + nq])
+        chain.appendBodyToJoint(parent, tree.inertias[j], pin.SE3.Identity())
+        previous = chain.addJointFrame(parent, previous)
+        new[j] = parent
+    frame = tree.frames[tree.getFrameId(leg.frame)]
+    placement = frame.placement if frame.parentJoint else base.actInv(frame.placement)
+    chain.addBodyFrame(leg.frame, new[frame.parentJoint], placement, previous)
+    return chain, base
+
+
+def _closure_tip(chain: pin.Model, leg, data, anchor: pin.SE3, home: pin.SE3,
+                 tree: pin.Model) -> str:
+    """Append the joints a closure stands for (none for a weld, a revolute about z for a
+    revolute closure, three revolutes for a point) at its leg-side constraint frame, and
+    the tip frame; returns the tip frame's name. The joints' frame is turned so that the
+    tip coincides with the platform's constraint frame at zero angles (home)."""
+    frame = chain.frames[chain.getFrameId(leg.frame)]
+    parent, placement = frame.parentJoint, frame.placement * leg.placement
+    C_leg = data.oMf[tree.getFrameId(leg.frame)] * leg.placement
+    C_platform = home * anchor
+    turn = pin.SE3(C_leg.rotation.T @ C_platform.rotation, np.zeros(3))
+    axes = {"weld": (), "revolute": _SPHERICAL[2:], "point": _SPHERICAL}[leg.kind]
+    previous = chain.getFrameId(leg.frame)
+    joint_placement = placement * turn if axes else placement
+    for axis, joint_model in axes:
+        parent = chain.addJoint(parent, joint_model(), joint_placement,
+                                _unique(chain, f"{leg.name}_{axis}"),
+                                np.array([100.0]), np.array([10.0]),
+                                np.array([-np.pi]), np.array([np.pi]))
+        previous = chain.addJointFrame(parent, previous)
+        joint_placement = pin.SE3.Identity()
+    tip = _unique(chain, f"{leg.name}_tip")
+    chain.addBodyFrame(tip, parent, joint_placement, previous)
+    return tip
+
+
+def _unique(model: pin.Model, name: str) -> str:
+    """``name``, or ``name`` with a number appended, that no joint or frame of
+    ``model`` has."""
+    out, k = name, 1
+    while model.existFrame(out) or model.existJointName(out):
+        out, k = f"{name}_{k}", k + 1
+    return out
+
+
 # --------------------------------------------------------------------- TOML files
 _LEG_KEYS = {"name", "urdf", "tip", "actuated", "base", "anchor", "home_q"}
 _TOP_KEYS = {"name", "description", "legs", "home", "closure", "length_unit"}
@@ -595,8 +771,13 @@ _CLOSURES = ("weld", "spherical", "revolute")
 _POSE_KEYS = {"xyz", "rpy"}
 
 
+#: Backends of :func:`load_mechanism`.
+BACKENDS = ("legs", "general")
+
+
 def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | None = None,
-                   output: str | None = None, point: bool | None = None):
+                   output: str | None = None, point: bool | None = None,
+                   backend: str | None = None):
     """Read a mechanism file, by its suffix:
 
     * ``.toml``: our format (this module's docstring): legs fixed to a platform give a
@@ -615,13 +796,28 @@ def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | Non
             analysed (default: the file's).
         point: For a :class:`~pkm_pin.linkage.Linkage`, analyse the output frame's origin
             as a point (``True``) or as a body (``False``; default: the file's).
+        backend: ``None`` (default): by file, as above. ``"legs"``: the per-leg screw
+            engine of a base–legs–platform machine, a :class:`Mechanism`, also for an
+            Extended URDF or MJCF file in which that structure is detected
+            (:meth:`Mechanism.from_closure_model`: the same machine written as TOML legs
+            gives the same numbers); a file without it is refused with the reason.
+            ``"general"``: the general elimination, a :class:`~pkm_pin.linkage.Linkage`,
+            for every file (TOML legs through their :attr:`Mechanism.closure_model`).
 
     Raises:
         MechanismFileError: the file is missing or wrong; the message names the file,
             the entry (leg, key, closure) and how to fix it.
     """
+    if backend not in (None,) + BACKENDS:
+        raise InputError(f"backend={backend!r}: write one of {', '.join(map(repr, BACKENDS))} "
+                         "or leave it out")
     path = Path(path)
     label = str(path)
+    return _with_backend(_load_file(path, label, closures, output, point), backend, label)
+
+
+def _load_file(path: Path, label: str, closures, output, point):
+    """:func:`load_mechanism` of the file's own kind."""
     try:
         exists = path.is_file()
     except OSError as e:  # e.g. a name too long for the file system
@@ -669,6 +865,27 @@ def _linkage_file(path: Path, suffix: str, closures, output, point):
                                  "actuated joints", str(e)) from e
     except InputError as e:
         raise MechanismFileError(label, "", str(e)) from e
+
+
+def _with_backend(mech, backend: str | None, label: str):
+    """``mech`` (a :class:`Mechanism` or a :class:`~pkm_pin.linkage.Linkage`) read
+    through the ``backend`` of :func:`load_mechanism`."""
+    from .linkage import Linkage
+
+    if backend is None or (backend == "legs") == isinstance(mech, Mechanism):
+        return mech
+    if backend == "general":
+        return Linkage(mech.closure_model)
+    try:
+        return Mechanism.from_closure_model(
+            mech.model, mech.assemble().q,
+            description=f"base–legs–platform machine detected in {Path(label).name}")
+    except AssemblyError as e:
+        raise MechanismFileError(label, "", f"does not assemble from its reference, so its "
+                                 f"legs cannot be read: {e}") from e
+    except InputError as e:
+        raise MechanismFileError(label, "", f"{e}; analyse it with the general backend "
+                                 "(the default for this file)") from e
 
 
 def _load_toml(path: Path):
