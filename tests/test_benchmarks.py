@@ -16,6 +16,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 import bench_analysis  # noqa: E402
 import bench_fk  # noqa: E402
 import bench_linkage  # noqa: E402
+import bench_one_core  # noqa: E402
 import equivalence_table  # noqa: E402
 
 pytestmark = pytest.mark.benchmark
@@ -67,3 +68,14 @@ def test_bench_workspace_runs_serial_and_on_dask(capsys):
     assert set(rows) == {"serial", "dask 1", "dask 2"}
     assert all(t > 0 and rate > 0 for t, rate in rows.values())
     assert "efficiency" in capsys.readouterr().out
+
+
+def test_bench_one_core_same_stewart_same_indices(capsys):
+    """bench_one_core: the Stewart's Extended URDF through the legs backend gives the
+    TOML's indices to 1e-9 at every pose; the general elimination of the URDF's tree
+    does not (its indices depend on the tree)."""
+    rows = bench_one_core.main(n=3, repeat=1)
+    assert rows["diff_legs"] <= 1e-9 and rows["diff_general"] <= 1e-9
+    assert rows["diff_urdf"] > 1e-3
+    assert set(rows["per_pose"]) == {"toml", "urdf/legs", "urdf/general"}
+    assert "urdf/legs" in capsys.readouterr().out

@@ -1,0 +1,189 @@
+"""A base–legs–platform structure detected in any closure model: the same machine gives
+the same analysis whatever file and tree describe it (issue 24)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from linkage_models import five_bar, four_bar
+
+import pkm_pin
+from pkm_pin import Mechanism
+from pkm_pin.builders.extended_urdf import write_extended_urdf
+from pkm_pin.cli import main
+from pkm_pin.errors import InputError, MechanismFileError
+from pkm_pin.linkage import Linkage
+from pkm_pin.model import Closure, ClosureModel, configuration
+from pkm_pin.model.structure import detect_platform
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+STEWART = MODELS / "mechanisms" / "stewart.toml"
+
+
+@pytest.fixture(scope="module")
+def stewart(tmp_path_factory):
+    """The shipped 6-UPS as TOML legs and as an Extended URDF (tree through leg 1 and
+    its S joint, legs 2–6 cut after P and closed by point closures), with the URDF
+    tree's configuration at the TOML's home."""
+    toml = pkm_pin.load_mechanism(STEWART)
+    path = write_extended_urdf(toml, tmp_path_factory.mktemp("stewart"))
+    link = pkm_pin.load_mechanism(path)
+    tree, q = link.model.tree, np.array(link.model.reference)
+    for i, (leg, q_leg) in enumerate(zip(toml.legs, toml.home_assembly.leg_q)):
+        for name, value in zip(leg.joint_names, q_leg):
+            if tree.existJointName(f"leg{i + 1}_{name}"):
+                q[tree.joints[tree.getJointId(f"leg{i + 1}_{name}")].idx_q] = value
+    return toml, link, q, path
+
+
+def test_stewart_extended_urdf_is_detected_as_six_legs(stewart):
+    """The URDF's tree leg and five point closures are six legs, in the actuated order."""
+    _, link, _, _ = stewart
+    structure, reason = detect_platform(link.model)
+    assert reason == "" and not structure.free_flyer
+    assert [(leg.name, leg.kind, len(leg.joints)) for leg in structure.legs] == \
+        [("leg1", "tree", 6)] + [(f"leg{i}", "point", 3) for i in range(2, 7)]
+
+
+def test_same_stewart_same_numbers_whatever_the_file(stewart):
+    """TOML legs and the Extended URDF read through the legs backend: same home pose,
+    A and B to 1e-12, indices to 1e-9, at home and at a second pose."""
+    toml, link, q, _ = stewart
+    mech = Mechanism.from_closure_model(link.model, q)
+    assert mech.characteristic_length == pytest.approx(toml.characteristic_length, rel=1e-12)
+    assert np.allclose(mech.home.homogeneous, toml.home.homogeneous, atol=1e-12)
+    moved = toml.home * pin.SE3(pin.rpy.rpyToMatrix(0.05, -0.04, 0.1), np.array([0.03, -0.02,
+                                                                                  0.05]))
+    for pose in (toml.home, moved):
+        a, b = toml.analyze(pose), mech.analyze(pose)
+        assert (a.dof, a.motion_type, a.singularity) == (b.dof, b.motion_type, b.singularity)
+        np.testing.assert_allclose(b.A, a.A, atol=1e-12)
+        np.testing.assert_allclose(b.B, a.B, atol=1e-12)
+        for key, value in a.indices.items():
+            assert b.indices[key] == pytest.approx(value, rel=1e-9, abs=1e-12), key
+
+
+def test_forward_kinematics_agree_and_map_back_to_the_file(stewart):
+    """FK of the detected mechanism equals the TOML's; its assembly mapped back to the
+    URDF tree closes every closure and puts the output frame at the pose."""
+    toml, link, q, _ = stewart
+    mech = Mechanism.from_closure_model(link.model, q)
+    q_a = toml.home_assembly.q_actuated + np.array([0.02, -0.01, 0.03, 0.0, 0.01, -0.02])
+    a, b = toml.forward_kinematics(q_a), mech.forward_kinematics(q_a)
+    np.testing.assert_allclose(b.pose.homogeneous, a.pose.homogeneous, atol=1e-10)
+    np.testing.assert_allclose(mech.source_configuration(mech.home_assembly), q, atol=1e-10)
+    q_b = mech.source_configuration(b)
+    assert np.abs(link.model.closure_residual(q_b)).max() < 1e-10
+    data = link.model.tree.createData()
+    pin.framesForwardKinematics(link.model.tree, data, q_b)
+    placed = data.oMf[link.model.tree.getFrameId("platform")]
+    np.testing.assert_allclose(placed.homogeneous, b.pose.homogeneous, atol=1e-10)
+
+
+def test_general_backend_of_the_toml_stewart(stewart):
+    """load_mechanism(backend='general') reads TOML legs as a Linkage with the same
+    forward velocity map; backend='legs' of the URDF is a Mechanism."""
+    toml, _, _, path = stewart
+    general = pkm_pin.load_mechanism(STEWART, backend="general")
+    assert isinstance(general, Linkage)
+    assert isinstance(pkm_pin.load_mechanism(path, backend="legs"), Mechanism)
+    q = configuration(toml, toml.home_assembly)
+    la, ma = general.analyze(q), toml.home_analysis
+    for k in range(6):
+        rate = np.eye(6)[k]
+        np.testing.assert_allclose(la.forward_velocity(rate), ma.forward_velocity(rate),
+                                   atol=1e-9)
+
+
+def _parity(link: Linkage) -> Mechanism:
+    """Both backends at the linkage's assembly: same DOF, motion type, class and
+    forward velocity map (1e-9)."""
+    a = link.assemble()
+    mech = Mechanism.from_closure_model(link.model, a.q)
+    la, ma = link.analyze(a.q), mech.home_analysis
+    assert (la.dof, la.motion_type, la.singularity) == (ma.dof, ma.motion_type, ma.singularity)
+    n = len(link.actuated)
+    for k in range(n):
+        np.testing.assert_allclose(ma.forward_velocity(np.eye(n)[k]),
+                                   la.forward_velocity(np.eye(n)[k]), atol=1e-9)
+    return mech
+
+
+@pytest.mark.parametrize("name,kinds", [
+    ("loops/delta_loops.urdf", ["weld"] * 3),
+    ("loops/four_bar.urdf", ["tree", "point"]),
+    ("loops/four_bar.xml", ["tree", "point"]),
+])
+def test_backend_parity_on_shipped_models(name, kinds):
+    """Every shipped model with a platform structure: the general elimination and the
+    per-leg engine give the same mobility and velocity maps."""
+    link = pkm_pin.load_mechanism(MODELS / name)
+    structure, _ = detect_platform(link.model)
+    assert sorted(leg.kind for leg in structure.legs) == sorted(kinds)
+    assert structure.free_flyer == (name.endswith("delta_loops.urdf"))
+    _parity(link)
+
+
+def test_five_bar_as_a_body_same_indices_from_urdf_and_mjcf():
+    """The shipped five-bar analysed as a body (MJCF) reads as a tree leg and a point
+    leg; the four-bar's per-leg indices are the same from its URDF and its MJCF."""
+    mech = _parity(pkm_pin.load_mechanism(MODELS / "loops/five_bar.xml"))
+    assert mech.home_analysis.dof == 2
+    a = pkm_pin.load_mechanism(MODELS / "loops/four_bar.urdf", backend="legs")
+    b = pkm_pin.load_mechanism(MODELS / "loops/four_bar.xml", backend="legs")
+    for key, value in a.home_analysis.indices.items():
+        assert b.home_analysis.indices[key] == pytest.approx(value, rel=1e-9), key
+
+
+@pytest.mark.parametrize("kind", ["revolute", "point"])
+def test_five_bar_closures_become_joints(kind):
+    """A revolute closure is one revolute about its z axis, a point closure a spherical
+    joint: both five-bars are 2-DOF and match the general backend."""
+    mech = _parity(Linkage(five_bar(kind)))
+    assert [leg.nv for leg in mech.legs] == [2, 3 if kind == "revolute" else 5]
+
+
+def test_structures_that_are_not_platforms_say_why():
+    """Multi-loop, point outputs, a closure of the platform onto itself and a leg
+    shared by two closures are left to the general backend, with the reason."""
+    cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
+    assert "neither on the platform" in detect_platform(cassie.model)[1]
+    point = pkm_pin.load_mechanism(MODELS / "loops/five_bar.urdf")
+    assert detect_platform(point.model) == (None, "the output is a point, not a platform body")
+    base = four_bar()
+    itself = ClosureModel(base.tree, (Closure("point", "rocker_end", "rocker_body",
+                                              name="self"),), ("rocker",), "rocker_body")
+    assert "joins the platform to itself" in detect_platform(itself)[1]
+    twice = ClosureModel(base.tree, base.closures + (Closure("point", "coupler_body",
+                                                             "rocker_body", name="again"),),
+                         ("crank",), "rocker_body")
+    assert "shares joint 'crank'" in detect_platform(twice)[1]
+    with pytest.raises(InputError, match="not a base–legs–platform machine"):
+        Mechanism.from_closure_model(cassie.model)
+    with pytest.raises(MechanismFileError, match="neither on the platform"):
+        pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf", backend="legs")
+    with pytest.raises(InputError, match="backend='fast'"):
+        pkm_pin.load_mechanism(STEWART, backend="fast")
+
+
+def test_from_closure_model_refuses_an_open_configuration():
+    """A configuration that does not close the loops is refused with its residual."""
+    model = four_bar()
+    with pytest.raises(InputError, match="does not close the loops"):
+        Mechanism.from_closure_model(model, model.reference)
+
+
+def test_cli_backend_legs_prints_the_toml_indices(stewart, capsys):
+    """pkm-pin analyze --backend legs of the Stewart's Extended URDF, at the TOML's home
+    pose, prints the TOML's type I/II indices."""
+    _, _, _, path = stewart
+    assert main(["analyze", str(path), "--backend", "legs", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    mech = pkm_pin.load_mechanism(path, backend="legs")
+    assert data["dof"] == 6
+    for key, value in mech.home_analysis.indices.items():
+        assert data["indices"][key] == pytest.approx(value, rel=1e-9)
