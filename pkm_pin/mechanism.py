@@ -61,6 +61,7 @@ from .errors import (
     UrdfError,
 )
 from .leg import Leg
+from .model.chain_urdf import chain_urdf
 from .screws import as_fraction, as_vector, homogenise
 from .solve import LEGS, POSE_COORDINATES, solve_kernel, solve_system
 from .tolerances import (
@@ -681,7 +682,9 @@ def _assembled(model, q) -> np.ndarray:
 def _structure_leg(model, leg, q: np.ndarray, data, home: pin.SE3):
     """``(Leg, anchor, home_q)`` of one :class:`~pkm_pin.model.structure.PlatformLeg`:
     the leg's joints copied from the tree (the first one's placement is the leg's base),
-    the closure's joint(s) and a tip frame appended."""
+    the closure's joint(s) and a tip frame appended, written as URDF text
+    (:func:`pkm_pin.model.chain_urdf.chain_urdf`) and read back as any leg, so that
+    sensitivity and calibration name and perturb its parameters."""
     tree = model.tree
     chain, base = _chain_of(tree, leg)
     home_q = [q[tree.joints[j].idx_q:tree.joints[j].idx_q + tree.joints[j].nq]
@@ -697,7 +700,8 @@ def _structure_leg(model, leg, q: np.ndarray, data, home: pin.SE3):
         tip = _closure_tip(chain, leg, data, anchor, home, tree)
         home_q.append(np.zeros(chain.nq - sum(len(x) for x in home_q)))
     actuated = tuple(tree.names[j] for j in leg.joints if tree.names[j] in model.actuated)
-    return (Leg(chain, tip, actuated, base=base, name=leg.name, source=model.name or "<model>"),
+    built = Leg.from_urdf(chain_urdf(chain, tip, leg.name), tip, actuated, base, leg.name)
+    return (dataclasses.replace(built, source=f"{model.name or 'model'}: leg {leg.name}"),
             anchor, np.concatenate(home_q) if home_q else np.zeros(0))
 
 

@@ -187,3 +187,21 @@ def test_cli_backend_legs_prints_the_toml_indices(stewart, capsys):
     assert data["dof"] == 6
     for key, value in mech.home_analysis.indices.items():
         assert data["indices"][key] == pytest.approx(value, rel=1e-9)
+
+
+def test_sensitivity_of_the_detected_legs_equals_the_toml(stewart):
+    """Sensitivity to the parameters both descriptions share (base, U, P joints and
+    anchors of every leg) is the same from the Extended URDF as from the TOML legs."""
+    toml, link, q, _ = stewart
+    mech = Mechanism.from_closure_model(link.model, q)
+    ours, ref = mech.sensitivity(), toml.sensitivity()
+    assert len(ours.parameters) == len(ref.parameters)
+    shared = 0
+    for name in ours.parameters:
+        leg, _, rest = name.partition("/")
+        theirs = f"{leg.removeprefix('leg')}/{rest.removeprefix(leg + '_')}"
+        if theirs in ref.parameters:
+            np.testing.assert_allclose(ours.column(name), ref.column(theirs), atol=1e-9,
+                                       err_msg=name)
+            shared += 1
+    assert shared >= 6 * (6 + 3 * 8) + 6 * 6  # bases, U1, U2, P (origin + axis), anchors
