@@ -65,6 +65,7 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
@@ -73,6 +74,7 @@ from . import screws
 from .analysis import classify
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .model.closure_model import ClosureModel, TreeKinematics
+from .model.structure import detect_platform
 from .screws import svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
@@ -210,6 +212,24 @@ class Linkage:
     def output(self) -> str:
         """Name of the output frame."""
         return self._model.output
+
+    @cached_property
+    def platform_structure(self) -> tuple:
+        """``(structure, reason)`` of :func:`pkm_pin.model.structure.detect_platform`: the
+        base–legs–platform machine found in the model (the per-leg engine reads it:
+        ``load_mechanism(..., backend="legs")``), or ``None`` and why not (cached)."""
+        return detect_platform(self._model)
+
+    @cached_property
+    def home_assembly(self) -> LinkageAssembly:
+        """The assembly from the model's reference (the file's ``q = 0`` or MJCF
+        ``qpos0``: its intended working mode), :meth:`assemble` with no guess (cached)."""
+        return self.assemble()
+
+    @cached_property
+    def home_analysis(self) -> LinkageAnalysis:
+        """The analysis of :attr:`home_assembly` (cached)."""
+        return self.analyze(self.home_assembly)
 
     @property
     def grubler(self) -> int:

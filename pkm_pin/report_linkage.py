@@ -91,7 +91,8 @@ def assembly_data(link, assembly) -> dict:
 def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Path] = ()) -> dict:
     """Plain-data summary (JSON-ready) of a linkage at an assembly.
 
-    Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``dof``,
+    Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``structure``
+    (:func:`structure_data`), ``dof``,
     ``idle_dof``, ``idle_motions`` (sentences), ``redundant_constraints``, ``grubler``,
     ``independent_actuators``, ``output_dof``, ``motion_type``, ``platform_twists`` (the
     analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
@@ -109,6 +110,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     data = assembly_data(link, assembly)
     data.update({
         "description": "",
+        "structure": structure_data(link),
         "dof": an.dof,
         "idle_dof": an.idle_dof,
         "idle_motions": list(mob.idle_motions),
@@ -132,6 +134,32 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "plots": [str(p) for p in plots],
     })
     return data
+
+
+def structure_data(link) -> dict:
+    """The base–legs–platform structure detected in the linkage's model
+    (:attr:`Linkage.platform_structure`): ``{"platform": True, "legs": [{"name", "kind",
+    "joints"}]}``, or ``{"platform": False, "reason": …}``."""
+    structure, reason = link.platform_structure
+    if structure is None:
+        return {"platform": False, "reason": reason}
+    names = link.model.tree.names
+    return {"platform": True, "legs": [
+        {"name": leg.name, "kind": leg.kind, "joints": [names[j] for j in leg.joints]}
+        for leg in structure.legs]}
+
+
+def structure_line(r: dict) -> str:
+    """One line: the structure found, and the backend that reads it per leg."""
+    s = r.get("structure")
+    if s is None:
+        return ""
+    if not s["platform"]:
+        return f"structure          general linkage (not base–legs–platform: {s['reason']})"
+    kinds = ", ".join(f"{leg['name']}: {leg['kind']}" for leg in s["legs"])
+    return (f"structure          base–legs–platform machine, {len(s['legs'])} legs ({kinds}); "
+            "--backend legs analyses it per leg (indices that do not depend on how the file "
+            "cuts the loops)")
 
 
 # ------------------------------------------------------------------------- text
@@ -159,7 +187,7 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
     out = [f"mechanism          {r['mechanism']}  (linkage: {len(r['joints'])} joints, "
            f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''}"
            + ("; no closure: a tree, analysed as a serial chain)" if not r["closures"] else ")"),
-           output_line(r, frames),
+           output_line(r, frames)] + [line for line in (structure_line(r),) if line] + [
            f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
            "joints (q):"] + joints_lines(r)
     out += [f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "

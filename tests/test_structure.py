@@ -205,3 +205,42 @@ def test_sensitivity_of_the_detected_legs_equals_the_toml(stewart):
                                        err_msg=name)
             shared += 1
     assert shared >= 6 * (6 + 3 * 8) + 6 * 6  # bases, U1, U2, P (origin + axis), anchors
+
+
+def test_study_homotopy_and_partial_poses_on_the_detected_stewart(stewart):
+    """Capabilities of platform machines reach the Extended URDF: every assembly mode by
+    the Study homotopy (complete, the TOML's poses) and a partial pose."""
+    toml, link, q, _ = stewart
+    mech = Mechanism.from_closure_model(link.model, q)
+    q_a = toml.home_assembly.q_actuated
+    ours, ref = mech.forward_kinematics_all(q_a), toml.forward_kinematics_all(q_a)
+    assert ours.method == ref.method == "homotopy" and ours.complete
+    assert len(ours) == len(ref) >= 2
+    for a, b in zip(ours, ref):
+        np.testing.assert_allclose(a.pose.homogeneous, b.pose.homogeneous, atol=1e-9)
+    z = float(toml.home.translation[2]) + 0.02
+    partial = mech.assemble({"z": z, "roll": 0.0, "pitch": 0.0})
+    assert partial.pose.translation[2] == pytest.approx(z, abs=1e-12)
+    assert partial.residual < 1e-10
+
+
+def test_linkage_report_names_the_structure_and_the_backend(capsys):
+    """pkm-pin analyze of a general-backend file says whether a platform machine was
+    found (and that --backend legs reads it per leg) or why not; JSON carries it."""
+    assert main(["analyze", str(MODELS / "loops/delta_loops.urdf"), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["structure"]["platform"] and [leg["kind"] for leg in
+                                              data["structure"]["legs"]] == ["weld"] * 3
+    assert main(["analyze", str(MODELS / "loops/cassie_knee.urdf")]) == 0
+    text = capsys.readouterr().out
+    assert "structure          general linkage (not base–legs–platform: closure" in text
+    assert main(["analyze", str(MODELS / "loops/delta_loops.urdf")]) == 0
+    assert "--backend legs analyses it per leg" in capsys.readouterr().out
+
+
+def test_linkage_home_assembly_is_the_assembly_from_the_reference():
+    """Linkage.home_assembly / home_analysis: assemble() from the reference, cached."""
+    link = pkm_pin.load_mechanism(MODELS / "loops/four_bar.urdf")
+    assert link.home_assembly is link.home_assembly
+    np.testing.assert_allclose(link.home_assembly.q, link.assemble().q, atol=1e-12)
+    assert link.home_analysis.dof == 1

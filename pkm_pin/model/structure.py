@@ -45,8 +45,8 @@ class PlatformLeg:
 
     Attributes:
         name: The leg's name: the common prefix of its joints' names (``"leg2"`` for
-            ``leg2_U1``, ``leg2_P``…), else the closure's name (else its leg-side frame;
-            ``"tree"`` for the leg the tree carries the platform on).
+            ``leg2_U1``, ``leg2_P``…), else its leg-side frame (``"tree"`` for the leg
+            the tree carries the platform on).
         joints: Tree joint indices from the base to the leg's end, one coordinate each.
         kind: ``"tree"`` (the platform is the leg's last body), or the kind of the
             closure joining the leg to the platform: ``"weld"``, ``"point"``,
@@ -161,7 +161,7 @@ def _closure_leg(tree: pin.Model, closure: Closure, platform: int
     chain, reason = _chain(tree, leg_joint, repr(frame)) if leg_joint else ((), "")
     if reason:
         return None, reason
-    name = _leg_name(tree, chain, closure.name or frame)
+    name = _leg_name(tree, chain, frame)
     return PlatformLeg(name, chain, closure.kind, frame, placement, pframe, pplacement), ""
 
 
