@@ -831,6 +831,8 @@ def _load_file(path: Path, label: str, closures, output, point):
     suffix = path.suffix.lower()
     if suffix in (".urdf", ".xml", ".mjcf"):
         return _linkage_file(path, suffix, closures, output, point)
+    if suffix != ".toml":
+        raise MechanismFileError(label, "", _unread_format(suffix))
     if closures is not None:
         raise MechanismFileError(label, "", "closures= names the closures file of a .urdf; "
                                  "a TOML mechanism file holds its own closures")
@@ -845,6 +847,24 @@ def _load_file(path: Path, label: str, closures, output, point):
         return type(mech)(mech.model, output=output, point=point)
     except InputError as e:
         raise MechanismFileError(label, "output", str(e)) from e
+
+
+#: The formats :func:`load_mechanism` reads, in words (for messages).
+FORMATS = ("a .toml mechanism file (legs, or legs meeting at a pin), an Extended URDF "
+           "(.urdf with its .yaml/.toml closures file beside it) or an MJCF file (.xml, "
+           ".mjcf)")
+
+
+def _unread_format(suffix: str) -> str:
+    """Why a file of this suffix is not read, and what to give instead."""
+    if suffix in (".yaml", ".yml"):
+        return ("is a closures file: give the .urdf it belongs to (the closures file is "
+                "found beside it, or pass it with closures= / --closures)")
+    if suffix == ".sdf":
+        why = ("its closures are not read yet" if getattr(pin, "WITH_SDFORMAT", False) else
+               "the installed Pinocchio has no SDFormat support (pinocchio.WITH_SDFORMAT)")
+        return f"SDF is not read ({why}); give {FORMATS}"
+    return f"unknown suffix {suffix or '(none)'!r}: pkm_pin reads {FORMATS}"
 
 
 def _linkage_file(path: Path, suffix: str, closures, output, point):

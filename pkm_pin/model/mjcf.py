@@ -19,6 +19,9 @@ closures, the actuators and the reference configuration from the file itself:
 * Reference: Pinocchio's ``referenceConfigurations["qpos0"]`` (the joints' ``ref``), else
   the neutral configuration.
 * Output frame: ``output=`` if given, else a body named ``effector``, else the last body.
+* Frame names are made distinct (MuJoCo names bodies, joints and sites in separate name
+  spaces; Pinocchio's frames share one): a body keeps its name, a joint or site frame of
+  the same name gets the suffix ``_joint`` / ``_site`` (joint names are unchanged).
 
 An MJCF without ``<equality>`` is a tree: its model has no closures and is analysed as a
 serial (or branching) chain.
@@ -65,9 +68,10 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
     label = str(path)
     root = _parse(path)
     tree = _build_tree(path, root)
+    renamed = _distinct_frame_names(tree)
     reference = (np.array(tree.referenceConfigurations["qpos0"])
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
-    closures = _closures(label, root, tree, reference)
+    closures = _closures(label, root, tree, reference, renamed)
     actuated = _actuated(label, root, tree)
     out = output if output is not None else _output_frame(tree)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
@@ -123,6 +127,36 @@ def _build_tree(path: Path, root: ET.Element) -> pin.Model:
     return model
 
 
+#: Suffix of a joint or site frame whose name a body also has (MuJoCo's name spaces are
+#: per element kind; Pinocchio's frames share one).
+_SUFFIX = {pin.FrameType.JOINT: "_joint", pin.FrameType.OP_FRAME: "_site",
+           pin.FrameType.FIXED_JOINT: "_fixed", pin.FrameType.SENSOR: "_sensor"}
+
+
+def _distinct_frame_names(tree: pin.Model) -> dict:
+    """Make every frame name of ``tree`` distinct, in place: where a body shares its name
+    with a joint or a site (Cassie's ``left-plantar-rod`` is both a body and a joint),
+    the body keeps it and the other frames get the suffix of their kind
+    (``left-plantar-rod_joint``; joint names, ``tree.names``, are unchanged). Returns the
+    new names, ``{(frame type, old name): new name}``."""
+    seen: dict = {}
+    for frame in tree.frames:
+        seen.setdefault(frame.name, []).append(frame.type)
+    clashing = {name for name, kinds in seen.items() if len(kinds) > 1}
+    renamed: dict = {}
+    taken = set(seen)
+    for frame in tree.frames:
+        if frame.name in clashing and frame.type != pin.FrameType.BODY:
+            name = base = frame.name + _SUFFIX.get(frame.type, "_frame")
+            k = 1
+            while name in taken:
+                name, k = f"{base}{k}", k + 1
+            taken.add(name)
+            renamed[(frame.type, frame.name)] = name
+            frame.name = name
+    return renamed
+
+
 def _pinocchio_model(filename: str, label: str) -> pin.Model:
     with _captured_stderr():
         try:
@@ -132,7 +166,8 @@ def _pinocchio_model(filename: str, label: str) -> pin.Model:
 
 
 # -------------------------------------------------------------------------- closures
-def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray) -> tuple:
+def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray,
+              renamed: dict) -> tuple:
     """One :class:`Closure` per active ``connect`` / ``weld`` of ``<equality>``."""
     data = tree.createData()
     pin.framesForwardKinematics(tree, data, q)
@@ -149,20 +184,21 @@ def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray) -> t
             if el.get("active", "true") == "false":
                 continue
             name = el.get("name") or f"{el.tag}{i}"
-            out.append(_closure(label, where, el, name, tree, data))
+            out.append(_closure(label, where, el, name, tree, data, renamed))
     return tuple(out)
 
 
 def _closure(label: str, where: str, el: ET.Element, name: str, tree: pin.Model,
-             data: pin.Data) -> Closure:
+             data: pin.Data, renamed: dict) -> Closure:
     """The closure of one ``connect`` or ``weld`` element."""
     kind = "point" if el.tag == "connect" else "weld"
     if el.get("site1") is not None or el.get("site2") is not None:
-        a, b = (_frame(label, f"{where} {k}", el.get(k), tree, pin.FrameType.OP_FRAME)
-                for k in ("site1", "site2"))
+        a, b = (_frame(label, f"{where} {k}", el.get(k), tree, pin.FrameType.OP_FRAME,
+                       renamed) for k in ("site1", "site2"))
         return Closure(kind, a, b, name=name)
-    a = _frame(label, f"{where} body1", el.get("body1"), tree, pin.FrameType.BODY)
-    b = _frame(label, f"{where} body2", el.get("body2", "world"), tree, pin.FrameType.BODY)
+    a = _frame(label, f"{where} body1", el.get("body1"), tree, pin.FrameType.BODY, renamed)
+    b = _frame(label, f"{where} body2", el.get("body2", "world"), tree, pin.FrameType.BODY,
+               renamed)
     oMa, oMb = (data.oMf[tree.getFrameId(f)] for f in (a, b))
     anchor = pin.SE3(np.eye(3), _floats(label, where, el, "anchor", 3, np.zeros(3)))
     if kind == "point":
@@ -178,20 +214,19 @@ def _closure(label: str, where: str, el: ET.Element, name: str, tree: pin.Model,
 
 
 def _frame(label: str, where: str, name: str | None, tree: pin.Model,
-           kind: pin.FrameType) -> str:
-    """The tree's frame for the body or site ``name`` (``world``: the universe)."""
+           kind: pin.FrameType, renamed: dict) -> str:
+    """The tree's frame for the body or site ``name`` (``world``: the universe; a site
+    renamed by :func:`_distinct_frame_names`: its new name)."""
     if name is None:
         raise ClosureFileError(label, where, "is missing")
     if name == "world" and kind == pin.FrameType.BODY:
         return tree.frames[0].name
     what = "body" if kind == pin.FrameType.BODY else "site"
+    name = renamed.get((kind, name), name)
     names = [f.name for f in tree.frames if f.type == kind and f.name != WORLD_BODY]
     if name not in names:
         raise ClosureFileError(label, where, f"{name!r} is not a {what} of the model; its "
                                f"{what}s: {_listing(names)}")
-    if tree.frames[tree.getFrameId(name)].type != kind:
-        raise ClosureFileError(label, where, f"{what} {name!r} shares its name with a joint "
-                               "or another element; give it a distinct name")
     return name
 
 

@@ -1,0 +1,70 @@
+"""Robot files as people write them (issue 25): names shared between MJCF bodies, joints
+and sites, formats pkm_pin does not read, strict JSON."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pkm_pin
+
+LOOPS = Path(__file__).resolve().parents[1] / "models" / "loops"
+
+
+def _clashing_four_bar(tmp_path: Path, sites: bool) -> Path:
+    """The shipped MJCF four-bar with every joint named like its body (Cassie's habit)
+    and, with ``sites``, the loop closed between two sites also named like bodies."""
+    text = (LOOPS / "four_bar.xml").read_text()
+    for body in ("crank", "coupler", "rocker"):
+        text = text.replace(f'"{body}_joint"', f'"{body}"')
+    if sites:
+        text = text.replace('<joint name="coupler" type="hinge" axis="0 0 1"/>',
+                            '<joint name="coupler" type="hinge" axis="0 0 1"/>'
+                            '<site name="coupler" pos="0.09 0 0"/>')
+        text = text.replace('<joint name="rocker" type="hinge" axis="0 0 1"/>',
+                            '<joint name="rocker" type="hinge" axis="0 0 1"/>'
+                            '<site name="rocker" pos="0.07 0 0"/>')
+        text = text.replace('body1="coupler" body2="rocker" anchor="0.09 0 0"',
+                            'site1="coupler" site2="rocker"')
+    path = tmp_path / "four_bar_clash.xml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("sites", [False, True])
+def test_mjcf_names_shared_by_bodies_joints_and_sites(tmp_path, sites):
+    """Bodies keep their names, joint and site frames get a suffix; the linkage is the
+    shipped four-bar (same joints, closure residual and analysis at home)."""
+    link = pkm_pin.load_mechanism(_clashing_four_bar(tmp_path, sites))
+    ref = pkm_pin.load_mechanism(LOOPS / "four_bar.xml")
+    names = [f.name for f in link.model.tree.frames]
+    assert len(names) == len(set(names)) and "crank_joint" in names
+    assert link.actuated == ("crank",)
+    c = link.model.closures[0]
+    assert (c.frame_a, c.frame_b) == (("coupler_site", "rocker_site") if sites
+                                      else ("coupler", "rocker"))
+    a, b = link.assemble(), ref.assemble()
+    np.testing.assert_allclose(a.q, b.q, atol=1e-10)
+    assert link.analyze(a).dof == ref.analyze(b).dof == 1
+    np.testing.assert_allclose(link.analyze(a).forward_velocity([1.0]),
+                               ref.analyze(b).forward_velocity([1.0]), atol=1e-10)
+
+
+@pytest.mark.parametrize("name,words", [
+    ("robot.sdf", "SDF is not read"),
+    ("robot.yaml", "is a closures file: give the .urdf it belongs to"),
+    ("robot", "unknown suffix '(none)': pkm_pin reads a .toml mechanism file"),
+])
+def test_formats_not_read_are_named_with_what_is_read(tmp_path, capsys, name, words):
+    """A file of a format pkm_pin does not read gets one line saying so and listing the
+    formats it reads (an .sdf used to be reported as 'not valid TOML')."""
+    from pkm_pin.cli import main
+
+    path = tmp_path / name
+    path.write_text('<sdf version="1.6"><model name="m"><link name="a"/></model></sdf>\n')
+    assert main(["analyze", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and words in err and "TOML:" not in err
+    assert "MJCF file (.xml, .mjcf)" in err or "closures file" in err
