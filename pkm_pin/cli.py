@@ -35,7 +35,6 @@ Python traceback. ``check`` exits with 1 when the file loads but has warnings.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import re
 import sys
@@ -149,6 +148,13 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
                      f"models are: {', '.join(sorted(shipped_models()))} (see 'pkm-pin list')")
 
 
+def _json(data) -> str:
+    """Strict JSON of a report (:func:`pkm_pin.report.strict_json`: no NaN/Infinity)."""
+    from .report import strict_json
+
+    return strict_json(data)
+
+
 def _is_file(path: Path) -> bool:
     """``path.is_file()``, False for names the OS refuses (too long, NUL byte)."""
     try:
@@ -215,7 +221,7 @@ def cmd_list(args) -> int:
     """Print the shipped models, one line each."""
     models = shipped_models()
     if args.json:
-        print(json.dumps(models, indent=2))
+        print(_json(models))
         return 0
     width = max(len(n) for n in models)
     for name, m in sorted(models.items()):
@@ -241,7 +247,7 @@ def cmd_analyze(args) -> int:
     if args.markdown:
         _write_text(args.markdown, report.markdown(analysis, data=data))
     if args.json:
-        print(json.dumps(data, indent=2, default=float))
+        print(_json(data))
     else:
         print(report.text(data))
         if args.markdown:
@@ -260,7 +266,7 @@ def _analyze_linkage(args, link) -> int:
     if args.markdown:
         _write_text(args.markdown, rl.linkage_markdown(data))
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(_json(data))
     else:
         print(rl.linkage_text(data, rl.body_frames(link.model)))
         if args.markdown:
@@ -370,7 +376,7 @@ def cmd_fk(args) -> int:
              "leg_q": {leg.name: qi.tolist() for leg, qi in zip(mech.legs, a.leg_q)}}
             for a in found]
     if args.json:
-        print(json.dumps(rows if args.all else rows[0], indent=2))
+        print(_json(rows if args.all else rows[0]))
         return 0
     print(f"mechanism  {mech.name}")
     print(f"actuated   {', '.join(mech.actuated_names)} = {_fmt(q)}")
@@ -390,7 +396,7 @@ def _fk_linkage(args, link) -> int:
     _no_all(args)
     q = link.check_actuated(args.q)
     data = assembly_data(link, link.forward_kinematics(q, guess=link.assemble()))
-    print(json.dumps(data, indent=2) if args.json else fk_text(data))
+    print(_json(data) if args.json else fk_text(data))
     return 0
 
 
@@ -420,7 +426,7 @@ def cmd_ik(args) -> int:
                 "pose": _pose_dict(found[0].pose)}
         if not args.all:
             body["q_actuated"] = body["q_actuated"][0]
-        print(json.dumps(body, indent=2))
+        print(_json(body))
         return 0
     print(f"mechanism  {mech.name}")
     if isinstance(pose, dict):
@@ -443,7 +449,7 @@ def _ik_linkage(args, link) -> int:
     data = assembly_data(link, link.inverse_kinematics(target))
     data["target"] = pose_dict(target)
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(_json(data))
         return 0
     print(f"target     xyz {_fmt(data['target']['xyz'])}  rpy {_fmt(data['target']['rpy'])}")
     print(fk_text(data))
@@ -821,7 +827,7 @@ def cmd_workspace(args) -> int:
     data = ws.as_dict()
     files = [prefix.with_name(prefix.name + ".json"), prefix.with_name(prefix.name + ".npz")]
     try:
-        files[0].write_text(json.dumps(data, indent=2))
+        files[0].write_text(_json(data))
         np.savez_compressed(files[1], points=ws.points, shape=np.array(ws.shape),
                             coords=np.array(ws.coords), bounds=ws.bounds,
                             **{f"mask_{k}": m for k, m in ws.masks.items()},
@@ -835,7 +841,7 @@ def cmd_workspace(args) -> int:
         raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
     data["files"] = [str(f) for f in files]
     if args.json:
-        print(json.dumps(data, indent=2))
+        print(_json(data))
         return 0
     print(f"mechanism  {mech.name}  ({ws.method})")
     print("box        " + ", ".join(f"{c} in [{lo:g}, {hi:g}] {u}" for c, (lo, hi), u in

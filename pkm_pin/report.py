@@ -19,7 +19,8 @@ The rows span the same screw system as ``Analysis.platform_twists``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import json
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -232,6 +233,39 @@ def finite_or_none(x: float) -> float | None:
     """``x`` as a float, or ``None`` when it is not finite (JSON has no nan)."""
     x = float(x)
     return x if np.isfinite(x) else None
+
+
+def strict_json(data) -> str:
+    """``data`` as strict JSON text (indented): numpy numbers and arrays as plain
+    numbers and lists, and every non-finite number (nan, ±inf: undefined at this
+    configuration) as ``null``; where ``data`` is a mapping with such numbers, the key
+    ``"non_finite"`` lists where they stood and what they were (``{"A[2][1]": "nan"}``),
+    so that a strict parser reads the report and a reader knows why a value is missing."""
+    found: dict = {}
+    clean = _finite(data, "", found)
+    if found and isinstance(clean, dict):
+        clean["non_finite"] = found
+    return json.dumps(clean, indent=2, allow_nan=False)
+
+
+def _finite(x, where: str, found: dict):
+    """:func:`strict_json`'s copy of ``x`` with non-finite numbers as ``None``."""
+    if isinstance(x, Mapping):
+        return {k: _finite(v, f"{where}.{k}" if where else str(k), found) for k, v in x.items()}
+    if isinstance(x, np.ndarray):
+        x = x.tolist()
+    if isinstance(x, (list, tuple)):
+        return [_finite(v, f"{where}[{i}]", found) for i, v in enumerate(x)]
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)):
+        return int(x)
+    if isinstance(x, (float, np.floating)):
+        if np.isfinite(x):
+            return float(x)
+        found[where] = str(float(x))
+        return None
+    return x
 
 
 def transmission_data(tr) -> dict:

@@ -68,3 +68,19 @@ def test_formats_not_read_are_named_with_what_is_read(tmp_path, capsys, name, wo
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and words in err and "TOML:" not in err
     assert "MJCF file (.xml, .mjcf)" in err or "closures file" in err
+
+
+def test_strict_json_turns_non_finite_numbers_into_null_with_a_reason():
+    """strict_json: nan and ±inf become null, listed under non_finite with where they
+    stood; numpy numbers and arrays become plain JSON; a strict parser reads it."""
+    import json
+
+    from pkm_pin.report import strict_json
+
+    text = strict_json({"A": np.array([[1.0, np.nan], [np.inf, 2.0]]), "dof": np.int64(3),
+                        "ok": np.bool_(True), "indices": {"type_I": -np.inf}})
+    data = json.loads(text, parse_constant=lambda c: pytest.fail(f"non-strict {c}"))
+    assert data["A"] == [[1.0, None], [None, 2.0]] and data["dof"] == 3 and data["ok"] is True
+    assert data["non_finite"] == {"A[0][1]": "nan", "A[1][0]": "inf",
+                                  "indices.type_I": "-inf"}
+    assert "non_finite" not in json.loads(strict_json({"x": 1.0}))
