@@ -45,7 +45,8 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError
-from .linkage import Linkage, LinkageAssembly, _body_points, _NullSpace
+from .linkage import Linkage, LinkageAssembly, _body_points
+from .model.closure_model import NullSpace
 from .report import readable_basis
 from .tolerances import RANK_RTOL
 from .view import (
@@ -99,7 +100,7 @@ def idle_velocities(link: Linkage, q) -> np.ndarray:
     closures allow with every actuated joint locked (the basis that
     :attr:`Mobility.idle_motions` describes, same rank decisions)."""
     model = link.model
-    ns = _NullSpace(model, model.kinematics(q), RANK_RTOL)
+    ns = NullSpace(model, model.kinematics(q), RANK_RTOL)
     return (ns.units[:, None] * ns.idle(RANK_RTOL)).T
 
 
