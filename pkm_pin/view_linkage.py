@@ -2,7 +2,7 @@
 its closures, its output frame and its idle motions in a meshcat scene.
 
 :func:`view_linkage` (also reached through :func:`pkm_pin.view.view`) draws, in the
-scene and page machinery of :mod:`pkm_pin.view`:
+scene and page machinery of :mod:`pkm_pin.scene`:
 
 * the tree as a skeleton: a bar from each joint's parent joint origin to its origin
   (grey from the world origin: the ground), and from a body's joint to the closure and
@@ -48,8 +48,7 @@ from .errors import InputError
 from .linkage import Linkage, LinkageAssembly, _body_points
 from .model.closure_model import NullSpace
 from .report import readable_basis
-from .tolerances import RANK_RTOL
-from .view import (
+from .scene import (
     ACTUATED_SCREW_COLOUR,
     ACTUATION_WRENCH_COLOUR,
     CONSTRAINT_WRENCH_COLOUR,
@@ -64,6 +63,7 @@ from .view import (
     _translation,
     node_name,
 )
+from .tolerances import RANK_RTOL
 
 CLOSURE_COLOUR = 0xE7298A
 IDLE_COLOUR = 0x00CC66
