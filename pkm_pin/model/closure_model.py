@@ -565,8 +565,7 @@ class NullSpace:
 
     def __init__(self, model: ClosureModel, kin: TreeKinematics, rtol: float):
         U = model.velocity_units
-        rank, _, _, Vt = screws.svd_rank(kin.closure_jacobian * U, rtol)
-        self.rank, self.N = rank, Vt[rank:].T
+        self.rank, self.N = _rank_and_null(kin.closure_jacobian * U, rtol)
         self.X = self.N[list(model.actuated_v)]
         self.Y_world = kin.output_jacobian @ (U[:, None] * self.N)
         self.units = U
