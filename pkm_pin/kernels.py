@@ -107,7 +107,8 @@ def chain_of(chains, i):
 
 class ChainKernel(Chain):
     """The compiled kinematics of one leg (:func:`chain_kernel`): its :class:`Chain`
-    (the same fields) with the calls a leg makes on it."""
+    (the same fields) with the calls a leg makes on it (the closure solver takes it in
+    :func:`pkm_pin.solve.solve_chain`)."""
 
     __slots__ = ()
 
@@ -122,16 +123,6 @@ class ChainKernel(Chain):
         J = np.empty((6, self.nv))
         fk_jacobian(self.chain, np.asarray(q, dtype=float), T, J)
         return T, J
-
-    def solve(self, target: np.ndarray, q0, tol: float = 1e-12, max_iter: int = 50):
-        """The closure solver (:func:`pkm_pin.solve.solve_from`) for the tip at ``target``
-        (4×4, world) from ``q0``: ``(q, residual, iterations)``."""
-        from .solve import solve_from
-
-        Q, res, its = np.empty((1, self.nv)), np.empty(1), np.zeros(1, np.int64)
-        solve_from(self.chain, np.ascontiguousarray(target, dtype=float)[None],
-                   np.array(q0, dtype=float)[None], tol, max_iter, Q, res, its)
-        return Q[0], float(res[0]), int(its[0])
 
 
 def chain_kernel(leg) -> ChainKernel | None:

@@ -73,9 +73,9 @@ import pinocchio as pin
 from . import screws
 from .analysis import classify
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
-from .model.closure_model import ClosureModel, TreeKinematics
+from .model.closure_model import ClosureModel, NullSpace, TreeKinematics, pose_rows
 from .model.structure import detect_platform
-from .screws import svd_rank
+from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
@@ -152,20 +152,6 @@ class Mobility:
     idle_motions: tuple
     independent_actuators: tuple
     grubler: int
-
-
-def homogenised_about(S: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
-    """Screws ``S`` (rows, world origin) about the point ``p``, moment part / ``length``:
-    ``(a; b) → (a; (b + a × p) / length)`` (the velocity, or moment, at ``p``)."""
-    return screws.homogenise(screws.about(np.atleast_2d(S), p), length)
-
-
-def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
-    """Inverse of :func:`homogenised_about`: world-origin screws (rows)."""
-    H = np.atleast_2d(H)
-    if H.shape[0] == 0:
-        return np.zeros((0, 6))
-    return screws.from_point(screws.dehomogenise(H, length), p)
 
 
 class Linkage:
@@ -305,7 +291,7 @@ class Linkage:
     def mobility(self, q, rtol: float = RANK_RTOL) -> Mobility:
         """:class:`Mobility` at the configuration ``q`` (assembled)."""
         kin = self._model.kinematics(q)
-        return _mobility(self, kin, _NullSpace(self._model, kin, rtol), rtol)
+        return _mobility(self, kin, NullSpace(self._model, kin, rtol), rtol)
 
     # ------------------------------------------------------------- analysis
     def analyze(self, q, *, about: str = "output", generic: LinkageAnalysis | None = None,
@@ -508,7 +494,7 @@ class Linkage:
             raise InputError(f"pose must be a finite pinocchio.SE3, got {type(pose).__name__}")
         model = self._model
         home = self.assemble(guess, starts=starts, seed=seed, tol=tol)
-        rows = _pose_rows(model, model.kinematics(home.q))
+        rows = pose_rows(model, model.kinematics(home.q))
         sol, iterations = solve_tree_starts(
             model, iter_tree_starts(model, home.q, count=int(starts), seed=seed), pose=pose,
             pose_rows=rows, nearest=home.q, tol=tol)
@@ -581,42 +567,8 @@ def _actuated_or_nan(model: ClosureModel, q: np.ndarray) -> np.ndarray:
         return np.full(len(model.actuated), np.nan)
 
 
-def _pose_rows(model: ClosureModel, kin: TreeKinematics) -> np.ndarray:
-    """Rows (d × 6) selecting the components of the output pose error that the output
-    can realise: an orthonormal basis of its twist system, homogenised, in its own axes
-    and about its origin (the identity when d = 6)."""
-    ns = _NullSpace(model, kin, RANK_RTOL)
-    M = kin.output_placement  # a point's error is in world axes (solve.pose_error_rows)
-    M = pin.SE3(np.eye(3), M.translation) if model.output_point else M
-    local = screws.homogenise(screws.transform(ns.Y_world.T, M.inverse()), model.length)
-    rank, _, _, Vt = svd_rank(local, RANK_RTOL)
-    return np.eye(6) if rank == 6 else Vt[:rank]
-
-
-class _NullSpace:
-    """The motions the closures allow at one configuration (dimensionless columns).
-
-    Attributes: ``N`` (nv × dof) orthonormal null-space basis of ``J_c U``; ``rank``;
-    ``X`` (actuated × dof) actuated rates; ``Y_world`` (6 × dof) output twists about the
-    world origin per unit of the null coordinates."""
-
-    def __init__(self, model: ClosureModel, kin: TreeKinematics, rtol: float):
-        U = model.velocity_units
-        rank, _, _, Vt = svd_rank(kin.closure_jacobian * U, rtol)
-        self.rank, self.N = rank, Vt[rank:].T
-        self.X = self.N[list(model.actuated_v)]
-        self.Y_world = kin.output_jacobian @ (U[:, None] * self.N)
-        self.units = U
-
-    def idle(self, rtol: float) -> np.ndarray:
-        """(nv × k) orthonormal basis of the idle motions (dimensionless columns): the
-        allowed motions that leave every actuated joint still."""
-        rank_x, _, _, Vt = svd_rank(self.X, rtol)
-        return self.N @ Vt[rank_x:].T
-
-
 # ====================================================================== mobility
-def _mobility(link: Linkage, kin: TreeKinematics, ns: _NullSpace, rtol: float) -> Mobility:
+def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
     idle = ns.idle(rtol)
@@ -1024,7 +976,7 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
     model = link.model
     L = model.length
     p = kin.output_placement.translation.copy() if about == "output" else np.zeros(3)
-    ns = _NullSpace(model, kin, rtol)
+    ns = NullSpace(model, kin, rtol)
     mob = _mobility(link, kin, ns, rtol)
     Yh = homogenised_about(ns.Y_world.T, p, L).T  # 6 × dof
     d, Uy, _, _ = svd_rank(Yh, rtol)
@@ -1059,7 +1011,7 @@ def _transmission(A_n: np.ndarray, P_h: np.ndarray, d: int) -> tuple[float, floa
     return t2, (float(sv[0] / t2) if t2 > 0 else np.inf)
 
 
-def _generalised(ns: _NullSpace, Yh: np.ndarray, rtol: float):
+def _generalised(ns: NullSpace, Yh: np.ndarray, rtol: float):
     """Reduced maps ``X_r``, ``Y_r`` on the motions that move the actuators or the output
     (basis ``M`` of null coordinates), and the forward and inverse indices: the smallest
     singular values of the actuated and output blocks of the orthonormalised ``(X; Y)``."""

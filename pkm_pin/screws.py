@@ -259,6 +259,20 @@ def dehomogenise(H, length: float) -> np.ndarray:
     return S
 
 
+def homogenised_about(S: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
+    """Screws ``S`` (rows, world origin) about the point ``p``, moment part / ``length``:
+    ``(a; b) → (a; (b + a × p) / length)`` (the velocity, or moment, at ``p``)."""
+    return homogenise(about(np.atleast_2d(S), p), length)
+
+
+def from_homogenised(H: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
+    """Inverse of :func:`homogenised_about`: world-origin screws (rows)."""
+    H = np.atleast_2d(H)
+    if H.shape[0] == 0:
+        return np.zeros((0, 6))
+    return from_point(dehomogenise(H, length), p)
+
+
 #: Rows whose homogenised norm is below this fraction of the largest are zero screws
 #: (alias of :data:`pkm_pin.tolerances.ZERO_SCREW_RTOL`).
 _ZERO_ROW = ZERO_SCREW_RTOL

@@ -87,8 +87,9 @@ warnings.filterwarnings("ignore", message=r"variable '.*' is not in scope",
 __all__ = ["ACTUATED", "LEGS", "PLATFORM", "POSE_COORDINATES", "ClosureSolution",
            "CoordinateSolution", "CoordinateSystem", "LegSolution", "Mask", "closure_error",
            "closure_iteration", "coordinate_errors", "coordinate_rates", "coordinate_scales",
-           "pose_coordinates", "solve_closure", "solve_coordinates", "solve_from",
-           "solve_kernel", "solve_leg", "solve_system", "start_configurations", "track"]
+           "pose_coordinates", "solve_chain", "solve_closure", "solve_coordinates",
+           "solve_from", "solve_kernel", "solve_leg", "solve_system", "start_configurations",
+           "track"]
 
 
 class Mask(IntEnum):
@@ -505,6 +506,15 @@ def solve_from(chain, targets, starts, tol, max_iter, Q, residual, iterations):
                 Q[i] = q
             if r <= tol:
                 break
+
+
+def solve_chain(kernel, target: np.ndarray, q0, tol: float = 1e-12, max_iter: int = 50):
+    """:func:`solve_from` for one leg's :class:`~pkm_pin.kernels.ChainKernel`, its tip at
+    ``target`` (4×4, world) from ``q0``: ``(q, residual, iterations)``."""
+    Q, res, its = np.empty((1, kernel.nv)), np.empty(1), np.zeros(1, np.int64)
+    solve_from(kernel.chain, np.ascontiguousarray(target, dtype=float)[None],
+               np.array(q0, dtype=float)[None], tol, max_iter, Q, res, its)
+    return Q[0], float(res[0]), int(its[0])
 
 
 @njit(cache=True, nogil=True)

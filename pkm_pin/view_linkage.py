@@ -2,7 +2,7 @@
 its closures, its output frame and its idle motions in a meshcat scene.
 
 :func:`view_linkage` (also reached through :func:`pkm_pin.view.view`) draws, in the
-scene and page machinery of :mod:`pkm_pin.view`:
+scene and page machinery of :mod:`pkm_pin.scene`:
 
 * the tree as a skeleton: a bar from each joint's parent joint origin to its origin
   (grey from the world origin: the ground), and from a body's joint to the closure and
@@ -45,10 +45,10 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError
-from .linkage import Linkage, LinkageAssembly, _body_points, _NullSpace
+from .linkage import Linkage, LinkageAssembly, _body_points
+from .model.closure_model import NullSpace
 from .report import readable_basis
-from .tolerances import RANK_RTOL
-from .view import (
+from .scene import (
     ACTUATED_SCREW_COLOUR,
     ACTUATION_WRENCH_COLOUR,
     CONSTRAINT_WRENCH_COLOUR,
@@ -63,6 +63,7 @@ from .view import (
     _translation,
     node_name,
 )
+from .tolerances import RANK_RTOL
 
 CLOSURE_COLOUR = 0xE7298A
 IDLE_COLOUR = 0x00CC66
@@ -99,7 +100,7 @@ def idle_velocities(link: Linkage, q) -> np.ndarray:
     closures allow with every actuated joint locked (the basis that
     :attr:`Mobility.idle_motions` describes, same rank decisions)."""
     model = link.model
-    ns = _NullSpace(model, model.kinematics(q), RANK_RTOL)
+    ns = NullSpace(model, model.kinematics(q), RANK_RTOL)
     return (ns.units[:, None] * ns.idle(RANK_RTOL)).T
 
 

@@ -65,6 +65,7 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError, PkmError
+from .model.closure_model import ClosureModel, pose_rows
 from .solve import POSE_COORDINATES
 
 #: The pose coordinates, in the order of the sweep arrays.
@@ -603,10 +604,9 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
             for a connected kind. DependentCoordinates: the coordinates (with ``at``)
             are not independent for this mechanism.
     """
-    from .linkage import Linkage
     from .transmission import GOOD_LTI
 
-    if isinstance(mech, Linkage):
+    if isinstance(getattr(mech, "model", None), ClosureModel):  # a Linkage
         return linkage_workspace(mech, coords, bounds=bounds, n=n, sampling=sampling,
                                  samples=samples, seed=seed, kinds=kinds,
                                  threshold=threshold, centre=centre, progress=progress,
@@ -915,8 +915,6 @@ class _LinkageDomain(NamedTuple):
 
 def _linkage_domain(link, ref, coords, bounds) -> _LinkageDomain:
     """The :class:`_LinkageDomain` of :func:`linkage_workspace`'s arguments."""
-    from .linkage import _pose_rows
-
     model = link.model
     out_xyz = ref.output_pose.translation.copy()
     if coords is None:
@@ -945,7 +943,7 @@ def _linkage_domain(link, ref, coords, bounds) -> _LinkageDomain:
     return _LinkageDomain(coords, idx, False, home,
                           _bounds(bounds, coords, home, np.full(len(coords), model.length)),
                           ("m",) * len(coords), fixed, "linkage output",
-                          _pose_rows(model, model.kinematics(ref.q)), out_xyz,
+                          pose_rows(model, model.kinematics(ref.q)), out_xyz,
                           np.full(len(coords), model.length))
 
 
@@ -1040,11 +1038,9 @@ def _followed(P: np.ndarray, Q: Mapping, points: np.ndarray, shape, sub: int, fo
 def _default_linkage_coords(link, ref) -> tuple[str, ...]:
     """The output point's moving coordinates (at the reference), else the first two
     actuated joints."""
-    from .linkage import _pose_rows
-
     model = link.model
     if model.output_point:
-        rows = _pose_rows(model, model.kinematics(ref.q))
+        rows = pose_rows(model, model.kinematics(ref.q))
         moving = np.linalg.norm(rows[:, 3:], axis=0) > 1e-6
         names = tuple(c for c, m in zip(COORDINATES[:3], moving) if m)
         if names:
@@ -1197,15 +1193,13 @@ def _carried_det(an, P0_world: np.ndarray) -> float:
     """``det(A_n Δ P̃ᵀ)`` of a linkage analysis: actuation wrenches normalised, the
     reference's output twists ``P0_world`` projected on the current twist system (both
     homogenised about the analysis' reference point); nan when not square."""
-    from .linkage import homogenised_about
-
     p, L = an.reference_point, an.length
     if an.A.shape[0] != an.output_dof or an.output_dof == 0:
         return np.nan
-    A = homogenised_about(an.A, p, L)
+    A = screws.homogenised_about(an.A, p, L)
     A = A / np.linalg.norm(A, axis=1, keepdims=True)
-    P = homogenised_about(an.platform_twists, p, L)
-    P0 = homogenised_about(P0_world, p, L)
+    P = screws.homogenised_about(an.platform_twists, p, L)
+    P0 = screws.homogenised_about(P0_world, p, L)
     carried = (P0 @ P.T) @ P
     return float(np.linalg.det(A @ (carried @ screws.DELTA).T))
 

@@ -556,6 +556,39 @@ def _orthonormal_span(T: np.ndarray, oMo: pin.SE3, length: float, rtol: float) -
     return screws.dehomogenise(np.linalg.qr(world.T)[0].T, length)
 
 
+class NullSpace:
+    """The motions the closures allow at one configuration (dimensionless columns).
+
+    Attributes: ``N`` (nv × dof) orthonormal null-space basis of ``J_c U``; ``rank``;
+    ``X`` (actuated × dof) actuated rates; ``Y_world`` (6 × dof) output twists about the
+    world origin per unit of the null coordinates."""
+
+    def __init__(self, model: ClosureModel, kin: TreeKinematics, rtol: float):
+        U = model.velocity_units
+        self.rank, self.N = _rank_and_null(kin.closure_jacobian * U, rtol)
+        self.X = self.N[list(model.actuated_v)]
+        self.Y_world = kin.output_jacobian @ (U[:, None] * self.N)
+        self.units = U
+
+    def idle(self, rtol: float) -> np.ndarray:
+        """(nv × k) orthonormal basis of the idle motions (dimensionless columns): the
+        allowed motions that leave every actuated joint still."""
+        rank_x, _, _, Vt = screws.svd_rank(self.X, rtol)
+        return self.N @ Vt[rank_x:].T
+
+
+def pose_rows(model: ClosureModel, kin: TreeKinematics) -> np.ndarray:
+    """Rows (d × 6) selecting the components of the output pose error that the output
+    can realise: an orthonormal basis of its twist system, homogenised, in its own axes
+    and about its origin (the identity when d = 6)."""
+    ns = NullSpace(model, kin, RANK_RTOL)
+    M = kin.output_placement  # a point's error is in world axes (solve.pose_error_rows)
+    M = pin.SE3(np.eye(3), M.translation) if model.output_point else M
+    local = screws.homogenise(screws.transform(ns.Y_world.T, M.inverse()), model.length)
+    rank, _, _, Vt = screws.svd_rank(local, RANK_RTOL)
+    return np.eye(6) if rank == 6 else Vt[:rank]
+
+
 # ------------------------------------------------------------------- validation
 def velocity_units(tree: pin.Model, length: float) -> np.ndarray:
     """Unit of each velocity coordinate of ``tree``: ``length`` for a coordinate whose
