@@ -171,20 +171,22 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
     (ITI, OTI per actuator, LTI, CTI, the weakest in words; ``None`` at a type II pose),
     ``uncontrolled_twist`` (words, at a type II/III singularity, else ``None``),
     ``crosscheck`` (quantity → largest dimensionless difference, or ``None``),
-    ``crosscheck_max_error`` and ``plots`` (file paths).
+    ``crosscheck_max_error``, ``plots`` (file paths) and ``failed_sections`` (section →
+    error, for the optional sections that failed: :func:`optional`).
     """
     from .crosscheck import crosscheck
 
     mech = analysis.mechanism
-    checks = crosscheck(analysis)
+    failed: dict = {}
+    checks = optional("crosscheck", lambda: crosscheck(analysis), failed)
     pose = analysis.assembly.pose
     centre = pose.translation
     motion = readable_basis(analysis.platform_twists, centre, analysis.length,
                             analysis.translations)
     constraints = readable_basis(analysis.constraint_wrenches, centre, analysis.length)
-    free = analysis.uncontrolled_twist
-    idle = _idle(analysis)
-    tr = _transmission(analysis)
+    free = optional("uncontrolled_twist", lambda: analysis.uncontrolled_twist, failed)
+    idle = optional("idle_motions", lambda: _idle(analysis), failed) or []
+    tr = optional("transmission", lambda: _transmission(analysis), failed)
     return {
         "mechanism": mech.name,
         "description": mech.description,
@@ -213,7 +215,26 @@ def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
         "crosscheck": checks,
         "crosscheck_max_error": None if checks is None else max(checks.values()),
         "plots": [str(p) for p in plots],
+        "failed_sections": failed,
     }
+
+
+def optional(section: str, compute, failed: dict):
+    """``compute()`` of an optional section of a report, or ``None`` with the error
+    recorded in ``failed[section]`` (``"Type: message"``): a section that fails on an
+    unusual file (a transmission index, the cross-check, idle motions in words) costs
+    that section, not the report."""
+    try:
+        return compute()
+    except Exception as e:  # noqa: BLE001 (any failure of an optional section)
+        failed[section] = f"{type(e).__name__}: {e}"[:300]
+        return None
+
+
+def failed_lines(r: dict) -> list[str]:
+    """One text line per optional section that failed (:func:`optional`)."""
+    return [f"{name:<18} not computed ({why})"
+            for name, why in r.get("failed_sections", {}).items()]
 
 
 def _transmission(analysis) -> dict | None:
@@ -399,6 +420,7 @@ def text(r: dict) -> str:
         parts = ", ".join(f"{k} {v:.2g}" for k, v in r["crosscheck"].items())
         out += ["cross-check        max |Pinocchio − formulas| = "
                 f"{r['crosscheck_max_error']:.3g}  ({parts})"]
+    out += failed_lines(r)
     out += [f"plot               {p}" for p in r.get("plots", [])]
     return "\n".join(out)
 

@@ -30,7 +30,9 @@ from .report import (
     _num,
     _row,
     _vec,
+    failed_lines,
     finite_or_none,
+    optional,
     readable_basis,
     transmission_data,
 )
@@ -108,6 +110,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     constraints = readable_basis(an.constraint_wrenches, centre, an.length)
     mob = an.mobility
     data = assembly_data(link, assembly)
+    failed: dict = {}
     data.update({
         "description": "",
         "structure": structure_data(link),
@@ -127,11 +130,13 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "singularity": an.singularity,
         "constraint_singular": an.constraint_singular,
         "indices": {k: finite_or_none(v) for k, v in an.indices.items()},
-        "transmission": _transmission(link, assembly),
+        "transmission": optional("transmission", lambda: _transmission(link, assembly),
+                                 failed),
         "uncontrolled_twist": None,
         "crosscheck": None,
         "crosscheck_max_error": None,
         "plots": [str(p) for p in plots],
+        "failed_sections": failed,
     })
     return data
 
@@ -188,10 +193,9 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
            f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''}"
            + ("; no closure: a tree, analysed as a serial chain)" if not r["closures"] else ")"),
            output_line(r, frames)] + [line for line in (structure_line(r),) if line] + [
-           f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
-           "joints (q):"] + joints_lines(r)
+           f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
     out += [f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "
-            f"{r['motion_type']})",
+            f"{r['motion_type']}; singularity {r['singularity']})",
             "idle motions       " + ("none" if not r["idle_motions"] else
                                      f"{r['idle_dof']} (with every actuated joint locked):")]
     out += [f"    {m}" for m in r["idle_motions"]]
@@ -199,7 +203,7 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
             f"{r['redundant_constraints']})",
             f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
             f"independent        {', '.join(r['independent_actuators']) or 'none'}",
-            f"output twists ({r['output']}; ω; v_O):"]
+            "joints (q):"] + joints_lines(r) + [f"output twists ({r['output']}; ω; v_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]] or ["    none"]
     out += ["constraint wrenches on the output (f; m_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["constraint_basis"]] or ["    none"]
@@ -210,6 +214,7 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
     tr = r.get("transmission")
     if tr is not None:
         out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}: {tr['words']}"]
+    out += failed_lines(r)
     out += [f"plot               {p}" for p in r.get("plots", [])]
     return "\n".join(out)
 

@@ -84,3 +84,30 @@ def test_strict_json_turns_non_finite_numbers_into_null_with_a_reason():
     assert data["non_finite"] == {"A[0][1]": "nan", "A[1][0]": "inf",
                                   "indices.type_I": "-inf"}
     assert "non_finite" not in json.loads(strict_json({"x": 1.0}))
+
+
+@pytest.mark.parametrize("spec,module", [("stewart", "pkm_pin.report"),
+                                         (str(LOOPS / "five_bar.urdf"),
+                                          "pkm_pin.report_linkage")])
+def test_a_failing_optional_section_leaves_the_rest_of_the_report(monkeypatch, capsys,
+                                                                  spec, module):
+    """An optional section that fails (battobot's transmission ended in IndexError) is
+    reported as not computed with its error; the analysis is still printed, exit 0,
+    and the JSON names the failed section."""
+    import importlib
+    import json
+
+    from pkm_pin.cli import main
+
+    def broken(*args):
+        raise IndexError("index 0 is out of bounds for axis 0 with size 0")
+
+    monkeypatch.setattr(importlib.import_module(module), "_transmission", broken)
+    assert main(["analyze", spec]) == 0
+    text = capsys.readouterr().out
+    assert "transmission       not computed (IndexError: index 0 is out of bounds" in text
+    assert "DOF" in text and "singularity" in text
+    assert main(["analyze", spec, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["transmission"] is None and "IndexError" in data["failed_sections"]["transmission"]
+    assert data["dof"] >= 2
