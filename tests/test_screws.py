@@ -814,3 +814,11 @@ def test_about_a_point_is_the_translated_frame_and_from_point_undoes_it():
     B, P = rng.normal(size=(2, 5, 6)), rng.normal(size=(2, 3))
     np.testing.assert_allclose(screws.from_point(screws.about(B, P), P), B, atol=1e-14)
     np.testing.assert_allclose(screws.about(B, P)[1], screws.about(B[1], P[1]), atol=1e-15)
+
+
+def test_cross_equals_numpy_cross_with_broadcasting():
+    """screws.cross gives numpy.cross's numbers for vectors, stacks and broadcasts."""
+    rng = np.random.default_rng(3)
+    for sa, sb in (((3,), (3,)), ((5, 3), (3,)), ((4, 1, 3), (2, 3)), ((7, 3), (7, 3))):
+        a, b = rng.normal(size=sa), rng.normal(size=sb)
+        np.testing.assert_allclose(screws.cross(a, b), np.cross(a, b), rtol=0, atol=1e-15)
