@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from .model.closure_model import duplicate_closures
 from .report import (
     _index,
     _list,
@@ -114,6 +115,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     data.update({
         "description": "",
         "structure": structure_data(link),
+        "duplicate_closures": [list(pair) for pair in duplicate_closures(link.model.closures)],
         "dof": an.dof,
         "idle_dof": an.idle_dof,
         "idle_motions": list(mob.idle_motions),
@@ -199,6 +201,8 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
             "idle motions       " + ("none" if not r["idle_motions"] else
                                      f"{r['idle_dof']} (with every actuated joint locked):")]
     out += [f"    {m}" for m in r["idle_motions"]]
+    out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
+            for a, b in r.get("duplicate_closures", [])]
     out += [f"Grübler count      {r['grubler']}  (redundant closure equations: "
             f"{r['redundant_constraints']})",
             f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",

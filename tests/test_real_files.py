@@ -111,3 +111,32 @@ def test_a_failing_optional_section_leaves_the_rest_of_the_report(monkeypatch, c
     data = json.loads(capsys.readouterr().out)
     assert data["transmission"] is None and "IndexError" in data["failed_sections"]["transmission"]
     assert data["dof"] >= 2
+
+
+def test_closure_of_a_body_onto_itself_is_refused_and_duplicates_are_named(capsys):
+    """A closure between two frames of one body is an error naming it; a closure that
+    repeats another (either way round) is named in the report, its rows redundant."""
+    from linkage_models import four_bar
+
+    from pkm_pin.errors import InputError
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.model import Closure, ClosureModel
+    from pkm_pin.model.closure_model import duplicate_closures
+    from pkm_pin.report_linkage import linkage_report_data, linkage_text
+
+    base = four_bar()
+    with pytest.raises(InputError, match="closure 'x' of the tree joins frame 'crank_body' to "
+                                         "itself"):
+        ClosureModel(base.tree, (Closure("point", "crank_body", "crank_body", name="x"),),
+                     ("crank",), "rocker_body")
+    c = base.closures[0]
+    again = Closure(c.kind, c.frame_b, c.frame_a, c.placement_b, c.placement_a, name="again")
+    model = ClosureModel(base.tree, base.closures + (again,), ("crank",), "rocker_body")
+    assert duplicate_closures(model.closures) == [("again", c.name)]
+    q = Linkage(base).assemble().q
+    single, double = Linkage(base).analyze(q), Linkage(model).analyze(q)
+    assert double.dof == single.dof == 1
+    assert double.redundant_constraints == single.redundant_constraints + 3
+    r = linkage_report_data(Linkage(model), Linkage(model).assemble(q))
+    assert r["duplicate_closures"] == [["again", c.name]]
+    assert f"duplicate closure  'again' repeats {c.name!r}" in linkage_text(r)

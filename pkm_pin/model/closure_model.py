@@ -166,6 +166,7 @@ class ClosureModel:
         set_(self, "closures", closures)
         set_(self, "actuated", tuple(self.actuated))
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
+        _check_closures_join_two_bodies(tree, closures, self.name)
         _check_actuated(tree, self.actuated, self.name)
         set_(self, "length", _length(tree, closures, self.length))
         reference = pin.neutral(tree) if self.reference is None else screws.as_vector(
@@ -624,6 +625,41 @@ def _frame_ids(tree: pin.Model, closures: tuple, output: str, name: str) -> dict
             raise TreeFrameNotFound(str(frame), _frame_names(tree), where)
         ids[frame] = tree.getFrameId(frame)
     return ids
+
+
+def _check_closures_join_two_bodies(tree: pin.Model, closures: tuple, name: str) -> None:
+    """Raise :class:`InputError` for a closure whose two frames are on one body (the same
+    frame, or two frames of one joint): their relative placement never changes, so the
+    closure either constrains nothing or can never hold."""
+    for c in closures:
+        a, b = (tree.frames[tree.getFrameId(f)] for f in (c.frame_a, c.frame_b))
+        if a.parentJoint == b.parentJoint:
+            what = (f"frame {c.frame_a!r} to itself" if c.frame_a == c.frame_b else
+                    f"{c.frame_a!r} and {c.frame_b!r}, two frames of one body "
+                    f"(joint {tree.names[a.parentJoint]!r})")
+            raise InputError(f"closure {c.name!r} of {name or 'the tree'} joins {what}: it "
+                             "constrains nothing (or can never hold); remove it, or name "
+                             "frames of two different bodies")
+
+
+def duplicate_closures(closures) -> list[tuple[str, str]]:
+    """Pairs ``(closure, earlier closure)`` that join the same two frames with the same
+    kind and constraint frames (either way round): each one's rows repeat the other's
+    and are counted as redundant."""
+    seen, out = {}, []
+    for c in closures:
+        ends = ((c.frame_a, _key(c.placement_a)), (c.frame_b, _key(c.placement_b)))
+        key = (c.kind, frozenset(ends))
+        if key in seen:
+            out.append((c.name, seen[key]))
+        else:
+            seen[key] = c.name
+    return out
+
+
+def _key(M: pin.SE3) -> tuple:
+    """A placement as a hashable key (rounded to 1e-12)."""
+    return tuple(np.round(M.homogeneous[:3].ravel(), 12))
 
 
 def _check_actuated(tree: pin.Model, actuated: tuple, name: str) -> None:

@@ -20,7 +20,8 @@ The rule (:func:`detect_platform`):
   revolute joint about the constraint frames' common z axis;
 * legs share no joint, and every movable joint of the tree is on a leg (or is the
   platform's free flyer): a joint on no leg, a closure between two legs or from the
-  platform to itself, a joint of several coordinates on a leg (a ball joint), or
+  platform to itself (refused by the closure model), a joint of several coordinates on
+  a leg (a ball joint), or
   mimicking joints leave the model to the general elimination, with the reason.
 
 The structure only names joints and frames: the legs' Pinocchio models are built from it
@@ -149,9 +150,7 @@ def _closure_leg(tree: pin.Model, closure: Closure, platform: int
     sides = [(closure.frame_a, closure.placement_a), (closure.frame_b, closure.placement_b)]
     parents = [tree.frames[tree.getFrameId(f)].parentJoint for f, _ in sides]
     on_platform = [p == platform for p in parents]
-    if all(on_platform):
-        return None, f"closure {closure.name!r} joins the platform to itself"
-    if not any(on_platform):
+    if not any(on_platform):  # (both on it: refused by ClosureModel)
         return None, (f"closure {closure.name!r} joins {closure.frame_a!r} to "
                       f"{closure.frame_b!r}, neither on the platform: a multi-loop linkage")
     (frame, placement), (pframe, pplacement) = sides if on_platform[1] else sides[::-1]
