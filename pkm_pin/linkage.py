@@ -78,11 +78,16 @@ from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
+    GIMBAL_LOCK_RTOL,
+    JOINT_LIMIT_SLACK,
     MODES_PATIENCE,
+    NEARBY_SAMPLES,
+    NEARBY_STEP,
     RANK_RTOL,
     ROTATION_COUNT_TOL,
     SAME_CONFIGURATION_TOL,
     SPAN_RTOL,
+    SPARSE_ZERO_RTOL,
 )
 
 __all__ = ["Linkage", "LinkageAnalysis", "LinkageAssembly", "LinkageSweep", "LoopClosureError",
@@ -142,6 +147,17 @@ class Mobility:
         independent_actuators: The actuated joints that can be driven independently
             (the first maximal independent set, in actuated order).
         grubler: Grübler–Kutzbach count ``Σ joint nv − Σ closure rows``.
+        rank: ``rank J_c`` here.
+        generic_dof, generic_idle_dof: ``dof`` and ``idle_dof`` at generic
+            configurations: the largest ranks of ``J_c`` and of ``J_c`` with the
+            actuated rows among this configuration and
+            :data:`~pkm_pin.tolerances.NEARBY_SAMPLES` nearby ones on the closure
+            manifold (a step along the allowed motions, and off the representation
+            singularities, projected back by the tree solver; seeded); ``None``: not
+            sampled (``nearby=0``).
+        singular: Whether a rank here is below the generic one (``None``: not decided).
+        representation: Representation singularities here, one sentence each (three
+            revolutes at a gimbal lock, a joint exactly at a limit).
     """
 
     dof: int
@@ -150,6 +166,28 @@ class Mobility:
     idle_motions: tuple
     independent_actuators: tuple
     grubler: int
+    rank: int | None = None
+    generic_dof: int | None = None
+    generic_idle_dof: int | None = None
+    singular: bool | None = None
+    representation: tuple = ()
+
+    @property
+    def singular_words(self) -> str:
+        """One sentence on a singular configuration (its ranks against the generic ones
+        and the representation singularities); ``""`` when it is not singular."""
+        if not self.singular:
+            return ""
+        nv = self.dof + self.rank
+        locked, generic_locked = nv - self.idle_dof, nv - self.generic_idle_dof
+        text = (f"singular configuration: DOF {self.dof}, idle DOF {self.idle_dof} here, "
+                f"{self.generic_dof} and {self.generic_idle_dof} at nearby configurations "
+                f"on the closure manifold (closure Jacobian rank {self.rank}, generic "
+                f"{nv - self.generic_dof}; with the actuated joints locked {locked}, "
+                f"generic {generic_locked})")
+        if self.representation:
+            text += "; representation singularity: " + "; ".join(self.representation)
+        return text
 
 
 def homogenised_about(S: np.ndarray, p: np.ndarray, length: float) -> np.ndarray:
@@ -253,7 +291,51 @@ class Linkage:
                                             nearest=model.reference if warm is None else warm)
         if not sol.converged:
             raise self._failure(sol, int(starts) + 3 + (warm is not None), targets)
+        off = self._off_representation(sol.q, targets, seed, tol, max_iter)
+        if off is not None:
+            sol, iterations = off[0], iterations + off[1]
         return self._assembly(sol, iterations)
+
+    def _off_representation(self, q: np.ndarray, targets, seed: int, tol: float,
+                            max_iter: int):
+        """A converged :class:`~pkm_pin.solve.TreeSolution` (and its iterations) at a
+        generic configuration near ``q`` when ``q`` sits on a representation singularity
+        (:func:`_representation`) whose ranks are below the generic ones; else ``None``.
+
+        The nearby configurations of :func:`_nearby` (along the allowed motions, the
+        locked coordinates stepped off and held, projected back) keep the actuated
+        values (``targets``, or ``q``'s own); when none is generic and no targets were
+        asked for, they may move the actuated joints too. The generic one nearest
+        ``q`` is kept."""
+        model = self._model
+        kin = model.kinematics(q)
+        hold, _ = _representation(model, kin)
+        if not hold:
+            return None
+        ns = _NullSpace(model, kin, RANK_RTOL)
+        here = _ranks(ns, RANK_RTOL)
+        keep = targets if targets is not None else _actuated_or_nan(model, q)
+        tries = [keep] if targets is not None or not np.isfinite(keep).all() else [keep, None]
+        acted = set(model.actuated_v)
+        for k, goal in enumerate(tries):
+            held = [i for i in hold if goal is None or i not in acted]
+            rng = np.random.default_rng(seed + k)
+            found = _nearby(model, q, ns, held, rng, NEARBY_SAMPLES, NEARBY_STEP, goal, tol,
+                            max_iter)
+            ranked = [(_ranks(_NullSpace(model, model.kinematics(s.q), RANK_RTOL),
+                              RANK_RTOL), s) for s in found]
+            all_ranks = [here] + [r for r, _ in ranked]
+            best = (max(r[0] for r in all_ranks), max(r[1] for r in all_ranks))
+            good = [s for r, s in ranked if r == best and r != here]
+            if good:
+                def distance(s):
+                    d = pin.difference(model.tree, q, s.q) / model.velocity_units
+                    return float(d @ d)
+                sol = min(good, key=distance)
+                final = solve_tree(model, sol.q, targets=targets, tol=tol, max_iter=max_iter)
+                return (final, sum(s.iterations for s in found) + final.iterations) \
+                    if final.converged else None
+        return None
 
     def _assembly(self, sol, iterations: int) -> LinkageAssembly:
         """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
@@ -282,15 +364,20 @@ class Linkage:
         return LoopClosureError(what or "output pose", sol.pose, detail)
 
     # ------------------------------------------------------------- mobility
-    def mobility(self, q, rtol: float = RANK_RTOL) -> Mobility:
-        """:class:`Mobility` at the configuration ``q`` (assembled)."""
+    def mobility(self, q, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
+                 seed: int = 0) -> Mobility:
+        """:class:`Mobility` at the configuration ``q`` (assembled, or a
+        :class:`LinkageAssembly`), its ranks compared with those at ``nearby``
+        configurations on the closure manifold (``0``: not compared; ``seed``: of their
+        random steps)."""
+        q = q.q if isinstance(q, LinkageAssembly) else q
         kin = self._model.kinematics(q)
-        return _mobility(self, kin, _NullSpace(self._model, kin, rtol), rtol)
+        return _mobility(self, kin, _NullSpace(self._model, kin, rtol), rtol, nearby, seed)
 
     # ------------------------------------------------------------- analysis
     def analyze(self, q, *, about: str = "output", generic: LinkageAnalysis | None = None,
-                rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL
-                ) -> LinkageAnalysis:
+                rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL,
+                nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
         """:class:`LinkageAnalysis` of the output frame at the assembled ``q`` (or a
         :class:`LinkageAssembly`).
 
@@ -300,11 +387,15 @@ class Linkage:
                 :class:`pkm_pin.Analysis`).
             generic: An analysis at a generic configuration: a constraint singularity is
                 a change of ``dof`` or ``output_dof`` from it (``None``: not decided).
+            nearby: How many nearby configurations on the closure manifold give the
+                generic ranks of the :class:`Mobility` (``0``: not sampled, as in sweeps
+                and workspaces).
         """
         if about not in ("output", "world"):
             raise InputError(f"about must be 'output' or 'world', got {about!r}")
         q = q.q if isinstance(q, LinkageAssembly) else q
-        return _analyse(self, self._model.kinematics(q), about, generic, rtol, singular_tol)
+        return _analyse(self, self._model.kinematics(q), about, generic, rtol, singular_tol,
+                        nearby)
 
     # ---------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, starts: int = 16, seed: int = 0,
@@ -404,7 +495,7 @@ class Linkage:
         model, kin = self._model, self._model.kinematics(q)
         an = analysis
         if an is None:
-            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL)
+            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL, 0)
         elif not (np.array_equal(an.q, q) and np.array_equal(
                 an.reference_point, kin.output_placement.translation)):
             raise InputError("analysis: not this linkage's analysis of q about its output "
@@ -527,7 +618,7 @@ class Linkage:
             except AssemblyError:
                 continue
             warm = a.q
-            an = self.analyze(a.q, about=about, generic=generic)
+            an = self.analyze(a.q, about=about, generic=generic, nearby=0)
             generic = generic or an
             out.record(i, a, an)
             if transmission:
@@ -594,16 +685,210 @@ class _NullSpace:
         rank_x, _, _, Vt = svd_rank(self.X, rtol)
         return self.N @ Vt[rank_x:].T
 
+    def rank_x(self, rtol: float) -> int:
+        """Rank of the actuated rates over the allowed motions."""
+        return svd_rank(self.X, rtol)[0]
+
+
+def sparse_basis(K: np.ndarray) -> np.ndarray:
+    """A basis of the column space of ``K`` (n × k, independent columns) whose columns
+    move few coordinates: unit columns, each the sparsest vector found with a given
+    coordinate moving (an L1 minimisation: least ``Σ |x_i|`` over ``x = K c`` with
+    ``x_p = 1``, a linear program per coordinate ``p``, coordinates whose rows of ``K``
+    are parallel tried once), taken greedily, fewest moving coordinates first, while
+    independent of those taken; entries below :data:`~pkm_pin.tolerances.SPARSE_ZERO_RTOL`
+    of a column's largest are zero. Motions with disjoint sets of coordinates (the
+    spins of separate rods) come out one by one. Ordered by first moving coordinate,
+    its largest entry positive. Spans the column space of ``K`` (to the zeroed
+    entries)."""
+    n, k = K.shape
+    if k == 0:
+        return np.zeros((n, 0))
+    if k == 1:
+        return _unit_columns(K)
+    from scipy.optimize import linprog
+
+    scale = np.abs(K).max()
+    rows = K / scale
+    norms = np.linalg.norm(rows, axis=1)
+    tried: list[np.ndarray] = []
+    found = []
+    A_ub = np.block([[rows, -np.eye(n)], [-rows, -np.eye(n)]])
+    cost = np.r_[np.zeros(k), np.ones(n)]
+    bounds = [(None, None)] * k + [(0, None)] * n
+    for p in np.argsort(-norms, kind="stable"):
+        if norms[p] <= SPARSE_ZERO_RTOL * norms.max():
+            break
+        u = rows[p] / norms[p]
+        if any(abs(abs(u @ t) - 1.0) <= SPARSE_ZERO_RTOL for t in tried):
+            continue
+        tried.append(u)
+        res = linprog(cost, A_ub=A_ub, b_ub=np.zeros(2 * n),
+                      A_eq=np.r_[rows[p], np.zeros(n)][None], b_eq=[1.0], bounds=bounds,
+                      method="highs")
+        if res.status != 0:
+            continue
+        x = rows @ res.x[:k]
+        x[np.abs(x) <= SPARSE_ZERO_RTOL * np.abs(x).max()] = 0.0
+        found.append((int(np.count_nonzero(x)), float(np.abs(x).sum() / np.abs(x).max()),
+                      int(p), x))
+    found.sort(key=lambda f: f[:3])
+    chosen: list[np.ndarray] = []
+    for *_, x in found:
+        trial = np.array(chosen + [x])
+        if np.linalg.matrix_rank(trial, tol=SPARSE_ZERO_RTOL * np.abs(trial).max()) \
+                == len(chosen) + 1:
+            chosen.append(x)
+        if len(chosen) == k:
+            break
+    if len(chosen) < k:  # not expected: complete with the orthogonal remainder of K
+        Q = np.linalg.qr(np.array(chosen).T)[0] if chosen else np.zeros((n, 0))
+        rest = K - Q @ (Q.T @ K)
+        chosen += list(np.linalg.svd(rest, full_matrices=False)[0][:, :k - len(chosen)].T)
+    B = _unit_columns(np.array(chosen).T)
+    first = [int(np.flatnonzero(B[:, j])[0]) for j in range(k)]
+    return B[:, np.argsort(first, kind="stable")]
+
+
+def _unit_columns(B: np.ndarray) -> np.ndarray:
+    """Columns of ``B`` scaled to unit norm, each one's largest entry positive."""
+    B = np.array(B, dtype=float)
+    for j in range(B.shape[1]):
+        big = B[np.argmax(np.abs(B[:, j])), j]
+        B[:, j] /= np.linalg.norm(B[:, j]) * np.sign(big)
+    return B
+
 
 # ====================================================================== mobility
-def _mobility(link: Linkage, kin: TreeKinematics, ns: _NullSpace, rtol: float) -> Mobility:
+def _ranks(ns: _NullSpace, rtol: float) -> tuple[int, int]:
+    """``(rank J_c, rank of J_c with the actuated rows)`` of a :class:`_NullSpace`."""
+    return ns.rank, ns.rank + ns.rank_x(rtol)
+
+
+def _mobility(link: Linkage, kin: TreeKinematics, ns: _NullSpace, rtol: float,
+              nearby: int = NEARBY_SAMPLES, seed: int = 0) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
-    idle = ns.idle(rtol)
-    words = tuple(describe_motion(model, kin, ns.units * idle[:, k])
-                  for k in range(idle.shape[1]))
-    return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], words,
-                    _independent(model, ns.X, rtol), link.grubler)
+    idle = sparse_basis(ns.idle(rtol))
+    words: list[str] = []
+    for k in range(idle.shape[1]):
+        text = describe_motion(model, kin, ns.units * idle[:, k])
+        if text in words:  # two motions of the same joints: tell them apart by their rates
+            text = describe_motion(model, kin, ns.units * idle[:, k], rates=True)
+        words.append(text)
+    hold, representation = _representation(model, kin)
+    here = _ranks(ns, rtol)
+    generic = singular = None
+    if nearby > 0:
+        rng = np.random.default_rng(seed)
+        found = _nearby(model, kin.q, ns, hold, rng, int(nearby), NEARBY_STEP)
+        ranks = [here] + [_ranks(_NullSpace(model, model.kinematics(s.q), rtol), rtol)
+                          for s in found]
+        generic = (max(r[0] for r in ranks), max(r[1] for r in ranks))
+        singular = generic != here
+    return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], tuple(words),
+                    _independent(model, ns.X, rtol), link.grubler, ns.rank,
+                    None if generic is None else model.nv - generic[0],
+                    None if generic is None else model.nv - generic[1], singular,
+                    tuple(representation))
+
+
+def _nearby(model: ClosureModel, q: np.ndarray, ns: _NullSpace, hold, rng, count: int,
+            step: float, targets=None, tol: float = CLOSURE_TOL, max_iter: int = 100
+            ) -> list:
+    """Converged :class:`~pkm_pin.solve.TreeSolution` s at up to ``count``
+    configurations near ``q`` on the closure manifold: a random allowed motion of
+    dimensionless size ``step`` (the columns of ``ns.N``), the velocity coordinates
+    ``hold`` stepped ``step`` off (into the range of a joint at a limit) and held
+    there, projected back onto the closures (and ``targets``) by
+    :func:`~pkm_pin.solve.solve_tree`."""
+    U, hold = model.velocity_units, list(hold)
+    dof = ns.N.shape[1]
+    if not dof and not hold:
+        return []
+    free = None
+    if hold:
+        free = np.ones(model.nv, bool)
+        free[hold] = False
+    signs = _inward(model, q, hold)
+    out = []
+    for _ in range(count):
+        dv = np.zeros(model.nv)
+        if dof:
+            z = rng.normal(size=dof)
+            dv = ns.N @ z * (step / np.linalg.norm(z))
+        if hold:
+            dv[hold] = step * np.where(signs == 0, rng.choice([-1.0, 1.0], len(hold)), signs)
+        sol = solve_tree(model, pin.integrate(model.tree, q, U * dv), free, targets, tol=tol,
+                         max_iter=max_iter)
+        if sol.converged:
+            out.append(sol)
+    return out
+
+
+def _inward(model: ClosureModel, q: np.ndarray, coords) -> np.ndarray:
+    """For each velocity coordinate of a 1-DOF joint: +1 at its lower limit, −1 at its
+    upper limit, 0 elsewhere."""
+    from .solve import tree_limits
+
+    lo, up = tree_limits(model)
+    tree = model.tree
+    out = np.zeros(len(coords))
+    idx_q = {tree.joints[j].idx_v: tree.joints[j].idx_q for j in range(1, tree.njoints)
+             if tree.joints[j].nq == tree.joints[j].nv == 1}
+    for k, i in enumerate(coords):
+        if i in idx_q:
+            iq = idx_q[i]
+            out[k] = 1.0 if q[iq] <= lo[iq] + JOINT_LIMIT_SLACK else (
+                -1.0 if q[iq] >= up[iq] - JOINT_LIMIT_SLACK else 0.0)
+    return out
+
+
+def _representation(model: ClosureModel, kin: TreeKinematics) -> tuple[list, list]:
+    """Representation singularities at ``kin.q``: ``(velocity coordinates, sentences)``.
+
+    * Three consecutive revolute joints (each the parent of the next) at a gimbal lock:
+      the first and third axes lie on one line (their homogenised twists about the
+      middle joint agree up to sign, :data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`)
+      while the middle one is not on it; the middle joint's coordinate.
+    * A 1-DOF joint exactly at a finite limit (within
+      :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK`; the tree solver clips there)."""
+    from .solve import tree_limits
+
+    tree, L, U = model.tree, model.length, model.velocity_units
+    J = kin.joint_twists
+    coords, words = [], []
+
+    def revolute(j):
+        joint = tree.joints[j]
+        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0 \
+            and np.linalg.norm(J[joint.idx_v, :3]) > 0
+
+    for c in range(1, tree.njoints):
+        j = tree.parents[c]
+        p = tree.parents[j] if j > 0 else 0
+        if not (revolute(c) and revolute(j) and revolute(p)):
+            continue
+        centre = kin.joint_placements[j].translation
+        T = homogenised_about(J[[tree.joints[k].idx_v for k in (p, j, c)]], centre, L)
+        T /= np.linalg.norm(T, axis=1)[:, None]
+        same = min(np.linalg.norm(T[0] - T[2]), np.linalg.norm(T[0] + T[2]))
+        if same <= GIMBAL_LOCK_RTOL and min(np.linalg.norm(T[1] - T[0]),
+                                            np.linalg.norm(T[1] + T[0])) > GIMBAL_LOCK_RTOL:
+            coords.append(tree.joints[j].idx_v)
+            words.append(f"{tree.names[j]} at a gimbal lock (the axes of {tree.names[p]} "
+                         f"and {tree.names[c]} coincide)")
+    lo, up = tree_limits(model)
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        if joint.nq != 1 or joint.nv != 1 or not np.isfinite(lo[joint.idx_q]):
+            continue
+        x = kin.q[joint.idx_q]
+        for name, limit in (("lower", lo[joint.idx_q]), ("upper", up[joint.idx_q])):
+            if abs(x - limit) <= JOINT_LIMIT_SLACK and joint.idx_v not in coords:
+                coords.append(joint.idx_v)
+                words.append(f"{tree.names[j]} at its {name} limit {limit:.6g}")
+    return coords, words
 
 
 def _independent(model: ClosureModel, X: np.ndarray, rtol: float) -> tuple:
@@ -640,31 +925,67 @@ def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{x:.6g}" for x in np.where(np.abs(p) < 1e-12, 0.0, p)) + ")"
 
 
-def describe_motion(model: ClosureModel, kin: TreeKinematics, v: np.ndarray) -> str:
-    """One sentence describing the tree motion ``v`` (nv,): the body that moves and the
-    line it turns about (through its joints' centres when they lie on it), or the
-    joints that move."""
+def describe_motion(model: ClosureModel, kin: TreeKinematics, v: np.ndarray,
+                    rates: bool = False) -> str:
+    """One sentence describing the tree motion ``v`` (nv,), naming only the joints and
+    bodies it moves: the bodies that turn together about one line (through their
+    joints' centres when they lie on it) — "rod spins about the line through its joints
+    at …" for one body alone — and the joints that move, with the other moving bodies,
+    when there are more; else the joints that move and the bodies they move. ``rates``:
+    each joint's rate relative to the largest (to tell apart two motions of the same
+    joints)."""
     tree, L = model.tree, model.length
     x = v / model.velocity_units
-    moving = [tree.names[j] for j in range(1, tree.njoints)
-              if np.abs(x[tree.joints[j].idx_v:tree.joints[j].idx_v + tree.joints[j].nv]).max(
-                  initial=0.0) > 1e-9 * np.abs(x).max()]
+    top = np.abs(x).max(initial=0.0)
+    moving, amount = [], []
+    for j in range(1, tree.njoints):
+        part = x[tree.joints[j].idx_v:tree.joints[j].idx_v + tree.joints[j].nv]
+        big = part[np.argmax(np.abs(part))] if part.size else 0.0
+        if abs(big) > 1e-9 * top:
+            moving.append(tree.names[j])
+            amount.append(big / top)
+    joints = ", ".join(f"{n} ({a:+.3g})" if rates else n for n, a in zip(moving, amount))
     T = _body_twists(model, kin, v)
-    size = np.linalg.norm(screws.homogenise(T, L), axis=1)
+    H = screws.homogenise(T, L)
+    size = np.linalg.norm(H, axis=1)
     bodies = [j for j in range(1, tree.njoints) if size[j] > 1e-9 * size.max()]
-    if len(bodies) == 1:
-        j = bodies[0]
-        w, vel = T[j, :3], T[j, 3:]
-        if np.linalg.norm(w) > 0 and abs(w @ vel) <= 1e-9 * np.linalg.norm(w) ** 2 * L:
-            point, direction = screws.axis(T[j], L)
-            on = [p for p in _body_points(model, kin, j)
-                  if np.linalg.norm(np.cross(p - point, direction)) <= 1e-7 * L]
-            where = (" and ".join(_fmt(p) for p in on[:2]) if len(on) >= 2 else
-                     f"{_fmt(point)} along {_fmt(direction)}")
-            through = "its joints at " if len(on) >= 2 else ""
-            return f"{_body_name(tree, j)} spins about the line through {through}{where}"
-    return (f"joints {', '.join(moving)} move (bodies "
+    groups: list[list[int]] = []
+    for j in bodies:
+        for g in groups:
+            if np.linalg.norm(H[j] - H[g[0]]) <= 1e-9 * size.max():
+                g.append(j)
+                break
+        else:
+            groups.append([j])
+    spin = [g for g in groups if _pure_rotation(T[g[0]], L)]
+    if spin:
+        g = max(spin, key=lambda g: (len(g), size[g[0]]))
+        point, direction = screws.axis(T[g[0]], L)
+        on: list = []
+        for j in g:
+            on += [p for p in _body_points(model, kin, j)
+                   if np.linalg.norm(np.cross(p - point, direction)) <= 1e-7 * L
+                   and all(np.linalg.norm(p - u) > 1e-9 * L for u in on)]
+        where = (" and ".join(_fmt(p) for p in on[:2]) if len(on) >= 2 else
+                 f"{_fmt(point)} along {_fmt(direction)}")
+        names = [_body_name(tree, j) for j in g]
+        who = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+        verb, own = ("spins", "its") if len(names) == 1 else ("spin", "their")
+        through = f"{own} joints at " if len(on) >= 2 else ""
+        text = f"{who} {verb} about the line through {through}{where}"
+        others = [_body_name(tree, j) for j in bodies if j not in g]
+        if len(groups) == 1 and not rates:
+            return text
+        return (text + f" (joints {joints} move"
+                + (f"; bodies {', '.join(others)} move too)" if others else ")"))
+    return (f"joints {joints} move (bodies "
             f"{', '.join(_body_name(tree, j) for j in bodies)})")
+
+
+def _pure_rotation(t: np.ndarray, L: float) -> bool:
+    """Whether the twist ``t`` (axis-first) is a rotation of pitch zero."""
+    w, vel = t[:3], t[3:]
+    return bool(np.linalg.norm(w) > 0 and abs(w @ vel) <= 1e-9 * np.linalg.norm(w) ** 2 * L)
 
 
 def _loop_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, support: set
@@ -1000,12 +1321,12 @@ class LinkageAnalysis:
 
 
 def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: float,
-             singular_tol: float) -> LinkageAnalysis:
+             singular_tol: float, nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
     model = link.model
     L = model.length
     p = kin.output_placement.translation.copy() if about == "output" else np.zeros(3)
     ns = _NullSpace(model, kin, rtol)
-    mob = _mobility(link, kin, ns, rtol)
+    mob = _mobility(link, kin, ns, rtol, nearby)
     Yh = homogenised_about(ns.Y_world.T, p, L).T  # 6 × dof
     d, Uy, _, _ = svd_rank(Yh, rtol)
     P_h = Uy[:, :d].T
@@ -1101,7 +1422,13 @@ def _actuation_row(G: np.ndarray, col: int, rtol: float) -> np.ndarray | None:
     _, _, Vb = np.linalg.svd(b[None], full_matrices=True)
     Nb = Vb[1:].T
     z = np.linalg.lstsq(Z.T @ Nb, -Z.T @ y0, rcond=rtol)[0] if Nb.size else np.zeros(0)
-    return Z.T @ (y0 + Nb @ z)
+    zeta = Z.T @ (y0 + Nb @ z)
+    # The closures alone can hold the actuated rate (w_o = 0 with β ≠ 0: the actuator
+    # is locked by the loops here): no wrench on the output carries it, as when the
+    # column depends on the others.
+    if np.linalg.norm(zeta) <= rtol * np.linalg.norm(y0):
+        return None
+    return zeta
 
 
 def _scaled_wrench(zeta_h: np.ndarray, p: np.ndarray, L: float, unit: float,
