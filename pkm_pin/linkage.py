@@ -12,8 +12,14 @@ whole tree:
   per-leg solver), with restarts (:func:`pkm_pin.solve.tree_starts`) and the branch
   nearest the guess.
 * **Mobility** (:meth:`Linkage.mobility`): ``dof = nv − rank J_c``, redundant closure
-  rows, idle motions (those left with every actuated joint locked, described in words),
-  the actuated joints that can be driven independently, and Grübler's count.
+  rows, idle motions (those left with every actuated joint locked: a sparse basis of
+  them, :func:`sparse_basis`, each described in words), the actuated joints that can be
+  driven independently, and Grübler's count; and whether the configuration is singular:
+  the ranks of ``J_c`` and of ``J_c`` with the actuated rows against their generic
+  values, the largest at a few nearby configurations on the closure manifold (a random
+  step along the allowed motions, projected back by the tree solver, seeded), with the
+  representation singularities found (three revolutes standing for a spherical joint at
+  a gimbal lock, a joint exactly at a limit).
 * **Output analysis** (:meth:`Linkage.analyze` → :class:`LinkageAnalysis`): the output
   frame's twist system, its constraint wrenches, ``A Δ t = B q̇_a``, velocity maps,
   singularity classes and dimensionless indices.
@@ -276,7 +282,13 @@ class Linkage:
         :class:`LinkageAssembly`), ``model.reference``, neutral, the middle of the limits
         and ``starts`` random configurations within the limits (``seed``). A converged
         warm start is kept; otherwise the converged solution nearest ``guess`` (default
-        the reference) is.
+        the reference) is. A solution on a representation singularity (three revolutes
+        at a gimbal lock, a joint exactly at a limit) whose ranks are below those of
+        nearby configurations is not kept: the nearest generic configuration found by
+        stepping off it along the allowed motions, keeping the actuated values (any
+        values when none were asked for and none of those is generic), is
+        (:meth:`_off_representation`; Gepetto's ``wl16_like`` otherwise assembles at
+        a gimbal lock with 9 idle DOF instead of 6).
 
         Raises:
             LoopClosureError: no start closes; the message names the worst loop and its
@@ -680,10 +692,11 @@ class _NullSpace:
         self.units = U
 
     def idle(self, rtol: float) -> np.ndarray:
-        """(nv × k) orthonormal basis of the idle motions (dimensionless columns): the
-        allowed motions that leave every actuated joint still."""
+        """(nv × k) basis of the idle motions (dimensionless unit columns): the allowed
+        motions that leave every actuated joint still, each moving few joints
+        (:func:`sparse_basis` of the orthonormal one)."""
         rank_x, _, _, Vt = svd_rank(self.X, rtol)
-        return self.N @ Vt[rank_x:].T
+        return sparse_basis(self.N @ Vt[rank_x:].T)
 
     def rank_x(self, rtol: float) -> int:
         """Rank of the actuated rates over the allowed motions."""
@@ -769,7 +782,7 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: _NullSpace, rtol: float,
               nearby: int = NEARBY_SAMPLES, seed: int = 0) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
-    idle = sparse_basis(ns.idle(rtol))
+    idle = ns.idle(rtol)
     words: list[str] = []
     for k in range(idle.shape[1]):
         text = describe_motion(model, kin, ns.units * idle[:, k])
