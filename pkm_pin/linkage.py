@@ -713,12 +713,19 @@ def sparse_basis(K: np.ndarray) -> np.ndarray:
     of a column's largest are zero. Motions with disjoint sets of coordinates (the
     spins of separate rods) come out one by one. Ordered by first moving coordinate,
     its largest entry positive. Spans the column space of ``K`` (to the zeroed
-    entries)."""
+    entries). When the reduced row echelon form (:func:`_echelon`) already has disjoint
+    columns, it is the answer (no linear program)."""
     n, k = K.shape
     if k == 0:
         return np.zeros((n, 0))
     if k == 1:
         return _unit_columns(K)
+    echelon = _echelon(K)
+    moving = np.abs(echelon) > 0
+    if moving.sum(axis=1).max() <= 1:  # disjoint motions: each one is already sparsest
+        B = _unit_columns(echelon)
+        first = [int(np.flatnonzero(B[:, j])[0]) for j in range(k)]
+        return B[:, np.argsort(first, kind="stable")]
     from scipy.optimize import linprog
 
     scale = np.abs(K).max()
@@ -761,6 +768,27 @@ def sparse_basis(K: np.ndarray) -> np.ndarray:
     B = _unit_columns(np.array(chosen).T)
     first = [int(np.flatnonzero(B[:, j])[0]) for j in range(k)]
     return B[:, np.argsort(first, kind="stable")]
+
+
+def _echelon(K: np.ndarray) -> np.ndarray:
+    """Columns spanning those of ``K`` (n × k): the reduced row echelon form of ``Kᵀ``
+    by complete pivoting (each column 1 at its pivot coordinate, 0 at the others'),
+    entries below :data:`~pkm_pin.tolerances.SPARSE_ZERO_RTOL` of a column's largest
+    set to zero."""
+    R = np.array(K.T, dtype=float)
+    k = R.shape[0]
+    for i in range(k):
+        sub = np.abs(R[i:])
+        r, c = np.unravel_index(np.argmax(sub), sub.shape)
+        R[[i, i + r]] = R[[i + r, i]]
+        R[i] /= R[i, c]
+        for j in range(k):
+            if j != i:
+                R[j] -= R[j, c] * R[i]
+                R[j, c] = 0.0
+    for row in R:
+        row[np.abs(row) <= SPARSE_ZERO_RTOL * np.abs(row).max()] = 0.0
+    return R.T
 
 
 def _unit_columns(B: np.ndarray) -> np.ndarray:
