@@ -320,10 +320,10 @@ class Linkage:
         asked for, they may move the actuated joints too. The generic one nearest
         ``q`` is kept."""
         model = self._model
-        kin = model.kinematics(q)
-        hold, _ = _representation(model, kin)
+        hold, _ = _representation(model, None, q)
         if not hold:
             return None
+        kin = model.kinematics(q)
         ns = _NullSpace(model, kin, RANK_RTOL)
         here = _ranks(ns, RANK_RTOL)
         keep = targets if targets is not None else _actuated_or_nan(model, q)
@@ -885,50 +885,80 @@ def _inward(model: ClosureModel, q: np.ndarray, coords) -> np.ndarray:
     return out
 
 
-def _representation(model: ClosureModel, kin: TreeKinematics) -> tuple[list, list]:
-    """Representation singularities at ``kin.q``: ``(velocity coordinates, sentences)``.
-
-    * Three consecutive revolute joints (each the parent of the next) at a gimbal lock:
-      the first and third axes lie on one line (their homogenised twists about the
-      middle joint agree up to sign, :data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`)
-      while the middle one is not on it; the middle joint's coordinate.
-    * A 1-DOF joint exactly at a finite limit (within
-      :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK`; the tree solver clips there)."""
-    from .solve import tree_limits
-
-    tree, L, U = model.tree, model.length, model.velocity_units
-    J = kin.joint_twists
-    coords, words = [], []
+def _revolute_triples(model: ClosureModel) -> np.ndarray:
+    """(m × 3) joint indices ``(p, j, c)`` of three consecutive revolute joints of the
+    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians):
+    where a gimbal lock can occur."""
+    tree, U = model.tree, model.velocity_units
 
     def revolute(j):
         joint = tree.joints[j]
-        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0 \
-            and np.linalg.norm(J[joint.idx_v, :3]) > 0
+        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0
 
-    for c in range(1, tree.njoints):
-        j = tree.parents[c]
-        p = tree.parents[j] if j > 0 else 0
-        if not (revolute(c) and revolute(j) and revolute(p)):
-            continue
-        centre = kin.joint_placements[j].translation
-        T = homogenised_about(J[[tree.joints[k].idx_v for k in (p, j, c)]], centre, L)
-        T /= np.linalg.norm(T, axis=1)[:, None]
-        same = min(np.linalg.norm(T[0] - T[2]), np.linalg.norm(T[0] + T[2]))
-        if same <= GIMBAL_LOCK_RTOL and min(np.linalg.norm(T[1] - T[0]),
-                                            np.linalg.norm(T[1] + T[0])) > GIMBAL_LOCK_RTOL:
+    out = [(tree.parents[tree.parents[c]], tree.parents[c], c) for c in range(1, tree.njoints)
+           if revolute(c) and revolute(tree.parents[c])
+           and revolute(tree.parents[tree.parents[c]])]
+    return np.array(out, dtype=int).reshape(-1, 3)
+
+
+def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
+    """``(joint, "lower" or "upper", limit)`` of the 1-DOF joints exactly at a finite
+    limit of :func:`~pkm_pin.solve.tree_limits` (within
+    :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK`)."""
+    from .solve import tree_limits
+
+    lo, up = tree_limits(model)
+    near_lo = np.abs(q - lo) <= JOINT_LIMIT_SLACK
+    near_up = np.abs(q - up) <= JOINT_LIMIT_SLACK
+    if not (near_lo.any() or near_up.any()):
+        return []
+    tree, out = model.tree, []
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        if joint.nq == joint.nv == 1:
+            i = joint.idx_q
+            if near_lo[i] or near_up[i]:
+                out.append((j, "lower" if near_lo[i] else "upper", lo[i] if near_lo[i]
+                            else up[i]))
+    return out
+
+
+def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None
+                    ) -> tuple[list, list]:
+    """Representation singularities at ``kin.q`` (or ``q``; ``kin`` made only when
+    needed): ``(velocity coordinates, sentences)``.
+
+    * Three consecutive revolute joints (:func:`_revolute_triples`) at a gimbal lock:
+      the first and third axes lie on one line (their unit homogenised twists about the
+      middle joint agree up to sign, :data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`)
+      while the middle one is not on it; the middle joint's coordinate.
+    * A 1-DOF joint exactly at a finite limit (:func:`_at_limits`; the tree solver clips
+      there)."""
+    tree, L = model.tree, model.length
+    q = kin.q if kin is not None else model.check_q(q)
+    coords, words = [], []
+    triples = _revolute_triples(model)
+    if len(triples):
+        kin = kin if kin is not None else model.kinematics(q)
+        J = kin.joint_twists
+        iv = np.array([tree.joints[k].idx_v for k in range(tree.njoints)])
+        centres = np.array([kin.joint_placements[j].translation for j in triples[:, 1]])
+        T = screws.homogenise(screws.about(J[iv[triples]], centres), L)  # m × 3 × 6
+        T /= np.linalg.norm(T, axis=2)[..., None]
+
+        def apart(a, b):
+            return np.minimum(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
+
+        locked = (apart(T[:, 0], T[:, 2]) <= GIMBAL_LOCK_RTOL) \
+            & (apart(T[:, 1], T[:, 0]) > GIMBAL_LOCK_RTOL)
+        for p, j, c in triples[locked].tolist():
             coords.append(tree.joints[j].idx_v)
             words.append(f"{tree.names[j]} at a gimbal lock (the axes of {tree.names[p]} "
                          f"and {tree.names[c]} coincide)")
-    lo, up = tree_limits(model)
-    for j in range(1, tree.njoints):
-        joint = tree.joints[j]
-        if joint.nq != 1 or joint.nv != 1 or not np.isfinite(lo[joint.idx_q]):
-            continue
-        x = kin.q[joint.idx_q]
-        for name, limit in (("lower", lo[joint.idx_q]), ("upper", up[joint.idx_q])):
-            if abs(x - limit) <= JOINT_LIMIT_SLACK and joint.idx_v not in coords:
-                coords.append(joint.idx_v)
-                words.append(f"{tree.names[j]} at its {name} limit {limit:.6g}")
+    for j, side, limit in _at_limits(model, q):
+        if tree.joints[j].idx_v not in coords:
+            coords.append(tree.joints[j].idx_v)
+            words.append(f"{tree.names[j]} at its {side} limit {limit:.6g}")
     return coords, words
 
 
