@@ -97,7 +97,7 @@ from .tolerances import (
 )
 
 __all__ = ["Linkage", "LinkageAnalysis", "LinkageAssembly", "LinkageSweep", "LoopClosureError",
-           "Mobility"]
+           "Mobility", "sparse_basis"]
 
 
 class LoopClosureError(AssemblyError):
