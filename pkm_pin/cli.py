@@ -351,6 +351,8 @@ def _check_linkage(path: Path, link) -> int:
     if dependent:
         warnings.append(f"actuated joints {', '.join(dependent)} depend on the others "
                         "(redundant actuation)")
+    if an.mobility.singular:
+        warnings.append(an.mobility.singular_words)
     if an.singularity != "none":
         warnings.append(f"the reference assembly is a type {an.singularity} singularity "
                         "(indices " + ", ".join(f"{k} {v:.2g}" for k, v in an.indices.items())

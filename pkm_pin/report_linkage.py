@@ -95,8 +95,12 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     """Plain-data summary (JSON-ready) of a linkage at an assembly.
 
     Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``structure``
-    (:func:`structure_data`), ``dof``,
-    ``idle_dof``, ``idle_motions`` (sentences), ``redundant_constraints``, ``grubler``,
+    (:func:`structure_data`), ``duplicate_closures``, ``dof``,
+    ``idle_dof``, ``idle_motions`` (sentences), ``singular`` (a rank below the generic
+    one: :attr:`~pkm_pin.linkage.Mobility.singular`, ``None``: not decided),
+    ``generic_dof``, ``generic_idle_dof``, ``representation_singularities`` (sentences),
+    ``singular_words`` (the sentence, ``""`` when not singular),
+    ``redundant_constraints``, ``grubler``,
     ``independent_actuators``, ``output_dof``, ``motion_type``, ``platform_twists`` (the
     analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
     (readable bases about the output origin, with ``words``), ``A``, ``B``,
@@ -119,6 +123,11 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "dof": an.dof,
         "idle_dof": an.idle_dof,
         "idle_motions": list(mob.idle_motions),
+        "singular": mob.singular,
+        "generic_dof": mob.generic_dof,
+        "generic_idle_dof": mob.generic_idle_dof,
+        "representation_singularities": list(mob.representation),
+        "singular_words": mob.singular_words,
         "redundant_constraints": an.redundant_constraints,
         "grubler": mob.grubler,
         "independent_actuators": list(mob.independent_actuators),
@@ -201,6 +210,8 @@ def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
             "idle motions       " + ("none" if not r["idle_motions"] else
                                      f"{r['idle_dof']} (with every actuated joint locked):")]
     out += [f"    {m}" for m in r["idle_motions"]]
+    if r.get("singular_words"):
+        out += [f"singular           {r['singular_words']}"]
     out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
             for a, b in r.get("duplicate_closures", [])]
     out += [f"Grübler count      {r['grubler']}  (redundant closure equations: "
@@ -246,6 +257,8 @@ def linkage_markdown(r: dict) -> str:
               f"- degree of freedom: **{r['dof']}**, output motion {r['motion_type']}",
               f"- idle degrees of freedom: {r['idle_dof']}"]
     lines += [f"  - {m}" for m in r["idle_motions"]]
+    if r.get("singular_words"):
+        lines += [f"- {r['singular_words']}"]
     lines += [f"- Grübler–Kutzbach count: {r['grubler']}",
               f"- redundant closure equations: {r['redundant_constraints']}",
               f"- independent actuators: {', '.join(r['independent_actuators']) or 'none'}",

@@ -1219,7 +1219,7 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, gen
     for i, q in Q.items():
         ok[i] = True
         q_all[i] = q
-        an = link.analyze(q, generic=generic) if analyse else None
+        an = link.analyze(q, generic=generic, nearby=0) if analyse else None
         if transmission:  # from the cell's analysis when made (not made twice)
             tr = link.transmission(q, analysis=an)
             lti[i], cti[i] = tr.lti, tr.cti
