@@ -70,6 +70,7 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -224,6 +225,10 @@ class Linkage:
             model = replace(model, output_point=bool(point))
         self._model = model
         self._loops = _loops_of_actuators(model)
+        #: ``(rank J_c, rank with the actuated rows)`` at the first configuration whose
+        #: nearby ones were sampled (:func:`_mobility`): later configurations with the
+        #: same ranks are generic without sampling again.
+        self._generic_ranks: tuple[int, int] | None = None
 
     def __repr__(self) -> str:
         return f"Linkage({self.name!r}, actuated={self.actuated}, output={self.output!r})"
@@ -695,13 +700,18 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
     hold, representation = _representation(model, kin)
     here = _ranks(ns, rtol)
     generic = singular = None
-    if nearby > 0:
+    known = link._generic_ranks if rtol == RANK_RTOL else None
+    if nearby > 0 and known is not None and here == known:
+        generic, singular = known, False  # the ranks sampled before: generic
+    elif nearby > 0:
         rng = np.random.default_rng(seed)
         found = _nearby(model, kin.q, ns, hold, rng, int(nearby), NEARBY_STEP)
         ranks = [here] + [_ranks(NullSpace(model, model.kinematics(s.q), rtol), rtol)
                           for s in found]
         generic = (max(r[0] for r in ranks), max(r[1] for r in ranks))
         singular = generic != here
+        if known is None and rtol == RANK_RTOL:
+            link._generic_ranks = generic
     return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], tuple(words),
                     _independent(model, ns.X, rtol), link.grubler, ns.rank,
                     None if generic is None else model.nv - generic[0],
@@ -760,20 +770,31 @@ def _inward(model: ClosureModel, q: np.ndarray, coords) -> np.ndarray:
     return out
 
 
+@functools.lru_cache(maxsize=64)
 def _revolute_triples(model: ClosureModel) -> np.ndarray:
     """(m × 3) joint indices ``(p, j, c)`` of three consecutive revolute joints of the
-    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians):
-    where a gimbal lock can occur."""
+    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians)
+    whose axes meet at one point (``j`` and ``c`` placed without offset: three
+    revolutes standing for a spherical joint): where a gimbal lock, a representation
+    singularity, can occur (axes that meet elsewhere make a real singularity of the
+    linkage, not one of its description). Read-only; cached per model."""
     tree, U = model.tree, model.velocity_units
+    tiny = 1e-12 * model.length
 
     def revolute(j):
         joint = tree.joints[j]
         return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0
 
+    def centred(j):
+        return np.linalg.norm(tree.jointPlacements[j].translation) <= tiny
+
     out = [(tree.parents[tree.parents[c]], tree.parents[c], c) for c in range(1, tree.njoints)
            if revolute(c) and revolute(tree.parents[c])
-           and revolute(tree.parents[tree.parents[c]])]
-    return np.array(out, dtype=int).reshape(-1, 3)
+           and revolute(tree.parents[tree.parents[c]])
+           and centred(c) and centred(tree.parents[c])]
+    triples = np.array(out, dtype=int).reshape(-1, 3)
+    triples.setflags(write=False)
+    return triples
 
 
 def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
