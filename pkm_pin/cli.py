@@ -90,7 +90,7 @@ def shipped_models() -> dict[str, dict]:
     ``models/mechanisms/*.toml`` (same name for the same mechanism).
     """
     from .builders import DESCRIPTIONS, MECHANISMS
-    from .mechanism import tomllib
+    from .io import tomllib
 
     models = {name: {"description": DESCRIPTIONS.get(name, ""), "builder": True, "file": None}
               for name in MECHANISMS}
@@ -124,8 +124,8 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
         InputError: ``spec`` is neither a file nor a shipped model.
     """
     from .builders import MECHANISMS
+    from .io import load_mechanism
     from .linkage import Linkage
-    from .mechanism import load_mechanism
 
     options = {"closures": closures, "output": output, "point": point}
     given = [f"--{k}" if k != "point" else ("--point" if v else "--body")
@@ -277,7 +277,7 @@ def _analyze_linkage(args, link) -> int:
 def cmd_check(args) -> int:
     """Load a mechanism file, assemble it at home and analyse it; report problems."""
     from .crosscheck import crosscheck
-    from .mechanism import load_mechanism
+    from .io import load_mechanism
 
     path = Path(args.file)
     if not _is_file(path) and _is_file(models_dir() / f"{args.file}.toml"):

@@ -40,8 +40,9 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         ("engine", "engine.core", "analysis", "transmission")),
     5: ("position problems and studies built on the solver and the analysis",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration")),
-    6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together",
-        ("mechanism", "linkage")),
+    6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
+        "io reads every file format into one of them",
+        ("mechanism", "linkage", "io")),
     7: ("outputs and applications of the facades: reports, scenes, plots, the CLI, the "
         "cross-check, the example builders, the package's public names",
         ("report", "report_linkage", "scene", "view", "view_linkage", "plots", "cli",

@@ -17,7 +17,7 @@ from pkm_pin import screws
 from pkm_pin.builders.orthoglide import QUASI, orthoglide, orthoglide_quasi
 from pkm_pin.formulas import orthoglide as og
 from pkm_pin.formulas.orthoglide import OrthoglideParameters
-from pkm_pin.mechanism import load_mechanism
+from pkm_pin import load_mechanism
 
 E = 0.1  # tool offset of the shipped designs
 
