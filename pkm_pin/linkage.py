@@ -79,7 +79,9 @@ import pinocchio as pin
 
 from . import screws
 from .analysis import classify
+from .assembly import Assembly
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
+from .mechanism import Mechanism
 from .model.closure_model import (
     ClosureModel,
     NullSpace,
@@ -261,6 +263,67 @@ class Linkage:
         return detect_platform(self._model)
 
     @cached_property
+    def legs_mechanism(self) -> Mechanism:
+        """The per-leg reading of this linkage (:meth:`Mechanism.from_closure_model` at
+        :attr:`home_assembly`): what the capabilities that read a machine leg by leg
+        (sensitivity to geometric errors, every working mode, the Study homotopy) use
+        (cached).
+
+        Raises:
+            InputError: no base–legs–platform structure in the model (the reason).
+        """
+        return Mechanism.from_closure_model(self._model, self.home_assembly.q)
+
+    def _legs(self, what: str) -> Mechanism:
+        """:attr:`legs_mechanism`, or an :class:`InputError` saying that ``what`` needs
+        legs and why this model has none."""
+        structure, reason = self.platform_structure
+        if structure is None:
+            raise InputError(f"{what} reads a machine leg by leg (legs between the base "
+                             f"and one platform), and {self.name or 'this linkage'} is not "
+                             f"one: {reason}")
+        return self.legs_mechanism
+
+    def legs_assembly(self, q=None) -> Assembly:
+        """The assembly of :attr:`legs_mechanism` at the tree configuration ``q`` (a
+        :class:`LinkageAssembly` or q; default home): the same pose, each leg's joints
+        from ``q``."""
+        mech = self._legs("a per-leg assembly")
+        q = self.home_assembly.q if q is None else self._guess_q(q)
+        kin = self._model.kinematics(q)
+        guess = []
+        for leg, chain in zip(mech.structure.legs, mech.legs):
+            values = [q[self._model.tree.joints[j].idx_q:self._model.tree.joints[j].idx_q
+                        + self._model.tree.joints[j].nq] for j in leg.joints]
+            known = np.concatenate(values) if values else np.zeros(0)
+            guess.append(np.r_[known, np.zeros(chain.nq - known.size)])
+        return mech.assemble(kin.output_placement, guess=guess)
+
+    def sensitivity(self, q=None, parameters=None):
+        """Sensitivity of the output pose to geometric errors (joint origins and axes,
+        bases, anchors: :func:`pkm_pin.sensitivity.sensitivity`) at ``q`` (default
+        home), read leg by leg through :attr:`legs_mechanism`.
+
+        Raises:
+            InputError: not a base–legs–platform machine (the reason).
+        """
+        mech = self._legs("sensitivity to geometric errors")
+        return mech.sensitivity(self.legs_assembly(q), parameters)
+
+    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0
+                               ) -> list[LinkageAssembly]:
+        """Every working mode at the output ``pose``: one assembly per distinct vector of
+        actuated values, found leg by leg (:meth:`Mechanism.inverse_kinematics_all` of
+        :attr:`legs_mechanism`), as configurations of this tree.
+
+        Raises:
+            InputError: not a base–legs–platform machine (the reason).
+        """
+        mech = self._legs("every working mode of a pose")
+        return [self.assemble(mech.source_configuration(a), starts=0)
+                for a in mech.inverse_kinematics_all(pose, starts=starts, seed=seed)]
+
+    @cached_property
     def home_assembly(self) -> LinkageAssembly:
         """The assembly from the model's reference (the file's ``q = 0`` or MJCF
         ``qpos0``: its intended working mode), :meth:`assemble` with no guess (cached)."""
@@ -434,7 +497,8 @@ class Linkage:
         return self.assemble(guess, q_actuated=q_actuated, starts=starts, seed=seed, tol=tol)
 
     def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
-                               patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL):
+                               patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL,
+                               method: str = "auto"):
         """Every assembly mode found for the actuated values: a multistart of the tree
         solver from batches of ``starts`` configurations drawn within the joint limits
         (the reference first), stopped after ``patience`` batches in a row find no new
@@ -443,17 +507,33 @@ class Linkage:
         the characteristic length): an idle motion (a rod spinning between its spherical
         joints) does not make a new mode.
 
+        ``method``: ``"multistart"`` (above), ``"homotopy"`` (every mode, proven, by the
+        Study homotopy of :mod:`pkm_pin.modes`: a machine whose legs are six distance
+        constraints, read through :attr:`legs_mechanism`; refused with the reason
+        otherwise) or ``"auto"`` (the homotopy where it applies, else the multistart).
+
         Returns:
             :class:`~pkm_pin.modes.AssemblyModes` of :class:`LinkageAssembly`, nearest
-            the reference first, ``complete=False`` (a multistart proves nothing).
+            the reference first; ``complete=False`` for a multistart (it proves nothing).
 
         Raises:
             ForwardKinematicsError: no start closes the loops at these values.
+            InputError: ``method="homotopy"`` where it does not apply.
         """
         from time import perf_counter
 
-        from .modes import AssemblyModes
+        from .modes import AssemblyModes, distance_legs
 
+        if method not in ("auto", "homotopy", "multistart"):
+            raise InputError(f"method must be 'auto', 'homotopy' or 'multistart', got "
+                             f"{method!r}")
+        mech = self._homotopy_legs(method, distance_legs)
+        if mech is not None:
+            modes = mech.forward_kinematics_all(q_actuated, seed=seed, tol=tol,
+                                                method="homotopy")
+            found = [self.assemble(mech.source_configuration(a), starts=0) for a in modes]
+            return AssemblyModes(found, modes.complete, modes.method, modes.counts,
+                                 modes.seconds)
         t0 = perf_counter()
         target = self.check_actuated(q_actuated)
         model = self._model
@@ -483,6 +563,20 @@ class Linkage:
         return AssemblyModes(found, False, "multistart",
                              {"starts": tried, "batches": batch, "modes": len(found)},
                              perf_counter() - t0)
+
+    def _homotopy_legs(self, method: str, distance_legs) -> Mechanism | None:
+        """The legs the Study homotopy runs on for ``method`` (``None``: use the
+        multistart); ``"homotopy"`` where it does not apply is an :class:`InputError`."""
+        if method == "multistart" or (method == "auto"
+                                      and self.platform_structure[0] is None):
+            return None
+        try:
+            mech = self._legs("the Study homotopy")
+        except (InputError, AssemblyError):
+            if method == "homotopy":
+                raise
+            return None
+        return mech if method == "homotopy" or distance_legs(mech) is not None else None
 
     def transmission(self, q, *, analysis: LinkageAnalysis | None = None):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or

@@ -244,3 +244,29 @@ def test_linkage_home_assembly_is_the_assembly_from_the_reference():
     assert link.home_assembly is link.home_assembly
     np.testing.assert_allclose(link.home_assembly.q, link.assemble().q, atol=1e-12)
     assert link.home_analysis.dof == 1
+
+
+def test_general_backend_hands_leg_by_leg_capabilities_to_the_legs(stewart):
+    """The Stewart's Extended URDF read by the general backend: sensitivity, every working
+    mode and the Study homotopy go through its legs (the TOML's numbers); a multi-loop
+    leg refuses them with a sentence saying why."""
+    toml, link, q, _ = stewart
+    a = link.assemble(q)
+    sens = link.sensitivity(a)
+    ref = toml.sensitivity()
+    np.testing.assert_allclose(sens.column("leg2/leg2_U1/origin.x"), ref.column("2/U1/origin.x"),
+                               atol=1e-9)
+    modes = link.forward_kinematics_all(a.q_actuated)
+    assert modes.method == "homotopy" and modes.complete
+    assert len(modes) == len(toml.forward_kinematics_all(toml.home_assembly.q_actuated))
+    assert all(np.abs(link.model.closure_residual(m.q)).max() < 1e-9 for m in modes)
+    assert link.forward_kinematics_all(a.q_actuated, method="multistart", patience=1).method \
+        == "multistart"
+    works = link.inverse_kinematics_all(toml.home)
+    assert any(np.allclose(w.q_actuated, a.q_actuated, atol=1e-9) for w in works)
+    cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
+    with pytest.raises(InputError, match="sensitivity to geometric errors reads a machine leg "
+                                         "by leg .* neither on the platform"):
+        cassie.sensitivity()
+    with pytest.raises(InputError, match="the Study homotopy reads a machine leg by leg"):
+        cassie.forward_kinematics_all(cassie.home_assembly.q_actuated, method="homotopy")
