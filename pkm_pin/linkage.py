@@ -71,6 +71,7 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 from __future__ import annotations
 
 import functools
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -694,9 +695,16 @@ class Linkage:
         output axes) are targeted: the output reaches the pose as far as it can move
         towards it, the other components are what the mechanism imposes.
 
+        A partial pose (a mapping of some of x, y, z, roll, pitch, yaw to values, the
+        others solved for: :meth:`Mechanism.complete_pose`) is solved leg by leg through
+        :attr:`legs_mechanism` (refused with the reason where the model has no legs).
+
         Raises:
             LoopClosureError: no start closes the loops and reaches the pose.
         """
+        if isinstance(pose, Mapping):
+            mech = self._legs("a partial pose")
+            return self.assemble(mech.source_configuration(mech.assemble(dict(pose))), starts=0)
         if not isinstance(pose, pin.SE3) or not np.isfinite(pose.homogeneous).all():
             raise InputError(f"pose must be a finite pinocchio.SE3, got {type(pose).__name__}")
         model = self._model

@@ -270,3 +270,17 @@ def test_general_backend_hands_leg_by_leg_capabilities_to_the_legs(stewart):
         cassie.sensitivity()
     with pytest.raises(InputError, match="the Study homotopy reads a machine leg by leg"):
         cassie.forward_kinematics_all(cassie.home_assembly.q_actuated, method="homotopy")
+
+
+def test_partial_pose_through_the_general_backend(stewart):
+    """A partial pose given to the general backend of a platform machine is solved leg by
+    leg: the coordinates asked for hold, the loops close; a multi-loop leg refuses it."""
+    toml, link, _, _ = stewart
+    z = float(toml.home.translation[2]) + 0.03
+    a = link.inverse_kinematics({"z": z, "roll": 0.02, "pitch": 0.0})
+    assert a.output_pose.translation[2] == pytest.approx(z, abs=1e-10)
+    assert pin.rpy.matrixToRpy(a.output_pose.rotation)[0] == pytest.approx(0.02, abs=1e-10)
+    assert np.abs(link.model.closure_residual(a.q)).max() < 1e-9
+    cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
+    with pytest.raises(InputError, match="a partial pose reads a machine leg by leg"):
+        cassie.inverse_kinematics({"z": -0.8})
