@@ -794,7 +794,6 @@ def cmd_workspace(args) -> int:
     kind's boundary surface for three coordinates)."""
     from .plots import workspace_plots
     from .view import workspace_cloud
-    from .workspace import workspace
 
     mech = _load(args)
     prefix = Path(args.out if args.out else f"workspace_{_slug(args.mechanism)}")
@@ -822,7 +821,7 @@ def cmd_workspace(args) -> int:
         executor = ProcessPoolExecutor(args.jobs)
         options.update(executor=executor, chunk_size=args.chunk_size)
     try:
-        ws = workspace(mech, coords, **options)
+        ws = mech.workspace(coords, **options)
     finally:
         if executor is not None:
             executor.shutdown()
