@@ -1077,6 +1077,8 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
     ``actuated`` (m,) marking joint ``j``'s rows, and ``key`` what identifies the side
     (its loops and joints: two actuators of one leg share it)."""
     tree = model.tree
+    if j in support:  # the actuator is on the output body's own chain: that chain is its leg
+        return _support_side(model, kin, j, support)
     rows, is_act, joints = [], [], set()
     for c in loops:
         cl = model.closures[c]
@@ -1098,6 +1100,24 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
         rows.extend(screws.line(C.translation, w) for w in axes)  # unit axes
         is_act.extend([False] * len(axes))
     key = (tuple(sorted(loops)), tuple(sorted(joints)))
+    return np.array(rows).reshape(-1, 6), np.array(is_act, bool), key
+
+
+def _support_side(model: ClosureModel, kin: TreeKinematics, j: int, support: set
+                  ) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """:func:`_side_freedoms` of an actuator ``j`` on the output body's own chain (the
+    tree runs through its leg to the output, as an Extended URDF cut open there: the
+    platform reading's tree leg): the chain's joints from the base to the output body,
+    their twists as the output body sees them."""
+    tree = model.tree
+    out_joint = tree.frames[tree.getFrameId(model.output)].parentJoint
+    E = kin.body_jacobians[out_joint].T
+    rows, is_act = [], []
+    for k in sorted(support - {0}):
+        r = E[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
+        rows.extend(r)
+        is_act.extend([k == j] * len(r))
+    key = ((), tuple(sorted(support - {0})))
     return np.array(rows).reshape(-1, 6), np.array(is_act, bool), key
 
 

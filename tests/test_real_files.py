@@ -140,3 +140,18 @@ def test_closure_of_a_body_onto_itself_is_refused_and_duplicates_are_named(capsy
     r = linkage_report_data(Linkage(model), Linkage(model).assemble(q))
     assert r["duplicate_closures"] == [["again", c.name]]
     assert f"duplicate closure  'again' repeats {c.name!r}" in linkage_text(r)
+
+
+def test_five_bar_with_a_body_output_transmits_well_as_its_legs_do():
+    """The shipped five-bar analysed as a body (its tree runs through motor 1's chain to
+    the output): the actuator on the output's own chain has that chain as its leg, so
+    the healthy five-bar reads healthy (ITI near 1, LTI 0.90, the legs backend's LTI),
+    where it used to read 'LTI = 0: leg mot1 transmits poorly: ITI 0.00'."""
+    link = pkm_pin.load_mechanism(LOOPS / "five_bar.xml")
+    a = link.home_assembly
+    tr = link.transmission(a)
+    legs = link.legs_mechanism.analyze(link.legs_assembly(a)).transmission
+    assert np.all(tr.iti > 0.99) and np.all(legs.iti > 0.99)
+    assert tr.lti == pytest.approx(legs.lti, abs=1e-9) and tr.lti > 0.9
+    np.testing.assert_allclose(tr.oti[1], legs.oti[1], atol=1e-9)
+    assert "ITI 0.00" not in tr.worst
