@@ -155,3 +155,24 @@ def test_five_bar_with_a_body_output_transmits_well_as_its_legs_do():
     assert tr.lti == pytest.approx(legs.lti, abs=1e-9) and tr.lti > 0.9
     np.testing.assert_allclose(tr.oti[1], legs.oti[1], atol=1e-9)
     assert "ITI 0.00" not in tr.worst
+
+
+def test_joints_written_without_a_range_move(tmp_path):
+    """A URDF whose <limit> elements give no lower/upper (Onshape exports, Gepetto's
+    kangaroo_like) has unlimited joints, not URDF's default range [0, 0] that pinned
+    every joint at 0: forward kinematics of the four-bar so written matches the shipped
+    file's."""
+    import re
+    import shutil
+
+    text = (LOOPS / "four_bar.urdf").read_text()
+    bare = re.sub(r'\s(lower|upper)="[^"]*"', "", text)
+    assert "lower=" not in bare
+    (tmp_path / "four_bar.urdf").write_text(bare)
+    shutil.copy(LOOPS / "four_bar.yaml", tmp_path / "four_bar.yaml")
+    link = pkm_pin.load_mechanism(tmp_path / "four_bar.urdf")
+    assert not np.isfinite(link.model.tree.lowerPositionLimit).any()
+    ref = pkm_pin.load_mechanism(LOOPS / "four_bar.urdf")
+    q_a = ref.home_assembly.q_actuated + 0.3
+    np.testing.assert_allclose(link.forward_kinematics(q_a, link.home_assembly).q,
+                               ref.forward_kinematics(q_a, ref.home_assembly).q, atol=1e-9)
