@@ -41,6 +41,7 @@ not with the other leg's, which a single output reports as a type I singularity.
 
 from __future__ import annotations
 
+import heapq
 import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
@@ -61,7 +62,7 @@ END_BODY_NAMES = ("end_effector", "effector", "foot", "platform", "plate", "tool
 #: Name of the MJCF ``<custom><text>`` element that names the output frame (its ``data``).
 MJCF_OUTPUT_KEY = "pkm_pin:output"
 
-_SIDE = re.compile(r"^(left|right|l|r)_|_(left|right|l|r|\d+)$")
+_SIDE = re.compile(r"^(left|right|l|r)[_-]|[_-](left|right|l|r|\d+)$")
 
 
 @dataclass(frozen=True)
@@ -199,7 +200,7 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
     scale = max((np.linalg.norm(y, 2) for y in Y if y.size), default=0.0)
     tol = rtol * scale
     massless = _massless(tree)
-    depth = _depths(tree, massless)
+    depth = _depths(model, massless)
     rods = _rods(model, used)
     actuated = {tree.getJointId(name) for name in model.actuated}
     cranks = {j for j in range(1, tree.njoints)
@@ -283,11 +284,41 @@ def _massless(tree: pin.Model) -> set:
     return {j for j in range(1, tree.njoints) if masses[j] <= 1e-12 * heaviest}
 
 
-def _depths(tree: pin.Model, massless: set) -> list:
-    """Movable joints in each joint's support (itself included), those of massless
-    bodies not counted."""
-    return [sum(1 for i in tree.supports[j] if i > 0 and tree.joints[i].nv > 0
-                and i not in massless) for j in range(tree.njoints)]
+def _depths(model: ClosureModel, massless: set) -> list:
+    """Each joint's body's distance from the base: the fewest joints on a path from the
+    base through the tree's joints and the closures (a joint of a massless body and a
+    weld count 0, a point closure 1). A free-flyer joint under the universe is no path
+    when other joints hang on the universe (a free platform held by closures), the base
+    itself when it is the only one (a floating base)."""
+    tree = model.tree
+    edges: dict = {j: [] for j in range(tree.njoints)}
+    roots = [j for j in range(1, tree.njoints) if tree.parents[j] == 0]
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        free = joint.nv == 6 and tree.parents[j] == 0
+        if free and len(roots) > 1:
+            continue
+        w = 0 if (free or joint.nv == 0 or j in massless) else 1
+        edges[tree.parents[j]].append((j, w))
+        edges[j].append((tree.parents[j], w))
+    for c in model.closures:
+        a, b = (tree.frames[tree.getFrameId(n)].parentJoint for n in (c.frame_a, c.frame_b))
+        w = 0 if c.kind == "weld" else 1
+        edges[a].append((b, w))
+        edges[b].append((a, w))
+    far = tree.njoints + len(model.closures) + 1
+    dist = [far] * tree.njoints
+    dist[0] = 0
+    heap = [(0, 0)]
+    while heap:
+        d, j = heapq.heappop(heap)
+        if d > dist[j]:
+            continue
+        for k, w in edges[j]:
+            if d + w < dist[k]:
+                dist[k] = d + w
+                heapq.heappush(heap, (d + w, k))
+    return dist
 
 
 def _rods(model: ClosureModel, used: set) -> set:
@@ -298,7 +329,7 @@ def _rods(model: ClosureModel, used: set) -> set:
     ends = [tree.frames[tree.getFrameId(name)].parentJoint
             for c in model.closures for name in (c.frame_a, c.frame_b)]
     named = {f.parentJoint for f in tree.frames
-             if f.type == pin.FrameType.BODY and f.name not in used
+             if f.type == pin.FrameType.BODY and (f.name not in used or _own(tree, f))
              and name_score(f.name) >= 2}
     return {j for j in set(ends)
             if j > 0 and j not in parents and ends.count(j) == 1 and j not in named}
