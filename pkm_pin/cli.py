@@ -268,7 +268,7 @@ def _analyze_linkage(args, link) -> int:
     if args.json:
         print(_json(data))
     else:
-        print(rl.linkage_text(data, rl.body_frames(link.model)))
+        print(rl.linkage_text(data, *reversed(rl.output_hint(link.model, assembly.q))))
         if args.markdown:
             print(f"markdown           {args.markdown}")
     return 0
