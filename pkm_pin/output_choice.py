@@ -8,26 +8,26 @@ body frame a designer would analyse — a leg's foot, an ankle's foot plate, a m
 platform — by this rule (``docs/closed_loops.md``, "Default output"):
 
 1. **Candidates**: the body frames of the tree (Pinocchio ``BODY`` frames: URDF links,
-   MJCF bodies), less the universe and the frames a closure uses (the toolbox's
-   ``closedloop*`` markers).
-2. **Fits**: with ``N`` the motions the closures allow (null space of ``J_c``), ``X`` the
-   actuated rates and ``Y`` the frame's homogenised twists over ``N``, the frame *fits*
-   when no idle motion moves it (``ker X ⊆ ker Y``) and its motion space has the
-   dimension of the independent actuators (``rank Y = rank X``): its motion and the
-   motors' determine each other, so neither the forward nor the inverse index of the
-   analysis is zero by construction. A rod that spins about its own axis, a crank that
-   a motor moves alone (rank below the actuators'), a base (rank 0) do not fit.
-3. **Order**: fitting frames first; then frames no idle motion moves, with the larger
-   motion space; then the body furthest down the tree (most movable joints in its
-   support: a foot before the shank that carries it); then not a **rod** (a leaf body of
-   the tree carrying exactly one closure frame: a two-point link between a joint and a
-   closure); then a frame **named** like an end body (``effector``, ``end_effector``,
-   ``foot``, ``platform``, ``plate``, ``tool``, ``tcp``, ``sole``: the exact name, then
-   a name containing one); then the body's own frame before links fixed to it; then
-   tree order.
+   MJCF bodies), less the universe and the marker links a closure uses (a body's own
+   frame used by a closure, as in MJCF, stays).
+2. **Controlled motion**: with ``N`` the motions the closures allow (null space of
+   ``J_c``), ``X`` the actuated rates and ``Y`` the frame's homogenised twists over ``N``,
+   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked)
+   and ``controlled_dim = rank Y − idle_dim``. The frame **fits** when ``idle_dim = 0``
+   and ``rank Y = rank X``: its motion and the motors' determine each other, so neither
+   the forward nor the inverse index of the analysis is zero by construction. A rod that
+   spins about its own axis, a crank that a motor moves alone, a base do not fit.
+3. **Order** (:meth:`OutputCandidate.key`): the larger ``controlled_dim``; the smaller
+   ``idle_dim``; a body with mass before a massless one (an exporter's intermediate links
+   between the revolutes of a spherical joint; only when the file gives masses); not a
+   **crank** (every movable joint of its support actuated); not a **rod** (a leaf of the
+   tree carrying exactly one closure frame and no link named like an end body); the body
+   **furthest from the base** (:func:`_depths`: fewest joints from the base through the
+   tree and the closures); a frame **named** like an end body (:func:`name_score`); the
+   joint's own body frame before links fixed to it; tree order.
 4. **Ties**: the other bodies (one frame each) equal to the chosen one on every key but
-   the name and tree order are listed (:attr:`OutputChoice.ties`): several feet of a
-   robot with two legs, the two distal links of a five-bar.
+   the name and the frame are listed (:attr:`OutputChoice.ties`): the two feet of a
+   two-legged robot, a motor crank that moves in as many dimensions as the foot.
 
 With an output point (``output_point``), ``Y`` is the velocity of each frame's origin
 (3 rows) instead of its twist. Ranks are decided on dimensionless matrices (rad, length
@@ -86,8 +86,8 @@ class OutputCandidate:
             alone (a motor's crank; every body of a serial arm).
         rod: A leaf body of the tree carrying exactly one closure frame and no link
             named like an end body: a two-point link between its joint and a closure.
-        depth: Movable joints in its support (from the root), those of massless
-            intermediate links not counted.
+        depth: Its distance from the base (:func:`_depths`: the fewest joints on a
+            path through the tree and the closures).
         named: :func:`name_score` (3: an end body's name, 2: the same with a side
             prefix or suffix, 1: a name containing one, 0: neither).
         own: The joint's own body frame (not a link fixed to it).
@@ -151,11 +151,12 @@ class OutputChoice:
         if not self.candidates:
             return f"output {self.frame}: no body frame to choose from"
         c = self.candidates[0]
-        why = (f"its motion space has the dimension of the {self.independent_actuators} "
-               "independent actuators and no idle motion moves it" if c.fits else
-               f"no body's motion has the dimension of the {self.independent_actuators} "
-               f"independent actuators; it moves in {c.motion_dim} dimensions"
-               + ("" if c.determined else ", idle motions included"))
+        n = self.independent_actuators
+        why = (f"its motion space has the dimension of the {n} independent actuators and "
+               "no idle motion moves it" if c.fits else
+               f"no body fits the {n} independent actuators; the motors set "
+               f"{c.controlled_dim} of its {c.motion_dim} motion dimensions"
+               + (f", {c.idle_dim} more with them locked" if c.idle_dim else ""))
         tied = f" (equally: {', '.join(self.ties)})" if self.ties else ""
         return (f"output {self.frame} chosen: {why}, {c.depth} joints from the base"
                 f"{tied}")
