@@ -268,7 +268,8 @@ def _analyze_linkage(args, link) -> int:
     if args.json:
         print(_json(data))
     else:
-        print(rl.linkage_text(data, rl.body_frames(link.model)))
+        likely, frames = rl.output_hint(link.model, assembly.q)
+        print(rl.linkage_text(data, frames, likely))
         if args.markdown:
             print(f"markdown           {args.markdown}")
     return 0

@@ -163,19 +163,32 @@ def _unread_format(suffix: str) -> str:
 
 
 def _linkage_file(path: Path, suffix: str, closures, output, point):
-    """The :class:`~pkm_pin.linkage.Linkage` of an Extended URDF or an MJCF file."""
-    from .model import read_extended_urdf, read_mjcf
+    """The :class:`~pkm_pin.linkage.Linkage` of an Extended URDF or an MJCF file.
+
+    Its output: ``output=``, else the file's (a closures file's ``output`` key, an MJCF
+    ``<custom><text name="pkm_pin:output" data="FRAME"/>``), else the body the
+    mechanism exists to move (:func:`pkm_pin.output_choice.designer_output`: at the
+    assembly from the reference, kept as :attr:`Linkage.home_assembly`; the readers'
+    default when it does not assemble)."""
+    from .model import find_closures_file, read_closures_file, read_extended_urdf, read_mjcf
+    from .output_choice import designer_output, mjcf_output
 
     label = str(path)
     try:
         if suffix == ".urdf":
             model = read_extended_urdf(path, closures, output=output)
+            named = output is not None or read_closures_file(
+                closures if closures is not None else find_closures_file(path)
+            ).output is not None
         else:
             if closures is not None:
                 raise MechanismFileError(label, "", "an MJCF file holds its closures "
                                          "(<equality>): closures= is for a .urdf")
+            output = output if output is not None else mjcf_output(path)
             model = read_mjcf(path, output=output)
-        return Linkage(model, point=point)
+            named = output is not None
+        link = Linkage(model, point=point)
+        return link if named else designer_output(link)
     except MechanismFileError:
         raise
     except (FrameNotFound, JointNotFound) as e:

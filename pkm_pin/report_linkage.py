@@ -65,6 +65,24 @@ def body_frames(model) -> list[str]:
             and f.name != "universe"]
 
 
+def output_hint(model, q) -> tuple[list[str], list[str]]:
+    """``(likely, frames)`` for the ``--output`` hint at the assembled ``q``: the likely
+    outputs (:func:`pkm_pin.output_choice.choose_output`: the body the mechanism exists
+    to move and those that fit equally) and every body frame, the candidates in the
+    rule's order first, then the frames of the closures (tree order); the frames in tree
+    order and no likely one when the rule cannot be evaluated."""
+    from .errors import PkmError
+    from .output_choice import choose_output
+
+    frames = body_frames(model)
+    try:
+        choice = choose_output(model, q)
+    except (PkmError, np.linalg.LinAlgError):
+        return [], frames
+    ranked = [c.frame for c in choice.candidates]
+    return list(choice.likely()), ranked + [f for f in frames if f not in set(ranked)]
+
+
 def assembly_data(link, assembly) -> dict:
     """Plain data of a :class:`~pkm_pin.linkage.LinkageAssembly`: ``mechanism``,
     ``output``, ``output_is_point``, ``pose`` (the output frame's), ``actuated``,
@@ -179,12 +197,18 @@ def structure_line(r: dict) -> str:
 
 
 # ------------------------------------------------------------------------- text
-def output_line(r: dict, frames: Sequence[str] = ()) -> str:
-    """The output frame, how it is analysed, and how to choose another."""
+def output_line(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()) -> str:
+    """The output frame, how it is analysed, and how to choose another: the ``likely``
+    outputs first (:func:`output_hint`), then the other ``frames`` (eight in all)."""
     how, other = (("its origin as a point", "--body: as a body") if r["output_is_point"]
                   else ("as a body", "--point: its origin as a point"))
-    shown = ", ".join(frames[:8]) + (", …" if len(frames) > 8 else "")
-    choices = f" (frames: {shown})" if frames else ""
+    rest = [f for f in frames if f not in set(likely)]
+    n = max(8 - len(likely), 3)
+    parts = [f"likely: {', '.join(likely)}"] if likely else []
+    if rest:
+        parts.append(("other frames: " if likely else "frames: ") + ", ".join(rest[:n])
+                     + (", …" if len(rest) > n else ""))
+    choices = f" ({'; '.join(parts)})" if parts else ""
     return (f"output             {r['output']}, {how}  [another frame: --output FRAME"
             f"{choices}; {other}]")
 
@@ -195,15 +219,16 @@ def joints_lines(r: dict) -> list[str]:
     return [f"    {n:<{width}}  {_list(v)}" for n, v in r["joints"].items()]
 
 
-def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
+def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()) -> str:
     """Plain-text report (the output of ``pkm-pin analyze`` for a linkage) from
-    :func:`linkage_report_data`; ``frames``: the choices of ``--output`` to suggest."""
+    :func:`linkage_report_data`; ``frames``: the choices of ``--output`` to suggest,
+    ``likely`` those named first (:func:`output_hint`)."""
     idx = ", ".join(f"{k} = {'undefined' if v is None else f'{v:.6g}'}"
                     for k, v in r["indices"].items())
     out = [f"mechanism          {r['mechanism']}  (linkage: {len(r['joints'])} joints, "
            f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''}"
            + ("; no closure: a tree, analysed as a serial chain)" if not r["closures"] else ")"),
-           output_line(r, frames)] + [line for line in (structure_line(r),) if line] + [
+           output_line(r, frames, likely)] + [line for line in (structure_line(r),) if line] + [
            f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
     out += [f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "
             f"{r['motion_type']}; singularity {r['singularity']})",
