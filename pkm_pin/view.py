@@ -146,17 +146,18 @@ def view(
         vis.path = visualizer.path
     scene = Scene(vis, recorder, analysis, f"pkm/{node_name(mech.name)}")
     painter = _Painter(scene)
-    painter.settings()
     painter.legs()
     painter.platform()
     if show_screws:
         painter.screws()
     if show_wrenches:
         painter.wrenches()
+    painter.settings()
     if animate_singular and analysis.singularity in ("II", "III") \
             and analysis.uncontrolled_twist is not None:
         painter.animate(analysis.uncontrolled_twist)
         scene.animated = True
+    painter.finish()
     if html is not None:
         scene.to_html(html)
     if open:
