@@ -181,6 +181,10 @@ class SceneRecorder:
         self.tree = self._tree.SceneTree()
         self.animation: bytes | None = None
         self.forward = forward
+        #: Title lines and legend entries of the page (:func:`overlay_html`), when the
+        #: drawing sets them (:func:`pkm_pin.view.workspace_cloud` does).
+        self.title_lines: tuple[str, ...] = ()
+        self.legend: tuple[LegendEntry, ...] = ()
 
     def send(self, command) -> None:
         """Record one meshcat command (``SetObject``, ``SetTransform``, …)."""
@@ -230,14 +234,16 @@ class SceneRecorder:
             out.append(self.animation)
         return out
 
-    def static_html(self, title: str = "MeshCat", overlay: str = "") -> str:
+    def static_html(self, title: str = "MeshCat", overlay: str | None = None) -> str:
         """A self-contained HTML page of the scene (no server, no network).
 
         Same page as meshcat's ``static_html()`` (the viewer's ``main.min.js`` inlined,
         then the commands), except that each command is decoded synchronously so that
-        they run in order; ``overlay``: HTML drawn over the scene's top left corner
-        (:func:`overlay_html`: title and legend).
+        they run in order; ``overlay``: HTML drawn over the scene's top left corner;
+        default: :func:`overlay_html` of :attr:`title_lines` and :attr:`legend`.
         """
+        if overlay is None:
+            overlay = overlay_html(self.title_lines, self.legend)
         meshcat = _meshcat()[0]
         viewer_js = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
         calls = "\n".join(f'pkmRun("{base64.b64encode(c).decode("ascii")}");'
@@ -468,6 +474,50 @@ def camera_placement(P: np.ndarray, length: float, shape: np.ndarray | None = No
     return centre, distance * d, radius
 
 
+def frame_view(vis, root: str, P: np.ndarray, length: float,
+               shape: np.ndarray | None = None) -> dict:
+    """Light grey background, the drawing under ``vis[root]`` centred, the grid and
+    axes scaled to it, and the default camera (:func:`camera_placement` of the points
+    ``P``, n × 3, in the drawing's world frame; ``shape``: the points of the body drawn,
+    default ``P``).
+
+    meshcat's camera always looks at the viewer's origin, so ``root`` is shifted to put
+    the centre of the points' bounding box there; the grid and axes are shifted with it.
+    The axes stay at the world origin, scaled by :func:`grid_scale` of ``length``; the
+    grid, of :func:`grid_cell` cells, lies in the plane z = 0, or under the drawing when
+    its body reaches below (a linkage hanging from its origin), centred under it, its
+    lines on multiples of the cell.
+
+    Returns:
+        ``target`` and ``position`` of the camera (world frame), ``grid_cell``,
+        ``grid_height``.
+    """
+    g = _meshcat()[1]
+    P = np.asarray(P, dtype=float)
+    body = P if shape is None else np.asarray(shape, dtype=float)
+    vis["/Background"].set_property("top_color", [0.97, 0.97, 0.97])
+    vis["/Background"].set_property("bottom_color", [0.80, 0.80, 0.82])
+    centre, offset, radius = camera_placement(P, length, shape=body)
+    vis[root].set_transform(_translation(-centre))
+    # meshcat's grid: 40 cells of 0.5; its axes: 1 unit long
+    cell = grid_cell(2.0 * radius)
+    lowest = float(body[:, 2].min())
+    height = lowest if lowest < -1e-9 * length else 0.0
+    under = [*(np.round(centre[:2] / cell) * cell), height]  # lines on multiples of cell
+    vis["/Grid"].set_transform(_translation(under - centre)
+                               @ np.diag([2.0 * cell, 2.0 * cell, 2.0 * cell, 1.0]))
+    vis["/Axes"].set_transform(_translation(-centre)
+                               @ np.diag([*[grid_scale(length)] * 3, 1.0]))
+    camera = g.PerspectiveCamera(fov=CAMERA_FOV, aspect=1, near=0.01 * radius,
+                                 far=200 * radius)
+    vis["/Cameras/default/rotated"].set_object(camera)
+    # the camera node is rotated so that its y axis (three.js "up") is the world z
+    vis["/Cameras/default/rotated/<object>"].set_property(
+        "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
+    return {"target": centre, "position": centre + offset, "grid_cell": cell,
+            "grid_height": height}
+
+
 def _open_page(page: str, prefix: str) -> None:
     """The HTML ``page`` written to a temporary file and opened in the browser."""
     fd, name = tempfile.mkstemp(prefix=prefix, suffix=".html")
@@ -550,38 +600,13 @@ class _Painter:
         return np.vstack([self.mech_points(), *self.drawn_points])
 
     def settings(self) -> None:
-        """Light grey background, the view centred on the drawing (call it last), the
-        grid scaled to it, and the default camera (:func:`camera_placement`).
-
-        meshcat's camera always looks at the viewer's origin, so the mechanism's subtree
-        is shifted to put the centre of its bounding box there; the grid and axes are
-        shifted with it. The axes stay at the mechanism's world origin, scaled by
-        :func:`grid_scale`; the grid, of :func:`grid_cell` cells, lies in the plane z = 0
-        or under the drawing when it reaches below (a linkage hanging from its origin),
-        centred under it, its lines on multiples of the cell.
-        """
-        vis = self.vis
-        vis["/Background"].set_property("top_color", [0.97, 0.97, 0.97])
-        vis["/Background"].set_property("bottom_color", [0.80, 0.80, 0.82])
-        P, body = self.frame_points(), self.mech_points()
-        centre, offset, radius = camera_placement(P, self.L, shape=body)
-        vis[self.root].set_transform(_translation(-centre))
-        # meshcat's grid: 40 cells of 0.5; axes: 1 unit long
-        self.grid_cell = cell = grid_cell(2.0 * radius)
-        lowest = float(body[:, 2].min())
-        self.grid_height = height = lowest if lowest < -1e-9 * self.L else 0.0
-        under = [*(np.round(centre[:2] / cell) * cell), height]  # lines on multiples of cell
-        vis["/Grid"].set_transform(_translation(under - centre)
-                                   @ np.diag([2.0 * cell, 2.0 * cell, 2.0 * cell, 1.0]))
-        vis["/Axes"].set_transform(_translation(-centre)
-                                   @ np.diag([*[grid_scale(self.L)] * 3, 1.0]))
-        camera = self.g.PerspectiveCamera(fov=CAMERA_FOV, aspect=1, near=0.01 * radius,
-                                          far=200 * radius)
-        vis["/Cameras/default/rotated"].set_object(camera)
-        # the camera node is rotated so that its y axis (three.js "up") is the world z
-        vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
-        self.scene.camera = {"target": centre, "position": centre + offset}
+        """The view set up for the drawing (call it last): :func:`frame_view` of
+        :meth:`frame_points` (shape: :meth:`mech_points`), the camera kept in
+        :attr:`Scene.camera`."""
+        body = self.mech_points()
+        view = frame_view(self.vis, self.root, self.frame_points(), self.L, shape=body)
+        self.grid_cell, self.grid_height = view["grid_cell"], view["grid_height"]
+        self.scene.camera = {"target": view["target"], "position": view["position"]}
 
     def mech_points(self) -> np.ndarray:
         """World points that the view must frame: joints, tips and anchors."""

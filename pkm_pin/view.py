@@ -67,6 +67,7 @@ from .scene import (
     LEG_COLOURS,
     PASSIVE_SCREW_COLOUR,
     PLATFORM_COLOUR,
+    LegendEntry,
     Scene,
     SceneRecorder,
     _hex_colour,
@@ -75,10 +76,22 @@ from .scene import (
     _Painter,
     _rgb,
     _translation,
+    frame_view,
     grid_scale,
     node_name,
 )
 from .workspace import KIND_COLOURS
+
+#: The legend's words for the workspace cloud's kinds (colours: ``KIND_COLOURS``) and
+#: for its home marker (:data:`HOME_COLOUR`).
+WORKSPACE_LEGEND_TEXT = {
+    "reachable": ("reachable", "the platform assembles"),
+    "singularity-free": ("singularity-free", "reachable, no singularity"),
+    "transmission": ("good transmission", "singularity-free, transmission above the "
+                     "threshold"),
+    "home": ("home", "the home pose"),
+}
+HOME_COLOUR = 0x000000
 
 #: The scene's names (:mod:`pkm_pin.scene`) are importable from here too.
 __all__ = ["ACTUATED_SCREW_COLOUR", "ACTUATION_WRENCH_COLOUR", "ANIMATION_AMPLITUDE",
@@ -188,13 +201,15 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     vis = meshcat.Visualizer(window=recorder)
     P = np.zeros((len(ws.points), 3))
     P[:, :len(ws.coords)] = ws.points
+    drawn: dict[str, int] = {}
     span = float(np.max(ws.bounds[:, 1] - ws.bounds[:, 0]))
     size = float(np.min(ws.spacing)) if len(ws.points) else span / 100
     codes, kinds = ws.smallest_kind()
     smallest = codes.ravel()
-    centre = P.mean(axis=0) if len(P) else np.zeros(3)
     root = vis["pkm"]["workspace"]
-    root.set_transform(_translation(-centre))
+    corners = np.zeros((2, 3))
+    corners[:, :len(ws.coords)] = ws.bounds.T
+    frame_view(vis, "pkm/workspace", corners, span)
     for i, k in enumerate(kinds):
         pts = P[smallest == i]
         if not len(pts):
@@ -203,12 +218,20 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
                          (1, len(pts)))
         root[node_name(k)].set_object(g.PointCloud(pts.T.astype(np.float32),
                                                    colour.astype(np.float32), size=size))
+        drawn[k] = _hex_colour(KIND_COLOURS[k])
     if surfaces and ws.sampling == "grid" and len(ws.coords) == 3:
-        _workspace_surfaces(ws, root, g, kinds)
+        drawn.update(_workspace_surfaces(ws, root, g, kinds))
     home = np.zeros(3)
     home[:len(ws.coords)] = ws.home
-    root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=0x000000))
+    root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=HOME_COLOUR))
     root["home"].set_transform(_translation(home))
+    drawn["home"] = HOME_COLOUR
+    coords = ", ".join(f"{c} [{u}]" for c, u in zip(ws.coords, ws.units))
+    recorder.title_lines = (f"workspace of {ws.mechanism}",
+                            f"{coords}: {len(ws.points)} {ws.sampling} samples",
+                            "each sample in the colour of the smallest set it is in")
+    recorder.legend = tuple(LegendEntry(k, *WORKSPACE_LEGEND_TEXT[k], (drawn[k],))
+                            for k in WORKSPACE_LEGEND_TEXT if k in drawn)
     if html is not None:
         Path(html).write_text(recorder.static_html(title=f"pkm_pin workspace: {ws.mechanism}"),
                               encoding="utf-8")
@@ -217,17 +240,21 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     return recorder
 
 
-def _workspace_surfaces(ws, root, g, kinds) -> None:
+def _workspace_surfaces(ws, root, g, kinds) -> dict[str, int]:
     """Each kind's voxel boundary mesh under ``root`` (translucent, its cloud's colour;
-    the larger kinds more transparent so the smaller ones show through)."""
+    the larger kinds more transparent so the smaller ones show through); the colour of
+    each kind drawn."""
     from .workspace import voxel_surface
 
+    drawn: dict[str, int] = {}
     for i, k in enumerate(kinds):
         vertices, faces = voxel_surface(ws.masks[k], ws.bounds)
         if not len(faces):
             continue
+        drawn[k] = _hex_colour(KIND_COLOURS[k])
         material = g.MeshLambertMaterial(color=_hex_colour(KIND_COLOURS[k]), transparent=True,
                                          opacity=0.25 + 0.2 * i)
         root[node_name(f"{k}_surface")].set_object(
             g.TriangularMeshGeometry(vertices.astype(np.float32),
                                      faces.astype(np.uint32)), material)
+    return drawn
