@@ -318,9 +318,10 @@ class Scene:
         title_lines: The page's title: the name, then the pose, then DOF, motion type
             and singularity class (from :attr:`analysis`).
         legend: One :class:`LegendEntry` per kind of object drawn.
-        camera: ``{"target": …, "position": …}``, the default camera in the
-            mechanism's world frame: it looks at the centre of the bounding box of the
-            drawing's points from outside that box.
+        camera: ``{"target": …, "position": …, "box": (lo, hi)}``, the default camera
+            in the mechanism's world frame: it looks at the centre of the bounding box
+            ``box`` of the drawing's points (joints, ends of screw axes and arrows) from
+            outside that box.
     """
 
     title_lines: tuple[str, ...] = ()
@@ -489,8 +490,8 @@ def frame_view(vis, root: str, P: np.ndarray, length: float,
     lines on multiples of the cell.
 
     Returns:
-        ``target`` and ``position`` of the camera (world frame), ``grid_cell``,
-        ``grid_height``.
+        ``target`` and ``position`` of the camera (world frame), ``box`` (lowest and
+        highest corner of the points' bounding box), ``grid_cell``, ``grid_height``.
     """
     g = _meshcat()[1]
     P = np.asarray(P, dtype=float)
@@ -514,8 +515,8 @@ def frame_view(vis, root: str, P: np.ndarray, length: float,
     # the camera node is rotated so that its y axis (three.js "up") is the world z
     vis["/Cameras/default/rotated/<object>"].set_property(
         "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
-    return {"target": centre, "position": centre + offset, "grid_cell": cell,
-            "grid_height": height}
+    return {"target": centre, "position": centre + offset, "box": (P.min(axis=0), P.max(axis=0)),
+            "grid_cell": cell, "grid_height": height}
 
 
 def _open_page(page: str, prefix: str) -> None:
@@ -606,7 +607,7 @@ class _Painter:
         body = self.mech_points()
         view = frame_view(self.vis, self.root, self.frame_points(), self.L, shape=body)
         self.grid_cell, self.grid_height = view["grid_cell"], view["grid_height"]
-        self.scene.camera = {"target": view["target"], "position": view["position"]}
+        self.scene.camera = {k: view[k] for k in ("target", "position", "box")}
 
     def mech_points(self) -> np.ndarray:
         """World points that the view must frame: joints, tips and anchors."""
