@@ -120,6 +120,89 @@ def overlay_html(title_lines, legend) -> str:
     return "\n".join(out)
 
 
+#: Where a live viewer gets the legend card (:func:`draw_legend_card`): a child of the
+#: default camera, so it stays in the view's top left corner as the camera moves.
+LEGEND_CARD_PATH = "/Cameras/default/rotated/<object>/pkm_legend"
+#: The width / height of the view the card is placed for.
+LEGEND_CARD_ASPECT = 1.5
+
+
+def legend_png(title_lines, legend, scale: float = 2.0) -> tuple[bytes, int, int]:
+    """The title and legend (as :func:`overlay_html` lays them out) drawn as a PNG
+    image by matplotlib, ``scale`` pixels per CSS pixel: ``(png, width, height)``, the
+    size in CSS pixels."""
+    import io
+
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.image import imsave
+    from matplotlib.patches import Rectangle
+    from matplotlib.transforms import IdentityTransform
+
+    title_lines, legend = list(title_lines), list(legend)
+    line, pad, swatch = 17.0 * scale, 8.0 * scale, 11.0 * scale
+    n_swatches = max((len(e.colours) for e in legend), default=0)
+    rows = len(title_lines) + len(legend) + (1 if legend else 0)
+    height = int(2 * pad + line * rows)
+    fig = Figure(figsize=(1000 * scale / 100, height / 100), dpi=100)
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    fig.patch.set_facecolor((1.0, 1.0, 1.0, 0.9))
+    pixels = IdentityTransform()
+    texts = []
+    y = height - pad - 0.75 * line
+    for i, text in enumerate(title_lines):
+        texts.append(fig.text(pad, y, text, transform=pixels, color="#222222",
+                              fontsize=(11.5 if i == 0 else 10) * scale * 0.75,
+                              fontweight="bold" if i == 0 else "normal"))
+        y -= line
+    y -= 0.3 * line
+    x_label = pad + n_swatches * (swatch + 2 * scale) + 4 * scale
+    for e in legend:
+        for k, c in enumerate(e.colours):
+            x = x_label - 4 * scale - (len(e.colours) - k) * (swatch + 2 * scale)
+            fig.add_artist(Rectangle((x, y - 1 * scale), swatch, swatch, transform=pixels,
+                                     facecolor=css_colour(c), edgecolor=(0, 0, 0, 0.35),
+                                     linewidth=0.5 * scale))
+        label = fig.text(x_label, y, e.label, transform=pixels, color="#222222",
+                         fontsize=10 * scale * 0.75)
+        texts.append(label)
+        right = label.get_window_extent(renderer).x1 + 5 * scale
+        texts.append(fig.text(right, y, e.note, transform=pixels, color="#666666",
+                              fontsize=9 * scale * 0.75))
+        y -= line
+    fig.canvas.draw()
+    width = min(int(max([t.get_window_extent(renderer).x1 for t in texts], default=0) + pad),
+                int(1000 * scale))
+    rgba = np.asarray(fig.canvas.buffer_rgba())[:, :width].copy()
+    rgba[[0, -1], :] = rgba[:, [0, -1]] = (187, 187, 187, 255)  # a grey border
+    out = io.BytesIO()
+    imsave(out, rgba, format="png")
+    return out.getvalue(), int(round(width / scale)), int(round(height / scale))
+
+
+def draw_legend_card(vis, title_lines, legend, radius: float) -> None:
+    """The title and legend as an image on a card in the default camera's top left
+    corner (:data:`LEGEND_CARD_PATH`): what a live meshcat viewer, whose page has no
+    room for HTML, shows instead of :func:`overlay_html`. The card is drawn at a tenth
+    of ``radius`` in front of the camera, over everything, sized and placed as in a view
+    800 pixels high and :data:`LEGEND_CARD_ASPECT` times as wide (a wider view has it
+    further right, a narrower one cuts its left side)."""
+    g = _meshcat()[1]
+    png, width, height = legend_png(title_lines, legend)
+    depth = 0.1 * radius
+    half = depth * np.tan(np.radians(CAMERA_FOV) / 2)  # half the view's height there
+    h = 2 * half * height / 800
+    w = h * width / height
+    margin = 2 * half * 8 / 800
+    texture = g.ImageTexture(image=g.PngImage(png))
+    material = g.MeshBasicMaterial(map=texture, transparent=True, depthTest=False,
+                                   depthWrite=False, side=0)  # front faces only
+    vis[LEGEND_CARD_PATH].set_object(g.Box([w, h, 1e-6 * h]), material)
+    # the camera looks along its -z axis, y up
+    vis[LEGEND_CARD_PATH].set_transform(_translation(
+        [-half * LEGEND_CARD_ASPECT + margin + w / 2, half - margin - h / 2, -depth]))
+
+
 def _short(x: float) -> str:
     """A number in three significant digits (``-0`` printed as ``0``)."""
     text = f"{x:.3g}"
@@ -220,16 +303,27 @@ class SceneRecorder:
             node = node[p]
         return node
 
-    def commands(self) -> list[bytes]:
+    def commands(self, without: tuple[str, ...] = ()) -> list[bytes]:
         """The packed commands that rebuild the scene: objects, properties and
-        transforms node by node (parents first), then the animation."""
+        transforms node by node (parents first), then the animation; ``without``: the
+        subtrees at these meshcat paths left out."""
+        left_out = []
+        for path in without:
+            *parent, name = [p for p in path.split("/") if p]
+            node = self.node("/".join(parent))
+            if node is not None and name in node:
+                left_out.append((node, name, node.pop(name)))
         out = []
-        for node in self._tree.walk(self.tree):
-            if node.object is not None:
-                out.append(node.object)
-            out.extend(node.properties)
-            if node.transform is not None:
-                out.append(node.transform)
+        try:
+            for node in self._tree.walk(self.tree):
+                if node.object is not None:
+                    out.append(node.object)
+                out.extend(node.properties)
+                if node.transform is not None:
+                    out.append(node.transform)
+        finally:
+            for node, name, child in left_out:
+                node[name] = child
         if self.animation is not None:
             out.append(self.animation)
         return out
@@ -240,14 +334,17 @@ class SceneRecorder:
         Same page as meshcat's ``static_html()`` (the viewer's ``main.min.js`` inlined,
         then the commands), except that each command is decoded synchronously so that
         they run in order; ``overlay``: HTML drawn over the scene's top left corner;
-        default: :func:`overlay_html` of :attr:`title_lines` and :attr:`legend`.
+        default: :func:`overlay_html` of :attr:`title_lines` and :attr:`legend`. A page
+        with an overlay leaves out the legend card drawn for a live viewer
+        (:data:`LEGEND_CARD_PATH`), which says the same.
         """
         if overlay is None:
             overlay = overlay_html(self.title_lines, self.legend)
         meshcat = _meshcat()[0]
         viewer_js = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
+        without = (LEGEND_CARD_PATH,) if overlay else ()
         calls = "\n".join(f'pkmRun("{base64.b64encode(c).decode("ascii")}");'
-                          for c in self.commands())
+                          for c in self.commands(without))
         return _PAGE.format(title=html_lib.escape(title), viewer_js=viewer_js.read_text("utf-8"),
                             commands=calls, overlay=overlay)
 
@@ -491,7 +588,8 @@ def frame_view(vis, root: str, P: np.ndarray, length: float,
 
     Returns:
         ``target`` and ``position`` of the camera (world frame), ``box`` (lowest and
-        highest corner of the points' bounding box), ``grid_cell``, ``grid_height``.
+        highest corner of the points' bounding box), ``radius`` (of
+        :func:`camera_placement`), ``grid_cell``, ``grid_height``.
     """
     g = _meshcat()[1]
     P = np.asarray(P, dtype=float)
@@ -516,7 +614,7 @@ def frame_view(vis, root: str, P: np.ndarray, length: float,
     vis["/Cameras/default/rotated/<object>"].set_property(
         "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
     return {"target": centre, "position": centre + offset, "box": (P.min(axis=0), P.max(axis=0)),
-            "grid_cell": cell, "grid_height": height}
+            "radius": radius, "grid_cell": cell, "grid_height": height}
 
 
 def _open_page(page: str, prefix: str) -> None:
@@ -548,6 +646,7 @@ class _Painter:
         self.drawn_points: list[np.ndarray] = []
         self.grid_cell: float | None = None
         self.grid_height = 0.0
+        self.radius = self.L
 
     def size(self, key: str) -> float:
         return _SIZE[key] * self.L
@@ -590,9 +689,12 @@ class _Painter:
         return tuple(lines)
 
     def finish(self) -> None:
-        """The scene's title and legend, from what was drawn."""
+        """The scene's title and legend, from what was drawn; for a live viewer, the
+        legend card (:func:`draw_legend_card`)."""
         self.scene.title_lines = self.title_lines()
         self.scene.legend = self.legend()
+        if self.scene.recorder.forward is not None:
+            draw_legend_card(self.vis, self.scene.title_lines, self.scene.legend, self.radius)
 
     # ------------------------------------------------------------- view settings
     def frame_points(self) -> np.ndarray:
@@ -607,6 +709,7 @@ class _Painter:
         body = self.mech_points()
         view = frame_view(self.vis, self.root, self.frame_points(), self.L, shape=body)
         self.grid_cell, self.grid_height = view["grid_cell"], view["grid_height"]
+        self.radius = view["radius"]
         self.scene.camera = {k: view[k] for k in ("target", "position", "box")}
 
     def mech_points(self) -> np.ndarray:

@@ -76,6 +76,7 @@ from .scene import (
     _Painter,
     _rgb,
     _translation,
+    draw_legend_card,
     frame_view,
     grid_scale,
     node_name,
@@ -209,7 +210,7 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     root = vis["pkm"]["workspace"]
     corners = np.zeros((2, 3))
     corners[:, :len(ws.coords)] = ws.bounds.T
-    frame_view(vis, "pkm/workspace", corners, span)
+    view = frame_view(vis, "pkm/workspace", corners, span)
     for i, k in enumerate(kinds):
         pts = P[smallest == i]
         if not len(pts):
@@ -232,6 +233,8 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
                             "each sample in the colour of the smallest set it is in")
     recorder.legend = tuple(LegendEntry(k, *WORKSPACE_LEGEND_TEXT[k], (drawn[k],))
                             for k in WORKSPACE_LEGEND_TEXT if k in drawn)
+    if visualizer is not None:
+        draw_legend_card(vis, recorder.title_lines, recorder.legend, view["radius"])
     if html is not None:
         Path(html).write_text(recorder.static_html(title=f"pkm_pin workspace: {ws.mechanism}"),
                               encoding="utf-8")

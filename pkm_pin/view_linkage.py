@@ -183,6 +183,7 @@ class _LinkagePainter(_Painter):
         P = self.mech_points()
         self.L = max(0.5 * float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))),
                      float(self.model.length))
+        self.radius = self.L
 
     def centre(self) -> np.ndarray:
         """Wrench arrows start nearest to the output frame's origin."""

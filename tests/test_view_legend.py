@@ -276,3 +276,29 @@ def test_chromium_shows_the_legend_and_title(rps3, tmp_path):
     box = image[20:120, 20:200]  # inside the overlay: white-ish with dark text
     assert np.mean(box.min(axis=2) > 235) > 0.6
     assert np.sum(box.max(axis=2) < 90) > 50
+
+
+def test_live_viewer_gets_the_legend_as_a_card(rps3):
+    """A live viewer, whose page takes no HTML, gets the title and legend as an image
+    card on the camera; the static page has the HTML overlay instead, without the card."""
+    import base64
+
+    import meshcat
+    import umsgpack
+
+    from pkm_pin.scene import LEGEND_CARD_PATH, SceneRecorder
+
+    live = meshcat.Visualizer(window=SceneRecorder())
+    scene = view(rps3, visualizer=live)
+    card = live.window.node(LEGEND_CARD_PATH)
+    assert card is not None and card.object is not None
+    obj = umsgpack.unpackb(card.object)["object"]
+    url = obj["images"][0]["url"]
+    assert url.startswith("data:image/png;base64,")
+    png = base64.b64decode(url.split(",", 1)[1])
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and len(png) > 5000
+    assert obj["materials"][0]["depthTest"] is False
+    page = scene.to_html()
+    assert 'id="pkm-legend"' in page
+    assert not any(c["path"].startswith(LEGEND_CARD_PATH) for c in page_commands(page))
+    assert view(rps3).recorder.node(LEGEND_CARD_PATH) is None  # no live viewer: no card
