@@ -1,6 +1,9 @@
 """The meshcat scene of pkm_pin's views: colours and sizes, the in-memory
 :class:`SceneRecorder` and its self-contained HTML page, the :class:`Scene`, and the
-painter that draws a mechanism's legs, platform, screws, wrenches and animation in it.
+painter that draws a mechanism's legs, platform, screws, wrenches and animation in it;
+the page's title and legend (:func:`overlay_html`, or for a live viewer
+:func:`draw_legend_card`) from what the painter noted drawing (:data:`LEGEND_TEXT`), and
+the default camera and grid framing the drawing (:func:`frame_view`).
 
 :func:`pkm_pin.view.view` (mechanisms) and :func:`pkm_pin.view_linkage.view_linkage`
 (general linkages) draw with it; its public names are importable from

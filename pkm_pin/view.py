@@ -20,6 +20,20 @@
 * at a type II or III singularity, an animation that moves the platform back and forth
   along :attr:`Analysis.uncontrolled_twist` (the legs follow by re-assembly).
 
+The page explains itself: over its top left corner, a title (the mechanism's name; the
+platform pose, xyz and roll-pitch-yaw in degrees; DOF, motion type and singularity class,
+from the analysis drawn: :attr:`Scene.title_lines`) and a legend with one entry per kind
+of object actually drawn, in the colours it was drawn with (:attr:`Scene.legend`; the
+painter notes each colour as it draws, so the legend cannot disagree with the picture).
+A live viewer's page takes no HTML: it gets the same title and legend as an image card
+that rides on the default camera (:func:`pkm_pin.scene.draw_legend_card`).
+
+The default camera looks at the centre of the bounding box of what is drawn (joints,
+ends of the screw axes and arrows) obliquely from above (:data:`scene.CAMERA_DIRECTION
+<pkm_pin.scene.CAMERA_DIRECTION>`, rather across the plane of a planar mechanism, never
+less than 25° above the ground plane), from the least distance that shows every point
+(:func:`pkm_pin.scene.camera_placement`, kept in :attr:`Scene.camera`).
+
 Nothing needs a server: by default the commands go to a :class:`SceneRecorder`, an
 in-memory stand-in for meshcat's server that keeps the scene tree the way the server
 does, and :meth:`Scene.to_html` writes the page that meshcat's ``static_html()`` would
@@ -42,8 +56,11 @@ mechanism name)::
     pkm/<m>/wrenches/constraint/<k>
 
 meshcat's camera orbits about the viewer's origin, so ``pkm/<m>`` is translated to bring
-the centre of the mechanism there; meshcat's grid and axes get the same translation, so
-they still mark the mechanism's world origin. Sizes are fractions of
+the centre of the drawing there; meshcat's axes get the same translation, so they still
+mark the mechanism's world origin (scaled by :func:`grid_scale`); its grid is scaled to
+the drawing (cells of :func:`pkm_pin.scene.grid_cell`, 1, 2 or 5 × a power of ten, given
+in the legend) and lies in the plane z = 0, or under the drawing when it reaches below
+(:func:`pkm_pin.scene.frame_view`). Sizes are fractions of
 :attr:`Mechanism.characteristic_length`, so a mechanism in millimetres looks the same as
 in metres.
 """
@@ -96,9 +113,10 @@ HOME_COLOUR = 0x000000
 
 #: The scene's names (:mod:`pkm_pin.scene`) are importable from here too.
 __all__ = ["ACTUATED_SCREW_COLOUR", "ACTUATION_WRENCH_COLOUR", "ANIMATION_AMPLITUDE",
-           "ANIMATION_FPS", "ANIMATION_FRAMES", "CONSTRAINT_WRENCH_COLOUR", "LEG_COLOURS",
-           "PASSIVE_SCREW_COLOUR", "PLATFORM_COLOUR", "Scene", "SceneRecorder", "grid_scale",
-           "node_name", "view", "workspace_cloud"]
+           "ANIMATION_FPS", "ANIMATION_FRAMES", "CONSTRAINT_WRENCH_COLOUR", "HOME_COLOUR",
+           "LEG_COLOURS", "PASSIVE_SCREW_COLOUR", "PLATFORM_COLOUR", "WORKSPACE_LEGEND_TEXT",
+           "LegendEntry", "Scene", "SceneRecorder", "grid_scale", "node_name", "view",
+           "workspace_cloud"]
 
 
 def view(
@@ -187,6 +205,9 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     singularity-free, good transmission), one node per kind
     (``pkm/workspace/<kind>``) so each can be hidden in the viewer's controls. Two
     coordinates are drawn in a plane (the third at 0); the point size is the cell size.
+    The page has a title and a legend of the kinds drawn and the home marker
+    (:data:`WORKSPACE_LEGEND_TEXT`; ``recorder.title_lines``, ``recorder.legend``), and
+    the camera and grid of :func:`pkm_pin.scene.frame_view` on the sampled box.
 
     With ``surfaces`` and a 3-D grid, each kind's boundary is drawn too, as a
     translucent triangle mesh of its cells' exposed faces

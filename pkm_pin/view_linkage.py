@@ -22,6 +22,10 @@ scene and page machinery of :mod:`pkm_pin.scene`:
   output (``show_wrenches``), as :func:`pkm_pin.view.view` draws them; for a point
   output only the forces among the constraint wrenches.
 
+Title, legend, camera and grid as :func:`pkm_pin.view.view` has them; the title names
+the output frame (or point) and its pose, the DOF, the idle DOF, the output's motion type
+and the singularity class.
+
 Scene layout (meshcat paths; ``<m>`` is :func:`~pkm_pin.view.node_name` of the name)::
 
     pkm/<m>/links/<joint or frame>       skeleton bars
