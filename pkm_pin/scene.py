@@ -98,8 +98,10 @@ def css_colour(colour: int) -> str:
 
 
 def overlay_html(title_lines, legend) -> str:
-    """The page's overlay: the title lines (the first one bold) and the legend, one
-    swatch per colour of each :class:`LegendEntry`. Empty when there is neither."""
+    """The page's overlay: the title lines (the first one bold) in the top left corner,
+    and the legend, one swatch per colour of each :class:`LegendEntry`, in the bottom
+    left one (the corners of a centred drawing are the emptiest). Empty when there is
+    neither."""
     title_lines, legend = list(title_lines), list(legend)
     if not title_lines and not legend:
         return ""
@@ -381,13 +383,15 @@ function pkmRun(b64) {{
 <style>
 body {{ margin: 0; }}
 #meshcat-pane {{ width: 100vw; height: 100vh; overflow: hidden; }}
-#pkm-overlay {{ position: absolute; top: 8px; left: 8px; max-width: 30em; z-index: 10;
-  font: 13px/1.35 system-ui, -apple-system, "Segoe UI", Helvetica, Arial, sans-serif;
-  color: #222; background: rgba(255, 255, 255, 0.86); border: 1px solid #bbb;
-  border-radius: 6px; padding: 6px 9px; pointer-events: none; }}
-#pkm-overlay .pkm-name {{ font-weight: 600; font-size: 15px; }}
-#pkm-overlay .pkm-line {{ color: #333; }}
-#pkm-legend {{ margin-top: 5px; pointer-events: auto; }}
+#pkm-overlay {{ font: 13px/1.35 system-ui, -apple-system, "Segoe UI", Helvetica, Arial,
+  sans-serif; color: #222; }}
+#pkm-title, #pkm-legend {{ position: absolute; left: 8px; max-width: 30em; z-index: 10;
+  background: rgba(255, 255, 255, 0.86); border: 1px solid #bbb; border-radius: 6px;
+  padding: 5px 9px; }}
+#pkm-title {{ top: 8px; pointer-events: none; }}
+#pkm-legend {{ bottom: 8px; }}
+#pkm-title .pkm-name {{ font-weight: 600; font-size: 15px; }}
+#pkm-title .pkm-line {{ color: #333; }}
 #pkm-legend summary {{ cursor: pointer; color: #555; }}
 #pkm-legend table {{ border-collapse: collapse; }}
 #pkm-legend td {{ padding: 1px 4px 1px 0; vertical-align: top; }}

@@ -257,7 +257,8 @@ def test_grid_cell_is_a_round_fraction_of_the_drawing():
 # ---------------------------------------------------------------------- in Chromium
 def test_chromium_shows_the_legend_and_title(rps3, tmp_path):
     """The page rendered by headless Chromium holds the title and legend in its DOM,
-    and the overlay is drawn: a screenshot has the light overlay box top left."""
+    and the overlay is drawn: a screenshot has the light title box top left and the
+    legend box bottom left, with dark text in them."""
     from PIL import Image
 
     scene = view(rps3)
@@ -273,9 +274,10 @@ def test_chromium_shows_the_legend_and_title(rps3, tmp_path):
     png = tmp_path / "shot.png"
     chromium(f"--screenshot={png}", path.as_uri(), tmp_path=tmp_path)
     image = np.asarray(Image.open(png).convert("RGB")).astype(int)
-    box = image[20:120, 20:200]  # inside the overlay: white-ish with dark text
-    assert np.mean(box.min(axis=2) > 235) > 0.6
-    assert np.sum(box.max(axis=2) < 90) > 50
+    assert image.shape[:2] == (600, 800)
+    for box in (image[14:60, 14:200], image[-100:-14, 14:200]):  # title, legend
+        assert np.mean(box.min(axis=2) > 235) > 0.6, "no light box"
+        assert np.sum(box.max(axis=2) < 90) > 50, "no dark text"
 
 
 def test_live_viewer_gets_the_legend_as_a_card(rps3):
