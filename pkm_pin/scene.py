@@ -209,9 +209,12 @@ def draw_legend_card(vis, title_lines, legend, radius: float) -> None:
 
 
 def _short(x: float) -> str:
-    """A number in three significant digits (``-0`` printed as ``0``)."""
-    text = f"{x:.3g}"
-    return "0" if text == "-0" else text
+    """A number in three significant digits, whole numbers up to 1e6 unabridged
+    (``1000``, not ``1e+03``), ``-0`` printed as ``0``."""
+    if x == 0 or not np.isfinite(x):
+        return "0" if x == 0 else str(x)
+    digits = min(max(3, int(np.floor(np.log10(abs(x)))) + 1), 6)
+    return f"{x:.{digits}g}"
 
 
 def pose_words(M: pin.SE3, length: float, point: bool = False) -> str:

@@ -140,8 +140,9 @@ def test_workspace_cloud_legend_lists_the_kinds_drawn():
 
 # --------------------------------------------------------------------------- title
 def test_title_has_name_pose_dof_motion_type_and_class(rps3):
-    """The title names the mechanism, its pose, DOF, motion type and singularity class;
-    at a type II pose it says so and that the scene is animated."""
+    """The title names the mechanism, its pose (short numbers, in millimetres too), DOF,
+    motion type and singularity class; at a type II pose it says so and that the scene
+    is animated."""
     scene = view(rps3)
     a = scene.analysis
     assert scene.title_lines[0] == rps3.name
@@ -151,6 +152,9 @@ def test_title_has_name_pose_dof_motion_type_and_class(rps3):
     page = scene.to_html()
     assert f"<title>pkm_pin: {html.escape(scene.title)}</title>" in page
     assert all(html.escape(line) in page for line in scene.title_lines)
+
+    mm = view(MECHANISMS["rps3"](scale=1000.0).build())
+    assert "xyz (0, 0, 1000)" in mm.title_lines[1]  # no 1e+03
 
     rpr3 = MECHANISMS["rpr3"]().build()
     singular = view(rpr3, rpr3_type2_pose())
