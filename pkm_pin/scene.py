@@ -601,7 +601,6 @@ def frame_view(vis, root: str, P: np.ndarray, length: float,
         highest corner of the points' bounding box), ``radius`` (of
         :func:`camera_placement`), ``grid_cell``, ``grid_height``.
     """
-    g = _meshcat()[1]
     P = np.asarray(P, dtype=float)
     body = P if shape is None else np.asarray(shape, dtype=float)
     vis["/Background"].set_property("top_color", [0.97, 0.97, 0.97])
@@ -617,12 +616,16 @@ def frame_view(vis, root: str, P: np.ndarray, length: float,
                                @ np.diag([2.0 * cell, 2.0 * cell, 2.0 * cell, 1.0]))
     vis["/Axes"].set_transform(_translation(-centre)
                                @ np.diag([*[grid_scale(length)] * 3, 1.0]))
-    camera = g.PerspectiveCamera(fov=CAMERA_FOV, aspect=1, near=0.01 * radius,
-                                 far=200 * radius)
-    vis["/Cameras/default/rotated"].set_object(camera)
+    # The viewer's own camera, set by its properties: a camera object set in its place
+    # a second time (a second view drawn into a live viewer) makes meshcat's page fail
+    # halfway and leave the camera at the origin, looking at the grid edge-on. The
+    # legend card riding on it (draw_legend_card) is drawn anew.
+    vis[LEGEND_CARD_PATH].delete()
+    camera = vis["/Cameras/default/rotated/<object>"]
+    for key, value in (("fov", CAMERA_FOV), ("near", 0.01 * radius), ("far", 200 * radius)):
+        camera.set_property(key, float(value))
     # the camera node is rotated so that its y axis (three.js "up") is the world z
-    vis["/Cameras/default/rotated/<object>"].set_property(
-        "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
+    camera.set_property("position", [float(offset[0]), float(offset[2]), float(-offset[1])])
     return {"target": centre, "position": centre + offset, "box": (P.min(axis=0), P.max(axis=0)),
             "radius": radius, "grid_cell": cell, "grid_height": height}
 

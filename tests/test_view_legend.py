@@ -308,3 +308,54 @@ def test_live_viewer_gets_the_legend_as_a_card(rps3):
     assert 'id="pkm-legend"' in page
     assert not any(c["path"].startswith(LEGEND_CARD_PATH) for c in page_commands(page))
     assert view(rps3).recorder.node(LEGEND_CARD_PATH) is None  # no live viewer: no card
+
+
+def test_second_view_into_a_live_viewer_keeps_its_camera(rps3, stewart, tmp_path):
+    """Two views drawn one after the other into one live viewer (every command replayed
+    in order, as meshcat's page receives them): the viewer's camera ends where the
+    second view put it, with the second legend card on it; the camera object is never
+    replaced (meshcat's page fails on a second replacement and leaves the camera at
+    the origin, looking at the grid edge-on)."""
+    import base64
+    import json
+
+    import meshcat
+    import umsgpack
+
+    from pkm_pin.scene import _PAGE, LEGEND_CARD_PATH
+
+    class Log:
+        def __init__(self):
+            self.commands = []
+
+        def send(self, command):
+            self.commands.append(umsgpack.packb(command.lower()))
+
+    log = Log()
+    live = meshcat.Visualizer(window=log)
+    view(rps3, visualizer=live)
+    second = view(stewart, visualizer=live)
+    decoded = [umsgpack.unpackb(c) for c in log.commands]
+    assert not any(c["type"] == "set_object" and c["path"].startswith("/Cameras/default/rotated")
+                   and not c["path"].startswith(LEGEND_CARD_PATH) for c in decoded)
+    viewer_js = Path(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
+    calls = "\n".join(f'pkmRun("{base64.b64encode(c).decode("ascii")}");'
+                      for c in log.commands)
+    probe = """<script>setTimeout(function () {
+      var c = viewer.camera, card = null;
+      c.traverse(function (o) { if (o.isMesh) card = o; });
+      var d = document.createElement("pre"); d.id = "probe";
+      d.textContent = JSON.stringify({position: c.position.toArray(), fov: c.fov,
+                                      card: card !== null});
+      document.body.appendChild(d); }, 300);</script></body>"""
+    page = _PAGE.format(title="live", viewer_js=viewer_js.read_text("utf-8"), commands=calls,
+                        overlay="").replace("</body>", probe)
+    path = tmp_path / "live.html"
+    path.write_text(page, encoding="utf-8")
+    run = chromium("--dump-dom", path.as_uri(), tmp_path=tmp_path)
+    found = re.search(r'<pre id="probe">([^<]*)</pre>', run.stdout)
+    assert found, run.stderr[-2000:]
+    state = json.loads(html.unescape(found.group(1)))
+    offset = second.camera["position"] - second.camera["target"]
+    np.testing.assert_allclose(state["position"], [offset[0], offset[2], -offset[1]], rtol=1e-6)
+    assert state["fov"] == CAMERA_FOV and state["card"]
