@@ -41,7 +41,7 @@ CONSTRAINT_WRENCH_COLOUR = 0x984EA3
 #: shows). The order is the legend's; the colours are those the painter drew with
 #: (:meth:`_Painter.note`), so they are never written twice.
 LEGEND_TEXT = {
-    "legs": ("legs", "one colour per leg"),
+    "legs": ("legs", "links and joints, one colour per leg"),
     "ground": ("ground", "bars from the world origin"),
     "links": ("links and joints", "one colour per branch"),
     "actuated_joint": ("actuated joint", "driven by an actuator"),

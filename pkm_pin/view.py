@@ -231,7 +231,7 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     root = vis["pkm"]["workspace"]
     corners = np.zeros((2, 3))
     corners[:, :len(ws.coords)] = ws.bounds.T
-    view = frame_view(vis, "pkm/workspace", corners, span)
+    framing = frame_view(vis, "pkm/workspace", corners, span)
     for i, k in enumerate(kinds):
         pts = P[smallest == i]
         if not len(pts):
@@ -255,7 +255,7 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     recorder.legend = tuple(LegendEntry(k, *WORKSPACE_LEGEND_TEXT[k], (drawn[k],))
                             for k in WORKSPACE_LEGEND_TEXT if k in drawn)
     if visualizer is not None:
-        draw_legend_card(vis, recorder.title_lines, recorder.legend, view["radius"])
+        draw_legend_card(vis, recorder.title_lines, recorder.legend, framing["radius"])
     if html is not None:
         Path(html).write_text(recorder.static_html(title=f"pkm_pin workspace: {ws.mechanism}"),
                               encoding="utf-8")
