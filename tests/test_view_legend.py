@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 from test_view import chromium, page_commands
 
+from pkm_pin import load_mechanism
 from pkm_pin.builders import MECHANISMS, rpr3_type2_pose
-from pkm_pin.mechanism import load_mechanism
 from pkm_pin.scene import (
     ACTUATED_SCREW_COLOUR,
     ACTUATION_WRENCH_COLOUR,
