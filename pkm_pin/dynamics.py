@@ -277,6 +277,77 @@ def _check_motion(model: ClosureModel, q, v, a) -> tuple:
     return q, v, a
 
 
+def motion_from_actuated(model: ClosureModel, q, qd_actuated, qdd_actuated
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """The tree's velocity ``v`` and acceleration ``a`` at the assembled ``q`` for the
+    actuated rates and accelerations [rad/s, m/s; /s²] (model.actuated order):
+    ``[J; S] v = [0; q̇_a]``, ``[J; S] a = [−J̇ v; q̈_a]`` (the second order kinematics of
+    the closures, ``J̇ v`` as in :func:`closure_acceleration`), solved on the
+    dimensionless rows; where idle motions leave ``v`` or ``a`` undetermined, the
+    minimum-norm (dimensionless) solution, whose idle acceleration need not be the one
+    the dynamics gives.
+
+    Raises:
+        SingularityError: at or near a type II singularity (the output can move with
+            every actuator still).
+        InconsistentMotion: actuated rates the closures do not allow (more actuators
+            than degrees of freedom, or a type I singularity).
+    """
+    q = model.check_q(q)
+    n = len(model.actuated)
+    qd = screws.as_vector(qd_actuated, n, "qd_actuated", ", ".join(model.actuated))
+    qdd = screws.as_vector(qdd_actuated, n, "qdd_actuated", ", ".join(model.actuated))
+    work = _work(model)
+    kin = TreeKinematics(model, q, work.data)
+    _check_closed(model, kin.residual)
+    Uv = model.velocity_units
+    ua = Uv[work.act_v]
+    H = np.zeros((work.n_rows + n, model.nv))
+    H[:work.n_rows] = kin.closure_jacobian * Uv
+    H[work.n_rows + np.arange(n), work.act_v] = 1.0
+    rank, Us, sv, Vt = screws.svd_rank(H, RANK_RTOL)
+    _check_free(model, kin, Vt, sv, rank)
+    pinv = Vt[:rank].T @ (np.diag(1.0 / sv[:rank]) @ Us[:, :rank].T)
+
+    def solve(rhs: np.ndarray, what: str) -> np.ndarray:
+        x = pinv @ rhs
+        res = float(np.linalg.norm(H @ x - rhs))
+        if res > MOTION_CONSISTENCY_RTOL * max(float(np.linalg.norm(rhs)), 1e-300):
+            raise InconsistentMotion(
+                f"the actuated {what} of {model.name or 'the model'} are not allowed by "
+                f"its closures (relative residual {res / np.linalg.norm(rhs):.3g}): more "
+                "actuators than degrees of freedom, or a type I singularity",
+                kind=what, residual=H @ x - rhs)
+        return Uv * x
+
+    zeros = np.zeros(work.n_rows)
+    v = solve(np.r_[zeros, qd / ua], "velocity")
+    pin.forwardKinematics(work.tree, work.data, q, v, np.zeros(model.nv))
+    drift = _second_derivative(work, *_end_motions(work, work.data, None))
+    a = solve(np.r_[-drift / work.row_units, qdd / ua], "acceleration")
+    return v, a
+
+
+def _check_free(model: ClosureModel, kin: TreeKinematics, Vt: np.ndarray, sv: np.ndarray,
+                rank: int) -> None:
+    """Raise :class:`SingularityError` when a motion of ``[J; S]``'s (near) null space
+    moves the output."""
+    smax = sv[0] if len(sv) else 0.0
+    p = kin.output_placement.translation
+    for k in range(model.nv):
+        if k < rank and sv[k] >= CLOSENESS_SINGULAR_TOL * smax:
+            continue
+        t = kin.output_jacobian @ (model.velocity_units * Vt[k])
+        if np.linalg.norm(screws.homogenised_about(t, p, model.length)) > \
+                CLOSENESS_SINGULAR_TOL:
+            index = (sv[k] / smax) if k < len(sv) and smax else 0.0
+            raise SingularityError(
+                f"{model.name or 'the model'} is at (or within {CLOSENESS_SINGULAR_TOL:g} "
+                "of) a type II singularity: the output can move with every actuator "
+                "still, its motion is not determined by the actuated rates",
+                kind="type II", index=float(index))
+
+
 # ------------------------------------------------------------- inverse dynamics
 def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=None,
                      tol: float = MOTION_CONSISTENCY_RTOL) -> InverseDynamics:
@@ -324,9 +395,9 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     J = work.row_units[:, None] * Jc
     Ja = J @ a
     drift = rdd - Ja
-    _check_rows(model, "acceleration", rdd / work.row_units,
-                np.abs(JU) @ np.abs(a / Uv) + np.abs(drift / work.row_units), tol,
-                work.row_units, "a")
+    _check_rows(model, "acceleration", rdd / work.row_units,  # gravity/L: its round-off
+                np.abs(JU) @ np.abs(a / Uv) + np.abs(drift / work.row_units)
+                + np.linalg.norm(g) / model.length, tol, work.row_units, "a")
     # balance  [Sᵀ, −(J_c U)ᵀ] x = U (τ_tree − J_oᵀ Δ w)
     na, nr = len(work.act_v), work.n_rows
     A = np.zeros((model.nv, na + nr))
