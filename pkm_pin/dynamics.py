@@ -91,9 +91,11 @@ class InverseDynamics:
         closure_forces: (n_rows,) λ, in the rows of the closures (closure order,
             :meth:`ClosureModel.closure_slices`), physical units (module docstring):
             what each closure applies to its ``frame_a``'s body.
-        redundant_rows: Closure rows that are dependent at ``q`` (``n_rows − rank J``):
-            when > 0, :attr:`closure_forces` is the minimum-norm solution (the rows'
-            forces are not determined by the motion).
+        redundant_rows: Dimension of the family of ``(efforts, closure forces)`` that
+            give the same motion: the closure rows that are dependent at ``q``
+            (``n_rows − rank J``), plus actuators that the closures alone can balance
+            (redundant actuation). When > 0 the minimum-norm solution is returned (on
+            the dimensionless unknowns, module docstring).
         payload_efforts: (n_actuated,) the part of :attr:`efforts` due to ``wrench``
             (zeros without one).
         payload_closure_forces: (n_rows,) the part of :attr:`closure_forces` due to it.
@@ -157,6 +159,11 @@ class _Work:
                                   dtype=int) for k in KINDS}
         self.rows = {k: np.array([np.arange(ends[i], ends[i + 1]) for i in idx], dtype=int
                                  ).reshape(len(idx), KINDS[k]) for k, idx in self.kinds.items()}
+        idx = np.array([i for i, c in enumerate(model.closures)
+                        if c.kind in ("point", "revolute")], dtype=int)
+        self.kinds["point3"] = idx
+        self.rows["point3"] = np.array([np.arange(ends[i], ends[i] + 3) for i in idx],
+                                       dtype=int).reshape(len(idx), 3)
         units = np.ones(self.n_rows)
         L = model.length
         for kind in ("point", "revolute"):
@@ -196,34 +203,35 @@ def _velocity_names(tree: pin.Model) -> list[str]:
 
 
 # ------------------------------------------------------ closure second derivative
-def _second_derivative(work: _Work, Hj: np.ndarray, Vl: np.ndarray, Al: np.ndarray
-                       ) -> np.ndarray:
+def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarray:
     """``J a + J̇ v`` of every closure row (physical units) from the world placements
     ``Hj`` (2C × 4 × 4) of the ends' joints and their local spatial velocities and
-    accelerations ``Vl``, ``Al`` (2C × 6, Pinocchio's linear-first ``(v; ω)``)."""
+    accelerations ``VA`` (2C × 2 × 6, Pinocchio's linear-first ``(v; ω)``)."""
     C, cross = work.C, screws.cross
     out = np.empty(work.n_rows)
     if C == 0:
         return out
-    R, c = Hj[:, :3, :3], work.local[:, :3, 3]
-    v, w, al, dw = Vl[:, :3], Vl[:, 3:], Al[:, :3], Al[:, 3:]
-    vc = v + cross(w, c)                       # velocity of the constraint origin (local)
-    acc = al + cross(dw, c) + cross(w, vc)     # its classical acceleration (local)
+    c = work.local[:, :3, 3]
+    v, w, al, dw = VA[:, 0, :3], VA[:, 0, 3:], VA[:, 1, :3], VA[:, 1, 3:]
+    wc = cross(VA[:, :, 3:], c[:, None])        # ω × c, ω̇ × c
+    vc = v + wc[:, 0]                           # velocity of the constraint origin (local)
+    acc = al + wc[:, 1] + cross(w, vc)          # its classical acceleration (local)
+    # the four vectors in world axes at once: ṗ, p̈, ω, ω̇ (2C × 3 × 4)
+    X = Hj[:, :3, :3] @ np.stack([vc, acc, w, dw], axis=2)
     Hc = Hj @ work.local
     Rc, p = Hc[:, :3, :3], Hc[:, :3, 3]
-    pd, pdd = np.einsum("kij,kj->ki", R, vc), np.einsum("kij,kj->ki", R, acc)
-    W, Wd = np.einsum("kij,kj->ki", R, w), np.einsum("kij,kj->ki", R, dw)
     a_, b_ = slice(0, C), slice(C, 2 * C)
-    wa, wb = W[a_], W[b_]
-    d, dd = p[b_] - p[a_], pd[b_] - pd[a_]
-    Wr, Wrd = wb - wa, Wd[b_] - Wd[a_]
-    U = dd - cross(wa, d)                              # velocity at p_b of the relative motion
-    Ud = pdd[b_] - pdd[a_] - cross(Wd[a_], d) - cross(wa, dd)
+    Xr = X[b_] - X[a_]                          # relative: ḋ, d̈, W, Ẇ (C × 3 × 4)
+    wa, dwa, wb = X[a_, :, 2], X[a_, :, 3], X[b_, :, 2]
+    d, dd, Wr, Wrd = p[b_] - p[a_], Xr[:, :, 0], Xr[:, :, 2], Xr[:, :, 3]
+    k3 = cross(np.stack([wa, dwa, wa]), np.stack([d, d, dd]))
+    U = dd - k3[0]                              # velocity at p_b of the relative motion
+    Ud = Xr[:, :, 1] - k3[1] - k3[2]
     RaT = Rc[a_].transpose(0, 2, 1)
-    for kind in ("point", "revolute"):
-        idx, rows = work.kinds[kind], work.rows[kind]
-        if idx.size:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U)
-            out[rows[:, :3]] = np.einsum("kij,kj->ki", RaT[idx], Ud[idx] - cross(wa[idx], U[idx]))
+    idx, rows = work.kinds["point3"], work.rows["point3"]
+    if idx.size:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U), point and revolute rows
+        y = Ud[idx] - cross(wa[idx], U[idx])
+        out[rows] = (RaT[idx] @ y[:, :, None])[:, :, 0]
     idx, rows = work.kinds["revolute"], work.rows["revolute"]
     if idx.size:  # d/dt R_aᵀ (W × z_b)
         zb = Rc[b_][idx, :, 2]
@@ -240,18 +248,16 @@ def _second_derivative(work: _Work, Hj: np.ndarray, Vl: np.ndarray, Al: np.ndarr
 
 
 def _end_motions(work: _Work, data: pin.Data, gravity: np.ndarray | None) -> tuple:
-    """``(Hj, Vl, Al)`` of the ends' joints from ``data``; ``gravity`` given: ``data``
+    """``(Hj, VA)`` of the ends' joints from ``data``; ``gravity`` given: ``data``
     holds ``rnea``'s ``a_gf`` (the acceleration minus gravity, local) and ``oMi`` from an
     earlier pass at the same ``q``."""
-    js = work.joints
-    Hj = np.array([data.oMi[j].homogeneous for j in js]).reshape(-1, 4, 4)
-    Vl = np.array([data.v[j].vector for j in js]).reshape(-1, 6)
-    if gravity is None:
-        Al = np.array([data.a[j].vector for j in js]).reshape(-1, 6)
-    else:
-        Al = np.array([data.a_gf[j].vector for j in js]).reshape(-1, 6)
-        Al[:, :3] += np.einsum("kji,j->ki", Hj[:, :3, :3], gravity)  # + R_jᵀ g
-    return Hj, Vl, Al
+    js, oMi, V = work.joints, data.oMi, data.v
+    A = data.a if gravity is None else data.a_gf
+    Hj = np.array([oMi[j].homogeneous for j in js]).reshape(-1, 4, 4)
+    VA = np.array([(V[j].vector, A[j].vector) for j in js]).reshape(-1, 2, 6)
+    if gravity is not None:
+        VA[:, 1, :3] += gravity @ Hj[:, :3, :3]  # + R_jᵀ g
+    return Hj, VA
 
 
 def closure_acceleration(model: ClosureModel, q, v, a) -> tuple[np.ndarray, np.ndarray,
@@ -416,10 +422,9 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     if balance > EFFORT_BALANCE_RTOL:
         _unbalanced(model, work, res, balance)
     act_units = Uv[work.act_v]
-    rank_j = screws.svd_rank(JU, RANK_RTOL)[0]
     return InverseDynamics(
         efforts=x[:na] / act_units, actuated=tuple(model.actuated),
-        closure_forces=x[na:] / work.row_units, redundant_rows=nr - rank_j,
+        closure_forces=x[na:] / work.row_units, redundant_rows=na + nr - rank,
         payload_efforts=xw[:na] / act_units, payload_closure_forces=xw[na:] / work.row_units,
         tree_efforts=tau_tree, acceleration_residual=rdd, drift=drift,
         balance_residual=balance,
