@@ -425,3 +425,55 @@ def test_shared_model_untouched_and_row_units():
     dyn.inverse_dynamics(cm, q, np.zeros(cm.nv), np.zeros(cm.nv), gravity=(0, 0, -1.0))
     assert np.array_equal(cm.tree.gravity.vector, before)
     assert np.array_equal(dyn.row_units(cm), np.tile(np.r_[np.ones(3), cm.length * np.ones(3)], 6))
+
+
+def test_detected_mechanism_uses_its_source_model():
+    """A delta detected in its Extended URDF (backend="legs"): Mechanism.inverse_dynamics
+    runs on the file's tree; its payload efforts equal the per-leg engine's
+    actuator_efforts(−w) to 1e-9."""
+    mech = pkm_pin.load_mechanism(ROOT / "models/loops/delta_loops.urdf", backend="legs")
+    assert mech.source_model is not None
+    q = mech.source_configuration()
+    w = np.array([4.0, -3.0, -50.0, 0.2, -0.4, 0.1])
+    zero = np.zeros(mech.source_model.nv)
+    r = mech.inverse_dynamics(q, zero, zero, wrench=w)
+    assert r.actuated == mech.source_model.actuated
+    engine = dict(zip(mech.actuated_names, mech.analyze().actuator_efforts(-w)))
+    expected = np.array([next(x for n, x in engine.items() if n.endswith("/" + a))
+                         for a in r.actuated])
+    assert np.allclose(r.payload_efforts, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+
+
+def test_units_and_placement_invariance():
+    """The five-bar (revolute closure) in millimetres gives the efforts ×1e6 (kg mm²/s²)
+    and the same motion moved in the world, gravity turned with it, the same efforts."""
+    rng = np.random.default_rng(9)
+    W = pin.SE3(pin.rpy.rpyToMatrix(0.3, -0.7, 1.1), np.array([0.4, -1.0, 2.0]))
+    g = np.array(G)
+    cm, q = with_inertias(five_bar("revolute")), five_bar_q([0.7, 1.2])
+    qd, qdd = rng.normal(size=2), rng.normal(size=2)
+    v, a = dyn.motion_from_actuated(cm, q, qd, qdd)
+    ref = dyn.inverse_dynamics(cm, q, v, a, gravity=g)
+    mm = with_inertias(five_bar("revolute", scale=1000.0))
+    r = dyn.inverse_dynamics(mm, q, *dyn.motion_from_actuated(mm, q, qd, qdd), gravity=1000 * g)
+    assert np.allclose(r.efforts, 1e6 * ref.efforts, rtol=1e-9)
+    moved = with_inertias(five_bar("revolute", where=W))
+    r = dyn.inverse_dynamics(moved, q, *dyn.motion_from_actuated(moved, q, qd, qdd),
+                             gravity=W.rotation @ g)
+    assert np.allclose(r.efforts, ref.efforts, rtol=1e-9, atol=1e-12)
+    assert np.allclose(r.closure_forces, ref.closure_forces, rtol=1e-9, atol=1e-9)
+
+
+def test_threads_share_no_working_data():
+    """Eight threads on one model with different gravities give the serial results."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    cm, q = model("stewart")
+    zero = np.zeros(cm.nv)
+    gs = [np.array([0.0, 0.0, -k]) for k in range(1, 9)]
+    serial = [dyn.inverse_dynamics(cm, q, zero, zero, gravity=g).efforts for g in gs]
+    with ThreadPoolExecutor(4) as pool:
+        threaded = list(pool.map(
+            lambda g: dyn.inverse_dynamics(cm, q, zero, zero, gravity=g).efforts, gs))
+    for x, y in zip(serial, threaded):
+        assert np.array_equal(x, y)
