@@ -64,8 +64,11 @@ from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+from numba import njit
+from numba.extending import register_jitable
 
 from . import screws
+from .compiling import prefer_compiled
 from .errors import InconsistentMotion, InputError, SingularityError
 from .model.closure_model import KINDS, ClosureModel, TreeKinematics
 from .tolerances import (
@@ -159,11 +162,9 @@ class _Work:
                                   dtype=int) for k in KINDS}
         self.rows = {k: np.array([np.arange(ends[i], ends[i + 1]) for i in idx], dtype=int
                                  ).reshape(len(idx), KINDS[k]) for k, idx in self.kinds.items()}
-        idx = np.array([i for i, c in enumerate(model.closures)
-                        if c.kind in ("point", "revolute")], dtype=int)
-        self.kinds["point3"] = idx
-        self.rows["point3"] = np.array([np.arange(ends[i], ends[i] + 3) for i in idx],
-                                       dtype=int).reshape(len(idx), 3)
+        codes = {"point": 0, "revolute": 1, "weld": 2}
+        self.kind_codes = np.array([codes[c.kind] for c in model.closures], dtype=np.int64)
+        self.first_rows = np.array(ends[:-1], dtype=np.int64)
         units = np.ones(self.n_rows)
         L = model.length
         for kind in ("point", "revolute"):
@@ -206,45 +207,97 @@ def _velocity_names(tree: pin.Model) -> list[str]:
 def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarray:
     """``J a + J̇ v`` of every closure row (physical units) from the world placements
     ``Hj`` (2C × 4 × 4) of the ends' joints and their local spatial velocities and
-    accelerations ``VA`` (2C × 2 × 6, Pinocchio's linear-first ``(v; ω)``)."""
-    C, cross = work.C, screws.cross
+    accelerations ``VA`` (2C × 2 × 6, Pinocchio's linear-first ``(v; ω)``): the
+    compiled :func:`closure_second_derivative` (its plain-Python source for the first
+    calls of a process, :func:`pkm_pin.compiling.prefer_compiled`), then ``Jlog6`` for
+    the welds."""
     out = np.empty(work.n_rows)
-    if C == 0:
+    if work.C == 0:
         return out
-    c = work.local[:, :3, 3]
-    v, w, al, dw = VA[:, 0, :3], VA[:, 0, 3:], VA[:, 1, :3], VA[:, 1, 3:]
-    wc = cross(VA[:, :, 3:], c[:, None])        # ω × c, ω̇ × c
-    vc = v + wc[:, 0]                           # velocity of the constraint origin (local)
-    acc = al + wc[:, 1] + cross(w, vc)          # its classical acceleration (local)
-    # the four vectors in world axes at once: ṗ, p̈, ω, ω̇ (2C × 3 × 4)
-    X = Hj[:, :3, :3] @ np.stack([vc, acc, w, dw], axis=2)
-    Hc = Hj @ work.local
-    Rc, p = Hc[:, :3, :3], Hc[:, :3, 3]
-    a_, b_ = slice(0, C), slice(C, 2 * C)
-    Xr = X[b_] - X[a_]                          # relative: ḋ, d̈, W, Ẇ (C × 3 × 4)
-    wa, dwa, wb = X[a_, :, 2], X[a_, :, 3], X[b_, :, 2]
-    d, dd, Wr, Wrd = p[b_] - p[a_], Xr[:, :, 0], Xr[:, :, 2], Xr[:, :, 3]
-    k3 = cross(np.stack([wa, dwa, wa]), np.stack([d, d, dd]))
-    U = dd - k3[0]                              # velocity at p_b of the relative motion
-    Ud = Xr[:, :, 1] - k3[1] - k3[2]
-    RaT = Rc[a_].transpose(0, 2, 1)
-    idx, rows = work.kinds["point3"], work.rows["point3"]
-    if idx.size:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U), point and revolute rows
-        y = Ud[idx] - cross(wa[idx], U[idx])
-        out[rows] = (RaT[idx] @ y[:, :, None])[:, :, 0]
-    idx, rows = work.kinds["revolute"], work.rows["revolute"]
-    if idx.size:  # d/dt R_aᵀ (W × z_b)
-        zb = Rc[b_][idx, :, 2]
-        x = cross(Wrd[idx], zb) + cross(Wr[idx], cross(wb[idx], zb)) \
-            - cross(wa[idx], cross(Wr[idx], zb))
-        out[rows[:, 3:]] = np.einsum("kij,kj->ki", RaT[idx], x)[:, :2]
+    nud, Mh = np.zeros((work.C, 6)), np.zeros((work.C, 3, 4))
+    kernel = closure_second_derivative
+    if not prefer_compiled(kernel):
+        kernel = kernel.py_func
+    kernel(np.ascontiguousarray(Hj), np.ascontiguousarray(VA), work.local, work.kind_codes,
+           work.first_rows, out, nud, Mh)
     idx, rows = work.kinds["weld"], work.rows["weld"]
-    for k, i in enumerate(idx):  # Jlog6(M) ν̇, ν = (R_bᵀ W; R_bᵀ U)
-        RbT = Rc[C + i].T
-        nud = np.r_[RbT @ (Wrd[i] - cross(wb[i], Wr[i])), RbT @ (Ud[i] - cross(wb[i], U[i]))]
-        M = pin.SE3(RaT[i] @ Rc[C + i], RaT[i] @ d[i])
-        out[rows[k]] = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(nud))
+    for k, i in enumerate(idx):  # Jlog6(M) ν̇
+        M = pin.SE3(Mh[i, :, :3], Mh[i, :, 3])
+        out[rows[k]] = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(nud[i]))
     return out
+
+
+@register_jitable
+def _cross(a, b):
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
+@register_jitable
+def _end(Hj, VA, local, e):
+    """World quantities of closure end ``e``: its constraint origin ``p``, velocity,
+    classical acceleration, the body's angular velocity and acceleration, and the
+    constraint frame's rotation."""
+    c = local[e, :3, 3]
+    w, dw = VA[e, 0, 3:], VA[e, 1, 3:]
+    vc = VA[e, 0, :3] + _cross(w, c)              # local velocity of the origin
+    acc = VA[e, 1, :3] + _cross(dw, c) + _cross(w, vc)  # its classical acceleration
+    p, pd, pdd = np.zeros(3), np.zeros(3), np.zeros(3)
+    W, Wd, Rc = np.zeros(3), np.zeros(3), np.zeros((3, 3))
+    for r in range(3):
+        p[r] = Hj[e, r, 3]
+        for k in range(3):
+            R = Hj[e, r, k]
+            p[r] += R * c[k]
+            pd[r] += R * vc[k]
+            pdd[r] += R * acc[k]
+            W[r] += R * w[k]
+            Wd[r] += R * dw[k]
+            Rc[r, k] = Hj[e, r, 0] * local[e, 0, k] + Hj[e, r, 1] * local[e, 1, k] \
+                + Hj[e, r, 2] * local[e, 2, k]
+    return p, pd, pdd, W, Wd, Rc
+
+
+@register_jitable
+def _transposed(R, x, r):
+    """``(Rᵀ x)[r]``."""
+    return R[0, r] * x[0] + R[1, r] * x[1] + R[2, r] * x[2]
+
+
+@njit(cache=True, nogil=True)
+def closure_second_derivative(Hj, VA, local, kind, first, out, nud, Mh):
+    """The closures' second derivative (module docstring): for closure ``i`` (ends
+    ``i`` and ``C + i`` of ``Hj``, ``VA``, ``local``; ``kind[i]`` 0 point, 1 revolute,
+    2 weld; rows from ``first[i]``), point and revolute rows into ``out``; for a weld
+    ``ν̇`` (axis-first, ``C_b`` axes) into ``nud[i]`` and ``M = C_a⁻¹ C_b`` (3 × 4)
+    into ``Mh[i]``, for the caller's ``Jlog6``."""
+    C = kind.shape[0]
+    for i in range(C):
+        pa, pda, pdda, wa, dwa, Ra = _end(Hj, VA, local, i)
+        pb, pdb, pddb, wb, dwb, Rb = _end(Hj, VA, local, C + i)
+        d, dd, Wr, Wrd = pb - pa, pdb - pda, wb - wa, dwb - dwa
+        U = dd - _cross(wa, d)                    # velocity at p_b, relative motion
+        Ud = pddb - pdda - _cross(dwa, d) - _cross(wa, dd)
+        r0 = first[i]
+        if kind[i] < 2:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U)
+            y = Ud - _cross(wa, U)
+            for r in range(3):
+                out[r0 + r] = _transposed(Ra, y, r)
+            if kind[i] == 1:  # d/dt R_aᵀ (W × z_b)
+                zb = np.array([Rb[0, 2], Rb[1, 2], Rb[2, 2]])
+                x = _cross(Wrd, zb) + _cross(Wr, _cross(wb, zb)) \
+                    - _cross(wa, _cross(Wr, zb))
+                out[r0 + 3] = _transposed(Ra, x, 0)
+                out[r0 + 4] = _transposed(Ra, x, 1)
+        else:  # ν = (R_bᵀ W; R_bᵀ U): ν̇ = (R_bᵀ (Ẇ − ω_b × W); R_bᵀ (U̇ − ω_b × U))
+            x1, x2 = Wrd - _cross(wb, Wr), Ud - _cross(wb, U)
+            for r in range(3):
+                nud[i, r] = _transposed(Rb, x1, r)
+                nud[i, 3 + r] = _transposed(Rb, x2, r)
+                Mh[i, r, 3] = _transposed(Ra, d, r)
+                for k in range(3):
+                    Mh[i, r, k] = Ra[0, r] * Rb[0, k] + Ra[1, r] * Rb[1, k] \
+                        + Ra[2, r] * Rb[2, k]
 
 
 def _end_motions(work: _Work, data: pin.Data, gravity: np.ndarray | None) -> tuple:
@@ -394,7 +447,7 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     Uv = model.velocity_units
     JU = Jc * Uv  # dimensionless
     _check_rows(model, "velocity", JU @ (v / Uv), np.abs(JU) @ np.abs(v / Uv), tol,
-                work.row_units / 1.0, "v")
+                work.row_units, "v")
     work.set_gravity(g)
     tau_tree = pin.rnea(work.tree, data, q, v, a).copy()
     rdd = _second_derivative(work, *_end_motions(work, data, g))
@@ -468,6 +521,8 @@ def _check_singular(model: ClosureModel, work: _Work, kin: TreeKinematics,
     closures satisfied (a left singular vector of the balance matrix with a singular
     value zero or below CLOSENESS_SINGULAR_TOL × the largest) moves the output."""
     nv = model.nv
+    if rank == nv and sv[-1] >= CLOSENESS_SINGULAR_TOL * sv[0]:
+        return
     full = np.zeros(nv)
     full[:len(sv)] = sv
     smax = sv[0] if len(sv) else 0.0

@@ -477,3 +477,22 @@ def test_threads_share_no_working_data():
             lambda g: dyn.inverse_dynamics(cm, q, zero, zero, gravity=g).efforts, gs))
     for x, y in zip(serial, threaded):
         assert np.array_equal(x, y)
+
+
+def test_compiled_second_derivative_equals_its_source():
+    """The compiled closures' second derivative and its plain-Python source give the same
+    rows (point, revolute and weld closures)."""
+    for name in ("cassie_knee", "five_bar_revolute", "stewart"):
+        cm, q = model(name)
+        rng = np.random.default_rng(10)
+        v = random_velocity(cm, q, rng)
+        work = dyn._work(cm)
+        pin.forwardKinematics(work.tree, work.data, q, v, rng.normal(size=cm.nv))
+        Hj, VA = dyn._end_motions(work, work.data, None)
+        outs = []
+        for kernel in (dyn.closure_second_derivative, dyn.closure_second_derivative.py_func):
+            out, nud, Mh = np.zeros(cm.n_rows), np.zeros((work.C, 6)), np.zeros((work.C, 3, 4))
+            kernel(Hj, VA, work.local, work.kind_codes, work.first_rows, out, nud, Mh)
+            outs.append(np.r_[out[work.kind_codes.repeat([c.dim for c in cm.closures]) < 2],
+                              nud.ravel(), Mh.ravel()])
+        assert np.allclose(outs[0], outs[1], rtol=1e-13, atol=1e-13), name
