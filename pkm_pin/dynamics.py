@@ -25,8 +25,9 @@ Equations (``v, a`` the tree's velocity and acceleration in Pinocchio's tangent 
   kind, λ is conjugate to its physical rows: a point closure's three rows are the force
   [N] in ``C_a`` axes at ``C_b``'s origin; a weld's six rows ``(moment [N m]; force [N])``
   in ``C_b`` axes at its origin (``Jlog6 = I`` at a closed weld); a revolute's point rows
-  as a point's, its two axis rows [N m] the moment ``R_a(−λ_y, λ_x, 0)``-like couple that
-  keeps the axes aligned (conjugate to the rates of the axis rows).
+  as a point's, its two axis rows ``(λ_x, λ_y)`` [N m] the couple ``z_b × (λ_x, λ_y, 0)``
+  = ``(−λ_y, λ_x, 0)`` in ``C_a`` axes (at a closed revolute) that keeps the axes
+  aligned.
 * ``(τ, λ)`` by least squares on the dimensionless system ``[Sᵀ, −(J_c U)ᵀ] (Uₐτ; s λ) =
   U (τ_tree − J_oᵀΔw)`` (``U`` :attr:`ClosureModel.velocity_units`, ``s``
   :func:`row_units`, ``J_c`` the dimensionless closure Jacobian): every unknown and
