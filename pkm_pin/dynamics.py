@@ -402,9 +402,10 @@ def _check_free(model: ClosureModel, kin: TreeKinematics, Vt: np.ndarray, sv: np
                 CLOSENESS_SINGULAR_TOL:
             index = (sv[k] / smax) if k < len(sv) and smax else 0.0
             raise SingularityError(
-                f"{model.name or 'the model'} is at (or within {CLOSENESS_SINGULAR_TOL:g} "
-                "of) a type II singularity: the output can move with every actuator "
-                "still, its motion is not determined by the actuated rates",
+                f"{model.name or 'the model'}: with every actuator still the output can "
+                f"move: a type II singularity (at or within {CLOSENESS_SINGULAR_TOL:g}), "
+                f"or fewer independent actuators ({len(model.actuated)}) than the output's "
+                "degrees of freedom; its motion is not determined by the actuated rates",
                 kind="type II", index=float(index))
 
 
@@ -538,10 +539,12 @@ def _check_singular(model: ClosureModel, work: _Work, kin: TreeKinematics,
         if moved > CLOSENESS_SINGULAR_TOL:
             index = full[k] / smax if smax else 0.0
             raise SingularityError(
-                f"{model.name or 'the model'} is at (or within {CLOSENESS_SINGULAR_TOL:g} "
-                f"of) a type II singularity: with every actuator still the output can "
-                f"move (singular value ratio {index:.3g} of the balance matrix), the "
-                "actuator efforts are unbounded", kind="type II", index=float(index))
+                f"{model.name or 'the model'}: with every actuator still the output can "
+                f"move (singular value ratio {index:.3g} of the balance matrix): a type II "
+                f"singularity (at or within {CLOSENESS_SINGULAR_TOL:g}), or fewer "
+                f"independent actuators ({len(model.actuated)}) than the output's degrees "
+                "of freedom; the actuator efforts are unbounded",
+                kind="type II", index=float(index))
 
 
 def _unbalanced(model: ClosureModel, work: _Work, res: np.ndarray, balance: float) -> None:

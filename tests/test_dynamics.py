@@ -20,6 +20,11 @@ efforts over 5 draws (measured)::
     five_bar.xml 7.5e-16   four_bar.xml 6.4e-16     agile_eye 1.6e-15
     orthoglide 9.4e-15     orthoglide_quasi 3.4e-15 prs3 6.6e-15
     rpr3 5.2e-15           rps3 1.7e-15             rrr3 1.9e-15    upu3 2.1e-15
+    Gepetto corpus (one draw): 5bar_linkage_iso3d 7.4e-16, iso6d 1.7e-15, robot_delta
+    3.3e-13, cassie_like 5.5e-14, digit_like 4.9e-15, talos_like 7.1e-15, battobot_6d
+    4.8e-14, digit_like_2legs 8.4e-15, _6D 1.4e-13, _old 8.5e-15, old/digit_like_2legs
+    5.3e-14 (disney_like is singular at home, closed_chain.xml has no actuator: both
+    SingularityError)
 
 Pinocchio has no 5D closure: the revolute five-bar's round trip uses the KKT system of
 our own rows (:func:`kkt_acceleration`), whose drift is checked by finite differences;
@@ -89,6 +94,11 @@ MODELS = {
     "five_bar_mjcf": lambda: _loaded("models/loops/five_bar.xml"),
     "four_bar_mjcf": lambda: _loaded("models/loops/four_bar.xml"),
 }
+#: The Gepetto corpus (tests/data/gepetto, their own inertias; some bodies massless) that
+#: assembles and is regular at home.
+CORPUS = ("5bar_linkage_iso3d", "5bar_linkage_iso6d", "robot_delta", "cassie_like",
+          "digit_like", "talos_like", "battobot_6d", "digit_like_2legs",
+          "digit_like_2legs_6D", "digit_like_2legs_old", "old/digit_like_2legs")
 #: The other shipped TOML mechanisms (legs welded to a free-flyer platform).
 OTHER_TOML = ("agile_eye", "orthoglide", "orthoglide_quasi", "prs3", "rpr3", "rps3", "rrr3",
               "upu3")
@@ -101,6 +111,8 @@ def model(name: str):
         return with_inertias(five_bar("revolute")), five_bar_q([0.7, 1.2])
     if name in OTHER_TOML:
         return _toml(name)
+    if name in CORPUS:
+        return _loaded(f"tests/data/gepetto/{name}/robot.urdf", False)
     return MODELS[name]()
 
 
@@ -174,7 +186,7 @@ def full_efforts(cm, tau_a) -> np.ndarray:
     return tau
 
 
-@pytest.mark.parametrize("name", sorted(MODELS) + list(OTHER_TOML))
+@pytest.mark.parametrize("name", sorted(MODELS) + list(OTHER_TOML) + list(CORPUS))
 def test_round_trip_with_pinocchio_constraint_dynamics(name):
     """Efforts → pin.constraintDynamics accelerations → inverse_dynamics gives the efforts
     back to 1e-8 relative, with J a + J̇ v ≈ 0."""
@@ -426,6 +438,17 @@ def test_type_two_singularity_raises():
         dyn.inverse_dynamics(cm, q, zero, zero, gravity=G)
     with pytest.raises(SingularityError, match="type II"):
         dyn.motion_from_actuated(cm, q, np.ones(2), np.zeros(2))
+
+
+@pytest.mark.parametrize("path", ["gepetto/disney_like/robot.urdf", "pinocchio/closed_chain.xml"])
+def test_output_moving_without_actuators_raises(path):
+    """Gepetto's disney_like at home (an idle motion moves the foot, as the corpus reads it)
+    and Pinocchio's closed_chain.xml (no actuator): SingularityError."""
+    link = pkm_pin.load_mechanism(ROOT / "tests" / "data" / path)
+    q = link.home_assembly.q
+    zero = np.zeros(link.model.nv)
+    with pytest.raises(SingularityError, match="every actuator still"):
+        link.inverse_dynamics(q, zero, zero)
 
 
 def test_shared_model_untouched_and_row_units():
