@@ -933,7 +933,8 @@ def _tree_step(model, q, e, H, free, r, lo, up):
 
 
 def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, *,
-               pose_rows=None, tol: float = CLOSURE_TOL, max_iter: int = 100) -> TreeSolution:
+               pose_rows=None, tol: float = CLOSURE_TOL, max_iter: int = 100,
+               compiled: bool | None = None) -> TreeSolution:
     """Damped Newton (Levenberg–Marquardt) on a closure model's residual from ``q0``.
 
     Unknowns: the velocity coordinates selected by the boolean mask ``free`` (nv,;
@@ -945,8 +946,20 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
     frame's :func:`pose_error_rows`, multiplied by ``pose_rows`` (k × 6, default the
     identity: the components of the pose that are targeted). Damping :func:`lm_damping`
     of ``r = max(closure, actuated, pose)``; stops on :func:`stop_rule` (``r ≤ tol``,
-    ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled)."""
+    ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled).
+
+    Drivers: without ``pose``, a tree whose joints :mod:`pkm_pin.tree_kernel` represents
+    is solved by its compiled loop (the same steps, the rows evaluated in compiled code)
+    when ``compiled`` is true or, by default, when that code is ready
+    (:func:`pkm_pin.compiling.prefer_compiled`: a one-off call on a fresh installation
+    does not wait for a compilation); otherwise one Pinocchio pass a step."""
     q = model.check_q(q0).copy()
+    if pose is None and compiled is not False:
+        from . import tree_kernel as tk
+
+        kern = tk.tree_kernel(model) if tk.ENABLED or compiled else None
+        if kern is not None and (compiled or prefer_compiled(tk.solve_tree_kernel)):
+            return _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter)
     free = None if free is None else np.asarray(free, bool)
     if free is not None and free.all():
         free = None
@@ -971,6 +984,30 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
             break
     return TreeSolution(q, r, *ev.parts, it, bool(r <= tol), ev.norms if at_q else None,
                         ev.output_placement if at_q else None)
+
+
+_NO_TARGETS = np.zeros(0)
+
+
+def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolution:
+    """:func:`solve_tree` by :func:`pkm_pin.tree_kernel.solve_tree_kernel` (``q``: a
+    checked copy of the start, solved in place)."""
+    if free is None:
+        free = kern.all_free
+    else:
+        free = np.ascontiguousarray(free, dtype=np.bool_)
+        if free.shape != (kern.nv,):
+            raise ValueError(f"free must have one entry per velocity coordinate ({kern.nv})")
+    has = targets is not None
+    t = np.ascontiguousarray(targets, dtype=np.float64) if has else _NO_TARGETS
+    if has and t.shape != kern.act_q.shape:
+        raise ValueError(f"targets must have one value per actuated joint ({len(kern.act_q)})")
+    norms, oMo, info = np.empty(kern.ckind.shape[0]), np.empty((4, 4)), np.empty(6)
+    tk.SOLVE(kern, q, free, has, t, float(tol), int(max_iter), norms, oMo, info)
+    at_q = info[5] == 1.0
+    return TreeSolution(q, float(info[0]), float(info[1]), float(info[2]), 0.0, int(info[3]),
+                        bool(info[4] == 1.0), norms if at_q else None,
+                        pin.SE3(oMo) if at_q else None)
 
 
 def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:

@@ -1,0 +1,674 @@
+"""Compiled kinematics and closure solver of a general closure model's tree (issue 24).
+
+The tree solver :func:`pkm_pin.solve.solve_tree` costs one Pinocchio pass and ~0.1 ms of
+Python (small numpy arrays, binding calls) per Newton step. For trees whose joints it
+can represent, this module evaluates the same rows in numba-compiled code and runs the
+same damped Newton (Levenberg–Marquardt) loop there, every constant read from the
+tree's Pinocchio model (joint placements, joint motions measured through Pinocchio's own
+forward kinematics, the closures' frames and placements, limits, velocity units). It is
+an accelerator, not a second source of truth: tests compare its residual and Jacobian
+with :meth:`ClosureModel.closure_residual` / :meth:`~ClosureModel.closure_jacobian` to
+round-off, and its solutions with the Pinocchio driver's.
+
+What it represents (:func:`tree_kernel`; otherwise ``None`` and the Pinocchio driver):
+revolute and prismatic joints about any axis (nq = nv = 1), unbounded revolutes
+(nq = 2, nv = 1: cos, sin), spherical joints (quaternion, body angular velocity) and
+free flyers (position and quaternion, body velocity ``(v; ω)``), as Pinocchio does; no
+mimic joints.
+
+Residual rows, exactly :mod:`pkm_pin.model.closure_model`'s (``C_a``, ``C_b`` the two
+constraint frames, ``L`` the characteristic length): point ``R_aᵀ (p_b − p_a) / L``;
+revolute the point rows and the x, y of ``R_aᵀ z_b``; weld ``log6(C_a⁻¹ C_b)`` axis-first
+``(θ; ρ / L)`` with its Jacobian through ``Jlog6`` (Pinocchio's formulas, below).
+Columns: per velocity coordinate, from the axis-first world twists ``(ω; v_O)`` of the
+joints supporting each frame. Actuated rows ``(q_a − target_a) / s_a``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+import pinocchio as pin
+from numba import njit
+from numba.extending import register_jitable
+
+from . import screws
+from .compiling import SameTypes
+from .kernels import log3
+from .solve import TREE_MAX_STEP, ldl, ldl_solve, lm_damping, stop_rule
+from .tolerances import NEWTON_STALL_RTOL
+
+#: Joint kinds of the compiled tree.
+REVOLUTE, PRISMATIC, UNBOUNDED, SPHERICAL, FREE_FLYER = 0, 1, 2, 3, 4
+#: Closure kinds of the compiled tree.
+POINT, REVOLUTE_CLOSURE, WELD = 0, 1, 2
+_CLOSURE_KINDS = {"point": POINT, "revolute": REVOLUTE_CLOSURE, "weld": WELD}
+
+#: Whether :func:`pkm_pin.solve.solve_tree` may use this module (False: the Pinocchio
+#: driver everywhere, for comparisons and diagnosis).
+ENABLED = True
+
+
+class TreeKernel(NamedTuple):
+    """A closure model's tree and closures as the compiled functions take them.
+
+    Joint ``j`` (1 … nj; index 0 the universe) is placed in its parent's frame by
+    ``place[j]`` then moved by its motion: a rotation about ``axis[j]`` by ``rate[j]``
+    times the coordinate (revolute; unbounded: the angle of ``(cos, sin)``), a
+    translation ``rate[j] · q · axis[j]`` (prismatic), the quaternion's rotation
+    (spherical) or the free flyer's placement. Frames: the closures' ``frame_a`` (C),
+    their ``frame_b`` (C), then the output frame: parent joint ``fjoint`` and constant
+    ``fplace`` (the frame's placement times the closure's constraint placement).
+    """
+
+    parent: np.ndarray  # (nj + 1,) parent joint
+    place: np.ndarray  # (nj + 1, 4, 4)
+    kind: np.ndarray  # (nj + 1,)
+    axis: np.ndarray  # (nj + 1, 3)
+    rate: np.ndarray  # (nj + 1,)
+    iq: np.ndarray  # (nj + 1,)
+    iv: np.ndarray  # (nj + 1,)
+    fjoint: np.ndarray  # (2C + 1,)
+    fplace: np.ndarray  # (2C + 1, 4, 4)
+    ckind: np.ndarray  # (C,)
+    rows: np.ndarray  # (C + 1,) first row of each closure
+    lower: np.ndarray  # (nq,)
+    upper: np.ndarray  # (nq,)
+    units: np.ndarray  # (nv,)
+    act_q: np.ndarray  # (na,)
+    act_v: np.ndarray  # (na,)
+    act_two: np.ndarray  # (na,) 1 where the actuated joint is (cos, sin)
+    act_scales: np.ndarray  # (na,)
+    all_free: np.ndarray  # (nv,) True: the mask of every velocity coordinate
+    length: float
+    nq: int
+    nv: int
+
+
+_SUPPORTED = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned",
+              "JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned",
+              "JointModelRUBX", "JointModelRUBY", "JointModelRUBZ",
+              "JointModelRevoluteUnboundedUnaligned", "JointModelSpherical",
+              "JointModelFreeFlyer"}
+
+
+def tree_kernel(model) -> TreeKernel | None:
+    """The compiled description of ``model`` (a :class:`~pkm_pin.model.ClosureModel`),
+    made once per model (kept on it), or ``None`` when a joint is not one of the module
+    docstring's."""
+    cached = model.__dict__.get("_tree_kernel", False)
+    if cached is False:
+        cached = _build(model)
+        object.__setattr__(model, "_tree_kernel", cached)
+    return cached
+
+
+def _one_dof_motion(tree: pin.Model, j: int, data: pin.Data):
+    """``(kind, axis, rate)`` of a 1-DOF joint measured through Pinocchio's forward
+    kinematics (as :func:`pkm_pin.kernels.chain_kernel`), or ``None``."""
+    jm = tree.joints[j]
+    probe = 0.1
+    q = pin.neutral(tree)
+    pin.forwardKinematics(tree, data, q)
+    M0 = tree.jointPlacements[j].actInv(data.liMi[j])
+    if jm.nq == 1:
+        q[jm.idx_q] = probe
+    else:
+        q[jm.idx_q], q[jm.idx_q + 1] = math.cos(probe), math.sin(probe)
+    pin.forwardKinematics(tree, data, q)
+    M1 = tree.jointPlacements[j].actInv(data.liMi[j])
+    if not np.allclose(M0.homogeneous, np.eye(4), rtol=0.0, atol=1e-12):
+        return None
+    S = screws.from_pinocchio(pin.log6(M1).vector) / probe
+    w, v = S[:3], S[3:]
+    nw, nvv = np.linalg.norm(w), np.linalg.norm(v)
+    if nw > 1e-12 and nvv <= 1e-12 * max(1.0, nw):
+        kind, axis, rate = (REVOLUTE if jm.nq == 1 else UNBOUNDED), w / nw, nw
+    elif nw <= 1e-12 and nvv > 0 and jm.nq == 1:
+        kind, axis, rate = PRISMATIC, v / nvv, nvv
+    else:
+        return None
+    a = int(np.argmax(np.abs(axis)))
+    if np.all(np.abs(np.delete(axis, a)) <= 1e-15):  # along ±e_a: e_a exactly
+        sign = 1.0 if axis[a] > 0 else -1.0
+        axis = np.zeros(3)
+        axis[a] = 1.0
+        rate *= sign
+    if abs(abs(rate) - 1.0) <= 1e-12:  # Pinocchio's joints: a unit rate
+        rate = math.copysign(1.0, rate)
+    return kind, axis, rate
+
+
+def _build(model) -> TreeKernel | None:
+    tree = model.tree
+    nj = tree.njoints
+    parent = np.zeros(nj, np.int64)
+    place = np.tile(np.eye(4), (nj, 1, 1))
+    kind = np.zeros(nj, np.int64)
+    axis = np.zeros((nj, 3))
+    rate = np.ones(nj)
+    iq = np.zeros(nj, np.int64)
+    iv = np.zeros(nj, np.int64)
+    data = tree.createData()
+    for j in range(1, nj):
+        jm = tree.joints[j]
+        name = jm.shortname()
+        if name not in _SUPPORTED:
+            return None
+        parent[j] = tree.parents[j]
+        place[j] = tree.jointPlacements[j].homogeneous
+        iq[j], iv[j] = jm.idx_q, jm.idx_v
+        if name == "JointModelSpherical":
+            kind[j] = SPHERICAL
+        elif name == "JointModelFreeFlyer":
+            kind[j] = FREE_FLYER
+        else:
+            motion = _one_dof_motion(tree, j, data)
+            if motion is None:
+                return None
+            kind[j], axis[j], rate[j] = motion
+    closures = model.closures
+    C = len(closures)
+    ids = model._frame_ids
+    names = [c.frame_a for c in closures] + [c.frame_b for c in closures] + [model.output]
+    extra = [c.placement_a for c in closures] + [c.placement_b for c in closures] \
+        + [pin.SE3.Identity()]
+    fjoint = np.array([tree.frames[ids[n]].parentJoint for n in names], np.int64)
+    fplace = np.array([(tree.frames[ids[n]].placement * P).homogeneous
+                       for n, P in zip(names, extra)]).reshape(2 * C + 1, 4, 4)
+    ckind = np.array([_CLOSURE_KINDS[c.kind] for c in closures], np.int64)
+    rows = np.cumsum([0] + [c.dim for c in closures]).astype(np.int64)
+    plan = model._plan
+    lo, up = plan.limits
+    joints = [tree.joints[tree.getJointId(a)] for a in model.actuated]
+    act_two = np.array([1 if jm.nq == 2 else 0 for jm in joints], np.int64)
+    if not plan.act_ok:
+        return None
+    return TreeKernel(parent, place, kind, axis, rate, iq, iv, fjoint, fplace, ckind, rows,
+                      np.array(lo), np.array(up), np.array(model.velocity_units, dtype=float),
+                      np.array(plan.act_q, np.int64), np.array(plan.act_v, np.int64), act_two,
+                      np.array(plan.act_scales, dtype=float), np.ones(tree.nv, np.bool_),
+                      float(model.length),
+                      int(tree.nq), int(tree.nv))
+
+
+# ======================================================== compiled kinematics
+@register_jitable
+def _quat_matrix(x, y, z, w, out):
+    """Eigen's rotation matrix of the quaternion ``(x, y, z, w)`` into ``out[:3, :3]``."""
+    tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
+    twx, twy, twz = tx * w, ty * w, tz * w
+    txx, txy, txz = tx * x, ty * x, tz * x
+    tyy, tyz, tzz = ty * y, tz * y, tz * z
+    out[0, 0], out[0, 1], out[0, 2] = 1.0 - (tyy + tzz), txy - twz, txz + twy
+    out[1, 0], out[1, 1], out[1, 2] = txy + twz, 1.0 - (txx + tzz), tyz - twx
+    out[2, 0], out[2, 1], out[2, 2] = txz - twy, tyz + twx, 1.0 - (txx + tyy)
+
+
+@register_jitable
+def _rotation(a, c, s, out):
+    """Rotation about the unit axis ``a`` of cosine ``c`` and sine ``s`` (Rodrigues)."""
+    ax, ay, az = a[0], a[1], a[2]
+    d = 1.0 - c
+    out[0, 0], out[0, 1], out[0, 2] = c + d * ax * ax, d * ax * ay - s * az, d * ax * az + s * ay
+    out[1, 0], out[1, 1], out[1, 2] = d * ay * ax + s * az, c + d * ay * ay, d * ay * az - s * ax
+    out[2, 0], out[2, 1], out[2, 2] = d * az * ax - s * ay, d * az * ay + s * ax, c + d * az * az
+
+
+@register_jitable
+def _mul(A, B, out):
+    """``out = A B`` for 4 × 4 rigid transforms (``out`` distinct from both)."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
+        out[i, 3] = A[i, 0] * B[0, 3] + A[i, 1] * B[1, 3] + A[i, 2] * B[2, 3] + A[i, 3]
+    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+@register_jitable
+def tree_placements(k, q, oMi, M):
+    """World placement ``oMi[j]`` (4 × 4) of every joint at ``q`` (``M``: a 4 × 4 work
+    array)."""
+    for a in range(4):
+        for b in range(4):
+            oMi[0, a, b] = 1.0 if a == b else 0.0
+    for j in range(1, k.parent.shape[0]):
+        kj, i = k.kind[j], k.iq[j]
+        for a in range(4):
+            for b in range(4):
+                M[a, b] = 1.0 if a == b else 0.0
+        if kj == REVOLUTE:
+            t = k.rate[j] * q[i]
+            _rotation(k.axis[j], math.cos(t), math.sin(t), M)
+        elif kj == UNBOUNDED:
+            _rotation(k.axis[j], q[i], math.copysign(1.0, k.rate[j]) * q[i + 1], M)
+        elif kj == PRISMATIC:
+            t = k.rate[j] * q[i]
+            M[0, 3], M[1, 3], M[2, 3] = t * k.axis[j, 0], t * k.axis[j, 1], t * k.axis[j, 2]
+        elif kj == SPHERICAL:
+            _quat_matrix(q[i], q[i + 1], q[i + 2], q[i + 3], M)
+        else:
+            _quat_matrix(q[i + 3], q[i + 4], q[i + 5], q[i + 6], M)
+            M[0, 3], M[1, 3], M[2, 3] = q[i], q[i + 1], q[i + 2]
+        P = np.empty((4, 4))
+        _mul(k.place[j], M, P)
+        _mul(oMi[k.parent[j]], P, oMi[j])
+
+
+@register_jitable
+def tree_twists(k, oMi, S):
+    """Column ``c`` of ``S`` (6 × nv): the axis-first world twist ``(ω; v_O)`` of velocity
+    coordinate ``c``'s joint motion per unit rate (Pinocchio's ``data.J``, reordered)."""
+    for j in range(1, k.parent.shape[0]):
+        kj, c = k.kind[j], k.iv[j]
+        T = oMi[j]
+        px, py, pz = T[0, 3], T[1, 3], T[2, 3]
+        if kj == REVOLUTE or kj == UNBOUNDED or kj == PRISMATIC:
+            r = k.rate[j]
+            a0, a1, a2 = k.axis[j, 0], k.axis[j, 1], k.axis[j, 2]
+            ux = r * (T[0, 0] * a0 + T[0, 1] * a1 + T[0, 2] * a2)
+            uy = r * (T[1, 0] * a0 + T[1, 1] * a1 + T[1, 2] * a2)
+            uz = r * (T[2, 0] * a0 + T[2, 1] * a1 + T[2, 2] * a2)
+            if kj == PRISMATIC:
+                S[0, c], S[1, c], S[2, c] = 0.0, 0.0, 0.0
+                S[3, c], S[4, c], S[5, c] = ux, uy, uz
+            else:
+                S[0, c], S[1, c], S[2, c] = ux, uy, uz
+                S[3, c], S[4, c], S[5, c] = py * uz - pz * uy, pz * ux - px * uz, \
+                    px * uy - py * ux
+        else:
+            first = c
+            if kj == FREE_FLYER:  # linear body rates first
+                for b in range(3):
+                    S[0, c + b], S[1, c + b], S[2, c + b] = 0.0, 0.0, 0.0
+                    S[3, c + b], S[4, c + b], S[5, c + b] = T[0, b], T[1, b], T[2, b]
+                first = c + 3
+            for b in range(3):
+                ux, uy, uz = T[0, b], T[1, b], T[2, b]
+                S[0, first + b], S[1, first + b], S[2, first + b] = ux, uy, uz
+                S[3, first + b] = py * uz - pz * uy
+                S[4, first + b] = pz * ux - px * uz
+                S[5, first + b] = px * uy - py * ux
+
+
+@register_jitable
+def _nv_of(kj):
+    if kj == SPHERICAL:
+        return 3
+    if kj == FREE_FLYER:
+        return 6
+    return 1
+
+
+@register_jitable
+def _relative_columns(k, ja, jb, S, W):
+    """``W`` (6 × nv): the world Jacobian of frame b's joint ``jb`` minus frame a's
+    ``ja`` (the columns of the joints supporting each; common ones cancel exactly)."""
+    for r in range(6):
+        for c in range(W.shape[1]):
+            W[r, c] = 0.0
+    j = jb
+    while j > 0:
+        c0 = k.iv[j]
+        for c in range(c0, c0 + _nv_of(k.kind[j])):
+            for r in range(6):
+                W[r, c] += S[r, c]
+        j = k.parent[j]
+    j = ja
+    while j > 0:
+        c0 = k.iv[j]
+        for c in range(c0, c0 + _nv_of(k.kind[j])):
+            for r in range(6):
+                W[r, c] -= S[r, c]
+        j = k.parent[j]
+
+
+@register_jitable
+def jlog3(theta, w, J):
+    """Pinocchio's ``Jlog3`` (3 × 3) at the rotation vector ``w`` of angle ``theta``."""
+    st, ct = math.sin(theta), math.cos(theta)
+    if theta < 1.2207031250000000e-04:  # TaylorSeriesExpansion::precision<3>
+        alpha = 1.0 / 12.0 + theta * theta / 720.0
+        diag = 0.5 * (2.0 - theta * theta / 6.0)
+    else:
+        st_1mct = st / (1.0 - ct)
+        alpha = 1.0 / (theta * theta) - st_1mct / (2.0 * theta)
+        diag = 0.5 * (theta * st_1mct)
+    for a in range(3):
+        for b in range(3):
+            J[a, b] = alpha * w[a] * w[b]
+        J[a, a] += diag
+    J[0, 1] -= 0.5 * w[2]
+    J[0, 2] += 0.5 * w[1]
+    J[1, 0] += 0.5 * w[2]
+    J[1, 2] -= 0.5 * w[0]
+    J[2, 0] -= 0.5 * w[1]
+    J[2, 1] += 0.5 * w[0]
+
+
+@register_jitable
+def log6_jlog6(R, p, out, J):
+    """Pinocchio's ``log6`` of ``(R, p)`` axis-first into ``out`` (6: ``(θ; ρ)``) and its
+    ``Jlog6`` (6 × 6, Pinocchio's order ``(v; ω)`` for both rows and columns)."""
+    w = np.empty(3)
+    log3(R, w)
+    t = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
+    x, y, z = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
+    t2s = 0.25 * (x * x + y * y + z * z)  # |unskew(R)|², Pinocchio's Taylor argument
+    st, ct = math.sin(t), math.cos(t)
+    if R[0, 0] + R[1, 1] + R[2, 2] >= 3.0 - 6.0554544523933395e-06:  # precision<2>
+        alpha = 1.0 - t2s / 12.0 - t2s * t2s / 720.0
+        beta = 1.0 / 12.0 + t2s / 720.0
+    else:
+        alpha = t * st / (2.0 * (1.0 - ct))
+        beta = 1.0 / (t * t) - st / (2.0 * t * (1.0 - ct))
+    wp = w[0] * p[0] + w[1] * p[1] + w[2] * p[2]
+    cx = w[1] * p[2] - w[2] * p[1]
+    cy = w[2] * p[0] - w[0] * p[2]
+    cz = w[0] * p[1] - w[1] * p[0]
+    out[0], out[1], out[2] = w[0], w[1], w[2]
+    out[3] = alpha * p[0] - 0.5 * cx + beta * wp * w[0]
+    out[4] = alpha * p[1] - 0.5 * cy + beta * wp * w[1]
+    out[5] = alpha * p[2] - 0.5 * cz + beta * wp * w[2]
+    A = np.empty((3, 3))
+    jlog3(t, w, A)
+    t2 = t * t
+    if t < 1.2207031250000000e-04:
+        beta = 1.0 / 12.0 + t2 / 720.0
+        bdot = 1.0 / 360.0
+    else:
+        tinv = 1.0 / t
+        t2inv = tinv * tinv
+        inv22 = 1.0 / (2.0 * (1.0 - ct))
+        beta = t2inv - st * tinv * inv22
+        bdot = -2.0 * t2inv * t2inv + (1.0 + st * tinv) * t2inv * inv22
+    v3 = np.empty(3)
+    for a in range(3):
+        v3[a] = bdot * wp * w[a] - (t2 * bdot + 2.0 * beta) * p[a]
+    Cm = np.empty((3, 3))
+    for a in range(3):
+        for b in range(3):
+            Cm[a, b] = v3[a] * w[b] + beta * w[a] * p[b]
+        Cm[a, a] += wp * beta
+    Cm[0, 1] -= 0.5 * p[2]
+    Cm[0, 2] += 0.5 * p[1]
+    Cm[1, 0] += 0.5 * p[2]
+    Cm[1, 2] -= 0.5 * p[0]
+    Cm[2, 0] -= 0.5 * p[1]
+    Cm[2, 1] += 0.5 * p[0]
+    for a in range(3):
+        for b in range(3):
+            J[a, b] = A[a, b]
+            J[3 + a, 3 + b] = A[a, b]
+            J[3 + a, b] = 0.0
+            s = 0.0
+            for m in range(3):
+                s += Cm[a, m] * A[m, b]
+            J[a, 3 + b] = s
+
+
+@register_jitable
+def closure_rows(k, q, e, H, norms, oMo):
+    """The closure rows at ``q``: residual ``e[:n]`` and Jacobian ``H[:n]`` (per unit of
+    each velocity coordinate), each closure's norm in ``norms``, the output frame's
+    world placement in ``oMo``. Returns the largest norm."""
+    nj = k.parent.shape[0]
+    C = k.ckind.shape[0]
+    nv = k.nv
+    oMi = np.empty((nj, 4, 4))
+    M = np.empty((4, 4))
+    tree_placements(k, q, oMi, M)
+    S = np.empty((6, nv))
+    tree_twists(k, oMi, S)
+    _mul(oMi[k.fjoint[2 * C]], k.fplace[2 * C], oMo)
+    Ca, Cb = np.empty((4, 4)), np.empty((4, 4))
+    W = np.empty((6, nv))
+    Rrel, prel, lg, Jl = np.empty((3, 3)), np.empty(3), np.empty(6), np.empty((6, 6))
+    nu = np.empty(6)
+    iL = 1.0 / k.length
+    worst = 0.0
+    for c in range(C):
+        _mul(oMi[k.fjoint[c]], k.fplace[c], Ca)
+        _mul(oMi[k.fjoint[C + c]], k.fplace[C + c], Cb)
+        _relative_columns(k, k.fjoint[c], k.fjoint[C + c], S, W)
+        r0 = k.rows[c]
+        pbx, pby, pbz = Cb[0, 3], Cb[1, 3], Cb[2, 3]
+        dx, dy, dz = pbx - Ca[0, 3], pby - Ca[1, 3], pbz - Ca[2, 3]
+        # W[:3] relative ω (world), W[3:] ← v_O + ω × p_b
+        for col in range(nv):
+            wx, wy, wz = W[0, col], W[1, col], W[2, col]
+            W[3, col] += wy * pbz - wz * pby
+            W[4, col] += wz * pbx - wx * pbz
+            W[5, col] += wx * pby - wy * pbx
+        kind = k.ckind[c]
+        if kind != WELD:
+            for a in range(3):
+                e[r0 + a] = (Ca[0, a] * dx + Ca[1, a] * dy + Ca[2, a] * dz) * iL
+                for col in range(nv):
+                    H[r0 + a, col] = (Ca[0, a] * W[3, col] + Ca[1, a] * W[4, col]
+                                      + Ca[2, a] * W[5, col]) * iL
+            if kind == REVOLUTE_CLOSURE:
+                zx, zy, zz = Cb[0, 2], Cb[1, 2], Cb[2, 2]
+                for a in range(2):
+                    e[r0 + 3 + a] = Ca[0, a] * zx + Ca[1, a] * zy + Ca[2, a] * zz
+                    for col in range(nv):  # R_aᵀ (ω × z_b)
+                        wx, wy, wz = W[0, col], W[1, col], W[2, col]
+                        H[r0 + 3 + a, col] = (Ca[0, a] * (wy * zz - wz * zy)
+                                              + Ca[1, a] * (wz * zx - wx * zz)
+                                              + Ca[2, a] * (wx * zy - wy * zx))
+        else:
+            for a in range(3):
+                for b in range(3):
+                    Rrel[a, b] = Ca[0, a] * Cb[0, b] + Ca[1, a] * Cb[1, b] + Ca[2, a] * Cb[2, b]
+                prel[a] = Ca[0, a] * dx + Ca[1, a] * dy + Ca[2, a] * dz
+            log6_jlog6(Rrel, prel, lg, Jl)
+            for a in range(3):
+                e[r0 + a] = lg[a]
+                e[r0 + 3 + a] = lg[3 + a] * iL
+            for col in range(nv):
+                for a in range(3):  # body twist in C_b, Pinocchio's (v; ω)
+                    nu[a] = Cb[0, a] * W[3, col] + Cb[1, a] * W[4, col] + Cb[2, a] * W[5, col]
+                    nu[3 + a] = Cb[0, a] * W[0, col] + Cb[1, a] * W[1, col] \
+                        + Cb[2, a] * W[2, col]
+                for a in range(3):
+                    lin, ang = 0.0, 0.0
+                    for b in range(6):
+                        lin += Jl[a, b] * nu[b]
+                        ang += Jl[3 + a, b] * nu[b]
+                    H[r0 + a, col] = ang
+                    H[r0 + 3 + a, col] = lin * iL
+        s = 0.0
+        for r in range(r0, k.rows[c + 1]):
+            s += e[r] * e[r]
+        norms[c] = math.sqrt(s)
+        worst = max(worst, norms[c])
+    return worst
+
+
+@njit(cache=True, nogil=True)
+def closure_rows_compiled(k, q, e, H, norms, oMo):
+    """:func:`closure_rows` compiled (for tests and one-off evaluations)."""
+    return closure_rows(k, q, e, H, norms, oMo)
+
+
+# ============================================================ the compiled solver
+@register_jitable
+def _quat_times_exp(q, i, wx, wy, wz):
+    """``q[i:i+4] ← q[i:i+4] · exp(ω)`` (quaternions ``(x, y, z, w)``), then Pinocchio's
+    first-order normalisation."""
+    t = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if t < 1e-8:
+        f = 0.5 - t * t / 48.0
+        cw = 1.0 - t * t / 8.0
+    else:
+        f = math.sin(0.5 * t) / t
+        cw = math.cos(0.5 * t)
+    bx, by, bz, bw = f * wx, f * wy, f * wz, cw
+    ax, ay, az, aw = q[i], q[i + 1], q[i + 2], q[i + 3]
+    x = aw * bx + ax * bw + ay * bz - az * by
+    y = aw * by - ax * bz + ay * bw + az * bx
+    z = aw * bz + ax * by - ay * bx + az * bw
+    w = aw * bw - ax * bx - ay * by - az * bz
+    n2 = x * x + y * y + z * z + w * w
+    g = (3.0 - n2) * 0.5
+    q[i], q[i + 1], q[i + 2], q[i + 3] = g * x, g * y, g * z, g * w
+
+
+@register_jitable
+def tree_integrate(k, q, dv):
+    """``q ← integrate(q, dv)`` (Pinocchio's integration of each joint, in place)."""
+    R = np.empty((4, 4))
+    for j in range(1, k.parent.shape[0]):
+        kj, i, c = k.kind[j], k.iq[j], k.iv[j]
+        if kj == REVOLUTE or kj == PRISMATIC:
+            q[i] += dv[c]
+        elif kj == UNBOUNDED:
+            ca, sa = q[i], q[i + 1]
+            cb, sb = math.cos(dv[c]), math.sin(dv[c])
+            x, y = ca * cb - sa * sb, sa * cb + ca * sb
+            g = (3.0 - (x * x + y * y)) * 0.5
+            q[i], q[i + 1] = g * x, g * y
+        elif kj == SPHERICAL:
+            _quat_times_exp(q, i, dv[c], dv[c + 1], dv[c + 2])
+        else:  # free flyer: M ← M exp(ν), ν = (v; ω) in the body frame
+            wx, wy, wz = dv[c + 3], dv[c + 4], dv[c + 5]
+            th2 = wx * wx + wy * wy + wz * wz
+            th = math.sqrt(th2)
+            if th < 1e-6:
+                b = 0.5 - th2 / 24.0
+            else:
+                h = math.sin(0.5 * th)
+                b = 2.0 * h * h / th2
+            if th < 1e-2:
+                cc = 1.0 / 6.0 - th2 / 120.0 + th2 * th2 / 5040.0
+            else:
+                cc = (th - math.sin(th)) / (th2 * th)
+            vx, vy, vz = dv[c], dv[c + 1], dv[c + 2]
+            # J_l(ω) v = v + b ω × v + c ω × (ω × v)
+            ux, uy, uz = wy * vz - wz * vy, wz * vx - wx * vz, wx * vy - wy * vx
+            tx, ty, tz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
+            lx, ly, lz = vx + b * ux + cc * tx, vy + b * uy + cc * ty, vz + b * uz + cc * tz
+            _quat_matrix(q[i + 3], q[i + 4], q[i + 5], q[i + 6], R)
+            for a in range(3):
+                q[i + a] += R[a, 0] * lx + R[a, 1] * ly + R[a, 2] * lz
+            _quat_times_exp(q, i + 3, wx, wy, wz)
+
+
+@register_jitable
+def _rows(k, q, has_targets, targets, e, H, norms, oMo):
+    """All rows at ``q``: closures, then the actuated rows when ``has_targets``.
+    Returns ``(closure, actuated)``."""
+    closure = closure_rows(k, q, e, H, norms, oMo)
+    act = 0.0
+    if has_targets:
+        n0 = k.rows[k.rows.shape[0] - 1]
+        for a in range(k.act_q.shape[0]):
+            i = k.act_q[a]
+            value = math.atan2(q[i + 1], q[i]) if k.act_two[a] else q[i]
+            r = n0 + a
+            e[r] = (value - targets[a]) / k.act_scales[a]
+            for col in range(k.nv):
+                H[r, col] = 0.0
+            H[r, k.act_v[a]] = 1.0 / k.act_scales[a]
+            act = max(act, abs(e[r]))
+    return closure, act
+
+
+@njit(cache=True, nogil=True)
+def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oMo, info):
+    """:func:`pkm_pin.solve.solve_tree` without pose rows, compiled: damped Newton on the
+    closure rows (and the actuated rows when ``has_targets``) from ``q`` (solved in
+    place), the unknowns the velocity coordinates where ``free`` is true. The same
+    steps as the Pinocchio driver (:func:`~pkm_pin.solve._tree_step`): dimensionless
+    columns, :func:`lm_damping`, ``L D Lᵀ`` of the normal equations, the step shortened
+    to :data:`~pkm_pin.solve.TREE_MAX_STEP`, projected onto the limits; stops on
+    :func:`stop_rule`, a non-finite step or a stalled one. ``info`` receives ``(r,
+    closure, actuated, iterations, converged, at_q)``; ``norms`` and ``oMo`` the last
+    evaluation's closure norms and output placement (at ``q`` when ``at_q``)."""
+    nv, nq = k.nv, k.nq
+    m = k.rows[k.rows.shape[0] - 1] + (k.act_q.shape[0] if has_targets else 0)
+    e, H = np.empty(m), np.empty((m, nv))
+    cols = np.empty(nv, np.int64)
+    nf = 0
+    for c in range(nv):
+        if free[c]:
+            cols[nf] = c
+            nf += 1
+    Hf = np.empty((m, nf))
+    N, g, inv, dx = np.empty((nf, nf)), np.empty(nf), np.empty(nf), np.empty(nf)
+    dv, q_new = np.zeros(nv), np.empty(nq)
+    for a in range(nq):
+        q[a] = min(k.upper[a], max(k.lower[a], q[a]))
+    best, slow, it, at_q = np.inf, 0, 0, True
+    closure, act, r = 0.0, 0.0, 0.0
+    while True:
+        closure, act = _rows(k, q, has_targets, targets, e, H, norms, oMo)
+        r = max(closure, act)
+        stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
+        if stop or nf == 0:
+            break
+        for row in range(m):
+            for b in range(nf):
+                Hf[row, b] = H[row, cols[b]] * k.units[cols[b]]
+        lam = lm_damping(r)
+        for a in range(nf):
+            s = 0.0
+            for row in range(m):
+                s += Hf[row, a] * e[row]
+            g[a] = s
+            for b in range(a + 1):
+                s = 0.0
+                for row in range(m):
+                    s += Hf[row, a] * Hf[row, b]
+                N[a, b] = s
+            N[a, a] += lam
+        if not ldl(N, nf, inv):
+            break
+        ldl_solve(N, nf, inv, g, dx)
+        big = 0.0
+        for a in range(nf):
+            dx[a] = -dx[a]
+            big = max(big, abs(dx[a]))
+        if big > TREE_MAX_STEP:
+            f = TREE_MAX_STEP / big
+            for a in range(nf):
+                dx[a] *= f
+        step = 0.0
+        for a in range(nf):
+            step += dx[a] * dx[a]
+            dv[cols[a]] = k.units[cols[a]] * dx[a]
+        for a in range(nq):
+            q_new[a] = q[a]
+        tree_integrate(k, q_new, dv)
+        finite = True
+        for a in range(nq):
+            q_new[a] = min(k.upper[a], max(k.lower[a], q_new[a]))
+            finite = finite and math.isfinite(q_new[a])
+        if not finite:
+            break
+        it += 1
+        moved = 0.0  # |difference(q, q_new) / units|²: only 1-DOF coordinates are clipped
+        for j in range(1, k.parent.shape[0]):
+            kj, i, c = k.kind[j], k.iq[j], k.iv[j]
+            if kj == REVOLUTE or kj == PRISMATIC:
+                d = (q_new[i] - q[i]) / k.units[c]
+                moved += d * d
+            else:
+                for b in range(c, c + _nv_of(kj)):
+                    d = dv[b] / k.units[b]
+                    moved += d * d
+        for a in range(nq):
+            q[a] = q_new[a]
+        if moved < NEWTON_STALL_RTOL * (1.0 + step):
+            at_q = False
+            break
+    info[0], info[1], info[2], info[3] = r, closure, act, it
+    info[4] = 1.0 if r <= tol else 0.0
+    info[5] = 1.0 if at_q else 0.0
+
+
+#: :func:`solve_tree_kernel` called by :func:`pkm_pin.solve.solve_tree`: a model's kernel
+#: is typed once, later calls go straight to the machine code (:class:`SameTypes`).
+SOLVE = SameTypes(solve_tree_kernel, 0)
