@@ -1004,10 +1004,9 @@ def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolut
         raise ValueError(f"targets must have one value per actuated joint ({len(kern.act_q)})")
     norms, oMo, info = np.empty(kern.ckind.shape[0]), np.empty((4, 4)), np.empty(6)
     tk.SOLVE(kern, q, free, has, t, float(tol), int(max_iter), norms, oMo, info)
-    at_q = info[5] == 1.0
-    return TreeSolution(q, float(info[0]), float(info[1]), float(info[2]), 0.0, int(info[3]),
-                        bool(info[4] == 1.0), norms if at_q else None,
-                        pin.SE3(oMo) if at_q else None)
+    r, closure, actuated, iterations, converged, at_q = info.tolist()
+    return TreeSolution(q, r, closure, actuated, 0.0, int(iterations), converged == 1.0,
+                        norms if at_q else None, pin.SE3(oMo) if at_q else None)
 
 
 def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
@@ -1065,7 +1064,7 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
     iterations)``."""
     if isinstance(starts, np.ndarray):
         starts = np.atleast_2d(starts)
-    ref = None if nearest is None else model.check_q(nearest)
+    first = None
     found, total = [], 0
     for k, q0 in enumerate(starts):
         sol = solve_tree(model, q0, free, targets, pose, pose_rows=pose_rows, tol=tol,
@@ -1074,11 +1073,12 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
         found.append(sol)
         if k == 0 and sol.converged:
             return sol, total
-        if ref is None:
-            ref = model.check_q(q0)
+        if first is None:
+            first = q0
     good = [s for s in found if s.converged]
     if not good:
         return min(found, key=lambda s: s.residual), total
+    ref = model.check_q(first if nearest is None else nearest)
 
     def distance(s):
         d = pin.difference(model.tree, ref, s.q) / model.velocity_units

@@ -196,65 +196,90 @@ def _build(model) -> TreeKernel | None:
 
 # ======================================================== compiled kinematics
 @register_jitable
-def _quat_matrix(x, y, z, w, out):
-    """Eigen's rotation matrix of the quaternion ``(x, y, z, w)`` into ``out[:3, :3]``."""
+def _quat(x, y, z, w):
+    """Eigen's rotation matrix of the quaternion ``(x, y, z, w)`` (9 scalars, by rows)."""
     tx, ty, tz = 2.0 * x, 2.0 * y, 2.0 * z
     twx, twy, twz = tx * w, ty * w, tz * w
     txx, txy, txz = tx * x, ty * x, tz * x
     tyy, tyz, tzz = ty * y, tz * y, tz * z
-    out[0, 0], out[0, 1], out[0, 2] = 1.0 - (tyy + tzz), txy - twz, txz + twy
-    out[1, 0], out[1, 1], out[1, 2] = txy + twz, 1.0 - (txx + tzz), tyz - twx
-    out[2, 0], out[2, 1], out[2, 2] = txz - twy, tyz + twx, 1.0 - (txx + tyy)
+    return (1.0 - (tyy + tzz), txy - twz, txz + twy, txy + twz, 1.0 - (txx + tzz), tyz - twx,
+            txz - twy, tyz + twx, 1.0 - (txx + tyy))
 
 
 @register_jitable
-def _rotation(a, c, s, out):
-    """Rotation about the unit axis ``a`` of cosine ``c`` and sine ``s`` (Rodrigues)."""
-    ax, ay, az = a[0], a[1], a[2]
+def _rodrigues(ax, ay, az, c, s):
+    """Rotation about the unit axis ``a`` of cosine ``c`` and sine ``s`` (9 scalars)."""
     d = 1.0 - c
-    out[0, 0], out[0, 1], out[0, 2] = c + d * ax * ax, d * ax * ay - s * az, d * ax * az + s * ay
-    out[1, 0], out[1, 1], out[1, 2] = d * ay * ax + s * az, c + d * ay * ay, d * ay * az - s * ax
-    out[2, 0], out[2, 1], out[2, 2] = d * az * ax - s * ay, d * az * ay + s * ax, c + d * az * az
+    return (c + d * ax * ax, d * ax * ay - s * az, d * ax * az + s * ay,
+            d * ay * ax + s * az, c + d * ay * ay, d * ay * az - s * ax,
+            d * az * ax - s * ay, d * az * ay + s * ax, c + d * az * az)
 
 
 @register_jitable
-def _mul(A, B, out):
-    """``out = A B`` for 4 × 4 rigid transforms (``out`` distinct from both)."""
-    for i in range(3):
-        for j in range(3):
-            out[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
-        out[i, 3] = A[i, 0] * B[0, 3] + A[i, 1] * B[1, 3] + A[i, 2] * B[2, 3] + A[i, 3]
-    out[3, 0], out[3, 1], out[3, 2], out[3, 3] = 0.0, 0.0, 0.0, 1.0
+def _load(A, i):
+    """The 12 numbers ``(R by rows, p)`` of the rigid transform ``A[i]`` (3-D array)."""
+    return (A[i, 0, 0], A[i, 0, 1], A[i, 0, 2], A[i, 1, 0], A[i, 1, 1], A[i, 1, 2],
+            A[i, 2, 0], A[i, 2, 1], A[i, 2, 2], A[i, 0, 3], A[i, 1, 3], A[i, 2, 3])
 
 
 @register_jitable
-def tree_placements(k, q, oMi, M):
-    """World placement ``oMi[j]`` (4 × 4) of every joint at ``q`` (``M``: a 4 × 4 work
-    array)."""
-    for a in range(4):
-        for b in range(4):
-            oMi[0, a, b] = 1.0 if a == b else 0.0
-    for j in range(1, k.parent.shape[0]):
-        kj, i = k.kind[j], k.iq[j]
-        for a in range(4):
-            for b in range(4):
-                M[a, b] = 1.0 if a == b else 0.0
+def _store(T, out, i):
+    """``out[i]`` (4 × 4) ← the 12 numbers ``T`` (as :func:`_load`)."""
+    out[i, 0, 0], out[i, 0, 1], out[i, 0, 2], out[i, 0, 3] = T[0], T[1], T[2], T[9]
+    out[i, 1, 0], out[i, 1, 1], out[i, 1, 2], out[i, 1, 3] = T[3], T[4], T[5], T[10]
+    out[i, 2, 0], out[i, 2, 1], out[i, 2, 2], out[i, 2, 3] = T[6], T[7], T[8], T[11]
+    out[i, 3, 0], out[i, 3, 1], out[i, 3, 2], out[i, 3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+@register_jitable
+def _compose(A, B):
+    """``A B`` of two rigid transforms given as 12 numbers (:func:`_load`)."""
+    return (A[0] * B[0] + A[1] * B[3] + A[2] * B[6], A[0] * B[1] + A[1] * B[4] + A[2] * B[7],
+            A[0] * B[2] + A[1] * B[5] + A[2] * B[8], A[3] * B[0] + A[4] * B[3] + A[5] * B[6],
+            A[3] * B[1] + A[4] * B[4] + A[5] * B[7], A[3] * B[2] + A[4] * B[5] + A[5] * B[8],
+            A[6] * B[0] + A[7] * B[3] + A[8] * B[6], A[6] * B[1] + A[7] * B[4] + A[8] * B[7],
+            A[6] * B[2] + A[7] * B[5] + A[8] * B[8],
+            A[0] * B[9] + A[1] * B[10] + A[2] * B[11] + A[9],
+            A[3] * B[9] + A[4] * B[10] + A[5] * B[11] + A[10],
+            A[6] * B[9] + A[7] * B[10] + A[8] * B[11] + A[11])
+
+
+@register_jitable
+def _motion(k, j, q):
+    """Joint ``j``'s motion at ``q`` as 12 numbers (:func:`_load`)."""
+    kj, i = k.kind[j], k.iq[j]
+    if kj == REVOLUTE or kj == UNBOUNDED:
         if kj == REVOLUTE:
             t = k.rate[j] * q[i]
-            _rotation(k.axis[j], math.cos(t), math.sin(t), M)
-        elif kj == UNBOUNDED:
-            _rotation(k.axis[j], q[i], math.copysign(1.0, k.rate[j]) * q[i + 1], M)
-        elif kj == PRISMATIC:
-            t = k.rate[j] * q[i]
-            M[0, 3], M[1, 3], M[2, 3] = t * k.axis[j, 0], t * k.axis[j, 1], t * k.axis[j, 2]
-        elif kj == SPHERICAL:
-            _quat_matrix(q[i], q[i + 1], q[i + 2], q[i + 3], M)
+            c, s = math.cos(t), math.sin(t)
         else:
-            _quat_matrix(q[i + 3], q[i + 4], q[i + 5], q[i + 6], M)
-            M[0, 3], M[1, 3], M[2, 3] = q[i], q[i + 1], q[i + 2]
-        P = np.empty((4, 4))
-        _mul(k.place[j], M, P)
-        _mul(oMi[k.parent[j]], P, oMi[j])
+            c, s = q[i], math.copysign(1.0, k.rate[j]) * q[i + 1]
+        R = _rodrigues(k.axis[j, 0], k.axis[j, 1], k.axis[j, 2], c, s)
+        return R + (0.0, 0.0, 0.0)
+    if kj == PRISMATIC:
+        t = k.rate[j] * q[i]
+        return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0,
+                t * k.axis[j, 0], t * k.axis[j, 1], t * k.axis[j, 2])
+    if kj == SPHERICAL:
+        return _quat(q[i], q[i + 1], q[i + 2], q[i + 3]) + (0.0, 0.0, 0.0)
+    return _quat(q[i + 3], q[i + 4], q[i + 5], q[i + 6]) + (q[i], q[i + 1], q[i + 2])
+
+
+@register_jitable
+def tree_placements(k, q, oMi):
+    """World placement ``oMi[j]`` (4 × 4) of every joint at ``q``."""
+    _store((1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), oMi, 0)
+    for j in range(1, k.parent.shape[0]):
+        T = _compose(_compose(_load(oMi, k.parent[j]), _load(k.place, j)), _motion(k, j, q))
+        _store(T, oMi, j)
+
+
+@register_jitable
+def frame_placements(k, oMi, F):
+    """World placement ``F[f]`` of the kernel's frames (constraint frames ``C_a`` of
+    the closures, ``C_b``, then the output frame)."""
+    for f in range(k.fjoint.shape[0]):
+        _store(_compose(_load(oMi, k.fjoint[f]), _load(k.fplace, f)), F, f)
 
 
 @register_jitable
@@ -263,14 +288,14 @@ def tree_twists(k, oMi, S):
     coordinate ``c``'s joint motion per unit rate (Pinocchio's ``data.J``, reordered)."""
     for j in range(1, k.parent.shape[0]):
         kj, c = k.kind[j], k.iv[j]
-        T = oMi[j]
-        px, py, pz = T[0, 3], T[1, 3], T[2, 3]
+        T = _load(oMi, j)
+        px, py, pz = T[9], T[10], T[11]
         if kj == REVOLUTE or kj == UNBOUNDED or kj == PRISMATIC:
             r = k.rate[j]
             a0, a1, a2 = k.axis[j, 0], k.axis[j, 1], k.axis[j, 2]
-            ux = r * (T[0, 0] * a0 + T[0, 1] * a1 + T[0, 2] * a2)
-            uy = r * (T[1, 0] * a0 + T[1, 1] * a1 + T[1, 2] * a2)
-            uz = r * (T[2, 0] * a0 + T[2, 1] * a1 + T[2, 2] * a2)
+            ux = r * (T[0] * a0 + T[1] * a1 + T[2] * a2)
+            uy = r * (T[3] * a0 + T[4] * a1 + T[5] * a2)
+            uz = r * (T[6] * a0 + T[7] * a1 + T[8] * a2)
             if kj == PRISMATIC:
                 S[0, c], S[1, c], S[2, c] = 0.0, 0.0, 0.0
                 S[3, c], S[4, c], S[5, c] = ux, uy, uz
@@ -283,10 +308,10 @@ def tree_twists(k, oMi, S):
             if kj == FREE_FLYER:  # linear body rates first
                 for b in range(3):
                     S[0, c + b], S[1, c + b], S[2, c + b] = 0.0, 0.0, 0.0
-                    S[3, c + b], S[4, c + b], S[5, c + b] = T[0, b], T[1, b], T[2, b]
+                    S[3, c + b], S[4, c + b], S[5, c + b] = T[b], T[3 + b], T[6 + b]
                 first = c + 3
             for b in range(3):
-                ux, uy, uz = T[0, b], T[1, b], T[2, b]
+                ux, uy, uz = T[b], T[3 + b], T[6 + b]
                 S[0, first + b], S[1, first + b], S[2, first + b] = ux, uy, uz
                 S[3, first + b] = py * uz - pz * uy
                 S[4, first + b] = pz * ux - px * uz
@@ -349,10 +374,10 @@ def jlog3(theta, w, J):
 
 
 @register_jitable
-def log6_jlog6(R, p, out, J):
+def log6_jlog6(R, p, out, J, w, A, Cm):
     """Pinocchio's ``log6`` of ``(R, p)`` axis-first into ``out`` (6: ``(θ; ρ)``) and its
-    ``Jlog6`` (6 × 6, Pinocchio's order ``(v; ω)`` for both rows and columns)."""
-    w = np.empty(3)
+    ``Jlog6`` (6 × 6, Pinocchio's order ``(v; ω)`` for both rows and columns); ``w`` (3),
+    ``A`` and ``Cm`` (3 × 3): work arrays."""
     log3(R, w)
     t = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
     x, y, z = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
@@ -372,7 +397,6 @@ def log6_jlog6(R, p, out, J):
     out[3] = alpha * p[0] - 0.5 * cx + beta * wp * w[0]
     out[4] = alpha * p[1] - 0.5 * cy + beta * wp * w[1]
     out[5] = alpha * p[2] - 0.5 * cz + beta * wp * w[2]
-    A = np.empty((3, 3))
     jlog3(t, w, A)
     t2 = t * t
     if t < 1.2207031250000000e-04:
@@ -384,13 +408,11 @@ def log6_jlog6(R, p, out, J):
         inv22 = 1.0 / (2.0 * (1.0 - ct))
         beta = t2inv - st * tinv * inv22
         bdot = -2.0 * t2inv * t2inv + (1.0 + st * tinv) * t2inv * inv22
-    v3 = np.empty(3)
+    f1, f2 = bdot * wp, t2 * bdot + 2.0 * beta
     for a in range(3):
-        v3[a] = bdot * wp * w[a] - (t2 * bdot + 2.0 * beta) * p[a]
-    Cm = np.empty((3, 3))
-    for a in range(3):
+        v3 = f1 * w[a] - f2 * p[a]
         for b in range(3):
-            Cm[a, b] = v3[a] * w[b] + beta * w[a] * p[b]
+            Cm[a, b] = v3 * w[b] + beta * w[a] * p[b]
         Cm[a, a] += wp * beta
     Cm[0, 1] -= 0.5 * p[2]
     Cm[0, 2] += 0.5 * p[1]
@@ -409,33 +431,55 @@ def log6_jlog6(R, p, out, J):
             J[a, 3 + b] = s
 
 
+class Work(NamedTuple):
+    """Work arrays of :func:`closure_rows` (:func:`workspace`)."""
+
+    oMi: np.ndarray  # (nj, 4, 4) joint placements
+    F: np.ndarray  # (2C + 1, 4, 4) frame placements
+    S: np.ndarray  # (6, nv) joint twists
+    W: np.ndarray  # (6, nv) a closure's relative columns
+    Rrel: np.ndarray  # (3, 3)  a weld's relative rotation …
+    prel: np.ndarray  # (3,)  … and translation
+    lg: np.ndarray  # (6,)  its log6
+    Jl: np.ndarray  # (6, 6)  its Jlog6
+    nu: np.ndarray  # (6,)
+    w: np.ndarray  # (3,)
+    A: np.ndarray  # (3, 3)
+    Cm: np.ndarray  # (3, 3)
+
+
 @register_jitable
-def closure_rows(k, q, e, H, norms, oMo):
+def workspace(k):
+    """:class:`Work` for the kernel ``k``."""
+    nv = k.nv
+    return Work(np.empty((k.parent.shape[0], 4, 4)), np.empty((k.fjoint.shape[0], 4, 4)),
+                np.empty((6, nv)), np.empty((6, nv)), np.empty((3, 3)), np.empty(3),
+                np.empty(6), np.empty((6, 6)), np.empty(6), np.empty(3), np.empty((3, 3)),
+                np.empty((3, 3)))
+
+
+@register_jitable
+def closure_rows(k, q, ws, e, H, norms, oMo):
     """The closure rows at ``q``: residual ``e[:n]`` and Jacobian ``H[:n]`` (per unit of
     each velocity coordinate), each closure's norm in ``norms``, the output frame's
-    world placement in ``oMo``. Returns the largest norm."""
-    nj = k.parent.shape[0]
+    world placement in ``oMo`` (``ws``: :func:`workspace`). Returns the largest norm."""
     C = k.ckind.shape[0]
     nv = k.nv
-    oMi = np.empty((nj, 4, 4))
-    M = np.empty((4, 4))
-    tree_placements(k, q, oMi, M)
-    S = np.empty((6, nv))
+    oMi, F, S, W = ws.oMi, ws.F, ws.S, ws.W
+    tree_placements(k, q, oMi)
     tree_twists(k, oMi, S)
-    _mul(oMi[k.fjoint[2 * C]], k.fplace[2 * C], oMo)
-    Ca, Cb = np.empty((4, 4)), np.empty((4, 4))
-    W = np.empty((6, nv))
-    Rrel, prel, lg, Jl = np.empty((3, 3)), np.empty(3), np.empty(6), np.empty((6, 6))
-    nu = np.empty(6)
+    frame_placements(k, oMi, F)
+    for a in range(4):
+        for b in range(4):
+            oMo[a, b] = F[2 * C, a, b]
     iL = 1.0 / k.length
     worst = 0.0
     for c in range(C):
-        _mul(oMi[k.fjoint[c]], k.fplace[c], Ca)
-        _mul(oMi[k.fjoint[C + c]], k.fplace[C + c], Cb)
+        ca, cb = c, C + c
         _relative_columns(k, k.fjoint[c], k.fjoint[C + c], S, W)
         r0 = k.rows[c]
-        pbx, pby, pbz = Cb[0, 3], Cb[1, 3], Cb[2, 3]
-        dx, dy, dz = pbx - Ca[0, 3], pby - Ca[1, 3], pbz - Ca[2, 3]
+        pbx, pby, pbz = F[cb, 0, 3], F[cb, 1, 3], F[cb, 2, 3]
+        dx, dy, dz = pbx - F[ca, 0, 3], pby - F[ca, 1, 3], pbz - F[ca, 2, 3]
         # W[:3] relative ω (world), W[3:] ← v_O + ω × p_b
         for col in range(nv):
             wx, wy, wz = W[0, col], W[1, col], W[2, col]
@@ -445,33 +489,36 @@ def closure_rows(k, q, e, H, norms, oMo):
         kind = k.ckind[c]
         if kind != WELD:
             for a in range(3):
-                e[r0 + a] = (Ca[0, a] * dx + Ca[1, a] * dy + Ca[2, a] * dz) * iL
+                e[r0 + a] = (F[ca, 0, a] * dx + F[ca, 1, a] * dy + F[ca, 2, a] * dz) * iL
                 for col in range(nv):
-                    H[r0 + a, col] = (Ca[0, a] * W[3, col] + Ca[1, a] * W[4, col]
-                                      + Ca[2, a] * W[5, col]) * iL
+                    H[r0 + a, col] = (F[ca, 0, a] * W[3, col] + F[ca, 1, a] * W[4, col]
+                                      + F[ca, 2, a] * W[5, col]) * iL
             if kind == REVOLUTE_CLOSURE:
-                zx, zy, zz = Cb[0, 2], Cb[1, 2], Cb[2, 2]
+                zx, zy, zz = F[cb, 0, 2], F[cb, 1, 2], F[cb, 2, 2]
                 for a in range(2):
-                    e[r0 + 3 + a] = Ca[0, a] * zx + Ca[1, a] * zy + Ca[2, a] * zz
+                    e[r0 + 3 + a] = F[ca, 0, a] * zx + F[ca, 1, a] * zy + F[ca, 2, a] * zz
                     for col in range(nv):  # R_aᵀ (ω × z_b)
                         wx, wy, wz = W[0, col], W[1, col], W[2, col]
-                        H[r0 + 3 + a, col] = (Ca[0, a] * (wy * zz - wz * zy)
-                                              + Ca[1, a] * (wz * zx - wx * zz)
-                                              + Ca[2, a] * (wx * zy - wy * zx))
+                        H[r0 + 3 + a, col] = (F[ca, 0, a] * (wy * zz - wz * zy)
+                                              + F[ca, 1, a] * (wz * zx - wx * zz)
+                                              + F[ca, 2, a] * (wx * zy - wy * zx))
         else:
+            Rrel, prel, lg, Jl, nu = ws.Rrel, ws.prel, ws.lg, ws.Jl, ws.nu
             for a in range(3):
                 for b in range(3):
-                    Rrel[a, b] = Ca[0, a] * Cb[0, b] + Ca[1, a] * Cb[1, b] + Ca[2, a] * Cb[2, b]
-                prel[a] = Ca[0, a] * dx + Ca[1, a] * dy + Ca[2, a] * dz
-            log6_jlog6(Rrel, prel, lg, Jl)
+                    Rrel[a, b] = (F[ca, 0, a] * F[cb, 0, b] + F[ca, 1, a] * F[cb, 1, b]
+                                  + F[ca, 2, a] * F[cb, 2, b])
+                prel[a] = F[ca, 0, a] * dx + F[ca, 1, a] * dy + F[ca, 2, a] * dz
+            log6_jlog6(Rrel, prel, lg, Jl, ws.w, ws.A, ws.Cm)
             for a in range(3):
                 e[r0 + a] = lg[a]
                 e[r0 + 3 + a] = lg[3 + a] * iL
             for col in range(nv):
                 for a in range(3):  # body twist in C_b, Pinocchio's (v; ω)
-                    nu[a] = Cb[0, a] * W[3, col] + Cb[1, a] * W[4, col] + Cb[2, a] * W[5, col]
-                    nu[3 + a] = Cb[0, a] * W[0, col] + Cb[1, a] * W[1, col] \
-                        + Cb[2, a] * W[2, col]
+                    nu[a] = (F[cb, 0, a] * W[3, col] + F[cb, 1, a] * W[4, col]
+                             + F[cb, 2, a] * W[5, col])
+                    nu[3 + a] = F[cb, 0, a] * W[0, col] + F[cb, 1, a] * W[1, col] \
+                        + F[cb, 2, a] * W[2, col]
                 for a in range(3):
                     lin, ang = 0.0, 0.0
                     for b in range(6):
@@ -490,7 +537,7 @@ def closure_rows(k, q, e, H, norms, oMo):
 @njit(cache=True, nogil=True)
 def closure_rows_compiled(k, q, e, H, norms, oMo):
     """:func:`closure_rows` compiled (for tests and one-off evaluations)."""
-    return closure_rows(k, q, e, H, norms, oMo)
+    return closure_rows(k, q, workspace(k), e, H, norms, oMo)
 
 
 # ============================================================ the compiled solver
@@ -519,7 +566,6 @@ def _quat_times_exp(q, i, wx, wy, wz):
 @register_jitable
 def tree_integrate(k, q, dv):
     """``q ← integrate(q, dv)`` (Pinocchio's integration of each joint, in place)."""
-    R = np.empty((4, 4))
     for j in range(1, k.parent.shape[0]):
         kj, i, c = k.kind[j], k.iq[j], k.iv[j]
         if kj == REVOLUTE or kj == PRISMATIC:
@@ -550,17 +596,18 @@ def tree_integrate(k, q, dv):
             ux, uy, uz = wy * vz - wz * vy, wz * vx - wx * vz, wx * vy - wy * vx
             tx, ty, tz = wy * uz - wz * uy, wz * ux - wx * uz, wx * uy - wy * ux
             lx, ly, lz = vx + b * ux + cc * tx, vy + b * uy + cc * ty, vz + b * uz + cc * tz
-            _quat_matrix(q[i + 3], q[i + 4], q[i + 5], q[i + 6], R)
-            for a in range(3):
-                q[i + a] += R[a, 0] * lx + R[a, 1] * ly + R[a, 2] * lz
+            R = _quat(q[i + 3], q[i + 4], q[i + 5], q[i + 6])
+            q[i] += R[0] * lx + R[1] * ly + R[2] * lz
+            q[i + 1] += R[3] * lx + R[4] * ly + R[5] * lz
+            q[i + 2] += R[6] * lx + R[7] * ly + R[8] * lz
             _quat_times_exp(q, i + 3, wx, wy, wz)
 
 
 @register_jitable
-def _rows(k, q, has_targets, targets, e, H, norms, oMo):
+def _rows(k, q, ws, has_targets, targets, e, H, norms, oMo):
     """All rows at ``q``: closures, then the actuated rows when ``has_targets``.
     Returns ``(closure, actuated)``."""
-    closure = closure_rows(k, q, e, H, norms, oMo)
+    closure = closure_rows(k, q, ws, e, H, norms, oMo)
     act = 0.0
     if has_targets:
         n0 = k.rows[k.rows.shape[0] - 1]
@@ -589,22 +636,22 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     evaluation's closure norms and output placement (at ``q`` when ``at_q``)."""
     nv, nq = k.nv, k.nq
     m = k.rows[k.rows.shape[0] - 1] + (k.act_q.shape[0] if has_targets else 0)
-    e, H = np.empty(m), np.empty((m, nv))
+    ws = workspace(k)
     cols = np.empty(nv, np.int64)
     nf = 0
     for c in range(nv):
         if free[c]:
             cols[nf] = c
             nf += 1
-    Hf = np.empty((m, nf))
-    N, g, inv, dx = np.empty((nf, nf)), np.empty(nf), np.empty(nf), np.empty(nf)
-    dv, q_new = np.zeros(nv), np.empty(nq)
+    e, H, Hf, N = np.empty(m), np.empty((m, nv)), np.empty((m, nf)), np.empty((nf, nf))
+    g, inv, dx = np.empty(nf), np.empty(nf), np.empty(nf)
+    q_new, dv = np.empty(nq), np.zeros(nv)
     for a in range(nq):
         q[a] = min(k.upper[a], max(k.lower[a], q[a]))
     best, slow, it, at_q = np.inf, 0, 0, True
     closure, act, r = 0.0, 0.0, 0.0
     while True:
-        closure, act = _rows(k, q, has_targets, targets, e, H, norms, oMo)
+        closure, act = _rows(k, q, ws, has_targets, targets, e, H, norms, oMo)
         r = max(closure, act)
         stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
         if stop or nf == 0:
