@@ -1023,9 +1023,9 @@ def iter_tree_starts(model, warm=None, count: int = 0, seed: int = 0):
     """The rows of :func:`tree_starts`, made one at a time (a solve that converges from
     the warm start makes none of the others)."""
     lo, up = tree_limits(model)
+    if warm is not None:  # np.clip's wrapper costs more than the solve of a small tree
+        yield np.minimum(np.maximum(model.check_q(warm), lo), up)
     ref = np.array(model.reference)
-    if warm is not None:
-        yield np.clip(np.asarray(model.check_q(warm), dtype=float), lo, up)
     middle = np.where(np.isfinite(lo), 0.5 * (np.nan_to_num(lo) + np.nan_to_num(up)), ref)
     for row in (ref, pin.neutral(model.tree), middle):
         yield np.clip(row, lo, up)
