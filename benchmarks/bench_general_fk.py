@@ -134,7 +134,9 @@ class PlacoWorker:
 
 
 # ============================================================ pkm_pin
-def five_bar(placo: str | None, repeat: int) -> None:
+def five_bar(placo: str | None, repeat: int) -> dict:
+    """Time per solve [s] on the 5-bar: ``{"ours", "pinocchio", "placo" (inf when not
+    run)}``."""
     import numpy as np
 
     from pkm_pin import tree_kernel
@@ -181,10 +183,11 @@ def five_bar(placo: str | None, repeat: int) -> None:
           f"   x{t_pin / t_ours:.1f} the compiled path; same solutions to "
           f"{np.abs(q_pin - q_ours).max():.1e}")
     assert res_ours <= TOL and act_ours <= TOL
+    rows = {"ours": t_ours, "pinocchio": t_pin, "placo": t_placo}
     if worker is None:
         print("  PlaCo: no interpreter with placo (--placo-python, $PKM_PIN_PLACO_PYTHON or "
               ".venv/placo); not timed")
-        return
+        return rows
     p = worker.result()
     worker.close()
     q_placo = np.array(p["q"])[:, np.argsort(order)]
@@ -196,9 +199,12 @@ def five_bar(placo: str | None, repeat: int) -> None:
     print(f"  ratio pkm_pin / PlaCo x{t_ours / t_placo:.2f}   (target: at most 1; "
           f"before issue 24 x{t_pin / t_placo:.1f})")
     assert res_placo <= TOL
+    return rows
 
 
-def cassie(repeat: int) -> None:
+def cassie(repeat: int, n: int = 200) -> dict:
+    """Time per pose [s] of the Cassie-like leg: ``{figure: (ours, hand-written,
+    Pinocchio driver)}``."""
     from bench_linkage import CASSIE, HandWritten, motor_path, run_hand, run_ours
     from timing import best_of_each
 
@@ -207,7 +213,6 @@ def cassie(repeat: int) -> None:
 
     link = load_mechanism(CASSIE)
     hand = HandWritten(link)
-    n = 200
     Q = motor_path(n)
     solutions, prev = [], link.assemble().q
     for qa in Q:
@@ -215,6 +220,7 @@ def cassie(repeat: int) -> None:
         solutions.append(prev)
     print(f"Cassie-like leg ({link.model.nv} joints, {len(link.model.closures)} loops), {n} "
           "poses along a motor path, time per pose [µs]:")
+    rows = {}
     for what, label in (("assemble", "assembly (open → closed)"),
                         ("fk", "forward kinematics (warm)")):
         fns = {"ours": lambda: run_ours(link, Q, solutions, what, hand.act_q),
@@ -229,23 +235,29 @@ def cassie(repeat: int) -> None:
         fns["before"] = pinocchio_driver
         t = best_of_each(fns, repeat)
         ours, ref, before = t["ours"] / n, t["hand"] / n, t["before"] / n
+        rows[what] = (ours, ref, before)
         print(f"  {label:28s} pkm_pin {1e6 * ours:8.1f}   hand-written {1e6 * ref:8.1f}"
               f"   ratio x{ours / ref:5.2f}   (Pinocchio driver {1e6 * before:7.1f}: "
               f"x{before / ref:.2f})")
+    return rows
 
 
-def main(argv=None) -> None:
+def main(argv=None) -> dict:
+    """Run both comparisons (``argv``: the command line's options); returns their
+    figures, ``{"five_bar": …, "cassie": …}``."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--placo-python", help="interpreter with placo installed")
+    parser.add_argument("--no-placo", action="store_true", help="time pkm_pin only")
     parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--poses", type=int, default=200, help="Cassie-like leg poses")
     parser.add_argument("--placo-worker", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.placo_worker:
         placo_worker()
-        return
+        return {}
     sys.path.insert(0, str(Path(__file__).resolve().parent))
-    five_bar(placo_python(args.placo_python), args.repeat)
-    cassie(args.repeat)
+    placo = None if args.no_placo else placo_python(args.placo_python)
+    return {"five_bar": five_bar(placo, args.repeat), "cassie": cassie(args.repeat, args.poses)}
 
 
 if __name__ == "__main__":
