@@ -955,8 +955,7 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
     does not wait for a compilation); otherwise one Pinocchio pass a step."""
     q = model.check_q(q0).copy()
     if pose is None and compiled is not False:
-        from . import tree_kernel as tk
-
+        tk = _TREE_KERNEL or _tree_kernel_module()
         kern = tk.tree_kernel(model) if tk.ENABLED or compiled else None
         if kern is not None and (compiled or prefer_compiled(tk.solve_tree_kernel)):
             return _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter)
@@ -987,6 +986,16 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
 
 
 _NO_TARGETS = np.zeros(0)
+_TREE_KERNEL = None
+
+
+def _tree_kernel_module():
+    """:mod:`pkm_pin.tree_kernel` (imported on first use: it imports this module)."""
+    global _TREE_KERNEL
+    from . import tree_kernel
+
+    _TREE_KERNEL = tree_kernel
+    return tree_kernel
 
 
 def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolution:

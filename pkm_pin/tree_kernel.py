@@ -450,12 +450,14 @@ class Work(NamedTuple):
 
 @register_jitable
 def workspace(k):
-    """:class:`Work` for the kernel ``k``."""
-    nv = k.nv
-    return Work(np.empty((k.parent.shape[0], 4, 4)), np.empty((k.fjoint.shape[0], 4, 4)),
-                np.empty((6, nv)), np.empty((6, nv)), np.empty((3, 3)), np.empty(3),
-                np.empty(6), np.empty((6, 6)), np.empty(6), np.empty(3), np.empty((3, 3)),
-                np.empty((3, 3)))
+    """:class:`Work` for the kernel ``k`` (views into five allocations)."""
+    nj, nv = k.parent.shape[0], k.nv
+    T3 = np.empty((nj + k.fjoint.shape[0], 4, 4))
+    M2 = np.empty((12, nv))
+    R3 = np.empty((3, 3, 3))
+    v = np.empty(18)
+    return Work(T3[:nj], T3[nj:], M2[:6], M2[6:], R3[0], v[0:3], v[6:12], np.empty((6, 6)),
+                v[12:18], v[3:6], R3[1], R3[2])
 
 
 @register_jitable
@@ -643,9 +645,11 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
         if free[c]:
             cols[nf] = c
             nf += 1
-    e, H, Hf, N = np.empty(m), np.empty((m, nv)), np.empty((m, nf)), np.empty((nf, nf))
-    g, inv, dx = np.empty(nf), np.empty(nf), np.empty(nf)
-    q_new, dv = np.empty(nq), np.zeros(nv)
+    H, HN, V = np.empty((m, nv)), np.empty((m + nf, nf)), np.empty(m + 3 * nf + nq + nv)
+    Hf, N = HN[:m], HN[m:]
+    e, g, inv, dx = V[:m], V[m:m + nf], V[m + nf:m + 2 * nf], V[m + 2 * nf:m + 3 * nf]
+    q_new, dv = V[m + 3 * nf:m + 3 * nf + nq], V[m + 3 * nf + nq:]
+    dv[:] = 0.0
     for a in range(nq):
         q[a] = min(k.upper[a], max(k.lower[a], q[a]))
     best, slow, it, at_q = np.inf, 0, 0, True
