@@ -245,54 +245,58 @@ def _compose(A, B):
 
 
 @register_jitable
-def _motion(k, j, q):
-    """Joint ``j``'s motion at ``q`` as 12 numbers (:func:`_load`)."""
-    kj, i = k.kind[j], k.iq[j]
+def _motion(kj, rate, ax, ay, az, q, i):
+    """The motion of a joint of kind ``kj`` (axis ``a``, ``rate``; its coordinates from
+    ``q[i]``) as 12 numbers (:func:`_load`)."""
     if kj == REVOLUTE or kj == UNBOUNDED:
         if kj == REVOLUTE:
-            t = k.rate[j] * q[i]
+            t = rate * q[i]
             c, s = math.cos(t), math.sin(t)
         else:
-            c, s = q[i], math.copysign(1.0, k.rate[j]) * q[i + 1]
-        R = _rodrigues(k.axis[j, 0], k.axis[j, 1], k.axis[j, 2], c, s)
-        return R + (0.0, 0.0, 0.0)
+            c, s = q[i], math.copysign(1.0, rate) * q[i + 1]
+        return _rodrigues(ax, ay, az, c, s) + (0.0, 0.0, 0.0)
     if kj == PRISMATIC:
-        t = k.rate[j] * q[i]
-        return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0,
-                t * k.axis[j, 0], t * k.axis[j, 1], t * k.axis[j, 2])
+        t = rate * q[i]
+        return (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, t * ax, t * ay, t * az)
     if kj == SPHERICAL:
         return _quat(q[i], q[i + 1], q[i + 2], q[i + 3]) + (0.0, 0.0, 0.0)
     return _quat(q[i + 3], q[i + 4], q[i + 5], q[i + 6]) + (q[i], q[i + 1], q[i + 2])
 
 
-@register_jitable
+# The functions below that take the kernel ``k`` are inlined into their caller: a call
+# passes every array of ``k`` member by member (~150 scalars), which cost more than the
+# work of a small tree.
+@register_jitable(inline="always")
 def tree_placements(k, q, oMi):
     """World placement ``oMi[j]`` (4 × 4) of every joint at ``q``."""
+    parent, place, kind, axis, rate, iq = k.parent, k.place, k.kind, k.axis, k.rate, k.iq
     _store((1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), oMi, 0)
-    for j in range(1, k.parent.shape[0]):
-        T = _compose(_compose(_load(oMi, k.parent[j]), _load(k.place, j)), _motion(k, j, q))
-        _store(T, oMi, j)
+    for j in range(1, parent.shape[0]):
+        M = _motion(kind[j], rate[j], axis[j, 0], axis[j, 1], axis[j, 2], q, iq[j])
+        _store(_compose(_compose(_load(oMi, parent[j]), _load(place, j)), M), oMi, j)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def frame_placements(k, oMi, F):
     """World placement ``F[f]`` of the kernel's frames (constraint frames ``C_a`` of
     the closures, ``C_b``, then the output frame)."""
-    for f in range(k.fjoint.shape[0]):
-        _store(_compose(_load(oMi, k.fjoint[f]), _load(k.fplace, f)), F, f)
+    fjoint, fplace = k.fjoint, k.fplace
+    for f in range(fjoint.shape[0]):
+        _store(_compose(_load(oMi, fjoint[f]), _load(fplace, f)), F, f)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def tree_twists(k, oMi, S):
     """Column ``c`` of ``S`` (6 × nv): the axis-first world twist ``(ω; v_O)`` of velocity
     coordinate ``c``'s joint motion per unit rate (Pinocchio's ``data.J``, reordered)."""
-    for j in range(1, k.parent.shape[0]):
-        kj, c = k.kind[j], k.iv[j]
+    kind, iv, rate, axis, parent = k.kind, k.iv, k.rate, k.axis, k.parent
+    for j in range(1, parent.shape[0]):
+        kj, c = kind[j], iv[j]
         T = _load(oMi, j)
         px, py, pz = T[9], T[10], T[11]
         if kj == REVOLUTE or kj == UNBOUNDED or kj == PRISMATIC:
-            r = k.rate[j]
-            a0, a1, a2 = k.axis[j, 0], k.axis[j, 1], k.axis[j, 2]
+            r = rate[j]
+            a0, a1, a2 = axis[j, 0], axis[j, 1], axis[j, 2]
             ux = r * (T[0] * a0 + T[1] * a1 + T[2] * a2)
             uy = r * (T[3] * a0 + T[4] * a1 + T[5] * a2)
             uz = r * (T[6] * a0 + T[7] * a1 + T[8] * a2)
@@ -328,26 +332,27 @@ def _nv_of(kj):
 
 
 @register_jitable
-def _relative_columns(k, ja, jb, S, W):
+def _relative_columns(iv, kind, parent, ja, jb, S, W):
     """``W`` (6 × nv): the world Jacobian of frame b's joint ``jb`` minus frame a's
-    ``ja`` (the columns of the joints supporting each; common ones cancel exactly)."""
+    ``ja`` (the columns of the joints supporting each; common ones cancel exactly);
+    ``iv``, ``kind``, ``parent``: the kernel's arrays."""
     for r in range(6):
         for c in range(W.shape[1]):
             W[r, c] = 0.0
     j = jb
     while j > 0:
-        c0 = k.iv[j]
-        for c in range(c0, c0 + _nv_of(k.kind[j])):
+        c0 = iv[j]
+        for c in range(c0, c0 + _nv_of(kind[j])):
             for r in range(6):
                 W[r, c] += S[r, c]
-        j = k.parent[j]
+        j = parent[j]
     j = ja
     while j > 0:
-        c0 = k.iv[j]
-        for c in range(c0, c0 + _nv_of(k.kind[j])):
+        c0 = iv[j]
+        for c in range(c0, c0 + _nv_of(kind[j])):
             for r in range(6):
                 W[r, c] -= S[r, c]
-        j = k.parent[j]
+        j = parent[j]
 
 
 @register_jitable
@@ -465,7 +470,9 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
     """The closure rows at ``q``: residual ``e[:n]`` and Jacobian ``H[:n]`` (per unit of
     each velocity coordinate), each closure's norm in ``norms``, the output frame's
     world placement in ``oMo`` (``ws``: :func:`workspace`). Returns the largest norm."""
-    C = k.ckind.shape[0]
+    ckind, rows, fjoint = k.ckind, k.rows, k.fjoint
+    jiv, jkind, jparent = k.iv, k.kind, k.parent
+    C = ckind.shape[0]
     nv = k.nv
     oMi, F, S, W = ws.oMi, ws.F, ws.S, ws.W
     tree_placements(k, q, oMi)
@@ -478,8 +485,8 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
     worst = 0.0
     for c in range(C):
         ca, cb = c, C + c
-        _relative_columns(k, k.fjoint[c], k.fjoint[C + c], S, W)
-        r0 = k.rows[c]
+        _relative_columns(jiv, jkind, jparent, fjoint[c], fjoint[C + c], S, W)
+        r0 = rows[c]
         pbx, pby, pbz = F[cb, 0, 3], F[cb, 1, 3], F[cb, 2, 3]
         dx, dy, dz = pbx - F[ca, 0, 3], pby - F[ca, 1, 3], pbz - F[ca, 2, 3]
         # W[:3] relative ω (world), W[3:] ← v_O + ω × p_b
@@ -488,7 +495,7 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
             W[3, col] += wy * pbz - wz * pby
             W[4, col] += wz * pbx - wx * pbz
             W[5, col] += wx * pby - wy * pbx
-        kind = k.ckind[c]
+        kind = ckind[c]
         if kind != WELD:
             for a in range(3):
                 e[r0 + a] = (F[ca, 0, a] * dx + F[ca, 1, a] * dy + F[ca, 2, a] * dz) * iL
@@ -529,7 +536,7 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
                     H[r0 + a, col] = ang
                     H[r0 + 3 + a, col] = lin * iL
         s = 0.0
-        for r in range(r0, k.rows[c + 1]):
+        for r in range(r0, rows[c + 1]):
             s += e[r] * e[r]
         norms[c] = math.sqrt(s)
         worst = max(worst, norms[c])
@@ -565,11 +572,12 @@ def _quat_times_exp(q, i, wx, wy, wz):
     q[i], q[i + 1], q[i + 2], q[i + 3] = g * x, g * y, g * z, g * w
 
 
-@register_jitable
+@register_jitable(inline="always")
 def tree_integrate(k, q, dv):
     """``q ← integrate(q, dv)`` (Pinocchio's integration of each joint, in place)."""
-    for j in range(1, k.parent.shape[0]):
-        kj, i, c = k.kind[j], k.iq[j], k.iv[j]
+    kind, iq, iv, parent = k.kind, k.iq, k.iv, k.parent
+    for j in range(1, parent.shape[0]):
+        kj, i, c = kind[j], iq[j], iv[j]
         if kj == REVOLUTE or kj == PRISMATIC:
             q[i] += dv[c]
         elif kj == UNBOUNDED:
@@ -605,22 +613,23 @@ def tree_integrate(k, q, dv):
             _quat_times_exp(q, i + 3, wx, wy, wz)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _rows(k, q, ws, has_targets, targets, e, H, norms, oMo):
     """All rows at ``q``: closures, then the actuated rows when ``has_targets``.
     Returns ``(closure, actuated)``."""
+    rows, act_q, act_two, act_scales, act_v = k.rows, k.act_q, k.act_two, k.act_scales, k.act_v
     closure = closure_rows(k, q, ws, e, H, norms, oMo)
     act = 0.0
     if has_targets:
-        n0 = k.rows[k.rows.shape[0] - 1]
-        for a in range(k.act_q.shape[0]):
-            i = k.act_q[a]
-            value = math.atan2(q[i + 1], q[i]) if k.act_two[a] else q[i]
+        n0 = rows[rows.shape[0] - 1]
+        for a in range(act_q.shape[0]):
+            i = act_q[a]
+            value = math.atan2(q[i + 1], q[i]) if act_two[a] else q[i]
             r = n0 + a
-            e[r] = (value - targets[a]) / k.act_scales[a]
+            e[r] = (value - targets[a]) / act_scales[a]
             for col in range(k.nv):
                 H[r, col] = 0.0
-            H[r, k.act_v[a]] = 1.0 / k.act_scales[a]
+            H[r, act_v[a]] = 1.0 / act_scales[a]
             act = max(act, abs(e[r]))
     return closure, act
 
@@ -636,8 +645,10 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     :func:`stop_rule`, a non-finite step or a stalled one. ``info`` receives ``(r,
     closure, actuated, iterations, converged, at_q)``; ``norms`` and ``oMo`` the last
     evaluation's closure norms and output placement (at ``q`` when ``at_q``)."""
+    units, lower, upper, rows, act_q = k.units, k.lower, k.upper, k.rows, k.act_q
+    kind, iq, iv, parent = k.kind, k.iq, k.iv, k.parent
     nv, nq = k.nv, k.nq
-    m = k.rows[k.rows.shape[0] - 1] + (k.act_q.shape[0] if has_targets else 0)
+    m = rows[rows.shape[0] - 1] + (act_q.shape[0] if has_targets else 0)
     ws = workspace(k)
     cols = np.empty(nv, np.int64)
     nf = 0
@@ -651,7 +662,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     q_new, dv = V[m + 3 * nf:m + 3 * nf + nq], V[m + 3 * nf + nq:]
     dv[:] = 0.0
     for a in range(nq):
-        q[a] = min(k.upper[a], max(k.lower[a], q[a]))
+        q[a] = min(upper[a], max(lower[a], q[a]))
     best, slow, it, at_q = np.inf, 0, 0, True
     closure, act, r = 0.0, 0.0, 0.0
     while True:
@@ -662,7 +673,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
             break
         for row in range(m):
             for b in range(nf):
-                Hf[row, b] = H[row, cols[b]] * k.units[cols[b]]
+                Hf[row, b] = H[row, cols[b]] * units[cols[b]]
         lam = lm_damping(r)
         for a in range(nf):
             s = 0.0
@@ -689,26 +700,26 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
         step = 0.0
         for a in range(nf):
             step += dx[a] * dx[a]
-            dv[cols[a]] = k.units[cols[a]] * dx[a]
+            dv[cols[a]] = units[cols[a]] * dx[a]
         for a in range(nq):
             q_new[a] = q[a]
         tree_integrate(k, q_new, dv)
         finite = True
         for a in range(nq):
-            q_new[a] = min(k.upper[a], max(k.lower[a], q_new[a]))
+            q_new[a] = min(upper[a], max(lower[a], q_new[a]))
             finite = finite and math.isfinite(q_new[a])
         if not finite:
             break
         it += 1
         moved = 0.0  # |difference(q, q_new) / units|²: only 1-DOF coordinates are clipped
-        for j in range(1, k.parent.shape[0]):
-            kj, i, c = k.kind[j], k.iq[j], k.iv[j]
+        for j in range(1, parent.shape[0]):
+            kj, i, c = kind[j], iq[j], iv[j]
             if kj == REVOLUTE or kj == PRISMATIC:
-                d = (q_new[i] - q[i]) / k.units[c]
+                d = (q_new[i] - q[i]) / units[c]
                 moved += d * d
             else:
                 for b in range(c, c + _nv_of(kj)):
-                    d = dv[b] / k.units[b]
+                    d = dv[b] / units[b]
                     moved += d * d
         for a in range(nq):
             q[a] = q_new[a]
