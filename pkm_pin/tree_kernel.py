@@ -263,34 +263,32 @@ def _motion(kj, rate, ax, ay, az, q, i):
     return _quat(q[i + 3], q[i + 4], q[i + 5], q[i + 6]) + (q[i], q[i + 1], q[i + 2])
 
 
-# The functions below that take the kernel ``k`` are inlined into their caller: a call
-# passes every array of ``k`` member by member (~150 scalars), which cost more than the
-# work of a small tree.
-@register_jitable(inline="always")
-def tree_placements(k, q, oMi):
-    """World placement ``oMi[j]`` (4 × 4) of every joint at ``q``."""
-    parent, place, kind, axis, rate, iq = k.parent, k.place, k.kind, k.axis, k.rate, k.iq
+# The functions below take the kernel's arrays they read, not the kernel: a call passes
+# every array of its arguments member by member, ~150 scalars for the whole kernel (more
+# than the work of a small tree). Only closure_rows, once an evaluation, takes it.
+@register_jitable
+def tree_placements(parent, place, kind, axis, rate, iq, q, oMi):
+    """World placement ``oMi[j]`` (4 × 4) of every joint at ``q`` (the kernel's joint
+    arrays)."""
     _store((1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), oMi, 0)
     for j in range(1, parent.shape[0]):
         M = _motion(kind[j], rate[j], axis[j, 0], axis[j, 1], axis[j, 2], q, iq[j])
         _store(_compose(_compose(_load(oMi, parent[j]), _load(place, j)), M), oMi, j)
 
 
-@register_jitable(inline="always")
-def frame_placements(k, oMi, F):
+@register_jitable
+def frame_placements(fjoint, fplace, oMi, F):
     """World placement ``F[f]`` of the kernel's frames (constraint frames ``C_a`` of
     the closures, ``C_b``, then the output frame)."""
-    fjoint, fplace = k.fjoint, k.fplace
     for f in range(fjoint.shape[0]):
         _store(_compose(_load(oMi, fjoint[f]), _load(fplace, f)), F, f)
 
 
-@register_jitable(inline="always")
-def tree_twists(k, oMi, S):
+@register_jitable
+def tree_twists(kind, iv, rate, axis, oMi, S):
     """Column ``c`` of ``S`` (6 × nv): the axis-first world twist ``(ω; v_O)`` of velocity
     coordinate ``c``'s joint motion per unit rate (Pinocchio's ``data.J``, reordered)."""
-    kind, iv, rate, axis, parent = k.kind, k.iv, k.rate, k.axis, k.parent
-    for j in range(1, parent.shape[0]):
+    for j in range(1, kind.shape[0]):
         kj, c = kind[j], iv[j]
         T = _load(oMi, j)
         px, py, pz = T[9], T[10], T[11]
@@ -475,9 +473,9 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
     C = ckind.shape[0]
     nv = k.nv
     oMi, F, S, W = ws.oMi, ws.F, ws.S, ws.W
-    tree_placements(k, q, oMi)
-    tree_twists(k, oMi, S)
-    frame_placements(k, oMi, F)
+    tree_placements(k.parent, k.place, k.kind, k.axis, k.rate, k.iq, q, oMi)
+    tree_twists(k.kind, k.iv, k.rate, k.axis, oMi, S)
+    frame_placements(k.fjoint, k.fplace, oMi, F)
     for a in range(4):
         for b in range(4):
             oMo[a, b] = F[2 * C, a, b]
@@ -572,11 +570,11 @@ def _quat_times_exp(q, i, wx, wy, wz):
     q[i], q[i + 1], q[i + 2], q[i + 3] = g * x, g * y, g * z, g * w
 
 
-@register_jitable(inline="always")
-def tree_integrate(k, q, dv):
-    """``q ← integrate(q, dv)`` (Pinocchio's integration of each joint, in place)."""
-    kind, iq, iv, parent = k.kind, k.iq, k.iv, k.parent
-    for j in range(1, parent.shape[0]):
+@register_jitable
+def tree_integrate(kind, iq, iv, q, dv):
+    """``q ← integrate(q, dv)`` (Pinocchio's integration of each joint, in place; the
+    kernel's joint arrays)."""
+    for j in range(1, kind.shape[0]):
         kj, i, c = kind[j], iq[j], iv[j]
         if kj == REVOLUTE or kj == PRISMATIC:
             q[i] += dv[c]
@@ -613,25 +611,21 @@ def tree_integrate(k, q, dv):
             _quat_times_exp(q, i + 3, wx, wy, wz)
 
 
-@register_jitable(inline="always")
-def _rows(k, q, ws, has_targets, targets, e, H, norms, oMo):
-    """All rows at ``q``: closures, then the actuated rows when ``has_targets``.
-    Returns ``(closure, actuated)``."""
-    rows, act_q, act_two, act_scales, act_v = k.rows, k.act_q, k.act_two, k.act_scales, k.act_v
-    closure = closure_rows(k, q, ws, e, H, norms, oMo)
+@register_jitable
+def _actuated_rows(n0, act_q, act_two, act_scales, act_v, q, targets, e, H):
+    """The actuated rows ``(q_a − target_a) / s_a`` from row ``n0`` on; returns their
+    largest magnitude."""
     act = 0.0
-    if has_targets:
-        n0 = rows[rows.shape[0] - 1]
-        for a in range(act_q.shape[0]):
-            i = act_q[a]
-            value = math.atan2(q[i + 1], q[i]) if act_two[a] else q[i]
-            r = n0 + a
-            e[r] = (value - targets[a]) / act_scales[a]
-            for col in range(k.nv):
-                H[r, col] = 0.0
-            H[r, act_v[a]] = 1.0 / act_scales[a]
-            act = max(act, abs(e[r]))
-    return closure, act
+    for a in range(act_q.shape[0]):
+        i = act_q[a]
+        value = math.atan2(q[i + 1], q[i]) if act_two[a] else q[i]
+        r = n0 + a
+        e[r] = (value - targets[a]) / act_scales[a]
+        for col in range(H.shape[1]):
+            H[r, col] = 0.0
+        H[r, act_v[a]] = 1.0 / act_scales[a]
+        act = max(act, abs(e[r]))
+    return act
 
 
 @njit(cache=True, nogil=True)
@@ -645,10 +639,12 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     :func:`stop_rule`, a non-finite step or a stalled one. ``info`` receives ``(r,
     closure, actuated, iterations, converged, at_q)``; ``norms`` and ``oMo`` the last
     evaluation's closure norms and output placement (at ``q`` when ``at_q``)."""
-    units, lower, upper, rows, act_q = k.units, k.lower, k.upper, k.rows, k.act_q
-    kind, iq, iv, parent = k.kind, k.iq, k.iv, k.parent
+    units, lower, upper, rows = k.units, k.lower, k.upper, k.rows
+    kind, iq, iv = k.kind, k.iq, k.iv
+    act_q, act_two, act_scales, act_v = k.act_q, k.act_two, k.act_scales, k.act_v
     nv, nq = k.nv, k.nq
-    m = rows[rows.shape[0] - 1] + (act_q.shape[0] if has_targets else 0)
+    n0 = rows[rows.shape[0] - 1]
+    m = n0 + (act_q.shape[0] if has_targets else 0)
     ws = workspace(k)
     cols = np.empty(nv, np.int64)
     nf = 0
@@ -666,7 +662,9 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     best, slow, it, at_q = np.inf, 0, 0, True
     closure, act, r = 0.0, 0.0, 0.0
     while True:
-        closure, act = _rows(k, q, ws, has_targets, targets, e, H, norms, oMo)
+        closure = closure_rows(k, q, ws, e, H, norms, oMo)
+        if has_targets:
+            act = _actuated_rows(n0, act_q, act_two, act_scales, act_v, q, targets, e, H)
         r = max(closure, act)
         stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
         if stop or nf == 0:
@@ -703,7 +701,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
             dv[cols[a]] = units[cols[a]] * dx[a]
         for a in range(nq):
             q_new[a] = q[a]
-        tree_integrate(k, q_new, dv)
+        tree_integrate(kind, iq, iv, q_new, dv)
         finite = True
         for a in range(nq):
             q_new[a] = min(upper[a], max(lower[a], q_new[a]))
@@ -712,7 +710,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
             break
         it += 1
         moved = 0.0  # |difference(q, q_new) / units|²: only 1-DOF coordinates are clipped
-        for j in range(1, parent.shape[0]):
+        for j in range(1, kind.shape[0]):
             kj, i, c = kind[j], iq[j], iv[j]
             if kj == REVOLUTE or kj == PRISMATIC:
                 d = (q_new[i] - q[i]) / units[c]

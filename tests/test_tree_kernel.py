@@ -141,7 +141,7 @@ def test_integration_equals_pinocchio(model):
     q = random_q(model, rng)
     dv = rng.uniform(-0.5, 0.5, model.nv)
     mine = q.copy()
-    tree_kernel.tree_integrate(kern, mine, dv)
+    tree_kernel.tree_integrate(kern.kind, kern.iq, kern.iv, mine, dv)
     assert np.abs(mine - pin.integrate(model.tree, q, dv)).max() <= 1e-12
 
 
