@@ -53,6 +53,10 @@ the Python driver evaluates them with Pinocchio (legs the kernels cannot represe
 continuous or multi-DOF joints; one-off calls before the compiled code is ready) and runs
 :func:`closure_iteration` compiled (:data:`iteration_compiled`) or as Python.
 
+The tree solver of a general closure model (:func:`solve_tree`, below) has two drivers
+too: its rows evaluated by Pinocchio, or the whole loop compiled
+(:mod:`pkm_pin.tree_kernel`) for trees whose joints the compiled tree represents.
+
 Restarts: :func:`start_configurations` (warm start, neutral, middle of the limits, N random
 configurations drawn with a seed).
 """
