@@ -217,7 +217,7 @@ def damping(r: float) -> float:
 
     It grows with the error and vanishes at the solution (quadratic convergence kept);
     it tames singular starts (UR5 from neutral: 48/60 first-try vs 5/60 undamped). The
-    closure solver (:func:`pkm_pin.solve.lm_damping`) writes the same expression out for
+    closure solver (:func:`pkm_pin.newton.lm_damping`) writes the same expression out for
     its compiled code (numba's cache would not see a change made here); a test checks
     that they agree.
     """

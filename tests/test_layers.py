@@ -34,7 +34,7 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
     2: ("kinematics of one configuration: compiled leg kinematics, the Pinocchio pass, "
         "serial chains, the assembly record whose twists that pass verifies, the default "
         "output chosen from one configuration's motions",
-        ("kernels", "twists", "serial", "assembly", "output_choice")),
+        ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly", "output_choice")),
     3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
         ("solve", "leg")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "

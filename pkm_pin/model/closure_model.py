@@ -181,8 +181,9 @@ class ClosureModel:
         set_(self, "_local", threading.local())
 
     def __getstate__(self) -> dict:
-        """Pickle: the description (not the per-thread working data)."""
-        return {k: v for k, v in self.__dict__.items() if k != "_local"}
+        """Pickle: the description (not the per-thread working data, nor the compiled
+        tree of :func:`pkm_pin.tree_kernel.tree_kernel`, made again on first use)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_local", "_tree_kernel")}
 
     def __setstate__(self, state: dict) -> None:
         """Unpickle: the description as pickled, its arrays read-only again."""
