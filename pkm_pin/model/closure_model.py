@@ -136,6 +136,10 @@ class ClosureModel:
         reference: Reference configuration of the tree (nq,), the one assembly starts
             from (a file's ``q = 0`` or MJCF ``qpos0``; it need not satisfy the
             closures); default ``pinocchio.neutral(tree)``. Read-only.
+        actuator_matches: What the file named as actuators and which joints each name
+            picked, ``((identifier, (joint, ...)), ...)`` in the file's order (an Extended
+            URDF's ``name_mot`` entries, an MJCF's actuators); empty for a model made in
+            code. Reports may list it.
     """
 
     tree: pin.Model = field(repr=False)
@@ -146,6 +150,7 @@ class ClosureModel:
     length: float | None = None
     reference: np.ndarray | None = field(default=None, repr=False)
     output_point: bool = False
+    actuator_matches: tuple = ()
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
     _plan: _Plan = field(init=False, repr=False)
@@ -165,6 +170,8 @@ class ClosureModel:
         set_(self, "tree", tree)
         set_(self, "closures", closures)
         set_(self, "actuated", tuple(self.actuated))
+        set_(self, "actuator_matches", tuple((str(k), tuple(v))
+                                             for k, v in self.actuator_matches))
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_actuated(tree, self.actuated, self.name)
         set_(self, "length", _length(tree, closures, self.length))
