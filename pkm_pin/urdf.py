@@ -56,9 +56,9 @@ class LimitExceeded(Exception):
         super().__init__(reason)
 
 
-def read_bounded(path: Path, limit: int, what: str) -> str:
-    """The text of ``path`` (UTF-8), refused before reading it whole when it is larger than
-    ``limit`` bytes.
+def read_bounded(path: Path, limit: int, what: str, binary: bool = False) -> str | bytes:
+    """The text of ``path`` (UTF-8; its bytes if ``binary``), refused before reading it
+    whole when it is larger than ``limit`` bytes.
 
     Raises:
         LimitExceeded: the file is too large.
@@ -71,7 +71,7 @@ def read_bounded(path: Path, limit: int, what: str) -> str:
         shown = f"{size / 1e6:.1f} MB" if size > limit else f"more than {limit / 1e6:g} MB"
         raise LimitExceeded(f"the {what} is {shown}, more than the {limit / 1e6:g} MB "
                             "pkm_pin reads")
-    return data.decode("utf-8")
+    return data if binary else data.decode("utf-8")
 
 
 def check_xml_limits(xml: str | bytes, limit_depth: int = MAX_XML_DEPTH,
