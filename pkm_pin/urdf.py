@@ -65,9 +65,11 @@ def read_bounded(path: Path, limit: int, what: str, binary: bool = False) -> str
         OSError, UnicodeDecodeError: as :meth:`Path.read_text`.
     """
     with open(path, "rb") as f:
-        data = f.read(limit + 1)
-    if len(data) > limit:
-        size = os.path.getsize(path)
+        size = os.fstat(f.fileno()).st_size  # 0 for a pipe: read up to the limit
+        data = f.read((min(size, limit) if size else limit) + 1) if size <= limit else b""
+        if size and len(data) == size + 1:  # grew while read: read on, within the limit
+            data += f.read(limit + 1 - len(data))
+    if size > limit or len(data) > limit:
         shown = f"{size / 1e6:.1f} MB" if size > limit else f"more than {limit / 1e6:g} MB"
         raise LimitExceeded(f"the {what} is {shown}, more than the {limit / 1e6:g} MB "
                             "pkm_pin reads")

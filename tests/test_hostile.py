@@ -135,6 +135,27 @@ def test_other_yaml_constructs_are_refused(tmp_path, text, reason):
     assert reason in message and seconds < 5
 
 
+def test_deeply_nested_toml_closures_file_is_one_line(tmp_path):
+    """A TOML closures file nested 100 000 deep is a ClosureFileError, not a RecursionError."""
+    urdf = five_bar(tmp_path, FIVE_BAR_YAML)
+    toml = tmp_path / "c.toml"
+    toml.write_text("closed_loop = " + "[" * 100_000 + "]" * 100_000 + "\ntype = []\n")
+    message, seconds, _ = refused(lambda: read_extended_urdf(urdf, toml))
+    assert "not valid TOML: arrays or tables nested too deep" in message and seconds < 5
+
+
+def test_included_files_share_the_size_budget(tmp_path, monkeypatch):
+    """The main file and its includes together stay within the MJCF size limit."""
+    import pkm_pin.model.mjcf as mjcf
+
+    monkeypatch.setattr(mjcf, "MAX_BYTES", 400)
+    (tmp_path / "r.xml").write_text("<mujoco>" + "<!-- padding -->" * 20 + "</mujoco>")
+    (tmp_path / "s.xml").write_text('<mujoco><include file="r.xml"/>' + " " * 100
+                                    + "</mujoco>")
+    message, _, _ = refused(lambda: read_mjcf(tmp_path / "s.xml"))
+    assert "with its included files, the model is more than 0.0004 MB" in message
+
+
 # ----------------------------------------------------------------------- name_mot
 def test_name_mot_equal_to_a_joint_picks_it_alone(tmp_path):
     """'mot1' picks joint mot1 alone even when 'mot1_free' contains it; what each

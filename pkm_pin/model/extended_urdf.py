@@ -223,7 +223,10 @@ def _parse(text: str, label: str, toml: bool):
         try:
             return tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
-            raise ClosureFileError(label, "", f"not valid TOML: {e}") from e
+            raise ClosureFileError(label, "", f"not valid TOML: {_cut(str(e))[1:-1]}") from e
+        except RecursionError as e:  # tomllib recurses once per nested array or table
+            raise ClosureFileError(label, "", "not valid TOML: arrays or tables nested too "
+                                   "deep; a closures file nests 2 deep") from e
     import yaml
 
     try:

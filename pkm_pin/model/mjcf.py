@@ -135,7 +135,10 @@ def _parse_file(path: Path, label: str, budget: list) -> ET.Element:
         data = read_bounded(path, budget[0], "MJCF (with its included files)", binary=True)
         check_xml_limits(data)
     except LimitExceeded as e:
-        raise ClosureFileError(label, "", e.reason) from e
+        reason = e.reason if budget[0] == MAX_BYTES else (
+            f"with its included files, the model is more than {MAX_BYTES / 1e6:g} MB, the "
+            "most pkm_pin reads")
+        raise ClosureFileError(label, "", reason) from e
     except OSError as e:
         raise ClosureFileError(label, "", f"cannot be read: {e}") from e
     budget[0] -= len(data)
