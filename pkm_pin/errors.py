@@ -22,6 +22,19 @@ def _cut(value, limit: int = MAX_ECHO) -> str:
     return text if len(text) <= limit else text[:limit - 1] + "…"
 
 
+def _clip(text: str, limit: int = MAX_ECHO) -> str:
+    """``text`` (a path, a label) cut to ``limit`` characters, ending with "…" when cut."""
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def _is_file(path) -> bool:
+    """``Path.is_file()``, False for names the OS refuses (too long, a NUL byte)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
+
 def _listing(names: Iterable[str], limit: int = 25) -> str:
     """Comma-separated, quoted list of names (each cut by :func:`_cut`), cut after
     ``limit`` entries."""

@@ -66,7 +66,7 @@ from pathlib import Path
 
 import pinocchio as pin
 
-from ..errors import ClosureFileError, UrdfError, _cut, _listing
+from ..errors import ClosureFileError, UrdfError, _clip, _cut, _is_file, _listing
 from ..urdf import LimitExceeded, _captured_stderr, read, read_bounded
 from .closure_model import Closure, ClosureModel
 
@@ -156,10 +156,10 @@ def find_closures_file(urdf_path: str | os.PathLike) -> Path:
     candidates = [urdf.with_suffix(s) for s in (".yaml", ".yml", ".toml")]
     candidates.append(urdf.parent / "robot.yaml")
     for c in candidates:
-        if c.is_file():
+        if _is_file(c):
             return c
-    raise ClosureFileError(str(urdf), "", "no closures file beside it (looked for "
-                           + ", ".join(c.name for c in candidates)
+    raise ClosureFileError(_clip(str(urdf)), "", "no closures file beside it (looked for "
+                           + ", ".join(_clip(c.name, 80) for c in candidates)
                            + "); write one or pass closures_path=")
 
 
@@ -167,8 +167,8 @@ def find_closures_file(urdf_path: str | os.PathLike) -> Path:
 def read_closures_file(path: str | os.PathLike) -> ClosureSpec:
     """Read and check a closures file (YAML, or TOML by suffix) without its URDF."""
     path = Path(path)
-    label = str(path)
-    if not path.is_file():
+    label = _clip(str(path))
+    if not _is_file(path):
         raise ClosureFileError(label, "", "no such closures file; check the path")
     try:
         text = read_bounded(path, MAX_CLOSURES_BYTES, "closures file")

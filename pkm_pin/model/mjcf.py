@@ -45,7 +45,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ClosureFileError, _cut, _listing
+from ..errors import ClosureFileError, _clip, _cut, _is_file, _listing
 from ..urdf import (
     MAX_BYTES,
     MAX_COORDINATE,
@@ -83,7 +83,7 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
             file, the element and how to fix it.
     """
     path = Path(path)
-    label = str(path)
+    label = _clip(str(path))
     root, rewritten = _parse(path)
     tree = _build_tree(path, root, rewritten)
     renamed = _distinct_frame_names(tree)
@@ -106,8 +106,8 @@ def _parse(path: Path) -> tuple[ET.Element, bool]:
         ClosureFileError: a missing, too large, too deep or malformed file, a wrong include
             or a number out of range.
     """
-    label = str(path)
-    if not path.is_file():
+    label = _clip(str(path))
+    if not _is_file(path):
         raise ClosureFileError(label, "", "no such MJCF file; check the path")
     budget = [MAX_BYTES]
     root = _parse_file(path, label, budget)
@@ -165,7 +165,7 @@ def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
         return str(p.relative_to(folder)) if p.is_relative_to(folder) else str(p)
 
     def load(el: ET.Element, including: Path, chain: tuple) -> ET.Element:
-        label, name = str(including), el.get("file")
+        label, name = _clip(str(including)), el.get("file")
         where = f"include {_cut(name)}" if name is not None else "include"
         if not name:
             raise ClosureFileError(label, where, "has no file attribute")
@@ -188,13 +188,13 @@ def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
         if target in seen:
             raise ClosureFileError(label, where, f"{shown(target)} is included twice; MuJoCo "
                                    "includes a file at most once")
-        if not target.is_file():
+        if not _is_file(target):
             raise ClosureFileError(label, where, f"no such file {_cut(str(target))} (paths "
                                    "are relative to the main file's folder, as in MuJoCo)")
         seen.append(target)
-        sub = _parse_file(target, str(target), budget)
+        sub = _parse_file(target, _clip(str(target)), budget)
         if sub.tag != "mujoco":
-            raise ClosureFileError(str(target), "", f"the root element is "
+            raise ClosureFileError(_clip(str(target)), "", f"the root element is "
                                    f"<{_cut(sub.tag)[1:-1]}>; an included MJCF's must be "
                                    "<mujoco>")
         expand(sub, target, chain + (target,))
