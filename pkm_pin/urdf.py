@@ -226,6 +226,11 @@ def _floats(text: str | None, n: int, what: str, label: str,
 
 def _check_structure(root: ET.Element, label: str) -> None:
     """Check the link/joint tree: names, references, parents, loops, axes, limits."""
+    for el in root.iter():
+        if isinstance(el.tag, str) and el.tag.startswith("{http://www.ros.org/wiki/xacro}"):
+            raise UrdfError(label, f"<xacro:{_cut(el.tag.split('}')[1])[1:-1]}> is a xacro "
+                            "macro, which pkm_pin does not expand",
+                            "run 'xacro FILE > FILE.urdf' and give the URDF")
     links = [l.get("name") for l in root.findall("link")]
     if not links:
         raise UrdfError(label, "the robot has no <link>")

@@ -272,6 +272,22 @@ def test_mjcf_numbers_are_checked(tmp_path, old, new, where, reason):
     assert info.value.where == where and reason in str(info.value)
 
 
+def test_xacro_and_unexpanded_mjcf_elements_are_refused_by_name(tmp_path):
+    """A xacro macro in a URDF and an MJCF <replicate> (which Pinocchio ignores) are
+    refused by name instead of giving a model without those bodies."""
+    xacro = '<robot name="r" xmlns:xacro="http://www.ros.org/wiki/xacro">' \
+        '<xacro:include filename="arm.xacro"/><link name="a"/></robot>'
+    message, _, _ = refused(lambda: read(xacro), UrdfError)
+    assert "<xacro:include> is a xacro macro" in message
+    text = (LOOPS / "four_bar.xml").read_text().replace(
+        "<worldbody>", '<worldbody><replicate count="3" offset="0 0 1"><body name="r"/>'
+        "</replicate>")
+    (tmp_path / "r.xml").write_text(text)
+    with pytest.raises(ClosureFileError) as info:
+        read_mjcf(tmp_path / "r.xml")
+    assert info.value.where == "<replicate>" and "repeats its bodies" in str(info.value)
+
+
 # ------------------------------------------------------------------------ includes
 SCENE = """<mujoco model="{name} scene">
   <include file="{robot}"/>

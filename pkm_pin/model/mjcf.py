@@ -70,6 +70,12 @@ MAX_INCLUDE_DEPTH = 8
 _NUMERIC = ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis", "axis", "range", "ref",
             "anchor", "relpose", "fromto")
 
+#: MJCF elements that make bodies Pinocchio 4.1's parser ignores (the model would lose
+#: them without a word): refused by name.
+_NOT_EXPANDED = {"attach": "attaches a sub-model", "replicate": "repeats its bodies",
+                 "composite": "generates bodies", "flexcomp": "generates a flex",
+                 "model": "declares a sub-model to attach"}
+
 #: Equality elements that are not loop closures.
 _NOT_CLOSURES = ("joint", "tendon", "flex", "flexvert", "distance")
 
@@ -124,6 +130,11 @@ def _parse(path: Path) -> tuple[ET.Element, bool]:
     if bodies > MAX_LINKS:
         raise ClosureFileError(label, "worldbody", f"{bodies} bodies, more than the "
                                f"{MAX_LINKS} pkm_pin reads")
+    for el in root.iter():
+        if el.tag in _NOT_EXPANDED and (el.tag != "model" or el.get("file") is not None):
+            raise ClosureFileError(label, f"<{el.tag}>", f"{_NOT_EXPANDED[el.tag]}, which "
+                                   "Pinocchio's MJCF parser ignores; write the bodies out "
+                                   "(MuJoCo's compiled model, mj_saveLastXML, has them)")
     _check_numbers(label, root)
     return root, bool(included or merged)
 
