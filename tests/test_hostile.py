@@ -144,6 +144,14 @@ def test_deeply_nested_toml_closures_file_is_one_line(tmp_path):
     assert "not valid TOML: arrays or tables nested too deep" in message and seconds < 5
 
 
+def test_deeply_nested_mechanism_file_is_one_cli_line(tmp_path, capsys):
+    """A mechanism TOML nested 100 000 deep: exit 2, one line (no RecursionError)."""
+    path = tmp_path / "deep.toml"
+    path.write_text("name = " + "[" * 100_000 + "]" * 100_000 + "\n")
+    assert main(["analyze", str(path)]) == 2
+    assert "not valid TOML: maximum recursion depth exceeded" in one_error_line(capsys)
+
+
 def test_included_files_share_the_size_budget(tmp_path, monkeypatch):
     """The main file and its includes together stay within the MJCF size limit."""
     import pkm_pin.model.mjcf as mjcf
