@@ -357,6 +357,9 @@ def test_bad_includes_are_one_line_errors(tmp_path, files, main_file, where, rea
     for name, text in files.items():
         (tmp_path / name).parent.mkdir(parents=True, exist_ok=True)
         (tmp_path / name).write_text(text)
+    with pytest.raises(ClosureFileError) as info:
+        read_mjcf(tmp_path / main_file)
+    assert any(info.value.path == str(tmp_path / name) for name in files)
     message, seconds, peak = refused(lambda: read_mjcf(tmp_path / main_file))
     assert where in message and reason in message and seconds < 5 and peak < 500
 

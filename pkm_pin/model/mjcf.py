@@ -169,14 +169,16 @@ def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
     resolved), a cycle, a second include of a file, nesting deeper than
     :data:`MAX_INCLUDE_DEPTH`, a file that is not ``<mujoco>``. Returns the files
     inlined."""
-    folder = main.resolve().parent
+    start = main.resolve()
+    folder = start.parent
     seen: list[Path] = []
+    labels = {start: _clip(str(main))}  # errors name the main file as it was given
 
     def shown(p: Path) -> str:
         return str(p.relative_to(folder)) if p.is_relative_to(folder) else str(p)
 
     def load(el: ET.Element, including: Path, chain: tuple) -> ET.Element:
-        label, name = _clip(str(including)), el.get("file")
+        label, name = labels[including], el.get("file")
         where = f"include {_cut(name)}" if name is not None else "include"
         if not name:
             raise ClosureFileError(label, where, "has no file attribute")
@@ -203,9 +205,10 @@ def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
             raise ClosureFileError(label, where, f"no such file {_cut(str(target))} (paths "
                                    "are relative to the main file's folder, as in MuJoCo)")
         seen.append(target)
-        sub = _parse_file(target, _clip(str(target)), budget)
+        labels[target] = _clip(str(target))
+        sub = _parse_file(target, labels[target], budget)
         if sub.tag != "mujoco":
-            raise ClosureFileError(_clip(str(target)), "", f"the root element is "
+            raise ClosureFileError(labels[target], "", f"the root element is "
                                    f"<{_cut(sub.tag)[1:-1]}>; an included MJCF's must be "
                                    "<mujoco>")
         expand(sub, target, chain + (target,))
@@ -226,7 +229,6 @@ def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
                     stack.append(child)
                     i += 1
 
-    start = main.resolve()
     expand(root, start, (start,))
     return seen
 
