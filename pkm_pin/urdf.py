@@ -42,7 +42,7 @@ MAX_XML_DEPTH = 100
 #: Most XML elements accepted in one model (all its included files together).
 MAX_XML_ELEMENTS = 200_000
 #: Largest |coordinate| accepted [m] (origins, positions, anchors), and the largest
-#: |angle| [rad or deg]: a mechanism is not a kilometre wide; beyond, the
+#: |angle| [rad or deg]: a mechanism is not a thousand kilometres wide; beyond, the
 #: residuals and rank decisions lose their meaning (1e308 overflows to inf).
 MAX_COORDINATE = 1e6
 

@@ -178,6 +178,22 @@ def test_name_mot_equal_to_a_joint_picks_it_alone(tmp_path):
     assert model.actuator_matches == (("mot", ("mot1", "mot1_free", "mot2")),)
 
 
+def test_actuator_matches_keeps_the_constructor_compatible():
+    """ClosureModel without actuator_matches works as before (empty); a mapping is
+    accepted; anything else is an InputError."""
+    from dataclasses import replace
+
+    from pkm_pin.errors import InputError
+
+    model = read_mjcf(LOOPS / "four_bar.xml")
+    bare = type(model)(model.tree, model.closures, model.actuated, model.output)
+    assert bare.actuator_matches == ()
+    assert replace(bare, actuator_matches={"m": ["crank_joint"]}).actuator_matches == (
+        ("m", ("crank_joint",)),)
+    with pytest.raises(InputError, match="actuator_matches must be pairs"):
+        replace(bare, actuator_matches=3)
+
+
 @pytest.mark.parametrize("names,where,reason", [
     ("['']", "name_mot[0]", "the empty name '' is part of every joint name"),
     ("['mot1', 'nowhere']", "name_mot[1]", "'nowhere' matches no movable joint"),

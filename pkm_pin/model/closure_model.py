@@ -170,8 +170,14 @@ class ClosureModel:
         set_(self, "tree", tree)
         set_(self, "closures", closures)
         set_(self, "actuated", tuple(self.actuated))
-        set_(self, "actuator_matches", tuple((str(k), tuple(v))
-                                             for k, v in self.actuator_matches))
+        matches = self.actuator_matches
+        try:
+            matches = tuple((str(k), tuple(str(j) for j in v)) for k, v in (
+                matches.items() if isinstance(matches, dict) else matches))
+        except (TypeError, ValueError) as e:
+            raise InputError("actuator_matches must be pairs (identifier, joint names), got "
+                             f"{type(matches).__name__}") from e
+        set_(self, "actuator_matches", matches)
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_actuated(tree, self.actuated, self.name)
         set_(self, "length", _length(tree, closures, self.length))
