@@ -152,6 +152,20 @@ def test_deeply_nested_mechanism_file_is_one_cli_line(tmp_path, capsys):
     assert "not valid TOML: maximum recursion depth exceeded" in one_error_line(capsys)
 
 
+def test_counts_are_bounded(tmp_path):
+    """More than 500 closures in a closures file, or 500 actuators in an MJCF, are refused
+    before anything is built from them."""
+    urdf = five_bar(tmp_path, "closed_loop: [" + ", ".join(["[a, b]"] * 501) + "]\n"
+                    "type: []\nname_mot: []\n")
+    message, _, _ = refused(lambda: read_extended_urdf(urdf))
+    assert "closed_loop: has 501 entries, more than the 500" in message
+    text = (LOOPS / "four_bar.xml").read_text().replace(
+        "<actuator>", "<actuator>" + '<motor joint="crank_joint"/>' * 501)
+    (tmp_path / "m.xml").write_text(text)
+    message, _, _ = refused(lambda: read_mjcf(tmp_path / "m.xml"))
+    assert "actuator: 502 actuators, more than the 500 pkm_pin reads" in message
+
+
 def test_included_files_share_the_size_budget(tmp_path, monkeypatch):
     """The main file and its includes together stay within the MJCF size limit."""
     import pkm_pin.model.mjcf as mjcf

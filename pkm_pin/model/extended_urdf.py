@@ -67,7 +67,7 @@ from pathlib import Path
 import pinocchio as pin
 
 from ..errors import ClosureFileError, UrdfError, _clip, _cut, _is_file, _listing
-from ..urdf import LimitExceeded, _captured_stderr, read, read_bounded
+from ..urdf import MAX_LINKS, LimitExceeded, _captured_stderr, read, read_bounded
 from .closure_model import Closure, ClosureModel
 
 if sys.version_info >= (3, 11):
@@ -318,6 +318,9 @@ def _names(content: dict, key: str, label: str, str_items: bool = True) -> tuple
         return ()
     if not isinstance(value, list):
         raise ClosureFileError(label, key, f"must be a list, got {_cut(value)}")
+    if len(value) > MAX_LINKS:
+        raise ClosureFileError(label, key, f"has {len(value)} entries, more than the "
+                               f"{MAX_LINKS} joints pkm_pin reads in a URDF")
     for i, item in enumerate(value):
         if str_items and not isinstance(item, str):
             raise ClosureFileError(label, f"{key}[{i}]", f"must be a name (string), got "

@@ -126,10 +126,13 @@ def _parse(path: Path) -> tuple[ET.Element, bool]:
         _check_inlined_size(label, root)
     if root.find("worldbody") is None:
         raise ClosureFileError(label, "worldbody", "is missing; an MJCF needs a <worldbody>")
-    bodies = sum(1 for _ in root.iter("body"))
-    if bodies > MAX_LINKS:
-        raise ClosureFileError(label, "worldbody", f"{bodies} bodies, more than the "
-                               f"{MAX_LINKS} pkm_pin reads")
+    for section, tag, what in (("worldbody", "body", "bodies"),
+                               ("equality", "equality/*", "equality constraints"),
+                               ("actuator", "actuator/*", "actuators")):
+        count = sum(1 for _ in root.iterfind(f".//{tag}" if tag == "body" else tag))
+        if count > MAX_LINKS:
+            raise ClosureFileError(label, section, f"{count} {what}, more than the "
+                                   f"{MAX_LINKS} pkm_pin reads")
     for el in root.iter():
         if el.tag in _NOT_EXPANDED and (el.tag != "model" or el.get("file") is not None):
             raise ClosureFileError(label, f"<{el.tag}>", f"{_NOT_EXPANDED[el.tag]}, which "
