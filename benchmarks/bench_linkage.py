@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 from timing import best_of_each
 
-from pkm_pin.mechanism import load_mechanism
+from pkm_pin import load_mechanism
 
 CASSIE = Path(__file__).resolve().parents[1] / "models" / "loops" / "cassie_knee.urdf"
 

@@ -25,8 +25,9 @@ from .errors import (  # noqa: E402
     SingularityError,
     UrdfError,
 )
+from .io import load_mechanism  # noqa: E402
 from .leg import Leg, LegSolution  # noqa: E402
-from .mechanism import Assembly, Mechanism, load_mechanism  # noqa: E402
+from .mechanism import Assembly, Mechanism  # noqa: E402
 from .sensitivity import Sensitivity  # noqa: E402
 from .sweep import SweepResult  # noqa: E402
 from .view import view  # noqa: E402

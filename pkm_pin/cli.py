@@ -90,7 +90,7 @@ def shipped_models() -> dict[str, dict]:
     ``models/mechanisms/*.toml`` (same name for the same mechanism).
     """
     from .builders import DESCRIPTIONS, MECHANISMS
-    from .mechanism import tomllib
+    from .io import tomllib
 
     models = {name: {"description": DESCRIPTIONS.get(name, ""), "builder": True, "file": None}
               for name in MECHANISMS}
@@ -124,8 +124,8 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
         InputError: ``spec`` is neither a file nor a shipped model.
     """
     from .builders import MECHANISMS
+    from .io import load_mechanism
     from .linkage import Linkage
-    from .mechanism import load_mechanism
 
     options = {"closures": closures, "output": output, "point": point}
     given = [f"--{k}" if k != "point" else ("--point" if v else "--body")
@@ -268,7 +268,8 @@ def _analyze_linkage(args, link) -> int:
     if args.json:
         print(_json(data))
     else:
-        print(rl.linkage_text(data, rl.body_frames(link.model)))
+        likely, frames = rl.output_hint(link.model, assembly.q)
+        print(rl.linkage_text(data, frames, likely))
         if args.markdown:
             print(f"markdown           {args.markdown}")
     return 0
@@ -277,7 +278,7 @@ def _analyze_linkage(args, link) -> int:
 def cmd_check(args) -> int:
     """Load a mechanism file, assemble it at home and analyse it; report problems."""
     from .crosscheck import crosscheck
-    from .mechanism import load_mechanism
+    from .io import load_mechanism
 
     path = Path(args.file)
     if not _is_file(path) and _is_file(models_dir() / f"{args.file}.toml"):
@@ -351,6 +352,8 @@ def _check_linkage(path: Path, link) -> int:
     if dependent:
         warnings.append(f"actuated joints {', '.join(dependent)} depend on the others "
                         "(redundant actuation)")
+    if an.mobility.singular:
+        warnings.append(an.mobility.singular_words)
     if an.singularity != "none":
         warnings.append(f"the reference assembly is a type {an.singularity} singularity "
                         "(indices " + ", ".join(f"{k} {v:.2g}" for k, v in an.indices.items())
@@ -792,7 +795,6 @@ def cmd_workspace(args) -> int:
     kind's boundary surface for three coordinates)."""
     from .plots import workspace_plots
     from .view import workspace_cloud
-    from .workspace import workspace
 
     mech = _load(args)
     prefix = Path(args.out if args.out else f"workspace_{_slug(args.mechanism)}")
@@ -820,7 +822,7 @@ def cmd_workspace(args) -> int:
         executor = ProcessPoolExecutor(args.jobs)
         options.update(executor=executor, chunk_size=args.chunk_size)
     try:
-        ws = workspace(mech, coords, **options)
+        ws = mech.workspace(coords, **options)
     finally:
         if executor is not None:
             executor.shutdown()

@@ -12,8 +12,14 @@ whole tree:
   per-leg solver), with restarts (:func:`pkm_pin.solve.tree_starts`) and the branch
   nearest the guess.
 * **Mobility** (:meth:`Linkage.mobility`): ``dof = nv − rank J_c``, redundant closure
-  rows, idle motions (those left with every actuated joint locked, described in words),
-  the actuated joints that can be driven independently, and Grübler's count.
+  rows, idle motions (those left with every actuated joint locked: a sparse basis of
+  them, :func:`sparse_basis`, each described in words), the actuated joints that can be
+  driven independently, and Grübler's count; and whether the configuration is singular:
+  the ranks of ``J_c`` and of ``J_c`` with the actuated rows against their generic
+  values, the largest at a few nearby configurations on the closure manifold (a random
+  step along the allowed motions, projected back by the tree solver, seeded), with the
+  representation singularities found (three revolutes standing for a spherical joint at
+  a gimbal lock, a joint exactly at a limit).
 * **Output analysis** (:meth:`Linkage.analyze` → :class:`LinkageAnalysis`): the output
   frame's twist system, its constraint wrenches, ``A Δ t = B q̇_a``, velocity maps,
   singularity classes and dimensionless indices.
@@ -64,6 +70,8 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -72,15 +80,27 @@ import pinocchio as pin
 
 from . import screws
 from .analysis import classify
+from .assembly import Assembly
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
-from .model.closure_model import ClosureModel, NullSpace, TreeKinematics, pose_rows
+from .mechanism import Mechanism
+from .model.closure_model import (
+    ClosureModel,
+    NullSpace,
+    TreeKinematics,
+    pose_rows,
+    sparse_basis,
+)
 from .model.structure import detect_platform
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
+    GIMBAL_LOCK_RTOL,
+    JOINT_LIMIT_SLACK,
     MODES_PATIENCE,
+    NEARBY_SAMPLES,
+    NEARBY_STEP,
     RANK_RTOL,
     ROTATION_COUNT_TOL,
     SAME_CONFIGURATION_TOL,
@@ -88,7 +108,7 @@ from .tolerances import (
 )
 
 __all__ = ["Linkage", "LinkageAnalysis", "LinkageAssembly", "LinkageSweep", "LoopClosureError",
-           "Mobility"]
+           "Mobility", "sparse_basis"]
 
 
 class LoopClosureError(AssemblyError):
@@ -144,6 +164,17 @@ class Mobility:
         independent_actuators: The actuated joints that can be driven independently
             (the first maximal independent set, in actuated order).
         grubler: Grübler–Kutzbach count ``Σ joint nv − Σ closure rows``.
+        rank: ``rank J_c`` here.
+        generic_dof, generic_idle_dof: ``dof`` and ``idle_dof`` at generic
+            configurations: the largest ranks of ``J_c`` and of ``J_c`` with the
+            actuated rows among this configuration and
+            :data:`~pkm_pin.tolerances.NEARBY_SAMPLES` nearby ones on the closure
+            manifold (a step along the allowed motions, and off the representation
+            singularities, projected back by the tree solver; seeded); ``None``: not
+            sampled (``nearby=0``).
+        singular: Whether a rank here is below the generic one (``None``: not decided).
+        representation: Representation singularities here, one sentence each (three
+            revolutes at a gimbal lock, a joint exactly at a limit).
     """
 
     dof: int
@@ -152,6 +183,28 @@ class Mobility:
     idle_motions: tuple
     independent_actuators: tuple
     grubler: int
+    rank: int | None = None
+    generic_dof: int | None = None
+    generic_idle_dof: int | None = None
+    singular: bool | None = None
+    representation: tuple = ()
+
+    @property
+    def singular_words(self) -> str:
+        """One sentence on a singular configuration (its ranks against the generic ones
+        and the representation singularities); ``""`` when it is not singular."""
+        if not self.singular:
+            return ""
+        nv = self.dof + self.rank
+        locked, generic_locked = nv - self.idle_dof, nv - self.generic_idle_dof
+        text = (f"singular configuration: DOF {self.dof}, idle DOF {self.idle_dof} here, "
+                f"{self.generic_dof} and {self.generic_idle_dof} at nearby configurations "
+                f"on the closure manifold (closure Jacobian rank {self.rank}, generic "
+                f"{nv - self.generic_dof}; with the actuated joints locked {locked}, "
+                f"generic {generic_locked})")
+        if self.representation:
+            text += "; representation singularity: " + "; ".join(self.representation)
+        return text
 
 
 class Linkage:
@@ -175,6 +228,10 @@ class Linkage:
             model = replace(model, output_point=bool(point))
         self._model = model
         self._loops = _loops_of_actuators(model)
+        #: ``(rank J_c, rank with the actuated rows)`` at the first configuration whose
+        #: nearby ones were sampled (:func:`_mobility`): later configurations with the
+        #: same ranks are generic without sampling again.
+        self._generic_ranks: tuple[int, int] | None = None
 
     def __repr__(self) -> str:
         return f"Linkage({self.name!r}, actuated={self.actuated}, output={self.output!r})"
@@ -205,6 +262,67 @@ class Linkage:
         base–legs–platform machine found in the model (the per-leg engine reads it:
         ``load_mechanism(..., backend="legs")``), or ``None`` and why not (cached)."""
         return detect_platform(self._model)
+
+    @cached_property
+    def legs_mechanism(self) -> Mechanism:
+        """The per-leg reading of this linkage (:meth:`Mechanism.from_closure_model` at
+        :attr:`home_assembly`): what the capabilities that read a machine leg by leg
+        (sensitivity to geometric errors, every working mode, the Study homotopy) use
+        (cached).
+
+        Raises:
+            InputError: no base–legs–platform structure in the model (the reason).
+        """
+        return Mechanism.from_closure_model(self._model, self.home_assembly.q)
+
+    def _legs(self, what: str) -> Mechanism:
+        """:attr:`legs_mechanism`, or an :class:`InputError` saying that ``what`` needs
+        legs and why this model has none."""
+        structure, reason = self.platform_structure
+        if structure is None:
+            raise InputError(f"{what} reads a machine leg by leg (legs between the base "
+                             f"and one platform), and {self.name or 'this linkage'} is not "
+                             f"one: {reason}")
+        return self.legs_mechanism
+
+    def legs_assembly(self, q=None) -> Assembly:
+        """The assembly of :attr:`legs_mechanism` at the tree configuration ``q`` (a
+        :class:`LinkageAssembly` or q; default home): the same pose, each leg's joints
+        from ``q``."""
+        mech = self._legs("a per-leg assembly")
+        q = self.home_assembly.q if q is None else self._guess_q(q)
+        kin = self._model.kinematics(q)
+        guess = []
+        for leg, chain in zip(mech.structure.legs, mech.legs):
+            values = [q[self._model.tree.joints[j].idx_q:self._model.tree.joints[j].idx_q
+                        + self._model.tree.joints[j].nq] for j in leg.joints]
+            known = np.concatenate(values) if values else np.zeros(0)
+            guess.append(np.r_[known, np.zeros(chain.nq - known.size)])
+        return mech.assemble(kin.output_placement, guess=guess)
+
+    def sensitivity(self, q=None, parameters=None):
+        """Sensitivity of the output pose to geometric errors (joint origins and axes,
+        bases, anchors: :func:`pkm_pin.sensitivity.sensitivity`) at ``q`` (default
+        home), read leg by leg through :attr:`legs_mechanism`.
+
+        Raises:
+            InputError: not a base–legs–platform machine (the reason).
+        """
+        mech = self._legs("sensitivity to geometric errors")
+        return mech.sensitivity(self.legs_assembly(q), parameters)
+
+    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0
+                               ) -> list[LinkageAssembly]:
+        """Every working mode at the output ``pose``: one assembly per distinct vector of
+        actuated values, found leg by leg (:meth:`Mechanism.inverse_kinematics_all` of
+        :attr:`legs_mechanism`), as configurations of this tree.
+
+        Raises:
+            InputError: not a base–legs–platform machine (the reason).
+        """
+        mech = self._legs("every working mode of a pose")
+        return [self.assemble(mech.source_configuration(a), starts=0)
+                for a in mech.inverse_kinematics_all(pose, starts=starts, seed=seed)]
 
     @cached_property
     def home_assembly(self) -> LinkageAssembly:
@@ -244,7 +362,13 @@ class Linkage:
         :class:`LinkageAssembly`), ``model.reference``, neutral, the middle of the limits
         and ``starts`` random configurations within the limits (``seed``). A converged
         warm start is kept; otherwise the converged solution nearest ``guess`` (default
-        the reference) is.
+        the reference) is. A solution on a representation singularity (three revolutes
+        at a gimbal lock, a joint exactly at a limit) whose ranks are below those of
+        nearby configurations is not kept: the nearest generic configuration found by
+        stepping off it along the allowed motions, keeping the actuated values (any
+        values when none were asked for and none of those is generic), is
+        (:meth:`_off_representation`; Gepetto's ``wl16_like`` otherwise assembles at
+        a gimbal lock with 9 idle DOF instead of 6).
 
         Raises:
             LoopClosureError: no start closes; the message names the worst loop and its
@@ -259,7 +383,51 @@ class Linkage:
                                             nearest=model.reference if warm is None else warm)
         if not sol.converged:
             raise self._failure(sol, int(starts) + 3 + (warm is not None), targets)
+        off = self._off_representation(sol.q, targets, seed, tol, max_iter)
+        if off is not None:
+            sol, iterations = off[0], iterations + off[1]
         return self._assembly(sol, iterations)
+
+    def _off_representation(self, q: np.ndarray, targets, seed: int, tol: float,
+                            max_iter: int):
+        """A converged :class:`~pkm_pin.solve.TreeSolution` (and its iterations) at a
+        generic configuration near ``q`` when ``q`` sits on a representation singularity
+        (:func:`_representation`) whose ranks are below the generic ones; else ``None``.
+
+        The nearby configurations of :func:`_nearby` (along the allowed motions, the
+        locked coordinates stepped off and held, projected back) keep the actuated
+        values (``targets``, or ``q``'s own); when none is generic and no targets were
+        asked for, they may move the actuated joints too. The generic one nearest
+        ``q`` is kept."""
+        model = self._model
+        hold, _ = _representation(model, None, q)
+        if not hold:
+            return None
+        kin = model.kinematics(q)
+        ns = NullSpace(model, kin, RANK_RTOL)
+        here = _ranks(ns, RANK_RTOL)
+        keep = targets if targets is not None else _actuated_or_nan(model, q)
+        tries = [keep] if targets is not None or not np.isfinite(keep).all() else [keep, None]
+        acted = set(model.actuated_v)
+        for k, goal in enumerate(tries):
+            held = [i for i in hold if goal is None or i not in acted]
+            rng = np.random.default_rng(seed + k)
+            found = _nearby(model, q, ns, held, rng, NEARBY_SAMPLES, NEARBY_STEP, goal, tol,
+                            max_iter)
+            ranked = [(_ranks(NullSpace(model, model.kinematics(s.q), RANK_RTOL),
+                              RANK_RTOL), s) for s in found]
+            all_ranks = [here] + [r for r, _ in ranked]
+            best = (max(r[0] for r in all_ranks), max(r[1] for r in all_ranks))
+            good = [s for r, s in ranked if r == best and r != here]
+            if good:
+                def distance(s):
+                    d = pin.difference(model.tree, q, s.q) / model.velocity_units
+                    return float(d @ d)
+                sol = min(good, key=distance)
+                final = solve_tree(model, sol.q, targets=targets, tol=tol, max_iter=max_iter)
+                return (final, sum(s.iterations for s in found) + final.iterations) \
+                    if final.converged else None
+        return None
 
     def _assembly(self, sol, iterations: int) -> LinkageAssembly:
         """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
@@ -288,15 +456,20 @@ class Linkage:
         return LoopClosureError(what or "output pose", sol.pose, detail)
 
     # ------------------------------------------------------------- mobility
-    def mobility(self, q, rtol: float = RANK_RTOL) -> Mobility:
-        """:class:`Mobility` at the configuration ``q`` (assembled)."""
+    def mobility(self, q, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
+                 seed: int = 0) -> Mobility:
+        """:class:`Mobility` at the configuration ``q`` (assembled, or a
+        :class:`LinkageAssembly`), its ranks compared with those at ``nearby``
+        configurations on the closure manifold (``0``: not compared; ``seed``: of their
+        random steps)."""
+        q = q.q if isinstance(q, LinkageAssembly) else q
         kin = self._model.kinematics(q)
-        return _mobility(self, kin, NullSpace(self._model, kin, rtol), rtol)
+        return _mobility(self, kin, NullSpace(self._model, kin, rtol), rtol, nearby, seed)
 
     # ------------------------------------------------------------- analysis
     def analyze(self, q, *, about: str = "output", generic: LinkageAnalysis | None = None,
-                rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL
-                ) -> LinkageAnalysis:
+                rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL,
+                nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
         """:class:`LinkageAnalysis` of the output frame at the assembled ``q`` (or a
         :class:`LinkageAssembly`).
 
@@ -306,11 +479,15 @@ class Linkage:
                 :class:`pkm_pin.Analysis`).
             generic: An analysis at a generic configuration: a constraint singularity is
                 a change of ``dof`` or ``output_dof`` from it (``None``: not decided).
+            nearby: How many nearby configurations on the closure manifold give the
+                generic ranks of the :class:`Mobility` (``0``: not sampled, as in sweeps
+                and workspaces).
         """
         if about not in ("output", "world"):
             raise InputError(f"about must be 'output' or 'world', got {about!r}")
         q = q.q if isinstance(q, LinkageAssembly) else q
-        return _analyse(self, self._model.kinematics(q), about, generic, rtol, singular_tol)
+        return _analyse(self, self._model.kinematics(q), about, generic, rtol, singular_tol,
+                        nearby)
 
     # ---------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, starts: int = 16, seed: int = 0,
@@ -321,7 +498,8 @@ class Linkage:
         return self.assemble(guess, q_actuated=q_actuated, starts=starts, seed=seed, tol=tol)
 
     def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
-                               patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL):
+                               patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL,
+                               method: str = "auto"):
         """Every assembly mode found for the actuated values: a multistart of the tree
         solver from batches of ``starts`` configurations drawn within the joint limits
         (the reference first), stopped after ``patience`` batches in a row find no new
@@ -330,17 +508,33 @@ class Linkage:
         the characteristic length): an idle motion (a rod spinning between its spherical
         joints) does not make a new mode.
 
+        ``method``: ``"multistart"`` (above), ``"homotopy"`` (every mode, proven, by the
+        Study homotopy of :mod:`pkm_pin.modes`: a machine whose legs are six distance
+        constraints, read through :attr:`legs_mechanism`; refused with the reason
+        otherwise) or ``"auto"`` (the homotopy where it applies, else the multistart).
+
         Returns:
             :class:`~pkm_pin.modes.AssemblyModes` of :class:`LinkageAssembly`, nearest
-            the reference first, ``complete=False`` (a multistart proves nothing).
+            the reference first; ``complete=False`` for a multistart (it proves nothing).
 
         Raises:
             ForwardKinematicsError: no start closes the loops at these values.
+            InputError: ``method="homotopy"`` where it does not apply.
         """
         from time import perf_counter
 
-        from .modes import AssemblyModes
+        from .modes import AssemblyModes, distance_legs
 
+        if method not in ("auto", "homotopy", "multistart"):
+            raise InputError(f"method must be 'auto', 'homotopy' or 'multistart', got "
+                             f"{method!r}")
+        mech = self._homotopy_legs(method, distance_legs)
+        if mech is not None:
+            modes = mech.forward_kinematics_all(q_actuated, seed=seed, tol=tol,
+                                                method="homotopy")
+            found = [self.assemble(mech.source_configuration(a), starts=0) for a in modes]
+            return AssemblyModes(found, modes.complete, modes.method, modes.counts,
+                                 modes.seconds)
         t0 = perf_counter()
         target = self.check_actuated(q_actuated)
         model = self._model
@@ -370,6 +564,20 @@ class Linkage:
         return AssemblyModes(found, False, "multistart",
                              {"starts": tried, "batches": batch, "modes": len(found)},
                              perf_counter() - t0)
+
+    def _homotopy_legs(self, method: str, distance_legs) -> Mechanism | None:
+        """The legs the Study homotopy runs on for ``method`` (``None``: use the
+        multistart); ``"homotopy"`` where it does not apply is an :class:`InputError`."""
+        if method == "multistart" or (method == "auto"
+                                      and self.platform_structure[0] is None):
+            return None
+        try:
+            mech = self._legs("the Study homotopy")
+        except (InputError, AssemblyError):
+            if method == "homotopy":
+                raise
+            return None
+        return mech if method == "homotopy" or distance_legs(mech) is not None else None
 
     def transmission(self, q, *, analysis: LinkageAnalysis | None = None):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or
@@ -410,7 +618,7 @@ class Linkage:
         model, kin = self._model, self._model.kinematics(q)
         an = analysis
         if an is None:
-            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL)
+            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL, 0)
         elif not (np.array_equal(an.q, q) and np.array_equal(
                 an.reference_point, kin.output_placement.translation)):
             raise InputError("analysis: not this linkage's analysis of q about its output "
@@ -487,9 +695,16 @@ class Linkage:
         output axes) are targeted: the output reaches the pose as far as it can move
         towards it, the other components are what the mechanism imposes.
 
+        A partial pose (a mapping of some of x, y, z, roll, pitch, yaw to values, the
+        others solved for: :meth:`Mechanism.complete_pose`) is solved leg by leg through
+        :attr:`legs_mechanism` (refused with the reason where the model has no legs).
+
         Raises:
             LoopClosureError: no start closes the loops and reaches the pose.
         """
+        if isinstance(pose, Mapping):
+            mech = self._legs("a partial pose")
+            return self.assemble(mech.source_configuration(mech.assemble(dict(pose))), starts=0)
         if not isinstance(pose, pin.SE3) or not np.isfinite(pose.homogeneous).all():
             raise InputError(f"pose must be a finite pinocchio.SE3, got {type(pose).__name__}")
         model = self._model
@@ -533,7 +748,7 @@ class Linkage:
             except AssemblyError:
                 continue
             warm = a.q
-            an = self.analyze(a.q, about=about, generic=generic)
+            an = self.analyze(a.q, about=about, generic=generic, nearby=0)
             generic = generic or an
             out.record(i, a, an)
             if transmission:
@@ -568,14 +783,181 @@ def _actuated_or_nan(model: ClosureModel, q: np.ndarray) -> np.ndarray:
 
 
 # ====================================================================== mobility
-def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float) -> Mobility:
+def _ranks(ns: NullSpace, rtol: float) -> tuple[int, int]:
+    """``(rank J_c, rank of J_c with the actuated rows)`` of a :class:`NullSpace`."""
+    return ns.rank, ns.rank + ns.rank_x(rtol)
+
+
+def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
+              nearby: int = NEARBY_SAMPLES, seed: int = 0) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
     idle = ns.idle(rtol)
-    words = tuple(describe_motion(model, kin, ns.units * idle[:, k])
-                  for k in range(idle.shape[1]))
-    return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], words,
-                    _independent(model, ns.X, rtol), link.grubler)
+    words: list[str] = []
+    for k in range(idle.shape[1]):
+        text = describe_motion(model, kin, ns.units * idle[:, k])
+        if text in words:  # two motions of the same joints: tell them apart by their rates
+            text = describe_motion(model, kin, ns.units * idle[:, k], rates=True)
+        words.append(text)
+    hold, representation = _representation(model, kin)
+    here = _ranks(ns, rtol)
+    generic = singular = None
+    known = link._generic_ranks if rtol == RANK_RTOL else None
+    if nearby > 0 and known is not None and here == known:
+        generic, singular = known, False  # the ranks sampled before: generic
+    elif nearby > 0:
+        rng = np.random.default_rng(seed)
+        found = _nearby(model, kin.q, ns, hold, rng, int(nearby), NEARBY_STEP)
+        ranks = [here] + [_ranks(NullSpace(model, model.kinematics(s.q), rtol), rtol)
+                          for s in found]
+        generic = (max(r[0] for r in ranks), max(r[1] for r in ranks))
+        singular = generic != here
+        if known is None and rtol == RANK_RTOL:
+            link._generic_ranks = generic
+    return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], tuple(words),
+                    _independent(model, ns.X, rtol), link.grubler, ns.rank,
+                    None if generic is None else model.nv - generic[0],
+                    None if generic is None else model.nv - generic[1], singular,
+                    tuple(representation))
+
+
+def _nearby(model: ClosureModel, q: np.ndarray, ns: NullSpace, hold, rng, count: int,
+            step: float, targets=None, tol: float = CLOSURE_TOL, max_iter: int = 100
+            ) -> list:
+    """Converged :class:`~pkm_pin.solve.TreeSolution` s at up to ``count``
+    configurations near ``q`` on the closure manifold: a random allowed motion of
+    dimensionless size ``step`` (the columns of ``ns.N``), the velocity coordinates
+    ``hold`` stepped ``step`` off (into the range of a joint at a limit) and held
+    there, projected back onto the closures (and ``targets``) by
+    :func:`~pkm_pin.solve.solve_tree`."""
+    U, hold = model.velocity_units, list(hold)
+    dof = ns.N.shape[1]
+    if not dof and not hold:
+        return []
+    free = None
+    if hold:
+        free = np.ones(model.nv, bool)
+        free[hold] = False
+    signs = _inward(model, q, hold)
+    out = []
+    for _ in range(count):
+        dv = np.zeros(model.nv)
+        if dof:
+            z = rng.normal(size=dof)
+            dv = ns.N @ z * (step / np.linalg.norm(z))
+        if hold:
+            dv[hold] = step * np.where(signs == 0, rng.choice([-1.0, 1.0], len(hold)), signs)
+        sol = solve_tree(model, pin.integrate(model.tree, q, U * dv), free, targets, tol=tol,
+                         max_iter=max_iter)
+        if sol.converged:
+            out.append(sol)
+    return out
+
+
+def _inward(model: ClosureModel, q: np.ndarray, coords) -> np.ndarray:
+    """For each velocity coordinate of a 1-DOF joint: +1 at its lower limit, −1 at its
+    upper limit, 0 elsewhere."""
+    from .solve import tree_limits
+
+    lo, up = tree_limits(model)
+    tree = model.tree
+    out = np.zeros(len(coords))
+    idx_q = {tree.joints[j].idx_v: tree.joints[j].idx_q for j in range(1, tree.njoints)
+             if tree.joints[j].nq == tree.joints[j].nv == 1}
+    for k, i in enumerate(coords):
+        if i in idx_q:
+            iq = idx_q[i]
+            out[k] = 1.0 if q[iq] <= lo[iq] + JOINT_LIMIT_SLACK else (
+                -1.0 if q[iq] >= up[iq] - JOINT_LIMIT_SLACK else 0.0)
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _revolute_triples(model: ClosureModel) -> np.ndarray:
+    """(m × 3) joint indices ``(p, j, c)`` of three consecutive revolute joints of the
+    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians)
+    whose axes meet at one point (``j`` and ``c`` placed without offset: three
+    revolutes standing for a spherical joint): where a gimbal lock, a representation
+    singularity, can occur (axes that meet elsewhere make a real singularity of the
+    linkage, not one of its description). Read-only; cached per model."""
+    tree, U = model.tree, model.velocity_units
+    tiny = 1e-12 * model.length
+
+    def revolute(j):
+        joint = tree.joints[j]
+        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0
+
+    def centred(j):
+        return np.linalg.norm(tree.jointPlacements[j].translation) <= tiny
+
+    out = [(tree.parents[tree.parents[c]], tree.parents[c], c) for c in range(1, tree.njoints)
+           if revolute(c) and revolute(tree.parents[c])
+           and revolute(tree.parents[tree.parents[c]])
+           and centred(c) and centred(tree.parents[c])]
+    triples = np.array(out, dtype=int).reshape(-1, 3)
+    triples.setflags(write=False)
+    return triples
+
+
+def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
+    """``(joint, "lower" or "upper", limit)`` of the 1-DOF joints exactly at a finite
+    limit of :func:`~pkm_pin.solve.tree_limits` (within
+    :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK`)."""
+    from .solve import tree_limits
+
+    lo, up = tree_limits(model)
+    near_lo = np.abs(q - lo) <= JOINT_LIMIT_SLACK
+    near_up = np.abs(q - up) <= JOINT_LIMIT_SLACK
+    if not (near_lo.any() or near_up.any()):
+        return []
+    tree, out = model.tree, []
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        if joint.nq == joint.nv == 1:
+            i = joint.idx_q
+            if near_lo[i] or near_up[i]:
+                out.append((j, "lower" if near_lo[i] else "upper", lo[i] if near_lo[i]
+                            else up[i]))
+    return out
+
+
+def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None
+                    ) -> tuple[list, list]:
+    """Representation singularities at ``kin.q`` (or ``q``; ``kin`` made only when
+    needed): ``(velocity coordinates, sentences)``.
+
+    * Three consecutive revolute joints (:func:`_revolute_triples`) at a gimbal lock:
+      the first and third axes lie on one line (their unit homogenised twists about the
+      middle joint agree up to sign, :data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`)
+      while the middle one is not on it; the middle joint's coordinate.
+    * A 1-DOF joint exactly at a finite limit (:func:`_at_limits`; the tree solver clips
+      there)."""
+    tree, L = model.tree, model.length
+    q = kin.q if kin is not None else model.check_q(q)
+    coords, words = [], []
+    triples = _revolute_triples(model)
+    if len(triples):
+        kin = kin if kin is not None else model.kinematics(q)
+        J = kin.joint_twists
+        iv = np.array([tree.joints[k].idx_v for k in range(tree.njoints)])
+        centres = np.array([kin.joint_placements[j].translation for j in triples[:, 1]])
+        T = screws.homogenise(screws.about(J[iv[triples]], centres), L)  # m × 3 × 6
+        T /= np.linalg.norm(T, axis=2)[..., None]
+
+        def apart(a, b):
+            return np.minimum(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
+
+        locked = (apart(T[:, 0], T[:, 2]) <= GIMBAL_LOCK_RTOL) \
+            & (apart(T[:, 1], T[:, 0]) > GIMBAL_LOCK_RTOL)
+        for p, j, c in triples[locked].tolist():
+            coords.append(tree.joints[j].idx_v)
+            words.append(f"{tree.names[j]} at a gimbal lock (the axes of {tree.names[p]} "
+                         f"and {tree.names[c]} coincide)")
+    for j, side, limit in _at_limits(model, q):
+        if tree.joints[j].idx_v not in coords:
+            coords.append(tree.joints[j].idx_v)
+            words.append(f"{tree.names[j]} at its {side} limit {limit:.6g}")
+    return coords, words
 
 
 def _independent(model: ClosureModel, X: np.ndarray, rtol: float) -> tuple:
@@ -612,31 +994,67 @@ def _fmt(p: np.ndarray) -> str:
     return "(" + ", ".join(f"{x:.6g}" for x in np.where(np.abs(p) < 1e-12, 0.0, p)) + ")"
 
 
-def describe_motion(model: ClosureModel, kin: TreeKinematics, v: np.ndarray) -> str:
-    """One sentence describing the tree motion ``v`` (nv,): the body that moves and the
-    line it turns about (through its joints' centres when they lie on it), or the
-    joints that move."""
+def describe_motion(model: ClosureModel, kin: TreeKinematics, v: np.ndarray,
+                    rates: bool = False) -> str:
+    """One sentence describing the tree motion ``v`` (nv,), naming only the joints and
+    bodies it moves: the bodies that turn together about one line (through their
+    joints' centres when they lie on it) — "rod spins about the line through its joints
+    at …" for one body alone — and the joints that move, with the other moving bodies,
+    when there are more; else the joints that move and the bodies they move. ``rates``:
+    each joint's rate relative to the largest (to tell apart two motions of the same
+    joints)."""
     tree, L = model.tree, model.length
     x = v / model.velocity_units
-    moving = [tree.names[j] for j in range(1, tree.njoints)
-              if np.abs(x[tree.joints[j].idx_v:tree.joints[j].idx_v + tree.joints[j].nv]).max(
-                  initial=0.0) > 1e-9 * np.abs(x).max()]
+    top = np.abs(x).max(initial=0.0)
+    moving, amount = [], []
+    for j in range(1, tree.njoints):
+        part = x[tree.joints[j].idx_v:tree.joints[j].idx_v + tree.joints[j].nv]
+        big = part[np.argmax(np.abs(part))] if part.size else 0.0
+        if abs(big) > 1e-9 * top:
+            moving.append(tree.names[j])
+            amount.append(big / top)
+    joints = ", ".join(f"{n} ({a:+.3g})" if rates else n for n, a in zip(moving, amount))
     T = _body_twists(model, kin, v)
-    size = np.linalg.norm(screws.homogenise(T, L), axis=1)
+    H = screws.homogenise(T, L)
+    size = np.linalg.norm(H, axis=1)
     bodies = [j for j in range(1, tree.njoints) if size[j] > 1e-9 * size.max()]
-    if len(bodies) == 1:
-        j = bodies[0]
-        w, vel = T[j, :3], T[j, 3:]
-        if np.linalg.norm(w) > 0 and abs(w @ vel) <= 1e-9 * np.linalg.norm(w) ** 2 * L:
-            point, direction = screws.axis(T[j], L)
-            on = [p for p in _body_points(model, kin, j)
-                  if np.linalg.norm(np.cross(p - point, direction)) <= 1e-7 * L]
-            where = (" and ".join(_fmt(p) for p in on[:2]) if len(on) >= 2 else
-                     f"{_fmt(point)} along {_fmt(direction)}")
-            through = "its joints at " if len(on) >= 2 else ""
-            return f"{_body_name(tree, j)} spins about the line through {through}{where}"
-    return (f"joints {', '.join(moving)} move (bodies "
+    groups: list[list[int]] = []
+    for j in bodies:
+        for g in groups:
+            if np.linalg.norm(H[j] - H[g[0]]) <= 1e-9 * size.max():
+                g.append(j)
+                break
+        else:
+            groups.append([j])
+    spin = [g for g in groups if _pure_rotation(T[g[0]], L)]
+    if spin:
+        g = max(spin, key=lambda g: (len(g), size[g[0]]))
+        point, direction = screws.axis(T[g[0]], L)
+        on: list = []
+        for j in g:
+            on += [p for p in _body_points(model, kin, j)
+                   if np.linalg.norm(np.cross(p - point, direction)) <= 1e-7 * L
+                   and all(np.linalg.norm(p - u) > 1e-9 * L for u in on)]
+        where = (" and ".join(_fmt(p) for p in on[:2]) if len(on) >= 2 else
+                 f"{_fmt(point)} along {_fmt(direction)}")
+        names = [_body_name(tree, j) for j in g]
+        who = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+        verb, own = ("spins", "its") if len(names) == 1 else ("spin", "their")
+        through = f"{own} joints at " if len(on) >= 2 else ""
+        text = f"{who} {verb} about the line through {through}{where}"
+        others = [_body_name(tree, j) for j in bodies if j not in g]
+        if len(groups) == 1 and not rates:
+            return text
+        return (text + f" (joints {joints} move"
+                + (f"; bodies {', '.join(others)} move too)" if others else ")"))
+    return (f"joints {joints} move (bodies "
             f"{', '.join(_body_name(tree, j) for j in bodies)})")
+
+
+def _pure_rotation(t: np.ndarray, L: float) -> bool:
+    """Whether the twist ``t`` (axis-first) is a rotation of pitch zero."""
+    w, vel = t[:3], t[3:]
+    return bool(np.linalg.norm(w) > 0 and abs(w @ vel) <= 1e-9 * np.linalg.norm(w) ** 2 * L)
 
 
 def _loop_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, support: set
@@ -659,6 +1077,8 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
     ``actuated`` (m,) marking joint ``j``'s rows, and ``key`` what identifies the side
     (its loops and joints: two actuators of one leg share it)."""
     tree = model.tree
+    if j in support:  # the actuator is on the output body's own chain: that chain is its leg
+        return _support_side(model, kin, j, support)
     rows, is_act, joints = [], [], set()
     for c in loops:
         cl = model.closures[c]
@@ -680,6 +1100,24 @@ def _side_freedoms(model: ClosureModel, kin: TreeKinematics, loops, j: int, supp
         rows.extend(screws.line(C.translation, w) for w in axes)  # unit axes
         is_act.extend([False] * len(axes))
     key = (tuple(sorted(loops)), tuple(sorted(joints)))
+    return np.array(rows).reshape(-1, 6), np.array(is_act, bool), key
+
+
+def _support_side(model: ClosureModel, kin: TreeKinematics, j: int, support: set
+                  ) -> tuple[np.ndarray, np.ndarray, tuple]:
+    """:func:`_side_freedoms` of an actuator ``j`` on the output body's own chain (the
+    tree runs through its leg to the output, as an Extended URDF cut open there: the
+    platform reading's tree leg): the chain's joints from the base to the output body,
+    their twists as the output body sees them."""
+    tree = model.tree
+    out_joint = tree.frames[tree.getFrameId(model.output)].parentJoint
+    E = kin.body_jacobians[out_joint].T
+    rows, is_act = [], []
+    for k in sorted(support - {0}):
+        r = E[tree.joints[k].idx_v:tree.joints[k].idx_v + tree.joints[k].nv]
+        rows.extend(r)
+        is_act.extend([k == j] * len(r))
+    key = ((), tuple(sorted(support - {0})))
     return np.array(rows).reshape(-1, 6), np.array(is_act, bool), key
 
 
@@ -972,12 +1410,12 @@ class LinkageAnalysis:
 
 
 def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: float,
-             singular_tol: float) -> LinkageAnalysis:
+             singular_tol: float, nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
     model = link.model
     L = model.length
     p = kin.output_placement.translation.copy() if about == "output" else np.zeros(3)
     ns = NullSpace(model, kin, rtol)
-    mob = _mobility(link, kin, ns, rtol)
+    mob = _mobility(link, kin, ns, rtol, nearby)
     Yh = homogenised_about(ns.Y_world.T, p, L).T  # 6 × dof
     d, Uy, _, _ = svd_rank(Yh, rtol)
     P_h = Uy[:, :d].T
@@ -1073,7 +1511,13 @@ def _actuation_row(G: np.ndarray, col: int, rtol: float) -> np.ndarray | None:
     _, _, Vb = np.linalg.svd(b[None], full_matrices=True)
     Nb = Vb[1:].T
     z = np.linalg.lstsq(Z.T @ Nb, -Z.T @ y0, rcond=rtol)[0] if Nb.size else np.zeros(0)
-    return Z.T @ (y0 + Nb @ z)
+    zeta = Z.T @ (y0 + Nb @ z)
+    # The closures alone can hold the actuated rate (w_o = 0 with β ≠ 0: the actuator
+    # is locked by the loops here): no wrench on the output carries it, as when the
+    # column depends on the others.
+    if np.linalg.norm(zeta) <= rtol * np.linalg.norm(y0):
+        return None
+    return zeta
 
 
 def _scaled_wrench(zeta_h: np.ndarray, p: np.ndarray, L: float, unit: float,

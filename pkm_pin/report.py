@@ -308,7 +308,7 @@ def _idle(analysis) -> list[str]:
 
     mech = analysis.mechanism
     link = Linkage(mech.closure_model)
-    return list(link.mobility(configuration(mech, analysis.assembly)).idle_motions)
+    return list(link.mobility(configuration(mech, analysis.assembly), nearby=0).idle_motions)
 
 
 # ---------------------------------------------------------------------- Markdown

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from .model.closure_model import duplicate_closures
 from .report import (
     _index,
     _list,
@@ -64,6 +65,24 @@ def body_frames(model) -> list[str]:
             and f.name != "universe"]
 
 
+def output_hint(model, q) -> tuple[list[str], list[str]]:
+    """``(likely, frames)`` for the ``--output`` hint at the assembled ``q``: the likely
+    outputs (:func:`pkm_pin.output_choice.choose_output`: the body the mechanism exists
+    to move and those that fit equally) and every body frame, the candidates in the
+    rule's order first, then the frames of the closures (tree order); the frames in tree
+    order and no likely one when the rule cannot be evaluated."""
+    from .errors import PkmError
+    from .output_choice import choose_output
+
+    frames = body_frames(model)
+    try:
+        choice = choose_output(model, q)
+    except (PkmError, np.linalg.LinAlgError):
+        return [], frames
+    ranked = [c.frame for c in choice.candidates]
+    return list(choice.likely()), ranked + [f for f in frames if f not in set(ranked)]
+
+
 def assembly_data(link, assembly) -> dict:
     """Plain data of a :class:`~pkm_pin.linkage.LinkageAssembly`: ``mechanism``,
     ``output``, ``output_is_point``, ``pose`` (the output frame's), ``actuated``,
@@ -94,8 +113,12 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     """Plain-data summary (JSON-ready) of a linkage at an assembly.
 
     Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``structure``
-    (:func:`structure_data`), ``dof``,
-    ``idle_dof``, ``idle_motions`` (sentences), ``redundant_constraints``, ``grubler``,
+    (:func:`structure_data`), ``duplicate_closures``, ``dof``,
+    ``idle_dof``, ``idle_motions`` (sentences), ``singular`` (a rank below the generic
+    one: :attr:`~pkm_pin.linkage.Mobility.singular`, ``None``: not decided),
+    ``generic_dof``, ``generic_idle_dof``, ``representation_singularities`` (sentences),
+    ``singular_words`` (the sentence, ``""`` when not singular),
+    ``redundant_constraints``, ``grubler``,
     ``independent_actuators``, ``output_dof``, ``motion_type``, ``platform_twists`` (the
     analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
     (readable bases about the output origin, with ``words``), ``A``, ``B``,
@@ -114,9 +137,15 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     data.update({
         "description": "",
         "structure": structure_data(link),
+        "duplicate_closures": [list(pair) for pair in duplicate_closures(link.model.closures)],
         "dof": an.dof,
         "idle_dof": an.idle_dof,
         "idle_motions": list(mob.idle_motions),
+        "singular": mob.singular,
+        "generic_dof": mob.generic_dof,
+        "generic_idle_dof": mob.generic_idle_dof,
+        "representation_singularities": list(mob.representation),
+        "singular_words": mob.singular_words,
         "redundant_constraints": an.redundant_constraints,
         "grubler": mob.grubler,
         "independent_actuators": list(mob.independent_actuators),
@@ -168,12 +197,18 @@ def structure_line(r: dict) -> str:
 
 
 # ------------------------------------------------------------------------- text
-def output_line(r: dict, frames: Sequence[str] = ()) -> str:
-    """The output frame, how it is analysed, and how to choose another."""
+def output_line(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()) -> str:
+    """The output frame, how it is analysed, and how to choose another: the ``likely``
+    outputs first (:func:`output_hint`), then the other ``frames`` (eight in all)."""
     how, other = (("its origin as a point", "--body: as a body") if r["output_is_point"]
                   else ("as a body", "--point: its origin as a point"))
-    shown = ", ".join(frames[:8]) + (", …" if len(frames) > 8 else "")
-    choices = f" (frames: {shown})" if frames else ""
+    rest = [f for f in frames if f not in set(likely)]
+    n = max(8 - len(likely), 3)
+    parts = [f"likely: {', '.join(likely)}"] if likely else []
+    if rest:
+        parts.append(("other frames: " if likely else "frames: ") + ", ".join(rest[:n])
+                     + (", …" if len(rest) > n else ""))
+    choices = f" ({'; '.join(parts)})" if parts else ""
     return (f"output             {r['output']}, {how}  [another frame: --output FRAME"
             f"{choices}; {other}]")
 
@@ -184,21 +219,26 @@ def joints_lines(r: dict) -> list[str]:
     return [f"    {n:<{width}}  {_list(v)}" for n, v in r["joints"].items()]
 
 
-def linkage_text(r: dict, frames: Sequence[str] = ()) -> str:
+def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()) -> str:
     """Plain-text report (the output of ``pkm-pin analyze`` for a linkage) from
-    :func:`linkage_report_data`; ``frames``: the choices of ``--output`` to suggest."""
+    :func:`linkage_report_data`; ``frames``: the choices of ``--output`` to suggest,
+    ``likely`` those named first (:func:`output_hint`)."""
     idx = ", ".join(f"{k} = {'undefined' if v is None else f'{v:.6g}'}"
                     for k, v in r["indices"].items())
     out = [f"mechanism          {r['mechanism']}  (linkage: {len(r['joints'])} joints, "
            f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''}"
            + ("; no closure: a tree, analysed as a serial chain)" if not r["closures"] else ")"),
-           output_line(r, frames)] + [line for line in (structure_line(r),) if line] + [
+           output_line(r, frames, likely)] + [line for line in (structure_line(r),) if line] + [
            f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
     out += [f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "
             f"{r['motion_type']}; singularity {r['singularity']})",
             "idle motions       " + ("none" if not r["idle_motions"] else
                                      f"{r['idle_dof']} (with every actuated joint locked):")]
     out += [f"    {m}" for m in r["idle_motions"]]
+    if r.get("singular_words"):
+        out += [f"singular           {r['singular_words']}"]
+    out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
+            for a, b in r.get("duplicate_closures", [])]
     out += [f"Grübler count      {r['grubler']}  (redundant closure equations: "
             f"{r['redundant_constraints']})",
             f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
@@ -242,6 +282,8 @@ def linkage_markdown(r: dict) -> str:
               f"- degree of freedom: **{r['dof']}**, output motion {r['motion_type']}",
               f"- idle degrees of freedom: {r['idle_dof']}"]
     lines += [f"  - {m}" for m in r["idle_motions"]]
+    if r.get("singular_words"):
+        lines += [f"- {r['singular_words']}"]
     lines += [f"- Grübler–Kutzbach count: {r['grubler']}",
               f"- redundant closure equations: {r['redundant_constraints']}",
               f"- independent actuators: {', '.join(r['independent_actuators']) or 'none'}",

@@ -106,6 +106,20 @@ TARGET_LIMIT_SLACK = 1e-12
 SPHERICAL_OFFSET_RTOL = 1e-9
 #: … and when consecutive axes are not parallel: the sine of their angle is above this.
 SPHERICAL_AXES_SIN = 1e-6
+#: Gimbal lock of three consecutive revolute joints of a tree (a spherical joint written
+#: as three revolutes, issue 24): the first and third joints' homogenised twists (about
+#: the middle joint, moments / characteristic length) agree, up to sign, to this.
+GIMBAL_LOCK_RTOL = 1e-9
+#: Generic rank of a linkage (:meth:`pkm_pin.linkage.Linkage.mobility`): how many
+#: configurations near the analysed one, on the closure manifold, are sampled …
+NEARBY_SAMPLES = 3
+#: … each one this dimensionless step away (radians, or characteristic lengths) along a
+#: random motion the closures allow (and off a representation singularity), then
+#: projected back onto the closures by the tree solver (seeded: deterministic).
+NEARBY_STEP = 0.05
+#: An entry of a sparse idle-motion basis vector below this fraction of its largest
+#: entry is zero (:func:`pkm_pin.model.closure_model.sparse_basis`).
+SPARSE_ZERO_RTOL = 1e-9
 #: An assembly made by hand (not by the closure solver) is analysed when every leg closes
 #: to this relative pose error (:func:`pkm_pin.assembly.checked_twists`): printed values
 #: of about 10 significant digits pass, a leg off by a micrometre per metre does not.

@@ -371,13 +371,15 @@ def _load_yourdfpy(xml: str, label: str) -> yourdfpy.Robot:
 
 
 def build_model(src: UrdfSource) -> pin.Model:
-    """Pinocchio model of a validated URDF, with mimic joints honoured.
+    """Pinocchio model of a validated URDF, with mimic joints honoured; a joint whose
+    ``<limit>`` gives no range is unlimited (:func:`joints_without_range`).
 
     What urdfdom prints on the C-level stderr while parsing is captured and, on
     failure, put into the :class:`UrdfError` message (never printed)."""
     with _captured_stderr() as captured:
         try:
-            model = pin.buildModelFromXML(src.xml, mimic=True)
+            model = free_range(pin.buildModelFromXML(src.xml, mimic=True),
+                               joints_without_range(src))
             error = None
         except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
             model, error = None, e
@@ -385,6 +387,27 @@ def build_model(src: UrdfSource) -> pin.Model:
         detail = " ".join(line.strip() for line in captured() if line.strip())
         raise UrdfError(src.label, f"Pinocchio cannot build a model: {error}"
                         + (f" (urdfdom: {detail[:300]})" if detail else "")) from error
+    return model
+
+
+def joints_without_range(src: UrdfSource) -> list[str]:
+    """Revolute and prismatic joints of ``src`` whose ``<limit>`` gives neither ``lower``
+    nor ``upper``: URDF's default range is then [0, 0] (Pinocchio reads it so), but
+    files exported without ranges (Onshape's, Gepetto's ``kangaroo_like``) mean a joint
+    that moves; :func:`free_range` reads them as unlimited."""
+    return [j.name for j in src.robot.joints if j.type in ("revolute", "prismatic")
+            and (j.limit is None or (j.limit.lower is None and j.limit.upper is None))]
+
+
+def free_range(model: pin.Model, names) -> pin.Model:
+    """``model`` with the position range of the joints ``names`` unlimited (in place;
+    returned)."""
+    for name in names:
+        if model.existJointName(name):
+            joint = model.joints[model.getJointId(name)]
+            for i in range(joint.idx_q, joint.idx_q + joint.nq):
+                model.lowerPositionLimit[i] = -np.inf
+                model.upperPositionLimit[i] = np.inf
     return model
 
 

@@ -65,7 +65,7 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError, PkmError
-from .model.closure_model import ClosureModel, pose_rows
+from .model.closure_model import pose_rows
 from .solve import POSE_COORDINATES
 
 #: The pose coordinates, in the order of the sweep arrays.
@@ -577,8 +577,8 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     """The workspaces of a mechanism over some of its pose coordinates (module docstring).
 
     Args:
-        mech: A :class:`~pkm_pin.Mechanism` (a :class:`~pkm_pin.linkage.Linkage` goes to
-            :func:`linkage_workspace`).
+        mech: A :class:`~pkm_pin.Mechanism` (a :class:`~pkm_pin.linkage.Linkage`'s is
+            :func:`linkage_workspace`; both are reached by the ``workspace`` method).
         coords: 1 to 3 of x, y, z, roll, pitch, yaw (default
             :func:`default_coordinates`): positions at a fixed orientation give the
             constant-orientation workspace, angles at a fixed position the orientation
@@ -606,11 +606,6 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     """
     from .transmission import GOOD_LTI
 
-    if isinstance(getattr(mech, "model", None), ClosureModel):  # a Linkage
-        return linkage_workspace(mech, coords, bounds=bounds, n=n, sampling=sampling,
-                                 samples=samples, seed=seed, kinds=kinds,
-                                 threshold=threshold, centre=centre, progress=progress,
-                                 subsamples=subsamples)
     t0 = time.perf_counter()
     kinds = _kinds(kinds)
     threshold = GOOD_LTI if threshold is None else float(threshold)
@@ -1219,7 +1214,7 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, gen
     for i, q in Q.items():
         ok[i] = True
         q_all[i] = q
-        an = link.analyze(q, generic=generic) if analyse else None
+        an = link.analyze(q, generic=generic, nearby=0) if analyse else None
         if transmission:  # from the cell's analysis when made (not made twice)
             tr = link.transmission(q, analysis=an)
             lti[i], cti[i] = tr.lti, tr.cti

@@ -269,7 +269,7 @@ def _same_up_to_rounding(a: str, b: str, atol: float = 1e-12) -> bool:
 @pytest.mark.parametrize("name", NAMES)
 def test_committed_file_loads_and_assembles_in_the_home_working_mode(designs, name):
     """load_mechanism on the committed TOML assembles at home with the design's joint values."""
-    from pkm_pin.mechanism import load_mechanism
+    from pkm_pin import load_mechanism
 
     d = designs[name]
     mech = load_mechanism(MECHANISM_DIR / f"{d.slug}.toml")

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from helpers import one_error_line
 
+from pkm_pin import load_mechanism
 from pkm_pin.builders.loops import four_bar_home
 from pkm_pin.cli import main
-from pkm_pin.mechanism import load_mechanism
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 FOUR_BAR = MODELS / "loops" / "four_bar.urdf"

@@ -32,16 +32,18 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         ("urdf", "model", "model.closure_model", "model.extended_urdf", "model.mjcf",
          "model.pinned", "model.structure", "model.chain_urdf")),
     2: ("kinematics of one configuration: compiled leg kinematics, the Pinocchio pass, "
-        "serial chains, the assembly record whose twists that pass verifies",
-        ("kernels", "twists", "serial", "assembly")),
+        "serial chains, the assembly record whose twists that pass verifies, the default "
+        "output chosen from one configuration's motions",
+        ("kernels", "twists", "serial", "assembly", "output_choice")),
     3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
         ("solve", "leg")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission",
         ("engine", "engine.core", "analysis", "transmission")),
     5: ("position problems and studies built on the solver and the analysis",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration")),
-    6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together",
-        ("mechanism", "linkage")),
+    6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
+        "io reads every file format into one of them",
+        ("mechanism", "linkage", "io")),
     7: ("outputs and applications of the facades: reports, scenes, plots, the CLI, the "
         "cross-check, the example builders, the package's public names",
         ("report", "report_linkage", "scene", "view", "view_linkage", "plots", "cli",

@@ -15,8 +15,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from pkm_pin import load_mechanism
 from pkm_pin.builders.loops import CASSIE_POINTS, LOOP_MODELS, five_bar, four_bar
-from pkm_pin.mechanism import load_mechanism
 from pkm_pin.model import read_extended_urdf, read_mjcf
 
 LOOPS = Path(__file__).resolve().parents[1] / "models" / "loops"

@@ -13,11 +13,10 @@ import pinocchio as pin
 import pytest
 from helpers import MECHANISM_DIR, URDF_DIR
 
-from pkm_pin import screws
+from pkm_pin import load_mechanism, screws
 from pkm_pin.builders.orthoglide import QUASI, orthoglide, orthoglide_quasi
 from pkm_pin.formulas import orthoglide as og
 from pkm_pin.formulas.orthoglide import OrthoglideParameters
-from pkm_pin.mechanism import load_mechanism
 
 E = 0.1  # tool offset of the shipped designs
 

@@ -111,3 +111,68 @@ def test_a_failing_optional_section_leaves_the_rest_of_the_report(monkeypatch, c
     data = json.loads(capsys.readouterr().out)
     assert data["transmission"] is None and "IndexError" in data["failed_sections"]["transmission"]
     assert data["dof"] >= 2
+
+
+def test_closure_of_a_body_onto_itself_is_refused_and_duplicates_are_named(capsys):
+    """A closure between two frames of one body is an error naming it; a closure that
+    repeats another (either way round) is named in the report, its rows redundant."""
+    from linkage_models import four_bar
+
+    from pkm_pin.errors import InputError
+    from pkm_pin.linkage import Linkage
+    from pkm_pin.model import Closure, ClosureModel
+    from pkm_pin.model.closure_model import duplicate_closures
+    from pkm_pin.report_linkage import linkage_report_data, linkage_text
+
+    base = four_bar()
+    with pytest.raises(InputError, match="closure 'x' of the tree joins frame 'crank_body' to "
+                                         "itself"):
+        ClosureModel(base.tree, (Closure("point", "crank_body", "crank_body", name="x"),),
+                     ("crank",), "rocker_body")
+    c = base.closures[0]
+    again = Closure(c.kind, c.frame_b, c.frame_a, c.placement_b, c.placement_a, name="again")
+    model = ClosureModel(base.tree, base.closures + (again,), ("crank",), "rocker_body")
+    assert duplicate_closures(model.closures) == [("again", c.name)]
+    q = Linkage(base).assemble().q
+    single, double = Linkage(base).analyze(q), Linkage(model).analyze(q)
+    assert double.dof == single.dof == 1
+    assert double.redundant_constraints == single.redundant_constraints + 3
+    r = linkage_report_data(Linkage(model), Linkage(model).assemble(q))
+    assert r["duplicate_closures"] == [["again", c.name]]
+    assert f"duplicate closure  'again' repeats {c.name!r}" in linkage_text(r)
+
+
+def test_five_bar_with_a_body_output_transmits_well_as_its_legs_do():
+    """The shipped five-bar analysed as a body (its tree runs through motor 1's chain to
+    the output): the actuator on the output's own chain has that chain as its leg, so
+    the healthy five-bar reads healthy (ITI near 1, LTI 0.90, the legs backend's LTI),
+    where it used to read 'LTI = 0: leg mot1 transmits poorly: ITI 0.00'."""
+    link = pkm_pin.load_mechanism(LOOPS / "five_bar.xml")
+    a = link.home_assembly
+    tr = link.transmission(a)
+    legs = link.legs_mechanism.analyze(link.legs_assembly(a)).transmission
+    assert np.all(tr.iti > 0.99) and np.all(legs.iti > 0.99)
+    assert tr.lti == pytest.approx(legs.lti, abs=1e-9) and tr.lti > 0.9
+    np.testing.assert_allclose(tr.oti[1], legs.oti[1], atol=1e-9)
+    assert "ITI 0.00" not in tr.worst
+
+
+def test_joints_written_without_a_range_move(tmp_path):
+    """A URDF whose <limit> elements give no lower/upper (Onshape exports, Gepetto's
+    kangaroo_like) has unlimited joints, not URDF's default range [0, 0] that pinned
+    every joint at 0: forward kinematics of the four-bar so written matches the shipped
+    file's."""
+    import re
+    import shutil
+
+    text = (LOOPS / "four_bar.urdf").read_text()
+    bare = re.sub(r'\s(lower|upper)="[^"]*"', "", text)
+    assert "lower=" not in bare
+    (tmp_path / "four_bar.urdf").write_text(bare)
+    shutil.copy(LOOPS / "four_bar.yaml", tmp_path / "four_bar.yaml")
+    link = pkm_pin.load_mechanism(tmp_path / "four_bar.urdf")
+    assert not np.isfinite(link.model.tree.lowerPositionLimit).any()
+    ref = pkm_pin.load_mechanism(LOOPS / "four_bar.urdf")
+    q_a = ref.home_assembly.q_actuated + 0.3
+    np.testing.assert_allclose(link.forward_kinematics(q_a, link.home_assembly).q,
+                               ref.forward_kinematics(q_a, ref.home_assembly).q, atol=1e-9)

@@ -148,16 +148,16 @@ def test_five_bar_closures_become_joints(kind):
 
 
 def test_structures_that_are_not_platforms_say_why():
-    """Multi-loop, point outputs, a closure of the platform onto itself and a leg
-    shared by two closures are left to the general backend, with the reason."""
+    """Multi-loop, point outputs and a leg shared by two closures are left to the
+    general backend, with the reason; a closure of the platform onto itself is refused."""
     cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
     assert "neither on the platform" in detect_platform(cassie.model)[1]
     point = pkm_pin.load_mechanism(MODELS / "loops/five_bar.urdf")
     assert detect_platform(point.model) == (None, "the output is a point, not a platform body")
     base = four_bar()
-    itself = ClosureModel(base.tree, (Closure("point", "rocker_end", "rocker_body",
-                                              name="self"),), ("rocker",), "rocker_body")
-    assert "joins the platform to itself" in detect_platform(itself)[1]
+    with pytest.raises(InputError, match="two frames of one body"):
+        ClosureModel(base.tree, (Closure("point", "rocker_end", "rocker_body", name="self"),),
+                     ("rocker",), "rocker_body")
     twice = ClosureModel(base.tree, base.closures + (Closure("point", "coupler_body",
                                                              "rocker_body", name="again"),),
                          ("crank",), "rocker_body")
@@ -244,3 +244,43 @@ def test_linkage_home_assembly_is_the_assembly_from_the_reference():
     assert link.home_assembly is link.home_assembly
     np.testing.assert_allclose(link.home_assembly.q, link.assemble().q, atol=1e-12)
     assert link.home_analysis.dof == 1
+
+
+def test_general_backend_hands_leg_by_leg_capabilities_to_the_legs(stewart):
+    """The Stewart's Extended URDF read by the general backend: sensitivity, every working
+    mode and the Study homotopy go through its legs (the TOML's numbers); a multi-loop
+    leg refuses them with a sentence saying why."""
+    toml, link, q, _ = stewart
+    a = link.assemble(q)
+    sens = link.sensitivity(a)
+    ref = toml.sensitivity()
+    np.testing.assert_allclose(sens.column("leg2/leg2_U1/origin.x"), ref.column("2/U1/origin.x"),
+                               atol=1e-9)
+    modes = link.forward_kinematics_all(a.q_actuated)
+    assert modes.method == "homotopy" and modes.complete
+    assert len(modes) == len(toml.forward_kinematics_all(toml.home_assembly.q_actuated))
+    assert all(np.abs(link.model.closure_residual(m.q)).max() < 1e-9 for m in modes)
+    assert link.forward_kinematics_all(a.q_actuated, method="multistart", patience=1).method \
+        == "multistart"
+    works = link.inverse_kinematics_all(toml.home)
+    assert any(np.allclose(w.q_actuated, a.q_actuated, atol=1e-9) for w in works)
+    cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
+    with pytest.raises(InputError, match="sensitivity to geometric errors reads a machine leg "
+                                         "by leg .* neither on the platform"):
+        cassie.sensitivity()
+    with pytest.raises(InputError, match="the Study homotopy reads a machine leg by leg"):
+        cassie.forward_kinematics_all(cassie.home_assembly.q_actuated, method="homotopy")
+
+
+def test_partial_pose_through_the_general_backend(stewart):
+    """A partial pose given to the general backend of a platform machine is solved leg by
+    leg: the coordinates asked for hold, the loops close; a multi-loop leg refuses it."""
+    toml, link, _, _ = stewart
+    z = float(toml.home.translation[2]) + 0.03
+    a = link.inverse_kinematics({"z": z, "roll": 0.02, "pitch": 0.0})
+    assert a.output_pose.translation[2] == pytest.approx(z, abs=1e-10)
+    assert pin.rpy.matrixToRpy(a.output_pose.rotation)[0] == pytest.approx(0.02, abs=1e-10)
+    assert np.abs(link.model.closure_residual(a.q)).max() < 1e-9
+    cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
+    with pytest.raises(InputError, match="a partial pose reads a machine leg by leg"):
+        cassie.inverse_kinematics({"z": -0.8})

@@ -10,8 +10,7 @@ import numpy as np
 import pytest
 from test_view import chromium, hue_of, page_commands
 
-from pkm_pin import InputError
-from pkm_pin.mechanism import load_mechanism
+from pkm_pin import InputError, load_mechanism
 from pkm_pin.view import node_name, view
 from pkm_pin.view_linkage import (
     CLOSURE_COLOUR,

@@ -142,17 +142,21 @@ def four_bar(ground: float = 0.10, crank: float = 0.03, coupler: float = 0.09,
               '  <joint name="rocker_joint" type="hinge" axis="0 0 1"/>\n</body>\n')
     mjcf = _mjcf("four_bar", header, bodies,
                  f'    <connect name="coupler_rocker" body1="coupler" body2="rocker" '
-                 f'anchor="{_f(coupler)} 0 0"/>\n', ["crank_joint"])
+                 f'anchor="{_f(coupler)} 0 0"/>\n', ["crank_joint"], output="rocker")
     return LoopModel("four_bar", _urdf("four_bar", header, links, joints), yaml, mjcf)
 
 
 def _mjcf(name: str, header: tuple[str, str], bodies: str, equality: str,
-          motors: list[str]) -> str:
-    """MJCF text: ``bodies`` (unindented) under one joint-less ``base`` body."""
+          motors: list[str], output: str | None = None) -> str:
+    """MJCF text: ``bodies`` (unindented) under one joint-less ``base`` body; ``output``:
+    the output frame, named in ``<custom>`` (:data:`pkm_pin.output_choice.MJCF_OUTPUT_KEY`;
+    without it pkm_pin chooses the output by its rule)."""
     actuators = "".join(f'    <motor name="{m}_motor" joint="{m}"/>\n' for m in motors)
     inner = "".join(f"      {line}\n" for line in bodies.splitlines())
+    custom = ("" if output is None else
+              f'  <custom>\n    <text name="pkm_pin:output" data="{output}"/>\n  </custom>\n')
     return (f"<!-- {header[0]} -->\n<!-- {header[1]}; assembled at qpos0 = 0 -->\n"
-            f'<mujoco model="{name}">\n  <compiler angle="radian"/>\n'
+            f'<mujoco model="{name}">\n  <compiler angle="radian"/>\n{custom}'
             f'  <worldbody>\n    <body name="base">\n{inner}    </body>\n  </worldbody>\n'
             f"  <equality>\n{equality}  </equality>\n"
             f"  <actuator>\n{actuators}  </actuator>\n</mujoco>\n")

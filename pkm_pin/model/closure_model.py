@@ -63,7 +63,7 @@ import pinocchio as pin
 
 from .. import screws
 from ..errors import InputError, TreeFrameNotFound, TreeJointNotFound
-from ..tolerances import RANK_RTOL, ZERO_SCREW_RTOL
+from ..tolerances import RANK_RTOL, SPARSE_ZERO_RTOL, ZERO_SCREW_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
     from ..assembly import Assembly
@@ -179,6 +179,7 @@ class ClosureModel:
                              f"{type(matches).__name__}") from e
         set_(self, "actuator_matches", matches)
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
+        _check_closures_join_two_bodies(tree, closures, self.name)
         _check_actuated(tree, self.actuated, self.name)
         set_(self, "length", _length(tree, closures, self.length))
         reference = pin.neutral(tree) if self.reference is None else screws.as_vector(
@@ -584,10 +585,112 @@ class NullSpace:
         self.units = U
 
     def idle(self, rtol: float) -> np.ndarray:
-        """(nv × k) orthonormal basis of the idle motions (dimensionless columns): the
-        allowed motions that leave every actuated joint still."""
+        """(nv × k) basis of the idle motions (dimensionless unit columns): the allowed
+        motions that leave every actuated joint still, each moving few joints
+        (:func:`sparse_basis` of the orthonormal one)."""
         rank_x, _, _, Vt = screws.svd_rank(self.X, rtol)
-        return self.N @ Vt[rank_x:].T
+        return sparse_basis(self.N @ Vt[rank_x:].T)
+
+    def rank_x(self, rtol: float) -> int:
+        """Rank of the actuated rates over the allowed motions."""
+        return screws.svd_rank(self.X, rtol)[0]
+
+
+def sparse_basis(K: np.ndarray) -> np.ndarray:
+    """A basis of the column space of ``K`` (n × k, independent columns) whose columns
+    move few coordinates: unit columns, each the sparsest vector found with a given
+    coordinate moving (an L1 minimisation: least ``Σ |x_i|`` over ``x = K c`` with
+    ``x_p = 1``, a linear program per coordinate ``p``, coordinates whose rows of ``K``
+    are parallel tried once), taken greedily, fewest moving coordinates first, while
+    independent of those taken; entries below :data:`~pkm_pin.tolerances.SPARSE_ZERO_RTOL`
+    of a column's largest are zero. Motions with disjoint sets of coordinates (the
+    spins of separate rods) come out one by one. Ordered by first moving coordinate,
+    its largest entry positive. Spans the column space of ``K`` (to the zeroed
+    entries). When the reduced row echelon form (:func:`_echelon`) already has disjoint
+    columns, it is the answer (no linear program)."""
+    n, k = K.shape
+    if k == 0:
+        return np.zeros((n, 0))
+    if k == 1:
+        return _unit_columns(K)
+    echelon = _echelon(K)
+    moving = np.abs(echelon) > 0
+    if moving.sum(axis=1).max() <= 1:  # disjoint motions: each one is already sparsest
+        B = _unit_columns(echelon)
+        first = [int(np.flatnonzero(B[:, j])[0]) for j in range(k)]
+        return B[:, np.argsort(first, kind="stable")]
+    from scipy.optimize import linprog
+
+    scale = np.abs(K).max()
+    rows = K / scale
+    norms = np.linalg.norm(rows, axis=1)
+    tried: list[np.ndarray] = []
+    found = []
+    A_ub = np.block([[rows, -np.eye(n)], [-rows, -np.eye(n)]])
+    cost = np.r_[np.zeros(k), np.ones(n)]
+    bounds = [(None, None)] * k + [(0, None)] * n
+    for p in np.argsort(-norms, kind="stable"):
+        if norms[p] <= SPARSE_ZERO_RTOL * norms.max():
+            break
+        u = rows[p] / norms[p]
+        if any(abs(abs(u @ t) - 1.0) <= SPARSE_ZERO_RTOL for t in tried):
+            continue
+        tried.append(u)
+        res = linprog(cost, A_ub=A_ub, b_ub=np.zeros(2 * n),
+                      A_eq=np.r_[rows[p], np.zeros(n)][None], b_eq=[1.0], bounds=bounds,
+                      method="highs")
+        if res.status != 0:
+            continue
+        x = rows @ res.x[:k]
+        x[np.abs(x) <= SPARSE_ZERO_RTOL * np.abs(x).max()] = 0.0
+        found.append((int(np.count_nonzero(x)), float(np.abs(x).sum() / np.abs(x).max()),
+                      int(p), x))
+    found.sort(key=lambda f: f[:3])
+    chosen: list[np.ndarray] = []
+    for *_, x in found:
+        trial = np.array(chosen + [x])
+        if np.linalg.matrix_rank(trial, tol=SPARSE_ZERO_RTOL * np.abs(trial).max()) \
+                == len(chosen) + 1:
+            chosen.append(x)
+        if len(chosen) == k:
+            break
+    if len(chosen) < k:  # not expected: complete with the orthogonal remainder of K
+        Q = np.linalg.qr(np.array(chosen).T)[0] if chosen else np.zeros((n, 0))
+        rest = K - Q @ (Q.T @ K)
+        chosen += list(np.linalg.svd(rest, full_matrices=False)[0][:, :k - len(chosen)].T)
+    B = _unit_columns(np.array(chosen).T)
+    first = [int(np.flatnonzero(B[:, j])[0]) for j in range(k)]
+    return B[:, np.argsort(first, kind="stable")]
+
+
+def _echelon(K: np.ndarray) -> np.ndarray:
+    """Columns spanning those of ``K`` (n × k): the reduced row echelon form of ``Kᵀ``
+    by complete pivoting (each column 1 at its pivot coordinate, 0 at the others'),
+    entries below :data:`~pkm_pin.tolerances.SPARSE_ZERO_RTOL` of a column's largest
+    set to zero."""
+    R = np.array(K.T, dtype=float)
+    k = R.shape[0]
+    for i in range(k):
+        sub = np.abs(R[i:])
+        r, c = np.unravel_index(np.argmax(sub), sub.shape)
+        R[[i, i + r]] = R[[i + r, i]]
+        R[i] /= R[i, c]
+        for j in range(k):
+            if j != i:
+                R[j] -= R[j, c] * R[i]
+                R[j, c] = 0.0
+    for row in R:
+        row[np.abs(row) <= SPARSE_ZERO_RTOL * np.abs(row).max()] = 0.0
+    return R.T
+
+
+def _unit_columns(B: np.ndarray) -> np.ndarray:
+    """Columns of ``B`` scaled to unit norm, each one's largest entry positive."""
+    B = np.array(B, dtype=float)
+    for j in range(B.shape[1]):
+        big = B[np.argmax(np.abs(B[:, j])), j]
+        B[:, j] /= np.linalg.norm(B[:, j]) * np.sign(big)
+    return B
 
 
 def pose_rows(model: ClosureModel, kin: TreeKinematics) -> np.ndarray:
@@ -637,6 +740,41 @@ def _frame_ids(tree: pin.Model, closures: tuple, output: str, name: str) -> dict
             raise TreeFrameNotFound(str(frame), _frame_names(tree), where)
         ids[frame] = tree.getFrameId(frame)
     return ids
+
+
+def _check_closures_join_two_bodies(tree: pin.Model, closures: tuple, name: str) -> None:
+    """Raise :class:`InputError` for a closure whose two frames are on one body (the same
+    frame, or two frames of one joint): their relative placement never changes, so the
+    closure either constrains nothing or can never hold."""
+    for c in closures:
+        a, b = (tree.frames[tree.getFrameId(f)] for f in (c.frame_a, c.frame_b))
+        if a.parentJoint == b.parentJoint:
+            what = (f"frame {c.frame_a!r} to itself" if c.frame_a == c.frame_b else
+                    f"{c.frame_a!r} and {c.frame_b!r}, two frames of one body "
+                    f"(joint {tree.names[a.parentJoint]!r})")
+            raise InputError(f"closure {c.name!r} of {name or 'the tree'} joins {what}: it "
+                             "constrains nothing (or can never hold); remove it, or name "
+                             "frames of two different bodies")
+
+
+def duplicate_closures(closures) -> list[tuple[str, str]]:
+    """Pairs ``(closure, earlier closure)`` that join the same two frames with the same
+    kind and constraint frames (either way round): each one's rows repeat the other's
+    and are counted as redundant."""
+    seen, out = {}, []
+    for c in closures:
+        ends = ((c.frame_a, _key(c.placement_a)), (c.frame_b, _key(c.placement_b)))
+        key = (c.kind, frozenset(ends))
+        if key in seen:
+            out.append((c.name, seen[key]))
+        else:
+            seen[key] = c.name
+    return out
+
+
+def _key(M: pin.SE3) -> tuple:
+    """A placement as a hashable key (rounded to 1e-12)."""
+    return tuple(np.round(M.homogeneous[:3].ravel(), 12))
 
 
 def _check_actuated(tree: pin.Model, actuated: tuple, name: str) -> None:

@@ -67,7 +67,15 @@ from pathlib import Path
 import pinocchio as pin
 
 from ..errors import ClosureFileError, UrdfError, _clip, _cut, _is_file, _listing
-from ..urdf import MAX_LINKS, LimitExceeded, _captured_stderr, read, read_bounded
+from ..urdf import (
+    MAX_LINKS,
+    LimitExceeded,
+    _captured_stderr,
+    free_range,
+    joints_without_range,
+    read,
+    read_bounded,
+)
 from .closure_model import Closure, ClosureModel
 
 if sys.version_info >= (3, 11):
@@ -366,6 +374,7 @@ def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool) -> pin.Model:
                      if free_flyer else pin.buildModelFromXML(src.xml, mimic=False))
         except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
             raise ClosureFileError(src.label, "URDF", f"Pinocchio cannot build it: {e}") from e
+    free_range(model, joints_without_range(src))
     movable = [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0]
     for i, name in enumerate(spec.joint_name):
         if name not in movable:

@@ -103,6 +103,17 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
 
 
 # ------------------------------------------------------------------------------ tree
+def parse_mjcf(path: str | os.PathLike) -> ET.Element:
+    """The XML root of an MJCF file as :func:`read_mjcf` reads it: within the limits of
+    ``docs/reliability.md``, its ``<include>`` files inlined, its ``<worldbody>`` sections
+    merged (for what the file says beyond the tree, e.g. a ``<custom>`` text).
+
+    Raises:
+        ClosureFileError: as :func:`read_mjcf`.
+    """
+    return _parse(Path(path))[0]
+
+
 def _parse(path: Path) -> tuple[ET.Element, bool]:
     """The file's XML root with its ``<include>`` files inlined and its ``<worldbody>``
     sections merged (MuJoCo's rules), checked within the limits of ``docs/reliability.md``;

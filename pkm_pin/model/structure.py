@@ -20,7 +20,8 @@ The rule (:func:`detect_platform`):
   revolute joint about the constraint frames' common z axis;
 * legs share no joint, and every movable joint of the tree is on a leg (or is the
   platform's free flyer): a joint on no leg, a closure between two legs or from the
-  platform to itself, a joint of several coordinates on a leg (a ball joint), or
+  platform to itself (refused by the closure model), a joint of several coordinates on
+  a leg (a ball joint), or
   mimicking joints leave the model to the general elimination, with the reason.
 
 The structure only names joints and frames: the legs' Pinocchio models are built from it
@@ -112,7 +113,7 @@ def detect_platform(model: ClosureModel) -> tuple[PlatformStructure | None, str]
                                 model.output, pin.SE3.Identity()))
         used |= set(chain)
     for closure in model.closures:
-        leg, reason = _closure_leg(tree, closure, platform)
+        leg, reason = _closure_leg(tree, closure, platform, model.output)
         if reason:
             return None, reason
         shared = used & set(leg.joints)
@@ -143,17 +144,16 @@ def _chain(tree: pin.Model, joint: int, what: str) -> tuple[tuple[int, ...], str
     return chain, ""
 
 
-def _closure_leg(tree: pin.Model, closure: Closure, platform: int
+def _closure_leg(tree: pin.Model, closure: Closure, platform: int, output: str
                  ) -> tuple[PlatformLeg | None, str]:
     """The leg closed on the platform by ``closure``, or ``(None, reason)``."""
     sides = [(closure.frame_a, closure.placement_a), (closure.frame_b, closure.placement_b)]
     parents = [tree.frames[tree.getFrameId(f)].parentJoint for f, _ in sides]
     on_platform = [p == platform for p in parents]
-    if all(on_platform):
-        return None, f"closure {closure.name!r} joins the platform to itself"
-    if not any(on_platform):
+    if not any(on_platform):  # (both on it: refused by ClosureModel)
         return None, (f"closure {closure.name!r} joins {closure.frame_a!r} to "
-                      f"{closure.frame_b!r}, neither on the platform: a multi-loop linkage")
+                      f"{closure.frame_b!r}, neither on the platform (the body of the "
+                      f"output frame {output!r})")
     (frame, placement), (pframe, pplacement) = sides if on_platform[1] else sides[::-1]
     leg_joint = parents[1] if on_platform[0] else parents[0]
     if platform in tree.supports[leg_joint]:
