@@ -199,3 +199,22 @@ class ClosureFileError(MechanismFileError):
             ``equality/connect[2]``).
         reason: What is wrong and how to fix it.
     """
+
+
+class InconsistentMotion(InputError):
+    """A motion given to the inverse dynamics (:mod:`pkm_pin.dynamics`) is not one the
+    mechanism can make.
+
+    Attributes:
+        kind: ``"velocity"`` (``J v ≠ 0``), ``"acceleration"`` (``J a + J̇ v ≠ 0``) or
+            ``"idle"`` (a generalized force along an idle motion that no actuator gives).
+        residual: The closure rows' residual [physical units] (velocity, acceleration),
+            or the unbalanced generalized force per velocity coordinate (idle).
+        joints: The joints that move in the idle motion (``"idle"``), else empty.
+    """
+
+    def __init__(self, message: str, kind: str = "", residual=None, joints: tuple = ()):
+        self.kind = kind
+        self.residual = residual
+        self.joints = tuple(joints)
+        super().__init__(message)

@@ -78,6 +78,7 @@ from functools import cached_property
 import numpy as np
 import pinocchio as pin
 
+from . import dynamics as _dynamics
 from . import screws
 from .analysis import classify
 from .assembly import Assembly
@@ -725,6 +726,11 @@ class Linkage:
         from .workspace import linkage_workspace
 
         return linkage_workspace(self, coords, **options)
+
+    def inverse_dynamics(self, q, v, a, *, gravity=(0, 0, -9.81), wrench=None):
+        """Actuated efforts and closure forces of the motion ``(q, v, a)`` of the
+        model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
+        return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
 
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:

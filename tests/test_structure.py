@@ -284,3 +284,34 @@ def test_partial_pose_through_the_general_backend(stewart):
     cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
     with pytest.raises(InputError, match="a partial pose reads a machine leg by leg"):
         cassie.inverse_kinematics({"z": -0.8})
+
+
+def test_chain_urdf_round_trip_keeps_joints_axes_and_ranges():
+    """A leg chain written as URDF and read back has the same joints, placements, axes
+    (aligned or not) and ranges, an unlimited joint staying unlimited."""
+    from pkm_pin import urdf
+    from pkm_pin.model.chain_urdf import chain_urdf
+
+    m = pin.Model()
+    j1 = m.addJoint(0, pin.JointModelRZ(), pin.SE3(np.eye(3), np.array([0.1, 0, 0])), "a",
+                    np.array([1.0]), np.array([1.0]), np.array([-1.0]), np.array([2.0]))
+    axis = np.array([0.6, 0.0, 0.8])
+    j2 = m.addJoint(j1, pin.JointModelPrismaticUnaligned(axis),
+                    pin.SE3(pin.rpy.rpyToMatrix(0.1, 0.2, 0.3), np.array([0, 0.2, 0])), "b")
+    m.lowerPositionLimit[1], m.upperPositionLimit[1] = -np.inf, np.inf
+    m.addBodyFrame("tip", j2, pin.SE3(np.eye(3), np.array([0, 0, 0.3])), 0)
+    back = urdf.build_model(urdf.read(chain_urdf(m, "tip", "chain")))
+    assert list(back.names) == ["universe", "a", "b"]
+    for j in (1, 2):
+        np.testing.assert_allclose(back.jointPlacements[j].homogeneous,
+                                   m.jointPlacements[j].homogeneous, atol=1e-12)
+    np.testing.assert_allclose(back.joints[2].extract().axis, axis, atol=1e-12)
+    assert (back.lowerPositionLimit[0], back.upperPositionLimit[0]) == (-1.0, 2.0)
+    assert not np.isfinite(back.lowerPositionLimit[1]) and not np.isfinite(
+        back.upperPositionLimit[1])
+    data, ref = back.createData(), m.createData()
+    q = np.array([0.3, 0.05])
+    pin.framesForwardKinematics(back, data, q)
+    pin.framesForwardKinematics(m, ref, q)
+    np.testing.assert_allclose(data.oMf[back.getFrameId("tip")].homogeneous,
+                               ref.oMf[m.getFrameId("tip")].homogeneous, atol=1e-12)

@@ -9,7 +9,9 @@ Each joint ``j`` becomes a URDF joint of the same name whose parent link is the 
 its parent joint (``"<parent joint>_link"``, ``root`` for the universe) and whose
 ``<origin>`` is the joint placement (xyz [m], roll-pitch-yaw [rad]); revolute and
 prismatic joints about any axis (Pinocchio's ``RX``… and ``…Unaligned`` models) keep
-their axis and position limits, unbounded revolutes are ``continuous``. The tip frame
+their axis and finite position limits (an unlimited joint is written without a range,
+which :func:`pkm_pin.urdf.joints_without_range` reads back as unlimited), unbounded
+revolutes are ``continuous``. The tip frame
 becomes a link of its name, fixed to its joint's body at the frame's placement.
 """
 
@@ -42,12 +44,13 @@ def chain_urdf(model: pin.Model, tip: str, name: str = "chain") -> str:
         etree.SubElement(joint, "child", link=_link(model, j))
         _origin(joint, model.jointPlacements[j])
         etree.SubElement(joint, "axis", xyz=" ".join(repr(float(a)) for a in axis))
-        if kind != "continuous":
+        if kind != "continuous":  # a range only where it is finite (else: unlimited)
             iq = model.joints[j].idx_q
             lower, upper = model.lowerPositionLimit[iq], model.upperPositionLimit[iq]
-            etree.SubElement(joint, "limit", effort="100.0", velocity="10.0",
-                             lower=repr(float(max(lower, -1e6))),
-                             upper=repr(float(min(upper, 1e6))))
+            limit = etree.SubElement(joint, "limit", effort="100.0", velocity="10.0")
+            if np.isfinite(lower) and np.isfinite(upper):
+                limit.set("lower", repr(float(lower)))
+                limit.set("upper", repr(float(upper)))
     frame = model.frames[model.getFrameId(tip)]
     etree.SubElement(robot, "link", name=tip)
     fixed = etree.SubElement(robot, "joint", name=f"{tip}_fixed", type="fixed")
