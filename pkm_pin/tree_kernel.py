@@ -631,6 +631,53 @@ def _actuated_rows(n0, act_q, act_two, act_scales, act_v, q, targets, e, H):
     return act
 
 
+@register_jitable
+def _newton_step(Hf, e, m, nf, lam, N, g, inv, dx) -> bool:
+    """The damped Newton step ``dx = −(Hfᵀ Hf + λ I)⁻¹ Hfᵀ e`` on the first ``m`` rows and
+    ``nf`` columns (``L D Lᵀ`` of the normal equations), shortened to
+    :data:`~pkm_pin.newton.TREE_MAX_STEP`; False when they are not positive definite."""
+    for a in range(nf):
+        s = 0.0
+        for row in range(m):
+            s += Hf[row, a] * e[row]
+        g[a] = s
+        for b in range(a + 1):
+            s = 0.0
+            for row in range(m):
+                s += Hf[row, a] * Hf[row, b]
+            N[a, b] = s
+        N[a, a] += lam
+    if not ldl(N, nf, inv):
+        return False
+    ldl_solve(N, nf, inv, g, dx)
+    big = 0.0
+    for a in range(nf):
+        dx[a] = -dx[a]
+        big = max(big, abs(dx[a]))
+    if big > TREE_MAX_STEP:
+        f = TREE_MAX_STEP / big
+        for a in range(nf):
+            dx[a] *= f
+    return True
+
+
+@register_jitable
+def _moved(kind, iq, iv, units, q, q_new, dv) -> float:
+    """``|difference(q, q_new) / units|²`` of a step (only 1-DOF coordinates are clipped
+    to their limits: the others moved by ``dv``)."""
+    moved = 0.0
+    for j in range(1, kind.shape[0]):
+        kj, i, c = kind[j], iq[j], iv[j]
+        if kj == REVOLUTE or kj == PRISMATIC:
+            d = (q_new[i] - q[i]) / units[c]
+            moved += d * d
+        else:
+            for b in range(c, c + _nv_of(kj)):
+                d = dv[b] / units[b]
+                moved += d * d
+    return moved
+
+
 @njit(cache=True, nogil=True)
 def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oMo, info):
     """:func:`pkm_pin.solve.solve_tree` without pose rows, compiled: damped Newton on the
@@ -675,29 +722,8 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
         for row in range(m):
             for b in range(nf):
                 Hf[row, b] = H[row, cols[b]] * units[cols[b]]
-        lam = lm_damping(r)
-        for a in range(nf):
-            s = 0.0
-            for row in range(m):
-                s += Hf[row, a] * e[row]
-            g[a] = s
-            for b in range(a + 1):
-                s = 0.0
-                for row in range(m):
-                    s += Hf[row, a] * Hf[row, b]
-                N[a, b] = s
-            N[a, a] += lam
-        if not ldl(N, nf, inv):
+        if not _newton_step(Hf, e, m, nf, lm_damping(r), N, g, inv, dx):
             break
-        ldl_solve(N, nf, inv, g, dx)
-        big = 0.0
-        for a in range(nf):
-            dx[a] = -dx[a]
-            big = max(big, abs(dx[a]))
-        if big > TREE_MAX_STEP:
-            f = TREE_MAX_STEP / big
-            for a in range(nf):
-                dx[a] *= f
         step = 0.0
         for a in range(nf):
             step += dx[a] * dx[a]
@@ -712,16 +738,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
         if not finite:
             break
         it += 1
-        moved = 0.0  # |difference(q, q_new) / units|²: only 1-DOF coordinates are clipped
-        for j in range(1, kind.shape[0]):
-            kj, i, c = kind[j], iq[j], iv[j]
-            if kj == REVOLUTE or kj == PRISMATIC:
-                d = (q_new[i] - q[i]) / units[c]
-                moved += d * d
-            else:
-                for b in range(c, c + _nv_of(kj)):
-                    d = dv[b] / units[b]
-                    moved += d * d
+        moved = _moved(kind, iq, iv, units, q, q_new, dv)
         for a in range(nq):
             q[a] = q_new[a]
         if moved < NEWTON_STALL_RTOL * (1.0 + step):

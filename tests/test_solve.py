@@ -16,7 +16,7 @@ import pinocchio as pin
 import pytest
 from helpers import shipped_mechanisms
 
-from pkm_pin import screws, solve, tolerances
+from pkm_pin import newton, screws, solve, tolerances
 from pkm_pin.solve import (
     ACTUATED,
     LEGS,
@@ -291,9 +291,10 @@ def test_leg_solve_uses_the_restart_recipe(ur5):
 
 # -------------------------------------------------------------- shared constants
 def test_stopping_rules_are_those_of_the_tolerances():
-    """The compiled stopping rules and damping write out the constants of
-    pkm_pin.tolerances (numba's cache does not follow tolerances.py)."""
-    source = inspect.getsource(solve)
+    """The compiled stopping rules and damping (pkm_pin.newton, shared by the solvers)
+    write out the constants of pkm_pin.tolerances (numba's cache does not follow
+    tolerances.py)."""
+    source = inspect.getsource(solve) + inspect.getsource(newton)
     slow = re.findall(r"r > \(1\.0 - ([0-9.e+-]+)\) \* best", source)
     steps = re.findall(r"return slow >= (\d+), best, slow", source)
     stall = re.findall(r"step < ([0-9.e+-]+) \* \(1\.0 \+ size\)", source)

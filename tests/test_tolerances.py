@@ -87,16 +87,17 @@ def test_damping():
 
 
 def test_compiled_solvers_write_the_same_damping():
-    """The closure solver (solve.py) writes the damping out once for its compiled code
-    (numba's cache follows its own file only): ``DAMPING_FLOOR + DAMPING_GAIN r²``; no
-    other module writes a damping of its own."""
+    """The compiled solvers' shared policy (newton.py) writes the damping out once for
+    their compiled code (numba's cache follows its own file only): ``DAMPING_FLOOR +
+    DAMPING_GAIN r²``; no other module writes a damping of its own."""
     def damping_expressions(name):
         source = (PACKAGE / name).read_text()
         return re.findall(r"lam = ([0-9.e+-]+) \+ ([0-9.e+-]+) \* (\w+) \* \3\b", source)
 
-    found = damping_expressions("solve.py")
+    found = damping_expressions("newton.py")
     assert len(found) == 1
-    for name in ("kernels.py", "leg.py", "position.py", "sweep.py"):
+    for name in ("solve.py", "tree_kernel.py", "kernels.py", "leg.py", "position.py",
+                 "sweep.py"):
         assert not damping_expressions(name)
     for floor, gain, _ in found:
         assert float(floor) == tolerances.DAMPING_FLOOR

@@ -223,7 +223,10 @@ def test_camera_looks_at_the_box_centre_from_outside(key, stewart, rps3):
     it, obliquely, and sees every joint of the mechanism."""
     mech = {"stewart": stewart, "rps3": rps3}[key]
     scene = view(mech)
-    check_camera(scene, mechanism_points(mech, scene.assembly))
+    points = mechanism_points(mech, scene.assembly)
+    check_camera(scene, points)
+    assert np.linalg.norm(scene.camera["position"] - scene.camera["target"]) > np.ptp(
+        points, axis=0).max() / 2  # farther than half the drawing's extent
 
 
 def test_camera_and_grid_of_a_hanging_linkage():
