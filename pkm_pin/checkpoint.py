@@ -253,6 +253,8 @@ class Checkpoint:
         self._last_write: float | None = None
         self._write_cost = 0.0
         self._dirty = False
+        #: Writes of the partial file so far, and the seconds they took.
+        self.writes, self.write_seconds = 0, 0.0
         if self.resume:
             if not self.path.is_file():
                 raise InputError(f"--resume {self.prefix}: there is no {self.path} to "
@@ -341,6 +343,8 @@ class Checkpoint:
         atomic_savez(self.path, **arrays)
         self._last_write = time.perf_counter()
         self._write_cost = self._last_write - t
+        self.writes += 1
+        self.write_seconds += self._write_cost
         self._dirty = False
 
     def interrupted(self, error: BaseException) -> None:
