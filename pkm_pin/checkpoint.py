@@ -294,7 +294,10 @@ class Checkpoint:
             _STOP["loops"] -= 1
 
     def stage(self, name: str) -> _Stage:
-        """The stage ``name`` of the study (created on first use)."""
+        """The stage ``name`` of the study (created on first use; a study not begun is
+        begun with no more identity than its stages' poses)."""
+        if self.study is None:
+            self.begin({})
         if name not in self.stages:
             self.stages[name] = _Stage(self, name)
         return self.stages[name]
