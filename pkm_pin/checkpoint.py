@@ -52,7 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError
+from .errors import InputError, PkmError
 
 #: The ``format`` entry of a partial file.
 FORMAT = "pkm_pin.partial/1"
@@ -62,6 +62,11 @@ WRITE_INTERVAL = 10.0
 #: Per-pose arrays of a sweep kept in a stage, with their fill values.
 SWEEP_FIELDS = ("ok", "dof", "type_I", "type_II", "condition", "det", "q_actuated", "lti",
                 "cti")
+
+
+class CheckpointError(PkmError, OSError):
+    """The partial file could not be written (a full disk, a folder made read-only
+    during the run): the previous partial file is whole, the temporary one removed."""
 
 
 class Interrupted(KeyboardInterrupt):
@@ -235,13 +240,14 @@ class Checkpoint:
     """
 
     def __init__(self, prefix, *, resume: bool = False, keep: bool = False,
-                 interval: float = WRITE_INTERVAL,
+                 interval: float | None = None,
                  on_chunk: Callable[[str, int], None] | None = None,
                  identity: Mapping | None = None):
         self.prefix = Path(prefix)
         self.identity = dict(identity or {})
         self.path = self.prefix.with_name(self.prefix.name + ".partial.npz")
-        self.resume, self.keep, self.interval = bool(resume), bool(keep), float(interval)
+        self.resume, self.keep = bool(resume), bool(keep)
+        self.interval = float(WRITE_INTERVAL if interval is None else interval)
         self.on_chunk = on_chunk
         check_writable(self.path.parent, f"checkpoint {self.path}")
         if self.path.exists() and not self.path.is_file():
@@ -343,7 +349,13 @@ class Checkpoint:
                   "stages": np.array(list(self.stages), dtype=str)}
         for st in self.stages.values():
             arrays.update(st.arrays())
-        atomic_savez(self.path, **arrays)
+        try:
+            atomic_savez(self.path, **arrays)
+        except OSError as e:
+            self._dirty = False  # not tried again while the error goes up
+            kept = " (the previous one is kept whole)" if self.path.is_file() else ""
+            raise CheckpointError(f"cannot write the partial results {self.path}{kept}: "
+                                  f"{e.strerror or e}") from e
         self._last_write = time.perf_counter()
         self._write_cost = self._last_write - t
         self.writes += 1
@@ -511,5 +523,6 @@ def interrupt_line(error: Interrupted, command: str | None) -> str:
             f"continue with: {command}")
 
 
-__all__ = ["Checkpoint", "Interrupted", "atomic_savez", "atomic_write", "check_writable",
-           "checkpoint_of", "file_digest", "graceful_stop", "stop_requested", "study_json"]
+__all__ = ["Checkpoint", "CheckpointError", "Interrupted", "atomic_savez", "atomic_write",
+           "check_writable", "checkpoint_of", "file_digest",
+           "graceful_stop", "stop_requested", "study_json"]

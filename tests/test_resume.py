@@ -239,3 +239,33 @@ def test_a_dask_worker_killed_mid_sweep_costs_time_not_the_result(stewart, tmp_p
     with pytest.raises(ProcessLookupError):
         os.kill(killed[0], 0)
     _assert_same_workspace(ws, ref)
+
+
+def test_a_full_disk_during_the_run_is_one_error_and_keeps_the_last_file(tmp_path, monkeypatch,
+                                                                        capsys):
+    """A write that fails for lack of space (after a first good one) ends the study with
+    one error line, status 2; the partial file is the last whole one, no temporary left."""
+    import pkm_pin.checkpoint as checkpoint
+
+    savez, calls = np.savez, []
+
+    def filling(f, **arrays):
+        calls.append(1)
+        if len(calls) > 1:
+            f.write(b"PK\x03\x04 truncated")
+            raise OSError(28, "No space left on device")
+        savez(f, **arrays)
+
+    monkeypatch.setattr(checkpoint, "WRITE_INTERVAL", 0.0)
+    monkeypatch.setattr(checkpoint.np, "savez", filling)
+    argv = ["workspace", "stewart", "--coords", "x", "y", "z", "--n", "6", "--chunk-size",
+            "30", "--quiet", "--out", str(tmp_path / "ws")]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "No space left on device" in err, err
+    assert "previous one is kept whole" in err
+    monkeypatch.setattr(checkpoint.np, "savez", savez)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["ws.partial.npz"]
+    with np.load(tmp_path / "ws.partial.npz") as z:
+        assert z["cells.done"].sum() == 30
+    assert cli.main(argv[:-2] + ["--resume", str(tmp_path / "ws")]) == 0
