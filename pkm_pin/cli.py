@@ -28,6 +28,11 @@ forward kinematics first; ``--pose``: the output pose, inverse kinematics); ``ma
 sweeps two actuated coordinates (``--actuated NAME NAME``, ``--range A B C D``) in a snake
 so that each point is warm-started from its neighbour.
 
+``map`` and ``workspace`` (platform mechanisms) keep their results in
+``PREFIX.partial.npz`` while they run (:mod:`pkm_pin.checkpoint`): the first Ctrl-C or
+SIGTERM stops after the current chunk, prints how many cells are done and the command that
+continues (``--resume PREFIX``), and exits with 130 (SIGINT) or 143 (SIGTERM).
+
 User mistakes print one line ``pkm-pin: error: …`` on stderr and exit with status 2; no
 Python traceback. ``check`` exits with 1 when the file loads but has warnings.
 """
