@@ -10,11 +10,36 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 
+#: Longest echo of a value from an input in an error message [characters]: a hostile
+#: file's 10 MB value must not become a 10 MB error line.
+MAX_ECHO = 300
+
+
+def _cut(value, limit: int = MAX_ECHO) -> str:
+    """``repr(value)`` cut to ``limit`` characters, ending with "…" when cut."""
+    text = repr(value) if not isinstance(value, str) or len(value) <= 4 * limit \
+        else repr(value[:4 * limit])
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def _clip(text: str, limit: int = MAX_ECHO) -> str:
+    """``text`` (a path, a label) cut to ``limit`` characters, ending with "…" when cut."""
+    return text if len(text) <= limit else text[:limit - 1] + "…"
+
+
+def _is_file(path) -> bool:
+    """``Path.is_file()``, False for names the OS refuses (too long, a NUL byte)."""
+    try:
+        return path.is_file()
+    except (OSError, ValueError):
+        return False
+
 
 def _listing(names: Iterable[str], limit: int = 25) -> str:
-    """Comma-separated, quoted list of names, cut after ``limit`` entries."""
+    """Comma-separated, quoted list of names (each cut by :func:`_cut`), cut after
+    ``limit`` entries."""
     names = list(names)
-    shown = ", ".join(repr(n) for n in names[:limit])
+    shown = ", ".join(_cut(n) for n in names[:limit])
     if len(names) > limit:
         shown += f", … ({len(names) - limit} more)"
     return shown or "(none)"
@@ -174,3 +199,22 @@ class ClosureFileError(MechanismFileError):
             ``equality/connect[2]``).
         reason: What is wrong and how to fix it.
     """
+
+
+class InconsistentMotion(InputError):
+    """A motion given to the inverse dynamics (:mod:`pkm_pin.dynamics`) is not one the
+    mechanism can make.
+
+    Attributes:
+        kind: ``"velocity"`` (``J v ≠ 0``), ``"acceleration"`` (``J a + J̇ v ≠ 0``) or
+            ``"idle"`` (a generalized force along an idle motion that no actuator gives).
+        residual: The closure rows' residual [physical units] (velocity, acceleration),
+            or the unbalanced generalized force per velocity coordinate (idle).
+        joints: The joints that move in the idle motion (``"idle"``), else empty.
+    """
+
+    def __init__(self, message: str, kind: str = "", residual=None, joints: tuple = ()):
+        self.kind = kind
+        self.residual = residual
+        self.joints = tuple(joints)
+        super().__init__(message)

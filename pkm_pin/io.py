@@ -223,7 +223,7 @@ def _load_toml(path: Path):
     try:
         with path.open("rb") as f:
             doc = tomllib.load(f)
-    except tomllib.TOMLDecodeError as e:
+    except (tomllib.TOMLDecodeError, RecursionError) as e:  # RecursionError: deep nesting
         raise MechanismFileError(label, "", f"not valid TOML: {e}") from e
     except (OSError, UnicodeDecodeError) as e:
         raise MechanismFileError(label, "", f"cannot be read: {e}") from e

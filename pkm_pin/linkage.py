@@ -78,6 +78,7 @@ from functools import cached_property
 import numpy as np
 import pinocchio as pin
 
+from . import dynamics as _dynamics
 from . import screws
 from .analysis import classify
 from .assembly import Assembly
@@ -232,6 +233,8 @@ class Linkage:
         #: nearby ones were sampled (:func:`_mobility`): later configurations with the
         #: same ranks are generic without sampling again.
         self._generic_ranks: tuple[int, int] | None = None
+        self._closure_names = tuple(c.name or f"closure {k}"
+                                    for k, c in enumerate(model.closures))
 
     def __repr__(self) -> str:
         return f"Linkage({self.name!r}, actuated={self.actuated}, output={self.output!r})"
@@ -437,8 +440,7 @@ class Linkage:
         if norms is None or oMo is None:
             kin = model.kinematics(q)
             norms, oMo = model.closure_norms(kin.residual), kin.output_placement
-        names = {c.name or f"closure {k}": float(n)
-                 for k, (c, n) in enumerate(zip(model.closures, norms))}
+        names = dict(zip(self._closure_names, norms.tolist()))
         return LinkageAssembly(q.copy(), float(sol.residual), int(iterations), names,
                                _actuated_or_nan(model, q), oMo)
 
@@ -726,6 +728,11 @@ class Linkage:
 
         return linkage_workspace(self, coords, **options)
 
+    def inverse_dynamics(self, q, v, a, *, gravity=(0, 0, -9.81), wrench=None):
+        """Actuated efforts and closure forces of the motion ``(q, v, a)`` of the
+        model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
+        return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
+
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×
@@ -776,8 +783,10 @@ def _loops_of_actuators(model: ClosureModel) -> tuple:
 
 
 def _actuated_or_nan(model: ClosureModel, q: np.ndarray) -> np.ndarray:
+    """The actuated values at the solver's ``q`` (a checked configuration), NaN where an
+    actuated joint has no single value."""
     try:
-        return model.actuated_values(q)
+        return model._plan.actuated_values(q, model)
     except InputError:
         return np.full(len(model.actuated), np.nan)
 

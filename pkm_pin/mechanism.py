@@ -20,6 +20,7 @@ from functools import cached_property
 import numpy as np
 import pinocchio as pin
 
+from . import dynamics as _dynamics
 from . import position
 from . import sensitivity as _sensitivity
 from . import sweep as _sweep
@@ -511,6 +512,14 @@ class Mechanism:
         from .workspace import workspace
 
         return workspace(self, coords, **options)
+
+    def inverse_dynamics(self, q, v, a, *, gravity=(0, 0, -9.81), wrench=None):
+        """Actuated efforts and closure forces of the motion ``(q, v, a)`` of
+        :attr:`source_model`'s tree for a mechanism detected in a file, else of
+        :attr:`closure_model`'s (:func:`pkm_pin.dynamics.inverse_dynamics`; efforts in
+        that model's ``actuated`` order)."""
+        model = self.closure_model if self.source_model is None else self.source_model
+        return _dynamics.inverse_dynamics(model, q, v, a, gravity=gravity, wrench=wrench)
 
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,

@@ -43,9 +43,7 @@ from __future__ import annotations
 
 import heapq
 import re
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -254,11 +252,13 @@ def designer_output(link):
 
 def mjcf_output(path) -> str | None:
     """The output frame an MJCF file names, ``<custom><text name="pkm_pin:output"
-    data="FRAME"/></custom>`` (MuJoCo's element for user text), or None (also for a file
-    that is not well-formed XML: its reader says why)."""
+    data="FRAME"/></custom>`` (MuJoCo's element for user text; in the file or a file it
+    includes), or None (also for a file its reader refuses: the reader says why)."""
+    from .model.mjcf import parse_mjcf
+
     try:
-        root = ET.parse(Path(path)).getroot()
-    except (ET.ParseError, OSError):
+        root = parse_mjcf(path)  # bounded, includes inlined
+    except PkmError:
         return None
     for text in root.iter("text"):
         if text.get("name") == MJCF_OUTPUT_KEY and text.get("data"):

@@ -87,7 +87,8 @@ def assembly_data(link, assembly) -> dict:
     """Plain data of a :class:`~pkm_pin.linkage.LinkageAssembly`: ``mechanism``,
     ``output``, ``output_is_point``, ``pose`` (the output frame's), ``actuated``,
     ``q_actuated``, ``q`` (the whole tree, Pinocchio's joint order, full precision),
-    ``joint_names``, ``joints`` (:func:`joint_values`), ``residual`` and ``closures``
+    ``joint_names``, ``joints`` (:func:`joint_values`), ``actuator_matches`` (each
+    actuator identifier of the file and the joints it picked), ``residual`` and ``closures``
     (name, kind, frames and residual of each)."""
     model = link.model
     return {
@@ -97,6 +98,7 @@ def assembly_data(link, assembly) -> dict:
         "output_is_point": bool(model.output_point),
         "pose": pose_dict(assembly.output_pose),
         "actuated": list(link.actuated),
+        "actuator_matches": {name: list(joints) for name, joints in model.actuator_matches},
         "q_actuated": assembly.q_actuated.tolist(),
         "q": assembly.q.tolist(),
         "joint_names": list(model.tree.names[1:]),
@@ -241,7 +243,8 @@ def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()
             for a, b in r.get("duplicate_closures", [])]
     out += [f"Grübler count      {r['grubler']}  (redundant closure equations: "
             f"{r['redundant_constraints']})",
-            f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
+            f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}"
+            + _matches_words(r.get("actuator_matches", {})),
             f"independent        {', '.join(r['independent_actuators']) or 'none'}",
             "joints (q):"] + joints_lines(r) + [f"output twists ({r['output']}; ω; v_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]] or ["    none"]
@@ -269,6 +272,14 @@ def _transmission(link, assembly) -> dict | None:
     except (PkmError, np.linalg.LinAlgError):
         return None
     return transmission_data(tr)
+
+
+def _matches_words(matches: dict) -> str:
+    """What the file's actuator identifiers picked, where one is not a joint's own name
+    (``"  (name_mot 'mot' picked mot1, mot2)"``); ``""`` otherwise."""
+    picked = [f"{name!r} picked {', '.join(joints)}" for name, joints in matches.items()
+              if list(joints) != [name]]
+    return f"  (identifiers: {'; '.join(picked)})" if picked else ""
 
 
 def linkage_markdown(r: dict) -> str:

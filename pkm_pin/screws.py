@@ -30,6 +30,8 @@ screws themselves (:func:`characteristic_length`), which is also unit-invariant.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 from numba import njit
@@ -78,7 +80,9 @@ def as_vector(x, n: int, name: str = "vector", what: str = "", noun: str = "valu
     if a.shape != (n,):
         detail = f" ({what})" if what else ""
         raise InputError(f"{name} must have {n} {noun}{detail}, got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
+    # a·a finite ⇒ every entry finite (the cheap test); otherwise the exact one (a·a
+    # also overflows for finite entries beyond ~1e154)
+    if not math.isfinite(a.dot(a)) and not np.isfinite(a).all():
         raise InputError(f"{name} must be finite, got {a}")
     return a
 

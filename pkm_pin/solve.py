@@ -53,6 +53,10 @@ the Python driver evaluates them with Pinocchio (legs the kernels cannot represe
 continuous or multi-DOF joints; one-off calls before the compiled code is ready) and runs
 :func:`closure_iteration` compiled (:data:`iteration_compiled`) or as Python.
 
+The tree solver of a general closure model (:func:`solve_tree`, below) has two drivers
+too: its rows evaluated by Pinocchio, or the whole loop compiled
+(:mod:`pkm_pin.tree_kernel`) for trees whose joints the compiled tree represents.
+
 Restarts: :func:`start_configurations` (warm start, neutral, middle of the limits, N random
 configurations drawn with a seed).
 """
@@ -76,6 +80,7 @@ from .compiling import SameTypes, prefer_compiled
 from .engine.linalg import jacobi
 from .kernels import _compose, _fk, chain_of, twist_exp
 from .kernels import pose_error as closure_error
+from .newton import TREE_MAX_STEP, ldl, ldl_solve, lm_damping, stop_rule
 from .tolerances import CLOSURE_TOL, NEWTON_STALL_RTOL, RANK_RTOL
 
 # numba's typed IR inlining (register_jitable(inline="always")) trips one of its own
@@ -152,27 +157,6 @@ class ClosureSolution:
 
 # =================================================================== the step
 @register_jitable
-def lm_damping(r):
-    """:func:`pkm_pin.tolerances.damping` of the relative residual ``r``, written out for
-    the compiled code (numba's cache does not follow tolerances.py; a test checks that
-    the two agree)."""
-    lam = 1e-10 + 1e-2 * r * r
-    return lam
-
-
-@register_jitable
-def stop_rule(r, tol, it, max_iter, best, slow):
-    """Newton's stopping rules before a step, ``(stop, best, slow)``: ``r ≤ tol``, ``it ≥
-    max_iter``, or :data:`~pkm_pin.tolerances.NEWTON_SLOW_STEPS` (10) evaluations in a
-    row whose ``r`` is not below ``1 − NEWTON_SLOW_RTOL`` (1e-3) times the best so far."""
-    if r <= tol or it >= max_iter:
-        return True, best, slow
-    slow = slow + 1 if r > (1.0 - 1e-3) * best else 0
-    best = min(best, r)
-    return slow >= 10, best, slow
-
-
-@register_jitable
 def leg_rows(T, J, units, length, nv, H):
     """Rows of a leg's residual per unit of its dimensionless unknowns: column ``c`` of
     ``H`` (6 × nv) is ``(ω; (v_O + ω × p_T) / length)`` of the joint twist ``J[:, c]``
@@ -220,46 +204,6 @@ def normal_equations(H, e, nv, lam, N, g):
                 s += H[k, a] * H[k, b]
             N[a, b] = s
         N[a, a] += lam
-
-
-@register_jitable
-def ldl(A, n, inv):
-    """``A[:n, :n] = L D Lᵀ`` for the symmetric positive definite ``A``, in place on its
-    lower triangle: the unit factor ``L`` below the diagonal, ``D`` on it; ``inv``
-    receives ``1 / D``. No square roots (one division per column, off the critical
-    path of the substitutions). False if ``A`` is not positive definite."""
-    for j in range(n):
-        d = A[j, j]
-        for k in range(j):
-            d -= A[j, k] * A[j, k] * A[k, k]
-        if not 0.0 < d < np.inf:
-            return False
-        A[j, j] = d
-        f = 1.0 / d
-        inv[j] = f
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= A[i, k] * A[j, k] * A[k, k]
-            A[i, j] = s * f
-    return True
-
-
-@register_jitable
-def ldl_solve(A, n, inv, b, x):
-    """``x = A⁻¹ b`` from the factors of :func:`ldl` (``x`` may be ``b``)."""
-    for i in range(n):
-        s = b[i]
-        for k in range(i):
-            s -= A[i, k] * x[k]
-        x[i] = s
-    for i in range(n):
-        x[i] *= inv[i]
-    for i in range(n - 1, -1, -1):
-        s = x[i]
-        for k in range(i + 1, n):
-            s -= A[k, i] * x[k]
-        x[i] = s
 
 
 @register_jitable
@@ -828,10 +772,6 @@ def solve_closure(mech, pose, leg_q, mask: Mask = LEGS, target=None, *,
 # output frame. Same damping (lm_damping) and stopping rules (stop_rule, the stall test)
 # as the per-leg solver above; plain numpy + Pinocchio, one Pinocchio pass a step.
 
-#: Largest dimensionless step of the tree solver (infinity norm: rad, or lengths ``L``
-#: for translations): a longer Newton step is shortened to it, which keeps a start far
-#: from closure (published models open by up to ~1 L) from jumping between branches.
-TREE_MAX_STEP = 0.5
 
 
 @dataclass(frozen=True)
@@ -943,7 +883,8 @@ def _tree_step(model, q, e, H, free, r, lo, up):
 
 
 def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, *,
-               pose_rows=None, tol: float = CLOSURE_TOL, max_iter: int = 100) -> TreeSolution:
+               pose_rows=None, tol: float = CLOSURE_TOL, max_iter: int = 100,
+               compiled: bool | None = None) -> TreeSolution:
     """Damped Newton (Levenberg–Marquardt) on a closure model's residual from ``q0``.
 
     Unknowns: the velocity coordinates selected by the boolean mask ``free`` (nv,;
@@ -955,8 +896,19 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
     frame's :func:`pose_error_rows`, multiplied by ``pose_rows`` (k × 6, default the
     identity: the components of the pose that are targeted). Damping :func:`lm_damping`
     of ``r = max(closure, actuated, pose)``; stops on :func:`stop_rule` (``r ≤ tol``,
-    ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled)."""
+    ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled).
+
+    Drivers: without ``pose``, a tree whose joints :mod:`pkm_pin.tree_kernel` represents
+    is solved by its compiled loop (the same steps, the rows evaluated in compiled code)
+    when ``compiled`` is true or, by default, when that code is ready
+    (:func:`pkm_pin.compiling.prefer_compiled`: a one-off call on a fresh installation
+    does not wait for a compilation); otherwise one Pinocchio pass a step."""
     q = model.check_q(q0).copy()
+    if pose is None and compiled is not False:
+        tk = _TREE_KERNEL or _tree_kernel_module()
+        kern = tk.tree_kernel(model) if tk.ENABLED or compiled else None
+        if kern is not None and (compiled or prefer_compiled(tk.solve_tree_kernel)):
+            return _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter)
     free = None if free is None else np.asarray(free, bool)
     if free is not None and free.all():
         free = None
@@ -983,6 +935,39 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
                         ev.output_placement if at_q else None)
 
 
+_NO_TARGETS = np.zeros(0)
+_TREE_KERNEL = None
+
+
+def _tree_kernel_module():
+    """:mod:`pkm_pin.tree_kernel` (imported on first use: it imports this module)."""
+    global _TREE_KERNEL
+    from . import tree_kernel
+
+    _TREE_KERNEL = tree_kernel
+    return tree_kernel
+
+
+def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolution:
+    """:func:`solve_tree` by :func:`pkm_pin.tree_kernel.solve_tree_kernel` (``q``: a
+    checked copy of the start, solved in place)."""
+    if free is None:
+        free = kern.all_free
+    else:
+        free = np.ascontiguousarray(free, dtype=np.bool_)
+        if free.shape != (kern.nv,):
+            raise ValueError(f"free must have one entry per velocity coordinate ({kern.nv})")
+    has = targets is not None
+    t = np.ascontiguousarray(targets, dtype=np.float64) if has else _NO_TARGETS
+    if has and t.shape != kern.act_q.shape:
+        raise ValueError(f"targets must have one value per actuated joint ({len(kern.act_q)})")
+    norms, oMo, info = np.empty(kern.ckind.shape[0]), np.empty((4, 4)), np.empty(6)
+    tk.SOLVE(kern, q, free, has, t, float(tol), int(max_iter), norms, oMo, info)
+    r, closure, actuated, iterations, converged, at_q = info.tolist()
+    return TreeSolution(q, r, closure, actuated, 0.0, int(iterations), converged == 1.0,
+                        norms if at_q else None, pin.SE3(oMo) if at_q else None)
+
+
 def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
     """Restart configurations (S, nq) of a closure model's tree, in this order: the warm
     start (when given), ``model.reference``, ``pinocchio.neutral``, the middle of the
@@ -997,9 +982,9 @@ def iter_tree_starts(model, warm=None, count: int = 0, seed: int = 0):
     """The rows of :func:`tree_starts`, made one at a time (a solve that converges from
     the warm start makes none of the others)."""
     lo, up = tree_limits(model)
+    if warm is not None:  # np.clip's wrapper costs more than the solve of a small tree
+        yield np.minimum(np.maximum(model.check_q(warm), lo), up)
     ref = np.array(model.reference)
-    if warm is not None:
-        yield np.clip(np.asarray(model.check_q(warm), dtype=float), lo, up)
     middle = np.where(np.isfinite(lo), 0.5 * (np.nan_to_num(lo) + np.nan_to_num(up)), ref)
     for row in (ref, pin.neutral(model.tree), middle):
         yield np.clip(row, lo, up)
@@ -1038,7 +1023,7 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
     iterations)``."""
     if isinstance(starts, np.ndarray):
         starts = np.atleast_2d(starts)
-    ref = None if nearest is None else model.check_q(nearest)
+    first = None
     found, total = [], 0
     for k, q0 in enumerate(starts):
         sol = solve_tree(model, q0, free, targets, pose, pose_rows=pose_rows, tol=tol,
@@ -1047,11 +1032,12 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
         found.append(sol)
         if k == 0 and sol.converged:
             return sol, total
-        if ref is None:
-            ref = model.check_q(q0)
+        if first is None:
+            first = q0
     good = [s for s in found if s.converged]
     if not good:
         return min(found, key=lambda s: s.residual), total
+    ref = model.check_q(first if nearest is None else nearest)
 
     def distance(s):
         d = pin.difference(model.tree, ref, s.q) / model.velocity_units

@@ -191,6 +191,17 @@ HOMOTOPY_REAL_TOL = 1e-6
 #: in a row that find no new assembly mode.
 MODES_PATIENCE = 5
 
+# ====================================================================== dynamics
+#: Inverse dynamics (:mod:`pkm_pin.dynamics`): a velocity with ``J v`` or an
+#: acceleration with ``J a + J̇ v`` above this fraction of the size of its terms (the
+#: closure rows made dimensionless, each row's ``Σ |J_ij x_j|`` plus ``|J̇ v|``) is
+#: inconsistent with the closures.
+MOTION_CONSISTENCY_RTOL = 1e-6
+#: Inverse dynamics: a least-squares balance of the generalized forces whose residual
+#: exceeds this fraction of the right-hand side (or of the size of the solution's
+#: terms) needs an effort no actuator gives (along an idle motion).
+EFFORT_BALANCE_RTOL = 1e-6
+
 # ======================================================================== reports
 #: Components of a unit direction below this are printed as 0; coordinates of points
 #: below this times the characteristic length likewise (``report._SNAP``).
@@ -206,7 +217,7 @@ def damping(r: float) -> float:
 
     It grows with the error and vanishes at the solution (quadratic convergence kept);
     it tames singular starts (UR5 from neutral: 48/60 first-try vs 5/60 undamped). The
-    closure solver (:func:`pkm_pin.solve.lm_damping`) writes the same expression out for
+    closure solver (:func:`pkm_pin.newton.lm_damping`) writes the same expression out for
     its compiled code (numba's cache would not see a change made here); a test checks
     that they agree.
     """

@@ -23,7 +23,7 @@ import numpy as np
 import pinocchio as pin
 import yourdfpy
 
-from .errors import UrdfError
+from .errors import UrdfError, _cut, _listing
 
 _MOVABLE = ("revolute", "continuous", "prismatic", "floating", "planar")
 _TYPES = ("fixed",) + _MOVABLE
@@ -33,6 +33,93 @@ _TYPES = ("fixed",) + _MOVABLE
 MAX_LINKS = 500
 #: Largest URDF text accepted [bytes] (checked before parsing).
 MAX_BYTES = 16_000_000
+#: Deepest element nesting accepted in an XML model (URDF, MJCF), checked by a streaming
+#: pass before any tree is built. A URDF is 4 deep; an MJCF nests one element per body
+#: (humanoids and hands: about 20). Pinocchio 4.1's MJCF parser takes time cubic in the
+#: depth (0.07 s at 100 levels, 35 s at 600) and recurses on the C stack (50 000 levels:
+#: a segfault), so the limit bounds both.
+MAX_XML_DEPTH = 100
+#: Most XML elements accepted in one model (all its included files together).
+MAX_XML_ELEMENTS = 200_000
+#: Largest |coordinate| accepted [m] (origins, positions, anchors), and the largest
+#: |angle| [rad or deg]: a mechanism is not a thousand kilometres wide; beyond, the
+#: residuals and rank decisions lose their meaning (1e308 overflows to inf).
+MAX_COORDINATE = 1e6
+
+
+class LimitExceeded(Exception):
+    """An input goes beyond a reader's limit (size, depth, count, range); ``reason`` says
+    which. Each reader re-raises it as its own :class:`~pkm_pin.errors.PkmError`."""
+
+    def __init__(self, reason: str):
+        self.reason = reason
+        super().__init__(reason)
+
+
+def read_bounded(path: Path, limit: int, what: str, binary: bool = False) -> str | bytes:
+    """The text of ``path`` (UTF-8; its bytes if ``binary``), refused before reading it
+    whole when it is larger than ``limit`` bytes.
+
+    Raises:
+        LimitExceeded: the file is too large.
+        OSError, UnicodeDecodeError: as :meth:`Path.read_text`.
+    """
+    with open(path, "rb") as f:
+        size = os.fstat(f.fileno()).st_size  # 0 for a pipe: read up to the limit
+        data = f.read((min(size, limit) if size else limit) + 1) if size <= limit else b""
+        if size and len(data) == size + 1:  # grew while read: read on, within the limit
+            data += f.read(limit + 1 - len(data))
+    if size > limit or len(data) > limit:
+        shown = f"{size / 1e6:.1f} MB" if size > limit else f"more than {limit / 1e6:g} MB"
+        raise LimitExceeded(f"the {what} is {shown}, more than the {limit / 1e6:g} MB "
+                            "pkm_pin reads")
+    return data if binary else data.decode("utf-8")
+
+
+def check_xml_limits(xml: str | bytes, limit_depth: int = MAX_XML_DEPTH,
+                     limit_elements: int = MAX_XML_ELEMENTS) -> int:
+    """Stream through ``xml`` (expat, no tree built) and refuse what the tree builders
+    (ElementTree, urdfdom, Pinocchio's MJCF parser) would choke on: nesting deeper than
+    ``limit_depth``, more than ``limit_elements`` elements, and DTD entity declarations
+    (no URDF or MJCF needs one; they are how "billion laughs" files expand). Malformed XML
+    is left to the caller's parser, which reports it with line and column.
+
+    Returns:
+        The number of elements.
+
+    Raises:
+        LimitExceeded: the limit passed, with the line.
+    """
+    from xml.parsers import expat
+
+    parser = expat.ParserCreate()
+    state = {"depth": 0, "count": 0}
+
+    def start(name, _attrs):
+        state["depth"] += 1
+        state["count"] += 1
+        if state["depth"] > limit_depth:
+            raise LimitExceeded(f"elements nested more than {limit_depth} deep (line "
+                                f"{parser.CurrentLineNumber}, <{_cut(name)[1:-1]}>)")
+        if state["count"] > limit_elements:
+            raise LimitExceeded(f"more than {limit_elements} XML elements (line "
+                                f"{parser.CurrentLineNumber})")
+
+    def end(_name):
+        state["depth"] -= 1
+
+    def entity(name, *_args):
+        raise LimitExceeded(f"a DTD entity declaration <!ENTITY {_cut(name)[1:-1]}> (line "
+                            f"{parser.CurrentLineNumber}): pkm_pin reads no entities")
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    parser.EntityDeclHandler = entity
+    try:
+        parser.Parse(xml, True)
+    except expat.ExpatError:
+        pass  # malformed: the caller's parser says where
+    return state["count"]
 
 
 @dataclass(frozen=True)
@@ -80,7 +167,9 @@ def read(source: str | os.PathLike) -> UrdfSource:
             )
             raise UrdfError(str(path), "no such file", hint)
         try:
-            xml = path.read_text()
+            xml = read_bounded(path, MAX_BYTES, "URDF")
+        except LimitExceeded as e:
+            raise UrdfError(str(path), e.reason, "split it or remove meshes inlined") from e
         except (OSError, UnicodeDecodeError) as e:
             raise UrdfError(str(path), f"cannot be read: {e}") from e
         label, directory = str(path), path.parent
@@ -94,13 +183,17 @@ def read(source: str | os.PathLike) -> UrdfSource:
                         "split it or remove meshes inlined")
     root = _parse_xml(xml, label)
     if label == "<string>":
-        label = f"<string: robot {root.get('name', '?')!r}>"
+        label = f"<string: robot {_cut(root.get('name', '?'), 80)}>"
     _check_structure(root, label)
     robot = _load_yourdfpy(xml, label)
     return UrdfSource(xml=xml, label=label, directory=directory, robot=robot)
 
 
 def _parse_xml(xml: str, label: str) -> ET.Element:
+    try:
+        check_xml_limits(xml)
+    except LimitExceeded as e:
+        raise UrdfError(label, e.reason) from e
     try:
         root = ET.fromstring(xml)
     except ET.ParseError as e:
@@ -111,20 +204,33 @@ def _parse_xml(xml: str, label: str) -> ET.Element:
     return root
 
 
-def _floats(text: str | None, n: int, what: str, label: str) -> np.ndarray | None:
+def _floats(text: str | None, n: int, what: str, label: str,
+            bound: float | None = MAX_COORDINATE) -> np.ndarray | None:
+    """The ``n`` numbers of ``text`` (None when absent), finite and, unless ``bound`` is
+    None, within ±``bound``."""
     if text is None:
         return None
     try:
         values = np.array([float(t) for t in text.split()])
     except ValueError as e:
-        raise UrdfError(label, f"{what} must be {n} numbers, got {text!r}") from e
+        raise UrdfError(label, f"{what} must be {n} numbers, got {_cut(text)}") from e
     if values.shape != (n,) or not np.all(np.isfinite(values)):
-        raise UrdfError(label, f"{what} must be {n} finite numbers, got {text!r}")
+        raise UrdfError(label, f"{what} must be {n} finite numbers, got {_cut(text)}")
+    if bound is not None and np.abs(values).max() > bound:
+        big = values[np.argmax(np.abs(values))]
+        raise UrdfError(label, f"{what} has {big:g}, beyond ±{bound:g} (m or rad)",
+                        "give the value in metres and radians; a mechanism is not "
+                        "a thousand kilometres wide")
     return values
 
 
 def _check_structure(root: ET.Element, label: str) -> None:
     """Check the link/joint tree: names, references, parents, loops, axes, limits."""
+    for el in root.iter():
+        if isinstance(el.tag, str) and el.tag.startswith("{http://www.ros.org/wiki/xacro}"):
+            raise UrdfError(label, f"<xacro:{_cut(el.tag.split('}')[1])[1:-1]}> is a xacro "
+                            "macro, which pkm_pin does not expand",
+                            "run 'xacro FILE > FILE.urdf' and give the URDF")
     links = [l.get("name") for l in root.findall("link")]
     if not links:
         raise UrdfError(label, "the robot has no <link>")
@@ -135,9 +241,11 @@ def _check_structure(root: ET.Element, label: str) -> None:
                         "a linkage), or split the URDF")
     if None in links:
         raise UrdfError(label, "a <link> has no name attribute")
+    for link in root.findall("link"):
+        _check_link(link, label)
     dup = {n for n in links if links.count(n) > 1}
     if dup:
-        raise UrdfError(label, f"link names must be unique; repeated: {sorted(dup)}")
+        raise UrdfError(label, f"link names must be unique; repeated: {_listing(sorted(dup))}")
     link_set = set(links)
     joints = root.findall("joint")
     names = [j.get("name") for j in joints]
@@ -145,7 +253,7 @@ def _check_structure(root: ET.Element, label: str) -> None:
         raise UrdfError(label, "a <joint> has no name attribute")
     dup = {n for n in names if names.count(n) > 1}
     if dup:
-        raise UrdfError(label, f"joint names must be unique; repeated: {sorted(dup)}")
+        raise UrdfError(label, f"joint names must be unique; repeated: {_listing(sorted(dup))}")
     parent_of: dict[str, str] = {}
     for j in joints:
         _check_joint(j, link_set, parent_of, label)
@@ -155,30 +263,55 @@ def _check_structure(root: ET.Element, label: str) -> None:
         if m is not None and m.get("joint") not in movable:
             raise UrdfError(
                 label,
-                f"joint {j.get('name')!r} mimics {m.get('joint')!r}, which is not a movable joint",
-                f"movable joints: {sorted(movable)}",
+                f"joint {_cut(j.get('name'))} mimics {_cut(m.get('joint'))}, which is not a "
+                "movable joint",
+                f"movable joints: {_listing(sorted(movable))}",
             )
     roots = [l for l in links if l not in parent_of]
     if len(roots) != 1:
         raise UrdfError(
             label,
-            f"the links must form one tree with one root; roots found: {roots}",
+            f"the links must form one tree with one root; roots found: {_listing(roots)}",
             "connect every link to the tree with a joint, or remove it",
         )
     for link in links:  # a loop would leave some link without a path to the root
         seen, cur = set(), link
         while cur in parent_of:
             if cur in seen:
-                raise UrdfError(label, f"the joints form a loop through link {cur!r}")
+                raise UrdfError(label, f"the joints form a loop through link {_cut(cur)}")
             seen.add(cur)
             cur = parent_of[cur]
 
 
+def _check_link(link: ET.Element, label: str) -> None:
+    """Origins (inertial, visual, collision) finite and within range; mass and inertia
+    finite, the mass not negative."""
+    where = f"link {_cut(link.get('name'))}"
+    for part in ("inertial", "visual", "collision"):
+        for el in link.findall(part):
+            origin = el.find("origin")
+            if origin is not None:
+                _floats(origin.get("xyz"), 3, f"{where} {part} origin xyz", label)
+                _floats(origin.get("rpy"), 3, f"{where} {part} origin rpy", label)
+    inertial = link.find("inertial")
+    if inertial is None:
+        return
+    mass = inertial.find("mass")
+    if mass is not None and mass.get("value") is not None:
+        m = _floats(mass.get("value"), 1, f"{where} mass", label, bound=None)
+        if m[0] < 0:
+            raise UrdfError(label, f"{where} has mass {m[0]:g} < 0")
+    inertia = inertial.find("inertia")
+    if inertia is not None:
+        for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+            _floats(inertia.get(key), 1, f"{where} inertia {key}", label, bound=None)
+
+
 def _check_joint(j: ET.Element, link_set: set, parent_of: dict, label: str) -> None:
     name, jtype = j.get("name"), j.get("type")
-    where = f"joint {name!r}"
+    where = f"joint {_cut(name)}"
     if jtype not in _TYPES:
-        raise UrdfError(label, f"{where} has type {jtype!r}", f"use one of {list(_TYPES)}")
+        raise UrdfError(label, f"{where} has type {_cut(jtype)}", f"use one of {list(_TYPES)}")
     ends = {}
     for tag in ("parent", "child"):
         el = j.find(tag)
@@ -187,12 +320,12 @@ def _check_joint(j: ET.Element, link_set: set, parent_of: dict, label: str) -> N
         if el.get("link") not in link_set:
             raise UrdfError(
                 label,
-                f"{where} names {tag} link {el.get('link')!r}, which does not exist",
-                f"links: {sorted(link_set)}",
+                f"{where} names {tag} link {_cut(el.get('link'))}, which does not exist",
+                f"links: {_listing(sorted(link_set))}",
             )
         ends[tag] = el.get("link")
     if ends["child"] in parent_of:
-        raise UrdfError(label, f"link {ends['child']!r} is the child of two joints")
+        raise UrdfError(label, f"link {_cut(ends['child'])} is the child of two joints")
     parent_of[ends["child"]] = ends["parent"]
     origin = j.find("origin")
     if origin is not None:
@@ -213,6 +346,9 @@ def _check_joint(j: ET.Element, link_set: set, parent_of: dict, label: str) -> N
             raise UrdfError(label, f"{where} has a non-numeric limit") from e
         if not (np.isfinite(lo) and np.isfinite(up)) or lo > up:
             raise UrdfError(label, f"{where} has limits lower={lo} > upper={up}")
+        if max(abs(lo), abs(up)) > MAX_COORDINATE:
+            raise UrdfError(label, f"{where} has limits lower={lo:g}, upper={up:g}, beyond "
+                            f"±{MAX_COORDINATE:g} (m or rad)")
         for key in ("effort", "velocity"):
             if lim.get(key) is None:
                 raise UrdfError(label, f"{where} <limit> has no {key} attribute",

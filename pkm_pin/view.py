@@ -20,6 +20,20 @@
 * at a type II or III singularity, an animation that moves the platform back and forth
   along :attr:`Analysis.uncontrolled_twist` (the legs follow by re-assembly).
 
+The page explains itself: over its top left corner, a title (the mechanism's name; the
+platform pose, xyz and roll-pitch-yaw in degrees; DOF, motion type and singularity class,
+from the analysis drawn: :attr:`Scene.title_lines`) and a legend with one entry per kind
+of object actually drawn, in the colours it was drawn with (:attr:`Scene.legend`; the
+painter notes each colour as it draws, so the legend cannot disagree with the picture).
+A live viewer's page takes no HTML: it gets the same title and legend as an image card
+that rides on the default camera (:func:`pkm_pin.scene.draw_legend_card`).
+
+The default camera looks at the centre of the bounding box of what is drawn (joints,
+ends of the screw axes and arrows) obliquely from above (:data:`scene.CAMERA_DIRECTION
+<pkm_pin.scene.CAMERA_DIRECTION>`, rather across the plane of a planar mechanism, never
+less than 25° above the ground plane), from the least distance that shows every point
+(:func:`pkm_pin.scene.camera_placement`, kept in :attr:`Scene.camera`).
+
 Nothing needs a server: by default the commands go to a :class:`SceneRecorder`, an
 in-memory stand-in for meshcat's server that keeps the scene tree the way the server
 does, and :meth:`Scene.to_html` writes the page that meshcat's ``static_html()`` would
@@ -42,8 +56,11 @@ mechanism name)::
     pkm/<m>/wrenches/constraint/<k>
 
 meshcat's camera orbits about the viewer's origin, so ``pkm/<m>`` is translated to bring
-the centre of the mechanism there; meshcat's grid and axes get the same translation, so
-they still mark the mechanism's world origin. Sizes are fractions of
+the centre of the drawing there; meshcat's axes get the same translation, so they still
+mark the mechanism's world origin (scaled by :func:`grid_scale`); its grid is scaled to
+the drawing (cells of :func:`pkm_pin.scene.grid_cell`, 1, 2 or 5 × a power of ten, given
+in the legend) and lies in the plane z = 0, or under the drawing when it reaches below
+(:func:`pkm_pin.scene.frame_view`). Sizes are fractions of
 :attr:`Mechanism.characteristic_length`, so a mechanism in millimetres looks the same as
 in metres.
 """
@@ -67,6 +84,7 @@ from .scene import (
     LEG_COLOURS,
     PASSIVE_SCREW_COLOUR,
     PLATFORM_COLOUR,
+    LegendEntry,
     Scene,
     SceneRecorder,
     _hex_colour,
@@ -75,16 +93,30 @@ from .scene import (
     _Painter,
     _rgb,
     _translation,
+    draw_legend_card,
+    frame_view,
     grid_scale,
     node_name,
 )
 from .workspace import KIND_COLOURS
 
+#: The legend's words for the workspace cloud's kinds (colours: ``KIND_COLOURS``) and
+#: for its home marker (:data:`HOME_COLOUR`).
+WORKSPACE_LEGEND_TEXT = {
+    "reachable": ("reachable", "the platform assembles"),
+    "singularity-free": ("singularity-free", "reachable, no singularity"),
+    "transmission": ("good transmission", "singularity-free, transmission above the "
+                     "threshold"),
+    "home": ("home", "the home pose"),
+}
+HOME_COLOUR = 0x000000
+
 #: The scene's names (:mod:`pkm_pin.scene`) are importable from here too.
 __all__ = ["ACTUATED_SCREW_COLOUR", "ACTUATION_WRENCH_COLOUR", "ANIMATION_AMPLITUDE",
-           "ANIMATION_FPS", "ANIMATION_FRAMES", "CONSTRAINT_WRENCH_COLOUR", "LEG_COLOURS",
-           "PASSIVE_SCREW_COLOUR", "PLATFORM_COLOUR", "Scene", "SceneRecorder", "grid_scale",
-           "node_name", "view", "workspace_cloud"]
+           "ANIMATION_FPS", "ANIMATION_FRAMES", "CONSTRAINT_WRENCH_COLOUR", "HOME_COLOUR",
+           "LEG_COLOURS", "PASSIVE_SCREW_COLOUR", "PLATFORM_COLOUR", "WORKSPACE_LEGEND_TEXT",
+           "LegendEntry", "Scene", "SceneRecorder", "grid_scale", "node_name", "view",
+           "workspace_cloud"]
 
 
 def view(
@@ -146,17 +178,18 @@ def view(
         vis.path = visualizer.path
     scene = Scene(vis, recorder, analysis, f"pkm/{node_name(mech.name)}")
     painter = _Painter(scene)
-    painter.settings()
     painter.legs()
     painter.platform()
     if show_screws:
         painter.screws()
     if show_wrenches:
         painter.wrenches()
+    painter.settings()
     if animate_singular and analysis.singularity in ("II", "III") \
             and analysis.uncontrolled_twist is not None:
         painter.animate(analysis.uncontrolled_twist)
         scene.animated = True
+    painter.finish()
     if html is not None:
         scene.to_html(html)
     if open:
@@ -172,6 +205,9 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     singularity-free, good transmission), one node per kind
     (``pkm/workspace/<kind>``) so each can be hidden in the viewer's controls. Two
     coordinates are drawn in a plane (the third at 0); the point size is the cell size.
+    The page has a title and a legend of the kinds drawn and the home marker
+    (:data:`WORKSPACE_LEGEND_TEXT`; ``recorder.title_lines``, ``recorder.legend``), and
+    the camera and grid of :func:`pkm_pin.scene.frame_view` on the sampled box.
 
     With ``surfaces`` and a 3-D grid, each kind's boundary is drawn too, as a
     translucent triangle mesh of its cells' exposed faces
@@ -187,13 +223,15 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     vis = meshcat.Visualizer(window=recorder)
     P = np.zeros((len(ws.points), 3))
     P[:, :len(ws.coords)] = ws.points
+    drawn: dict[str, int] = {}
     span = float(np.max(ws.bounds[:, 1] - ws.bounds[:, 0]))
     size = float(np.min(ws.spacing)) if len(ws.points) else span / 100
     codes, kinds = ws.smallest_kind()
     smallest = codes.ravel()
-    centre = P.mean(axis=0) if len(P) else np.zeros(3)
     root = vis["pkm"]["workspace"]
-    root.set_transform(_translation(-centre))
+    corners = np.zeros((2, 3))
+    corners[:, :len(ws.coords)] = ws.bounds.T
+    framing = frame_view(vis, "pkm/workspace", corners, span)
     for i, k in enumerate(kinds):
         pts = P[smallest == i]
         if not len(pts):
@@ -202,12 +240,22 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
                          (1, len(pts)))
         root[node_name(k)].set_object(g.PointCloud(pts.T.astype(np.float32),
                                                    colour.astype(np.float32), size=size))
+        drawn[k] = _hex_colour(KIND_COLOURS[k])
     if surfaces and ws.sampling == "grid" and len(ws.coords) == 3:
-        _workspace_surfaces(ws, root, g, kinds)
+        drawn.update(_workspace_surfaces(ws, root, g, kinds))
     home = np.zeros(3)
     home[:len(ws.coords)] = ws.home
-    root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=0x000000))
+    root["home"].set_object(g.Sphere(0.6 * size), g.MeshLambertMaterial(color=HOME_COLOUR))
     root["home"].set_transform(_translation(home))
+    drawn["home"] = HOME_COLOUR
+    coords = ", ".join(f"{c} [{u}]" for c, u in zip(ws.coords, ws.units))
+    recorder.title_lines = (f"workspace of {ws.mechanism}",
+                            f"{coords}: {len(ws.points)} {ws.sampling} samples",
+                            "each sample in the colour of the smallest set it is in")
+    recorder.legend = tuple(LegendEntry(k, *WORKSPACE_LEGEND_TEXT[k], (drawn[k],))
+                            for k in WORKSPACE_LEGEND_TEXT if k in drawn)
+    if visualizer is not None:
+        draw_legend_card(vis, recorder.title_lines, recorder.legend, framing["radius"])
     if html is not None:
         Path(html).write_text(recorder.static_html(title=f"pkm_pin workspace: {ws.mechanism}"),
                               encoding="utf-8")
@@ -216,17 +264,21 @@ def workspace_cloud(ws, *, html: str | os.PathLike | None = None, visualizer=Non
     return recorder
 
 
-def _workspace_surfaces(ws, root, g, kinds) -> None:
+def _workspace_surfaces(ws, root, g, kinds) -> dict[str, int]:
     """Each kind's voxel boundary mesh under ``root`` (translucent, its cloud's colour;
-    the larger kinds more transparent so the smaller ones show through)."""
+    the larger kinds more transparent so the smaller ones show through); the colour of
+    each kind drawn."""
     from .workspace import voxel_surface
 
+    drawn: dict[str, int] = {}
     for i, k in enumerate(kinds):
         vertices, faces = voxel_surface(ws.masks[k], ws.bounds)
         if not len(faces):
             continue
+        drawn[k] = _hex_colour(KIND_COLOURS[k])
         material = g.MeshLambertMaterial(color=_hex_colour(KIND_COLOURS[k]), transparent=True,
                                          opacity=0.25 + 0.2 * i)
         root[node_name(f"{k}_surface")].set_object(
             g.TriangularMeshGeometry(vertices.astype(np.float32),
                                      faces.astype(np.uint32)), material)
+    return drawn

@@ -22,6 +22,10 @@ scene and page machinery of :mod:`pkm_pin.scene`:
   output (``show_wrenches``), as :func:`pkm_pin.view.view` draws them; for a point
   output only the forces among the constraint wrenches.
 
+Title, legend, camera and grid as :func:`pkm_pin.view.view` has them; the title names
+the output frame (or point) and its pose, the DOF, the idle DOF, the output's motion type
+and the singularity class.
+
 Scene layout (meshcat paths; ``<m>`` is :func:`~pkm_pin.view.node_name` of the name)::
 
     pkm/<m>/links/<joint or frame>       skeleton bars
@@ -55,6 +59,7 @@ from .scene import (
     LEG_COLOURS,
     PASSIVE_SCREW_COLOUR,
     PLATFORM_COLOUR,
+    SINGULARITY_WORDS,
     Scene,
     SceneRecorder,
     _meshcat,
@@ -62,6 +67,7 @@ from .scene import (
     _segment_matrix,
     _translation,
     node_name,
+    pose_words,
 )
 from .tolerances import RANK_RTOL
 
@@ -144,7 +150,6 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         vis.path = visualizer.path
     scene = LinkageScene(vis, recorder, link, assembly, analysis, f"pkm/{node_name(link.name)}")
     painter = _LinkagePainter(scene)
-    painter.settings()
     painter.tree()
     painter.closures()
     painter.output()
@@ -153,6 +158,8 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         painter.screws()
     if show_wrenches:
         painter.wrenches()
+    painter.settings()
+    painter.finish()
     if html is not None:
         scene.to_html(html)
     if open:
@@ -173,9 +180,14 @@ class _LinkagePainter(_Painter):
         self.kin = self.model.kinematics(scene.assembly.q)
         self.root = scene.root
         self.legs_drawn = []
+        self.noted = {}
+        self.drawn_points = []
+        self.grid_cell = None
+        self.grid_height = 0.0
         P = self.mech_points()
         self.L = max(0.5 * float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))),
                      float(self.model.length))
+        self.radius = self.L
 
     def centre(self) -> np.ndarray:
         """Wrench arrows start nearest to the output frame's origin."""
@@ -215,11 +227,31 @@ class _LinkagePainter(_Painter):
         roots = [k for k in range(1, self.tree_.njoints) if self.tree_.parents[k] == 0]
         return LEG_COLOURS[roots.index(list(self.tree_.supports[j])[1]) % len(LEG_COLOURS)]
 
-    def bar(self, path: str, a, b, colour: int, radius: float, opacity: float = 1.0) -> None:
+    def bar(self, path: str, a, b, colour: int, radius: float, opacity: float = 1.0,
+            kind: str | None = None) -> bool:
+        """A cylinder from ``a`` to ``b`` (none when they meet), noted in the legend as
+        ``kind``; whether it was drawn."""
         if np.linalg.norm(np.asarray(b) - a) <= 1e-9 * self.L:
-            return
+            return False
         self.vis[path].set_object(self.g.Cylinder(1.0, radius), self.material(colour, opacity))
         self.vis[path].set_transform(_segment_matrix(np.asarray(a), np.asarray(b)))
+        self.drawn_points.append(np.array([a, b], dtype=float))
+        if kind is not None:
+            self.note(kind, colour)
+        return True
+
+    def title_lines(self) -> tuple[str, ...]:
+        """Name; output frame and its pose; DOF, output motion type, idle DOF and
+        singularity class."""
+        a = self.scene.analysis
+        M = self.kin.output_placement
+        what = "point" if self.model.output_point else "frame"
+        idle = f", {a.idle_dof} idle" if a.idle_dof else ""
+        return (self.mech.name,
+                f"output {what} {self.mech.output} at "
+                f"{pose_words(M, self.L, point=self.model.output_point)}",
+                f"{a.dof} DOF{idle}, output motion {a.motion_type}, singularity: "
+                f"{SINGULARITY_WORDS.get(a.singularity, a.singularity)}")
 
     # ----------------------------------------------------------------------- tree
     def tree(self) -> None:
@@ -229,18 +261,20 @@ class _LinkagePainter(_Painter):
             parent = tree.parents[j]
             colour = GROUND_COLOUR if parent == 0 else self.colour(parent)
             self.bar(f"{self.root}/links/{node_name(tree.names[j])}", self.joint_origin(parent),
-                     self.joint_origin(j), colour, r)
+                     self.joint_origin(j), colour, r, kind="ground" if parent == 0 else "links")
             self.joint(j)
         for name, p, j in self.carried_frames():
             self.bar(f"{self.root}/links/{node_name(name)}", self.joint_origin(j), p,
-                     self.colour(j), r)
+                     self.colour(j), r, kind="ground" if j == 0 else "links")
 
     def joint(self, j: int) -> None:
         """A joint's marker: cylinder along a revolute axis, cube, or ball."""
         joint, name = self.tree_.joints[j], self.tree_.names[j]
         if joint.nv == 0 or joint.nv == 6:  # mimic or free flyer: no physical joint
             return
-        colour = ACTUATED_SCREW_COLOUR if name in self.mech.actuated else self.colour(j)
+        actuated = name in self.mech.actuated
+        colour = ACTUATED_SCREW_COLOUR if actuated else self.colour(j)
+        self.note("actuated_joint" if actuated else "links", colour)
         node = self.vis[f"{self.root}/joints/{node_name(name)}"]
         c, s = self.joint_origin(j), self.size("joint")
         twist = self.kin.joint_twists[joint.idx_v]
@@ -273,6 +307,7 @@ class _LinkagePainter(_Painter):
         """Each loop's ring, its constraint-frame marker and the gap, if any."""
         for k, c in enumerate(self.model.closures):
             path = f"{self.root}/closures/{node_name(c.name or f'closure_{k}')}"
+            self.note("closure", CLOSURE_COLOUR)
             pts = self.loop_points(c)
             for i, (a, b) in enumerate(zip(pts[:-1], pts[1:])):
                 self.bar(f"{path}/ring/{i}", a, b, CLOSURE_COLOUR, 2.2 * self.size("link"),
@@ -300,6 +335,7 @@ class _LinkagePainter(_Painter):
         """A ball at the output frame's origin; its axes for a body."""
         M = self.kin.output_placement
         path = f"{self.root}/output"
+        self.note("output", PLATFORM_COLOUR)
         self.vis[f"{path}/ball"].set_object(self.g.Sphere(1.4 * self.size("anchor")),
                                             self.material(PLATFORM_COLOUR))
         self.vis[f"{path}/ball"].set_transform(_translation(M.translation))
@@ -307,7 +343,8 @@ class _LinkagePainter(_Painter):
             return
         for axis, colour, label in zip(M.rotation.T, OUTPUT_AXIS_COLOURS, "xyz"):
             self.bar(f"{path}/{label}", M.translation,
-                     M.translation + 0.25 * self.L * axis, colour, self.size("shaft"))
+                     M.translation + 0.25 * self.L * axis, colour, self.size("shaft"),
+                     kind="output_axes")
 
     # ---------------------------------------------------------------------- idle
     def idle(self) -> None:
@@ -327,7 +364,7 @@ class _LinkagePainter(_Painter):
                 t = (P - point) @ u
                 pad = 0.15 * max(float(np.ptp(t)), self.L)
                 a, b = point + (t.min() - pad) * u, point + (t.max() + pad) * u
-                self.bar(f"{path}/axis", a, b, IDLE_COLOUR, 1.8 * self.size("link"))
+                self.bar(f"{path}/axis", a, b, IDLE_COLOUR, 1.8 * self.size("link"), kind="idle")
                 continue
             x = v / self.model.velocity_units
             for j in range(1, tree.njoints):
@@ -336,6 +373,7 @@ class _LinkagePainter(_Painter):
                     node = self.vis[f"{path}/joints/{node_name(tree.names[j])}"]
                     node.set_object(self.g.Sphere(2.2 * self.size("joint")),
                                     self.material(IDLE_COLOUR, 0.5))
+                    self.note("idle", IDLE_COLOUR)
                     node.set_transform(_translation(self.joint_origin(j)))
 
     # ------------------------------------------------------------- screws, wrenches
@@ -351,10 +389,11 @@ class _LinkagePainter(_Painter):
             centre = self.joint_origin(j)
             if np.isfinite(screws.pitch(twist, length=self.model.length)):
                 centre = point + ((centre - point) @ u) * u
-            colour = ACTUATED_SCREW_COLOUR if tree.names[j] in self.mech.actuated \
-                else PASSIVE_SCREW_COLOUR
+            actuated = tree.names[j] in self.mech.actuated
+            colour = ACTUATED_SCREW_COLOUR if actuated else PASSIVE_SCREW_COLOUR
             self.bar(f"{self.root}/screws/{node_name(tree.names[j])}", centre - half * u,
-                     centre + half * u, colour, self.size("screw"))
+                     centre + half * u, colour, self.size("screw"),
+                     kind="actuated_axis" if actuated else "passive_axis")
 
     def wrenches(self) -> None:
         """Actuation wrenches (rows of ``A``) and the constraint wrenches on the output
@@ -362,8 +401,9 @@ class _LinkagePainter(_Painter):
         analysis = self.scene.analysis
         for name, w in zip(self.mech.actuated, analysis.A):
             self.arrow(f"actuation/{node_name(name.replace('/', '.'))}", w,
-                       ACTUATION_WRENCH_COLOUR)
+                       ACTUATION_WRENCH_COLOUR, "actuation_wrench")
         basis = readable_basis(analysis.constraint_wrenches, self.centre(), self.model.length)
         for k, b in enumerate(basis):
             if not (self.model.output_point and b.kind == "couple"):
-                self.arrow(f"constraint/{k}", b.screw, CONSTRAINT_WRENCH_COLOUR)
+                self.arrow(f"constraint/{k}", b.screw, CONSTRAINT_WRENCH_COLOUR,
+                           "constraint_wrench")

@@ -15,6 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import bench_analysis  # noqa: E402
 import bench_fk  # noqa: E402
+import bench_general_fk  # noqa: E402
 import bench_linkage  # noqa: E402
 import bench_one_core  # noqa: E402
 import equivalence_table  # noqa: E402
@@ -47,6 +48,17 @@ def test_bench_linkage_times_the_three_figures(capsys):
     assert set(rows) == {"assemble", "fk", "analyze"}
     assert all(ours > 0 and hand > 0 for ours, hand in rows.values())
     assert "ratio pkm_pin / hand-written" in capsys.readouterr().out
+
+
+def test_bench_general_fk_times_the_five_bar_and_the_cassie_leg(capsys):
+    """bench_general_fk.main (PlaCo left out) times the 5-bar's FK through both drivers
+    (solutions checked inside) and the Cassie-like leg against the hand-written loop."""
+    rows = bench_general_fk.main(["--no-placo", "--repeat", "1", "--poses", "5"])
+    assert rows["five_bar"]["ours"] > 0 and rows["five_bar"]["pinocchio"] > 0
+    assert set(rows["cassie"]) == {"assemble", "fk"}
+    assert all(t > 0 for figures in rows["cassie"].values() for t in figures)
+    out = capsys.readouterr().out
+    assert "Pinocchio driver" in out and "hand-written" in out
 
 
 def test_equivalence_table_numbers_are_below_1e_9(capsys):

@@ -34,11 +34,12 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
     2: ("kinematics of one configuration: compiled leg kinematics, the Pinocchio pass, "
         "serial chains, the assembly record whose twists that pass verifies, the default "
         "output chosen from one configuration's motions",
-        ("kernels", "twists", "serial", "assembly", "output_choice")),
+        ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly", "output_choice")),
     3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
         ("solve", "leg")),
-    4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission",
-        ("engine", "engine.core", "analysis", "transmission")),
+    4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
+        "closed-loop dynamics",
+        ("engine", "engine.core", "analysis", "transmission", "dynamics")),
     5: ("position problems and studies built on the solver and the analysis",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration")),
     6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "

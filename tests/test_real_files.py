@@ -176,3 +176,20 @@ def test_joints_written_without_a_range_move(tmp_path):
     q_a = ref.home_assembly.q_actuated + 0.3
     np.testing.assert_allclose(link.forward_kinematics(q_a, link.home_assembly).q,
                                ref.forward_kinematics(q_a, ref.home_assembly).q, atol=1e-9)
+
+
+def test_report_lists_which_joints_each_actuator_identifier_picked(tmp_path, capsys):
+    """An actuator identifier that is not a joint's own name (Gepetto's substring rule)
+    is shown with the joints it picked, in the text and in --json."""
+    import json
+    import shutil
+
+    from pkm_pin.cli import main
+
+    shutil.copy(LOOPS / "five_bar.urdf", tmp_path / "five_bar.urdf")
+    text = (LOOPS / "five_bar.yaml").read_text().replace("['mot1', 'mot2']", "['mot']")
+    (tmp_path / "five_bar.yaml").write_text(text)
+    assert main(["analyze", str(tmp_path / "five_bar.urdf")]) == 0
+    assert "(identifiers: 'mot' picked mot1, mot2)" in capsys.readouterr().out
+    assert main(["analyze", str(tmp_path / "five_bar.urdf"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["actuator_matches"] == {"mot": ["mot1", "mot2"]}

@@ -9,7 +9,8 @@ Each joint ``j`` becomes a URDF joint of the same name whose parent link is the 
 its parent joint (``"<parent joint>_link"``, ``root`` for the universe) and whose
 ``<origin>`` is the joint placement (xyz [m], roll-pitch-yaw [rad]); revolute and
 prismatic joints about any axis (Pinocchio's ``RX``… and ``…Unaligned`` models) keep
-their axis and finite position limits (an unlimited joint is written without a range,
+their axis and position limits within :data:`~pkm_pin.urdf.MAX_COORDINATE` (a joint
+unlimited, or with Pinocchio's default ±1.8e308, is written without a range,
 which :func:`pkm_pin.urdf.joints_without_range` reads back as unlimited), unbounded
 revolutes are ``continuous``. The tip frame
 becomes a link of its name, fixed to its joint's body at the frame's placement.
@@ -22,6 +23,7 @@ import pinocchio as pin
 from lxml import etree
 
 from ..errors import InputError
+from ..urdf import MAX_COORDINATE
 
 __all__ = ["chain_urdf"]
 
@@ -48,7 +50,7 @@ def chain_urdf(model: pin.Model, tip: str, name: str = "chain") -> str:
             iq = model.joints[j].idx_q
             lower, upper = model.lowerPositionLimit[iq], model.upperPositionLimit[iq]
             limit = etree.SubElement(joint, "limit", effort="100.0", velocity="10.0")
-            if np.isfinite(lower) and np.isfinite(upper):
+            if max(abs(lower), abs(upper)) <= MAX_COORDINATE:  # Pinocchio's "none": ±1.8e308
                 limit.set("lower", repr(float(lower)))
                 limit.set("upper", repr(float(upper)))
     frame = model.frames[model.getFrameId(tip)]

@@ -136,6 +136,10 @@ class ClosureModel:
         reference: Reference configuration of the tree (nq,), the one assembly starts
             from (a file's ``q = 0`` or MJCF ``qpos0``; it need not satisfy the
             closures); default ``pinocchio.neutral(tree)``. Read-only.
+        actuator_matches: What the file named as actuators and which joints each name
+            picked, ``((identifier, (joint, ...)), ...)`` in the file's order (an Extended
+            URDF's ``name_mot`` entries, an MJCF's actuators); empty for a model made in
+            code. Reports may list it.
     """
 
     tree: pin.Model = field(repr=False)
@@ -146,6 +150,7 @@ class ClosureModel:
     length: float | None = None
     reference: np.ndarray | None = field(default=None, repr=False)
     output_point: bool = False
+    actuator_matches: tuple = ()
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
     _plan: _Plan = field(init=False, repr=False)
@@ -165,6 +170,14 @@ class ClosureModel:
         set_(self, "tree", tree)
         set_(self, "closures", closures)
         set_(self, "actuated", tuple(self.actuated))
+        matches = self.actuator_matches
+        try:
+            matches = tuple((str(k), tuple(str(j) for j in v)) for k, v in (
+                matches.items() if isinstance(matches, dict) else matches))
+        except (TypeError, ValueError) as e:
+            raise InputError("actuator_matches must be pairs (identifier, joint names), got "
+                             f"{type(matches).__name__}") from e
+        set_(self, "actuator_matches", matches)
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_closures_join_two_bodies(tree, closures, self.name)
         _check_actuated(tree, self.actuated, self.name)
@@ -181,8 +194,9 @@ class ClosureModel:
         set_(self, "_local", threading.local())
 
     def __getstate__(self) -> dict:
-        """Pickle: the description (not the per-thread working data)."""
-        return {k: v for k, v in self.__dict__.items() if k != "_local"}
+        """Pickle: the description (not the per-thread working data, nor the compiled
+        tree of :func:`pkm_pin.tree_kernel.tree_kernel`, made again on first use)."""
+        return {k: v for k, v in self.__dict__.items() if k not in ("_local", "_tree_kernel")}
 
     def __setstate__(self, state: dict) -> None:
         """Unpickle: the description as pickled, its arrays read-only again."""

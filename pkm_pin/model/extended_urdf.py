@@ -28,7 +28,15 @@ following the toolbox's loader (``completeRobotLoader`` in
   Pinocchio's first frame of that name) on frame ``B`` at their own placements: ``3d``/``3D``
   a point closure, ``6d``/``6D`` a weld; the closure is named ``A + "C" + B``.
 * ``name_mot`` entries match every movable joint whose name *contains* them (the toolbox's
-  ``motname in name``), in the tree's joint order: that is the actuated order.
+  ``motname in name``), in the tree's joint order: that is the actuated order. An entry
+  equal to a joint's name picks that joint alone; the empty entry, an entry that picks
+  nothing and a joint picked by two entries are errors. What each entry picked is
+  :attr:`ClosureModel.actuator_matches`.
+
+The YAML is read within bounds (``docs/reliability.md``): at most
+:data:`MAX_CLOSURES_BYTES`, no anchors or aliases, no duplicate keys, nesting at most
+:data:`MAX_YAML_DEPTH`, at most :data:`MAX_YAML_NODES` values; every value is
+type-checked before use and echoed cut to 300 characters.
 
 Deliberate differences: a closure type other than 3d/6d, lists of different lengths, a
 frame, joint or motor name that matches nothing are errors (the toolbox falls back to 6D,
@@ -58,8 +66,16 @@ from pathlib import Path
 
 import pinocchio as pin
 
-from ..errors import ClosureFileError, UrdfError, _listing
-from ..urdf import _captured_stderr, free_range, joints_without_range, read
+from ..errors import ClosureFileError, UrdfError, _clip, _cut, _is_file, _listing
+from ..urdf import (
+    MAX_LINKS,
+    LimitExceeded,
+    _captured_stderr,
+    free_range,
+    joints_without_range,
+    read,
+    read_bounded,
+)
 from .closure_model import Closure, ClosureModel
 
 if sys.version_info >= (3, 11):
@@ -76,6 +92,14 @@ JOINT_TYPES = ("SPHERICAL", "FIXED", "CARDAN", "UJOINT_XY", "UJOINT_YZ", "UJOINT
 #: Keys of a closures file: required, then optional.
 REQUIRED_KEYS = ("closed_loop", "type", "name_mot")
 OPTIONAL_KEYS = ("joint_name", "joint_type", "output", "output_point")
+
+#: Largest closures file read [bytes]: Gepetto's are under 1 kB; refused before parsing.
+MAX_CLOSURES_BYTES = 1_000_000
+#: Deepest nesting of YAML lists and mappings (the format needs 3: mapping, list, pair).
+MAX_YAML_DEPTH = 16
+#: Most YAML nodes (scalars, lists, mappings) in a closures file. Anchors and aliases
+#: are refused, so a file's nodes are at most its events and this bounds memory.
+MAX_YAML_NODES = 100_000
 
 _REVOLUTE = {"X": pin.JointModelRX, "Y": pin.JointModelRY, "Z": pin.JointModelRZ}
 
@@ -128,8 +152,9 @@ def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.Pat
     tree = _build_tree(urdf, spec, free_flyer)
     closures = _closures(tree, spec)
     out = output if output is not None else _output_frame(tree, spec)
-    return ClosureModel(tree, closures, _actuated(tree, spec), out, name=tree.name,
-                        output_point=spec.output_point)
+    actuated, matches = _actuated(tree, spec)
+    return ClosureModel(tree, closures, actuated, out, name=tree.name,
+                        output_point=spec.output_point, actuator_matches=matches)
 
 
 def find_closures_file(urdf_path: str | os.PathLike) -> Path:
@@ -139,10 +164,10 @@ def find_closures_file(urdf_path: str | os.PathLike) -> Path:
     candidates = [urdf.with_suffix(s) for s in (".yaml", ".yml", ".toml")]
     candidates.append(urdf.parent / "robot.yaml")
     for c in candidates:
-        if c.is_file():
+        if _is_file(c):
             return c
-    raise ClosureFileError(str(urdf), "", "no closures file beside it (looked for "
-                           + ", ".join(c.name for c in candidates)
+    raise ClosureFileError(_clip(str(urdf)), "", "no closures file beside it (looked for "
+                           + ", ".join(_clip(c.name, 80) for c in candidates)
                            + "); write one or pass closures_path=")
 
 
@@ -150,20 +175,27 @@ def find_closures_file(urdf_path: str | os.PathLike) -> Path:
 def read_closures_file(path: str | os.PathLike) -> ClosureSpec:
     """Read and check a closures file (YAML, or TOML by suffix) without its URDF."""
     path = Path(path)
-    label = str(path)
-    if not path.is_file():
+    label = _clip(str(path))
+    if not _is_file(path):
         raise ClosureFileError(label, "", "no such closures file; check the path")
     try:
-        text = path.read_text()
+        text = read_bounded(path, MAX_CLOSURES_BYTES, "closures file")
+    except LimitExceeded as e:
+        raise ClosureFileError(label, "", e.reason + " (a closures file is a few lines)"
+                               ) from e
     except (OSError, UnicodeDecodeError) as e:
         raise ClosureFileError(label, "", f"cannot be read: {e}") from e
     content = _parse(text, label, toml=path.suffix.lower() == ".toml")
     if not isinstance(content, dict):
         raise ClosureFileError(label, "", "must be a mapping with the keys "
                                f"{list(REQUIRED_KEYS)} (optional: {list(OPTIONAL_KEYS)})")
+    for key in content:
+        if not isinstance(key, str):
+            raise ClosureFileError(label, _cut(key), "a key must be a name; the keys are "
+                                   f"{list(REQUIRED_KEYS + OPTIONAL_KEYS)}")
     unknown = sorted(set(content) - set(REQUIRED_KEYS) - set(OPTIONAL_KEYS))
     if unknown:
-        raise ClosureFileError(label, str(unknown[0]), "unknown key; the keys are "
+        raise ClosureFileError(label, _cut(unknown[0])[1:-1], "unknown key; the keys are "
                                f"{list(REQUIRED_KEYS + OPTIONAL_KEYS)}")
     for key in REQUIRED_KEYS:
         if key not in content:
@@ -174,20 +206,21 @@ def read_closures_file(path: str | os.PathLike) -> ClosureSpec:
     _same_length(label, "closed_loop", loops, "type", types)
     for i, t in enumerate(types):
         if t not in CLOSURE_TYPES:
-            raise ClosureFileError(label, f"type[{i}]", f"unknown closure type {t!r}; use "
+            raise ClosureFileError(label, f"type[{i}]", f"unknown closure type {_cut(t)}; use "
                                    "'3d' (point contact) or '6d' (weld)")
     names, kinds = _names(content, "joint_name", label), _names(content, "joint_type", label)
     _same_length(label, "joint_name", names, "joint_type", kinds)
     for i, k in enumerate(kinds):
         if _ujoint_axes(k) is None and k not in JOINT_TYPES:
-            raise ClosureFileError(label, f"joint_type[{i}]", f"unknown joint type {k!r}; "
+            raise ClosureFileError(label, f"joint_type[{i}]", f"unknown joint type {_cut(k)}; "
                                    f"use one of {list(JOINT_TYPES)} or UJOINT_ + two axes")
     output = content.get("output")
     if output is not None and not isinstance(output, str):
-        raise ClosureFileError(label, "output", f"must be a frame name, got {output!r}")
+        raise ClosureFileError(label, "output", f"must be a frame name, got {_cut(output)}")
     point = content.get("output_point", False)
     if not isinstance(point, bool):
-        raise ClosureFileError(label, "output_point", f"must be true or false, got {point!r}")
+        raise ClosureFileError(label, "output_point", f"must be true or false, got "
+                               f"{_cut(point)}")
     return ClosureSpec(label, loops, types, _names(content, "name_mot", label), names, kinds,
                        output, point)
 
@@ -198,16 +231,92 @@ def _parse(text: str, label: str, toml: bool):
         try:
             return tomllib.loads(text)
         except tomllib.TOMLDecodeError as e:
-            raise ClosureFileError(label, "", f"not valid TOML: {e}") from e
+            raise ClosureFileError(label, "", f"not valid TOML: {_cut(str(e))[1:-1]}") from e
+        except RecursionError as e:  # tomllib recurses once per nested array or table
+            raise ClosureFileError(label, "", "not valid TOML: arrays or tables nested too "
+                                   "deep; a closures file nests 2 deep") from e
     import yaml
 
     try:
-        return yaml.safe_load(text)
+        _check_yaml_events(text, label)
+        return yaml.load(text, Loader=_closures_loader())
+    except _DuplicateKey as e:
+        raise ClosureFileError(label, e.key, f"line {e.line}: duplicate key (first given at "
+                               f"line {e.first}); give each key once") from e
     except yaml.YAMLError as e:
         where = getattr(e, "problem_mark", None)
         at = f" at line {where.line + 1}, column {where.column + 1}" if where else ""
         problem = getattr(e, "problem", None) or str(e).splitlines()[0]
-        raise ClosureFileError(label, "", f"not valid YAML{at}: {problem}") from e
+        raise ClosureFileError(label, "", f"not valid YAML{at}: {_cut(problem)[1:-1]}") from e
+
+
+class _DuplicateKey(Exception):
+    def __init__(self, key: str, line: int, first: int):
+        self.key, self.line, self.first = key, line, first
+        super().__init__(key)
+
+
+def _check_yaml_events(text: str, label: str) -> None:
+    """Stream the YAML events of ``text`` (libyaml when installed; nothing is built) and
+    refuse anchors and aliases (an Extended URDF sidecar needs none; nested aliases
+    expand exponentially: 544 bytes give 9⁹ nodes), nesting deeper than
+    :data:`MAX_YAML_DEPTH` and more than :data:`MAX_YAML_NODES` nodes."""
+    import yaml
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+    depth = nodes = 0
+    for event in yaml.parse(text, Loader=loader):
+        if not isinstance(event, yaml.NodeEvent):
+            if isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+            continue
+        line = event.start_mark.line + 1 if event.start_mark is not None else "?"
+        if isinstance(event, yaml.AliasEvent) or event.anchor is not None:
+            sign = "*" if isinstance(event, yaml.AliasEvent) else "&"
+            raise ClosureFileError(label, "", f"line {line}: YAML anchor or alias "
+                                   f"{sign}{_cut(event.anchor)[1:-1]}; a closures file "
+                                   "needs none: write the values out")
+        nodes += 1
+        if nodes > MAX_YAML_NODES:
+            raise ClosureFileError(label, "", f"line {line}: more than {MAX_YAML_NODES} YAML "
+                                   "values; a closures file has a few")
+        if isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                raise ClosureFileError(label, "", f"line {line}: lists or mappings nested "
+                                       f"more than {MAX_YAML_DEPTH} deep")
+
+
+_LOADER = None
+
+
+def _closures_loader():
+    """PyYAML's safe loader (libyaml's when installed) refusing duplicate keys."""
+    global _LOADER
+    if _LOADER is None:
+        import yaml
+
+        base = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+        class ClosuresLoader(base):  # type: ignore[misc, valid-type]
+            def construct_mapping(self, node, deep=False):
+                self.flatten_mapping(node)
+                first: dict = {}
+                for key_node, _ in node.value:
+                    key = self.construct_object(key_node, deep=deep)
+                    line = key_node.start_mark.line + 1
+                    try:
+                        tagged = (type(key).__name__, key)  # 1 and true are two keys
+                        if tagged in first:
+                            raise _DuplicateKey(_cut(key)[1:-1] if isinstance(key, str)
+                                                else _cut(key), line, first[tagged])
+                        first[tagged] = line
+                    except TypeError:  # unhashable: the base class says so
+                        break
+                return super().construct_mapping(node, deep=deep)
+
+        _LOADER = ClosuresLoader
+    return _LOADER
 
 
 def _names(content: dict, key: str, label: str, str_items: bool = True) -> tuple:
@@ -216,11 +325,14 @@ def _names(content: dict, key: str, label: str, str_items: bool = True) -> tuple
     if value is None:
         return ()
     if not isinstance(value, list):
-        raise ClosureFileError(label, key, f"must be a list, got {value!r}")
+        raise ClosureFileError(label, key, f"must be a list, got {_cut(value)}")
+    if len(value) > MAX_LINKS:
+        raise ClosureFileError(label, key, f"has {len(value)} entries, more than the "
+                               f"{MAX_LINKS} joints pkm_pin reads in a URDF")
     for i, item in enumerate(value):
         if str_items and not isinstance(item, str):
             raise ClosureFileError(label, f"{key}[{i}]", f"must be a name (string), got "
-                                   f"{item!r}")
+                                   f"{_cut(item)}")
     return tuple(value)
 
 
@@ -228,7 +340,7 @@ def _pair(value, label: str, where: str) -> tuple[str, str]:
     if not (isinstance(value, list) and len(value) == 2
             and all(isinstance(v, str) for v in value)):
         raise ClosureFileError(label, where, f"must be a pair [frameA, frameB] of frame "
-                               f"names, got {value!r}")
+                               f"names, got {_cut(value)}")
     return value[0], value[1]
 
 
@@ -266,7 +378,7 @@ def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool) -> pin.Model:
     movable = [model.names[j] for j in range(1, model.njoints) if model.joints[j].nv > 0]
     for i, name in enumerate(spec.joint_name):
         if name not in movable:
-            raise ClosureFileError(spec.path, f"joint_name[{i}]", f"{name!r} is not a movable "
+            raise ClosureFileError(spec.path, f"joint_name[{i}]", f"{_cut(name)} is not a movable "
                                    f"joint of {src.label}; its joints: {_listing(movable)}")
     if spec.joint_name:
         model = _replace_joints(model, dict(zip(spec.joint_name, spec.joint_type)))
@@ -316,27 +428,47 @@ def _closures(tree: pin.Model, spec: ClosureSpec) -> tuple[Closure, ...]:
     for i, pair in enumerate(spec.closed_loop):
         for k, name in enumerate(pair):
             if not tree.existFrame(name):
-                raise ClosureFileError(spec.path, f"closed_loop[{i}][{k}]", f"frame {name!r} "
+                raise ClosureFileError(spec.path, f"closed_loop[{i}][{k}]", f"frame {_cut(name)} "
                                        f"is not in the URDF; its frames: {_listing(frames)}")
     return tuple(Closure(CLOSURE_TYPES[t], a, b, name=f"{a}C{b}")
                  for (a, b), t in zip(spec.closed_loop, spec.types))
 
 
-def _actuated(tree: pin.Model, spec: ClosureSpec) -> tuple[str, ...]:
-    """The movable joints whose names contain a ``name_mot`` entry, in tree order."""
+def _actuated(tree: pin.Model, spec: ClosureSpec) -> tuple[tuple[str, ...], tuple]:
+    """The actuated joints (tree order) and what each ``name_mot`` entry picked.
+
+    An entry equal to a movable joint's name picks that joint alone; any other picks
+    every movable joint whose name contains it (the toolbox's ``motname in name``). The
+    empty entry (a substring of every name), an entry picking nothing, and a joint picked
+    by two entries are errors naming them."""
     movable = [tree.names[j] for j in range(1, tree.njoints) if tree.joints[j].nv > 0]
+    matches, picked_by = [], {}
     for i, mot in enumerate(spec.name_mot):
-        if not any(mot in name for name in movable):
-            raise ClosureFileError(spec.path, f"name_mot[{i}]", f"{mot!r} matches no movable "
-                                   f"joint of the URDF; its joints: {_listing(movable)}")
-    return tuple(name for name in movable if any(mot in name for mot in spec.name_mot))
+        where = f"name_mot[{i}]"
+        if not mot.strip():
+            raise ClosureFileError(spec.path, where, f"the empty name {_cut(mot)} is part of "
+                                   "every joint name; name the actuated joints")
+        picked = (mot,) if mot in movable else tuple(n for n in movable if mot in n)
+        if not picked:
+            raise ClosureFileError(spec.path, where, f"{_cut(mot)} matches no movable joint "
+                                   f"of the URDF; its joints: {_listing(movable)}")
+        for joint in picked:
+            if joint in picked_by:
+                k, other = picked_by[joint]
+                raise ClosureFileError(spec.path, where, f"{_cut(mot)} picks joint "
+                                       f"{_cut(joint)}, which name_mot[{k}] {_cut(other)} "
+                                       "picked already; name each actuated joint once (a "
+                                       "name equal to a joint's picks that joint alone)")
+            picked_by[joint] = (i, mot)
+        matches.append((mot, picked))
+    return tuple(n for n in movable if n in picked_by), tuple(matches)
 
 
 def _output_frame(tree: pin.Model, spec: ClosureSpec) -> str:
     """The file's ``output``, else ``effector``, else the last body frame no closure uses."""
     if spec.output is not None:
         if not tree.existFrame(spec.output):
-            raise ClosureFileError(spec.path, "output", f"frame {spec.output!r} is not in the "
+            raise ClosureFileError(spec.path, "output", f"frame {_cut(spec.output)} is not in the "
                                    f"URDF; its frames: {_listing(f.name for f in tree.frames)}")
         return spec.output
     if tree.existFrame("effector"):

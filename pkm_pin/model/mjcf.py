@@ -45,12 +45,36 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..errors import ClosureFileError, _listing
-from ..urdf import _captured_stderr
+from ..errors import ClosureFileError, _clip, _cut, _is_file, _listing
+from ..urdf import (
+    MAX_BYTES,
+    MAX_COORDINATE,
+    MAX_LINKS,
+    MAX_XML_DEPTH,
+    MAX_XML_ELEMENTS,
+    LimitExceeded,
+    _captured_stderr,
+    check_xml_limits,
+    read_bounded,
+)
 from .closure_model import Closure, ClosureModel
 
 #: Name of the joint-less body that wraps the children of ``<worldbody>``.
 WORLD_BODY = "mjcf_worldbody"
+
+#: Deepest chain of ``<include>`` (a scene including a robot including its parts: 2).
+MAX_INCLUDE_DEPTH = 8
+
+#: Attributes checked as numbers (finite, within ±:data:`~pkm_pin.urdf.MAX_COORDINATE`)
+#: on every element: positions, orientations, axes, joint ranges and references.
+_NUMERIC = ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis", "axis", "range", "ref",
+            "anchor", "relpose", "fromto")
+
+#: MJCF elements that make bodies Pinocchio 4.1's parser ignores (the model would lose
+#: them without a word): refused by name.
+_NOT_EXPANDED = {"attach": "attaches a sub-model", "replicate": "repeats its bodies",
+                 "composite": "generates bodies", "flexcomp": "generates a flex",
+                 "model": "declares a sub-model to attach"}
 
 #: Equality elements that are not loop closures.
 _NOT_CLOSURES = ("joint", "tendon", "flex", "flexvert", "distance")
@@ -65,65 +89,246 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
             file, the element and how to fix it.
     """
     path = Path(path)
-    label = str(path)
-    root = _parse(path)
-    tree = _build_tree(path, root)
+    label = _clip(str(path))
+    root, rewritten = _parse(path)
+    tree = _build_tree(path, root, rewritten)
     renamed = _distinct_frame_names(tree)
     reference = (np.array(tree.referenceConfigurations["qpos0"])
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
     closures = _closures(label, root, tree, reference, renamed)
-    actuated = _actuated(label, root, tree)
+    actuated, matches = _actuated(label, root, tree)
     out = output if output is not None else _output_frame(tree)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
-                        reference=reference)
+                        reference=reference, actuator_matches=matches)
 
 
 # ------------------------------------------------------------------------------ tree
-def _parse(path: Path) -> ET.Element:
-    """The file's XML root, or a :class:`ClosureFileError`."""
-    label = str(path)
-    if not path.is_file():
+def parse_mjcf(path: str | os.PathLike) -> ET.Element:
+    """The XML root of an MJCF file as :func:`read_mjcf` reads it: within the limits of
+    ``docs/reliability.md``, its ``<include>`` files inlined, its ``<worldbody>`` sections
+    merged (for what the file says beyond the tree, e.g. a ``<custom>`` text).
+
+    Raises:
+        ClosureFileError: as :func:`read_mjcf`.
+    """
+    return _parse(Path(path))[0]
+
+
+def _parse(path: Path) -> tuple[ET.Element, bool]:
+    """The file's XML root with its ``<include>`` files inlined and its ``<worldbody>``
+    sections merged (MuJoCo's rules), checked within the limits of ``docs/reliability.md``;
+    and whether anything was inlined or merged (then Pinocchio reads a rewritten copy).
+
+    Raises:
+        ClosureFileError: a missing, too large, too deep or malformed file, a wrong include
+            or a number out of range.
+    """
+    label = _clip(str(path))
+    if not _is_file(path):
         raise ClosureFileError(label, "", "no such MJCF file; check the path")
+    budget = [MAX_BYTES]
+    root = _parse_file(path, label, budget)
+    if root.tag != "mujoco":
+        raise ClosureFileError(label, "", f"the root element is <{_cut(root.tag)[1:-1]}>, an "
+                               "MJCF's must be <mujoco>")
+    included = _inline_includes(path, root, budget)
+    merged = _merge_worldbodies(root)
+    if included:
+        _check_inlined_size(label, root)
+    if root.find("worldbody") is None:
+        raise ClosureFileError(label, "worldbody", "is missing; an MJCF needs a <worldbody>")
+    for section, tag, what in (("worldbody", "body", "bodies"),
+                               ("equality", "equality/*", "equality constraints"),
+                               ("actuator", "actuator/*", "actuators")):
+        count = sum(1 for _ in root.iterfind(f".//{tag}" if tag == "body" else tag))
+        if count > MAX_LINKS:
+            raise ClosureFileError(label, section, f"{count} {what}, more than the "
+                                   f"{MAX_LINKS} pkm_pin reads")
+    for el in root.iter():
+        if el.tag in _NOT_EXPANDED and (el.tag != "model" or el.get("file") is not None):
+            raise ClosureFileError(label, f"<{el.tag}>", f"{_NOT_EXPANDED[el.tag]}, which "
+                                   "Pinocchio's MJCF parser ignores; write the bodies out "
+                                   "(MuJoCo's compiled model, mj_saveLastXML, has them)")
+    _check_numbers(label, root)
+    return root, bool(included or merged)
+
+
+def _parse_file(path: Path, label: str, budget: list) -> ET.Element:
+    """One XML file's root, read within ``budget[0]`` bytes (decreased by its size) and
+    the XML limits."""
     try:
-        root = ET.parse(path).getroot()
+        data = read_bounded(path, budget[0], "MJCF (with its included files)", binary=True)
+        check_xml_limits(data)
+    except LimitExceeded as e:
+        reason = e.reason if budget[0] == MAX_BYTES else (
+            f"with its included files, the model is more than {MAX_BYTES / 1e6:g} MB, the "
+            "most pkm_pin reads")
+        raise ClosureFileError(label, "", reason) from e
+    except OSError as e:
+        raise ClosureFileError(label, "", f"cannot be read: {e}") from e
+    budget[0] -= len(data)
+    try:
+        return ET.fromstring(data)
     except ET.ParseError as e:
         line, col = e.position
         raise ClosureFileError(label, "", f"malformed XML at line {line}, column {col}: "
                                f"{e}") from e
-    except OSError as e:
-        raise ClosureFileError(label, "", f"cannot be read: {e}") from e
-    if root.tag != "mujoco":
-        raise ClosureFileError(label, "", f"the root element is <{root.tag}>, an MJCF's must "
-                               "be <mujoco>")
-    if root.find("worldbody") is None:
-        raise ClosureFileError(label, "worldbody", "is missing; an MJCF needs a <worldbody>")
-    return root
 
 
-def _build_tree(path: Path, root: ET.Element) -> pin.Model:
+def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
+    """Replace every ``<include file=…>`` under ``root``, in place, by the children of the
+    included file's ``<mujoco>`` root, as MuJoCo does: the path is relative to the main
+    file's folder (MuJoCo's rule, even in an included file), a file is included at most
+    once, includes nest. Refused: a file outside the main file's folder (after links are
+    resolved), a cycle, a second include of a file, nesting deeper than
+    :data:`MAX_INCLUDE_DEPTH`, a file that is not ``<mujoco>``. Returns the files
+    inlined."""
+    start = main.resolve()
+    folder = start.parent
+    seen: list[Path] = []
+    labels = {start: _clip(str(main))}  # errors name the main file as it was given
+
+    def shown(p: Path) -> str:
+        return str(p.relative_to(folder)) if p.is_relative_to(folder) else str(p)
+
+    def load(el: ET.Element, including: Path, chain: tuple) -> ET.Element:
+        label, name = labels[including], el.get("file")
+        where = f"include {_cut(name)}" if name is not None else "include"
+        if not name:
+            raise ClosureFileError(label, where, "has no file attribute")
+        if len(chain) > MAX_INCLUDE_DEPTH:
+            raise ClosureFileError(label, where, f"includes nested more than "
+                                   f"{MAX_INCLUDE_DEPTH} deep")
+        try:
+            target = (folder / name).resolve()
+        except (OSError, ValueError, RuntimeError) as e:
+            raise ClosureFileError(label, where, f"not a usable path ({e})") from e
+        if not target.is_relative_to(folder):
+            raise ClosureFileError(label, where, f"{_cut(str(target))} is outside the "
+                                   f"model's folder {_cut(str(folder))}; pkm_pin includes "
+                                   "files of that folder only (paths are relative to the "
+                                   "main file, as in MuJoCo)")
+        if target in chain:
+            cycle = " → ".join(shown(p) for p in chain[chain.index(target):] + (target,))
+            raise ClosureFileError(label, where, f"includes itself ({_cut(cycle)[1:-1]}); "
+                                   "remove the include")
+        if target in seen:
+            raise ClosureFileError(label, where, f"{shown(target)} is included twice; MuJoCo "
+                                   "includes a file at most once")
+        if not _is_file(target):
+            raise ClosureFileError(label, where, f"no such file {_cut(str(target))} (paths "
+                                   "are relative to the main file's folder, as in MuJoCo)")
+        seen.append(target)
+        labels[target] = _clip(str(target))
+        sub = _parse_file(target, labels[target], budget)
+        if sub.tag != "mujoco":
+            raise ClosureFileError(labels[target], "", f"the root element is "
+                                   f"<{_cut(sub.tag)[1:-1]}>; an included MJCF's must be "
+                                   "<mujoco>")
+        expand(sub, target, chain + (target,))
+        return sub
+
+    def expand(top: ET.Element, file: Path, chain: tuple) -> None:
+        stack = [top]
+        while stack:
+            el = stack.pop()
+            i = 0
+            while i < len(el):
+                child = el[i]
+                if child.tag == "include":
+                    children = list(load(child, file, chain))
+                    el[i:i + 1] = children
+                    i += len(children)
+                else:
+                    stack.append(child)
+                    i += 1
+
+    expand(root, start, (start,))
+    return seen
+
+
+def _merge_worldbodies(root: ET.Element) -> bool:
+    """Move the children of every ``<worldbody>`` after the first into the first (MuJoCo
+    merges repeated sections; Pinocchio 4.1 builds the tree once per ``<worldbody>``: a
+    scene that includes its robot and adds a floor has two). Returns whether it did."""
+    worlds = root.findall("worldbody")
+    for world in worlds[1:]:
+        worlds[0].extend(list(world))
+        root.remove(world)
+    return len(worlds) > 1
+
+
+def _check_inlined_size(label: str, root: ET.Element) -> None:
+    """The depth and element count of the model with its includes inlined."""
+    stack, count = [(root, 1)], 0
+    while stack:
+        el, depth = stack.pop()
+        count += 1
+        if depth > MAX_XML_DEPTH:
+            raise ClosureFileError(label, "include", f"with its included files, elements "
+                                   f"nested more than {MAX_XML_DEPTH} deep (<{el.tag}>)")
+        if count > MAX_XML_ELEMENTS:
+            raise ClosureFileError(label, "include", f"with its included files, more than "
+                                   f"{MAX_XML_ELEMENTS} XML elements")
+        stack.extend((c, depth + 1) for c in el)
+
+
+def _check_numbers(label: str, root: ET.Element) -> None:
+    """Every attribute of :data:`_NUMERIC` numbers, finite, within ±MAX_COORDINATE; joint
+    axes and quaternions of non-zero length; joint ranges with lower ≤ upper. The error
+    names the element, the attribute and the value."""
+    counts: dict = {}
+    for el in root.iter():
+        i = counts[el.tag] = counts.get(el.tag, -1) + 1
+        keys = [k for k in _NUMERIC if k in el.attrib]
+        if not keys:
+            continue
+        where = f"{el.tag}[{i}]" + (f" {_cut(el.get('name'))}" if el.get("name") else "")
+        for key in keys:
+            text = el.get(key)
+            try:
+                values = np.array([float(t) for t in text.split()])
+            except ValueError as e:
+                raise ClosureFileError(label, f"{where} {key}", f"must be numbers, got "
+                                       f"{_cut(text)}") from e
+            if values.size and not np.all(np.abs(values) <= MAX_COORDINATE):
+                bad = values[~(np.abs(values) <= MAX_COORDINATE)][0]
+                raise ClosureFileError(label, f"{where} {key}", f"has {bad:g}; numbers must "
+                                       f"be finite and within ±{MAX_COORDINATE:g} (m, rad or "
+                                       "degrees)")
+            if key == "quat" or (key == "axis" and el.tag == "joint"):
+                if values.size and not np.any(values):
+                    raise ClosureFileError(label, f"{where} {key}", f"has zero length "
+                                           f"({_cut(text)}); give a non-zero {key}")
+            if key == "range" and el.tag == "joint" and values.size == 2 \
+                    and values[0] > values[1]:
+                raise ClosureFileError(label, f"{where} range", f"has lower {values[0]:g} > "
+                                       f"upper {values[1]:g}")
+
+
+def _build_tree(path: Path, root: ET.Element, rewritten: bool = False) -> pin.Model:
     """Pinocchio's tree of the file, with the children of ``<worldbody>`` wrapped in one
-    body when Pinocchio would drop some (several bodies, or sites on the world)."""
+    body when Pinocchio would drop some (several bodies, or sites on the world); from a
+    temporary copy of ``root`` when it was ``rewritten`` (includes inlined) or wrapped."""
     world = root.find("worldbody")
     children = list(world)
     needs_wrap = sum(c.tag == "body" for c in children) > 1 or any(
         c.tag in ("site", "frame") for c in children)
-    if not needs_wrap:
+    if not needs_wrap and not rewritten:
         return _pinocchio_model(str(path), str(path))
-    if root.find(".//include") is not None:
-        raise ClosureFileError(str(path), "worldbody", "several bodies under <worldbody> and "
-                               "an <include>: Pinocchio keeps only the first body; wrap them "
-                               "in one body without joint, or inline the included file")
     wrapper = ET.Element("body", {"name": WORLD_BODY})
-    for c in children:
-        world.remove(c)
-        wrapper.append(c)
-    world.append(wrapper)
+    if needs_wrap:
+        for c in children:
+            world.remove(c)
+            wrapper.append(c)
+        world.append(wrapper)
     with tempfile.TemporaryDirectory() as folder:
         copy = Path(folder) / path.name
         ET.ElementTree(root).write(copy)
         model = _pinocchio_model(str(copy), str(path))
-    world.remove(wrapper)
-    world.extend(children)
+    if needs_wrap:
+        world.remove(wrapper)
+        world.extend(children)
     return model
 
 
@@ -175,7 +380,8 @@ def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray,
     for equality in root.findall("equality"):
         for el in equality:
             i = counts[el.tag] = counts.get(el.tag, -1) + 1
-            where = f"equality/{el.tag}[{i}]" + (f" {el.get('name')!r}" if el.get("name") else "")
+            where = f"equality/{el.tag}[{i}]" + (f" {_cut(el.get('name'))}" if el.get("name")
+                                                 else "")
             if el.tag in _NOT_CLOSURES:
                 raise ClosureFileError(label, where, "is not a loop closure; pkm_pin reads "
                                        "<connect> and <weld> equalities only: remove it")
@@ -225,7 +431,7 @@ def _frame(label: str, where: str, name: str | None, tree: pin.Model,
     name = renamed.get((kind, name), name)
     names = [f.name for f in tree.frames if f.type == kind and f.name != WORLD_BODY]
     if name not in names:
-        raise ClosureFileError(label, where, f"{name!r} is not a {what} of the model; its "
+        raise ClosureFileError(label, where, f"{_cut(name)} is not a {what} of the model; its "
                                f"{what}s: {_listing(names)}")
     return name
 
@@ -239,33 +445,35 @@ def _floats(label: str, where: str, el: ET.Element, key: str, n: int,
         values = np.array([float(t) for t in text.split()])
     except ValueError as e:
         raise ClosureFileError(label, f"{where} {key}", f"must be {n} numbers, got "
-                               f"{text!r}") from e
+                               f"{_cut(text)}") from e
     if values.shape != (n,) or not np.isfinite(values).all():
         raise ClosureFileError(label, f"{where} {key}", f"must be {n} finite numbers, got "
-                               f"{text!r}")
+                               f"{_cut(text)}")
     return values
 
 
 # ------------------------------------------------------------------ motors and output
-def _actuated(label: str, root: ET.Element, tree: pin.Model) -> tuple[str, ...]:
-    """The joints of the ``<actuator>`` elements, in file order."""
+def _actuated(label: str, root: ET.Element, tree: pin.Model) -> tuple[tuple[str, ...], tuple]:
+    """The joints of the ``<actuator>`` elements, in file order, and each actuator's
+    (name, or its element, and joint)."""
     movable = [tree.names[j] for j in range(1, tree.njoints) if tree.joints[j].nv > 0]
-    out = []
+    out, matches = [], []
     for actuators in root.findall("actuator"):
         for i, el in enumerate(actuators):
-            where = f"actuator/{el.tag}[{i}]" + (f" {el.get('name')!r}" if el.get("name")
+            where = f"actuator/{el.tag}[{i}]" + (f" {_cut(el.get('name'))}" if el.get("name")
                                                  else "")
             joint = el.get("joint", el.get("jointinparent"))
             if joint is None:
                 raise ClosureFileError(label, where, "drives no joint (a tendon, site or body "
                                        "actuator); pkm_pin needs joint actuators")
             if joint not in movable:
-                raise ClosureFileError(label, where, f"joint {joint!r} is not a joint of "
+                raise ClosureFileError(label, where, f"joint {_cut(joint)} is not a joint of "
                                        f"Pinocchio's model (a body with several joints is "
                                        f"one composite joint); joints: {_listing(movable)}")
+            matches.append((el.get("name") or f"actuator/{el.tag}[{i}]", (joint,)))
             if joint not in out:
                 out.append(joint)
-    return tuple(out)
+    return tuple(out), tuple(matches)
 
 
 def _output_frame(tree: pin.Model) -> str:

@@ -1,0 +1,123 @@
+"""Per-sample cost of closed-loop inverse dynamics: pkm_pin against a hand-written
+Pinocchio null-space solve.
+
+The 3-loop Cassie-like leg (``models/loops/cassie_knee.urdf``: 8 revolutes, three point
+closures, two motors; the file has no inertias, so every body gets a seeded random one),
+along a closed path of motor values around home: ``q`` by forward kinematics, ``v`` and
+``a`` by :func:`pkm_pin.dynamics.motion_from_actuated` (made before timing). Per sample:
+
+  * pkm_pin: :func:`pkm_pin.dynamics.inverse_dynamics` (rnea, the closure Jacobian in
+    physical units, ``J̇ v`` from Pinocchio's accelerations, the consistency checks of
+    ``J v`` and ``J a + J̇ v``, the SVD of the balance matrix with its type II / idle
+    checks, efforts and minimum-norm closure forces);
+  * hand-written: ``rnea`` on a tree with the gravity set, ``computeJointJacobians`` +
+    ``updateFramePlacements``, the two ``LOCAL_WORLD_ALIGNED`` frame Jacobians per point
+    closure (their linear rows' difference), the null space ``N`` of ``J`` by numpy's SVD,
+    ``τ = lstsq(Nᵀ Sᵀ, Nᵀ τ_tree)`` — no closure forces, no ``J̇ v``, no check.
+
+Prints both per-sample times and their ratio (issue 26's target: ≤ 1) and the largest
+difference of the efforts.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+from timing import best_of_each
+
+from pkm_pin import dynamics as dyn
+from pkm_pin import load_mechanism
+
+CASSIE = Path(__file__).resolve().parents[1] / "models" / "loops" / "cassie_knee.urdf"
+GRAVITY = np.array([0.0, 0.0, -9.81])
+
+
+def with_inertias(cm, seed: int = 0):
+    """``cm`` with a seeded random inertia on every body (as tests/test_dynamics.py)."""
+    rng = np.random.default_rng(seed)
+    tree, L = pin.Model(cm.tree), cm.length
+    for j in range(1, tree.njoints):
+        m = rng.uniform(0.5, 2.0)
+        d = m * (0.1 * L) ** 2 * (1 + 0.3 * rng.uniform(size=3))
+        R = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
+        tree.inertias[j] = pin.Inertia(m, rng.normal(size=3) * 0.2 * L, R @ np.diag(d) @ R.T)
+    return dataclasses.replace(cm, tree=tree)
+
+
+def samples(n: int, size: float = 0.2):
+    """The model and n consistent samples ``(q, v, a)`` along sines of the motors."""
+    link = load_mechanism(CASSIE)
+    cm = with_inertias(link.model)
+    home = link.home_assembly
+    t = np.linspace(0.0, 2.0, n, endpoint=False)
+    w = np.array([np.pi, 2 * np.pi])
+    out, prev = [], home.q
+    for s in t:
+        qa = home.q_actuated + size * np.sin(w * s)
+        q = link.forward_kinematics(qa, prev).q
+        v, a = dyn.motion_from_actuated(cm, q, size * w * np.cos(w * s),
+                                        -size * w ** 2 * np.sin(w * s))
+        out.append((q, v, a))
+        prev = q
+    return cm, out
+
+
+class HandWritten:
+    """rnea + closure Jacobian (point closures) + SVD null space + lstsq."""
+
+    def __init__(self, cm):
+        self.tree = pin.Model(cm.tree)
+        self.tree.gravity = pin.Motion(GRAVITY, np.zeros(3))
+        self.data = self.tree.createData()
+        ids = [(self.tree.getFrameId(c.frame_a), self.tree.getFrameId(c.frame_b))
+               for c in cm.closures]
+        assert all(c.kind == "point" and c.placement_a.isIdentity()
+                   and c.placement_b.isIdentity() for c in cm.closures)
+        self.ids = ids
+        self.S = np.zeros((len(cm.actuated), cm.nv))
+        self.S[np.arange(len(cm.actuated)), list(cm.actuated_v)] = 1.0
+
+    def __call__(self, q, v, a):
+        tree, data = self.tree, self.data
+        tau = pin.rnea(tree, data, q, v, a)
+        pin.computeJointJacobians(tree, data, q)
+        pin.updateFramePlacements(tree, data)
+        J = np.vstack([
+            pin.getFrameJacobian(tree, data, fa, pin.LOCAL_WORLD_ALIGNED)[:3]
+            - pin.getFrameJacobian(tree, data, fb, pin.LOCAL_WORLD_ALIGNED)[:3]
+            for fa, fb in self.ids])
+        _, sv, Vt = np.linalg.svd(J)
+        rank = int(np.sum(sv > 1e-9 * sv[0]))
+        N = Vt[rank:].T
+        return np.linalg.lstsq(N.T @ self.S.T, N.T @ tau, rcond=None)[0]
+
+
+def main(n: int = 200, repeat: int = 7) -> None:
+    cm, data = samples(n)
+    hand = HandWritten(cm)
+    ours = [dyn.inverse_dynamics(cm, q, v, a, gravity=GRAVITY).efforts for q, v, a in data]
+    theirs = [hand(q, v, a) for q, v, a in data]
+    diff = max(np.abs(x - y).max() / np.abs(y).max() for x, y in zip(ours, theirs))
+
+    def framework():
+        for q, v, a in data:
+            dyn.inverse_dynamics(cm, q, v, a, gravity=GRAVITY)
+
+    def reference():
+        for q, v, a in data:
+            hand(q, v, a)
+
+    best = best_of_each({"pkm_pin": framework, "hand-written": reference}, repeat)
+    us, ref = (best[k] / n * 1e6 for k in ("pkm_pin", "hand-written"))
+    print(f"Cassie-like leg, {n} samples, inverse dynamics per sample:")
+    print(f"  pkm_pin.dynamics.inverse_dynamics   {us:8.1f} us")
+    print(f"  hand-written null-space solve       {ref:8.1f} us")
+    print(f"  ratio pkm_pin / hand-written        {us / ref:8.2f}")
+    print(f"  largest relative difference of the efforts {diff:.1e}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,244 @@
+"""The compiled tree solver (pkm_pin.tree_kernel) against the Pinocchio path: the closure
+residual and Jacobian of every closure kind equal ClosureModel's at random
+configurations of every shipped closed-loop model, the Jacobian equals finite
+differences, the integration equals pin.integrate, and solve_tree finds the same
+solutions through either driver."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from pkm_pin import load_mechanism, solve, tree_kernel
+from pkm_pin.linkage import Linkage
+from pkm_pin.model.closure_model import Closure, ClosureModel, from_mechanism
+from pkm_pin.model.extended_urdf import read_extended_urdf
+
+ROOT = Path(__file__).resolve().parents[1]
+FILES = sorted([*(ROOT / "models" / "loops").glob("*.urdf"),
+                *(ROOT / "models" / "loops").glob("*.xml"),
+                *(ROOT / "tests" / "data" / "gepetto").glob("*/robot.urdf"),
+                *(ROOT / "models" / "pinned").glob("*.toml"),
+                ROOT / "benchmarks" / "data" / "planar_2dof" / "robot.urdf"])
+MECHANISMS = ["stewart", "rpr3", "agile_eye"]  # base-legs-platform trees: welds, free flyer
+
+
+def _model(name):
+    if isinstance(name, str):
+        return from_mechanism(load_mechanism(ROOT / "models" / "mechanisms" / f"{name}.toml"))
+    return load_mechanism(name).model
+
+
+def _label(p):
+    return p if isinstance(p, str) else str(p.relative_to(ROOT))
+
+
+MODELS = [*FILES, *MECHANISMS]
+
+
+@pytest.fixture(scope="module", params=MODELS, ids=_label)
+def model(request):
+    return _model(request.param)
+
+
+def random_q(model, rng) -> np.ndarray:
+    """A random configuration: revolutes in [−π, π], prismatics in ±L, any rotation."""
+    L = model.length
+    q = pin.randomConfiguration(model.tree, -np.pi * np.ones(model.nq), np.pi * np.ones(model.nq))
+    for j in range(1, model.tree.njoints):
+        joint = model.tree.joints[j]
+        if joint.nq == 1 and model.velocity_units[joint.idx_v] != 1.0:
+            q[joint.idx_q] = rng.uniform(-L, L)
+        elif joint.nq == 7:
+            q[joint.idx_q:joint.idx_q + 3] = rng.uniform(-L, L, 3)
+    return q
+
+
+def compiled_rows(kern, q):
+    n = int(kern.rows[-1])
+    e, H = np.empty(n), np.empty((n, kern.nv))
+    norms, oMo = np.empty(len(kern.ckind)), np.empty((4, 4))
+    worst = tree_kernel.closure_rows_compiled(kern, np.asarray(q, float), e, H, norms, oMo)
+    return e, H, norms, oMo, worst
+
+
+def test_every_shipped_model_has_a_kernel(model):
+    """Every closed-loop model shipped (revolute, spherical and free-flyer joints; point,
+    weld closures) is represented by the compiled kernel."""
+    assert tree_kernel.tree_kernel(model) is not None
+
+
+def test_compiled_rows_equal_the_closure_model(model):
+    """Residual, Jacobian, closure norms and output placement equal ClosureModel's
+    (Pinocchio) to rounding at random configurations: 1e-12, or 4e-14 per joint on the
+    large trees (the two evaluations round differently along a chain of ~100 joints)."""
+    kern = tree_kernel.tree_kernel(model)
+    tol = max(1e-12, 4e-14 * model.tree.njoints)
+    rng = np.random.default_rng(3)
+    out = model.tree.getFrameId(model.output)
+    data = model.tree.createData()
+    for _ in range(5):
+        q = random_q(model, rng)
+        e, H, norms, oMo, worst = compiled_rows(kern, q)
+        assert np.abs(e - model.closure_residual(q)).max(initial=0.0) <= tol
+        assert np.abs(H - model.closure_jacobian(q)).max(initial=0.0) <= tol
+        assert np.allclose(norms, model.closure_norms(model.closure_residual(q)), rtol=0,
+                           atol=tol)
+        assert worst == pytest.approx(norms.max(initial=0.0), abs=1e-15)
+        pin.framesForwardKinematics(model.tree, data, q)
+        assert np.abs(oMo - data.oMf[out].homogeneous).max() <= tol
+
+
+@pytest.mark.parametrize("kind", ["point", "revolute", "weld"])
+@pytest.mark.parametrize("name", ["five_bar", "cassie_knee", "ankle", "delta_loops"])
+def test_every_closure_kind_with_placements(name, kind):
+    """Each model's closures rewritten as ``kind`` with random constraint placements
+    (C_a, C_b away from the frames): compiled rows equal ClosureModel's to 1e-12, also
+    near the closed configuration (small rotation logs)."""
+    base = load_mechanism(ROOT / "models" / "loops" / f"{name}.urdf").model
+    rng = np.random.default_rng(13)
+    closures = tuple(Closure(kind, c.frame_a, c.frame_b, pin.SE3.Random(), pin.SE3.Random(),
+                             c.name) for c in base.closures)
+    model = ClosureModel(base.tree, closures, base.actuated, base.output, length=base.length)
+    kern = tree_kernel.tree_kernel(model)
+    for _ in range(4):
+        q = random_q(model, rng)
+        e, H, _, _, _ = compiled_rows(kern, q)
+        assert np.abs(e - model.closure_residual(q)).max() <= 1e-12
+        assert np.abs(H - model.closure_jacobian(q)).max() <= 1e-12
+    same = tuple(Closure(kind, c.frame_a, c.frame_b, c.placement_a, c.placement_b, c.name)
+                 for c in base.closures)
+    model = ClosureModel(base.tree, same, base.actuated, base.output, length=base.length)
+    q = Linkage(base).assemble().q  # closed: every log near zero (the Taylor branches)
+    e, H, _, _, _ = compiled_rows(tree_kernel.tree_kernel(model), q)
+    assert np.abs(e - model.closure_residual(q)).max() <= 1e-12
+    assert np.abs(H - model.closure_jacobian(q)).max() <= 1e-12
+
+
+def test_compiled_jacobian_equals_finite_differences(model):
+    """The compiled Jacobian is the derivative of the compiled residual along
+    pin.integrate (central differences)."""
+    kern = tree_kernel.tree_kernel(model)
+    q = random_q(model, np.random.default_rng(5))
+    _, H, _, _, _ = compiled_rows(kern, q)
+    eps = 1e-7
+    fd = np.empty_like(H)
+    for k in range(model.nv):
+        dv = np.zeros(model.nv)
+        dv[k] = eps
+        fd[:, k] = (compiled_rows(kern, pin.integrate(model.tree, q, dv))[0]
+                    - compiled_rows(kern, pin.integrate(model.tree, q, -dv))[0]) / (2 * eps)
+    assert np.allclose(H, fd, rtol=0, atol=1e-6 * max(1.0, np.abs(H).max()))
+
+
+def test_integration_equals_pinocchio(model):
+    """tree_integrate (run as Python) equals pin.integrate on every joint kind."""
+    kern = tree_kernel.tree_kernel(model)
+    rng = np.random.default_rng(7)
+    q = random_q(model, rng)
+    dv = rng.uniform(-0.5, 0.5, model.nv)
+    mine = q.copy()
+    tree_kernel.tree_integrate(kern.kind, kern.iq, kern.iv, mine, dv)
+    assert np.abs(mine - pin.integrate(model.tree, q, dv)).max() <= 1e-12
+
+
+@pytest.mark.parametrize("name", ["cassie_knee", "delta_loops", "ankle"])
+def test_solve_tree_compiled_equals_the_pinocchio_driver(name):
+    """solve_tree from the same open start, with and without actuated targets and with a
+    mask of unknowns: the same iterations and the same solution to round-off."""
+    model = load_mechanism(ROOT / "models" / "loops" / f"{name}.urdf").model
+    link = Linkage(model)
+    home = link.assemble()
+    rng = np.random.default_rng(11)
+    v = rng.uniform(-0.05, 0.05, model.nv)
+    q0 = pin.integrate(model.tree, home.q, v)
+    targets = home.q_actuated + 0.05
+    free = np.ones(model.nv, bool)
+    free[rng.integers(model.nv)] = False
+    for kwargs in ({}, {"targets": targets}, {"free": free}):
+        a = solve.solve_tree(model, q0, compiled=False, **kwargs)
+        b = solve.solve_tree(model, q0, compiled=True, **kwargs)
+        assert a.converged == b.converged and a.iterations == b.iterations
+        assert np.abs(pin.difference(model.tree, a.q, b.q)).max() <= 1e-10
+        assert b.residual == pytest.approx(a.residual, abs=1e-12)
+        if b.closure_norms is not None:
+            assert np.allclose(b.closure_norms, model.closure_norms(model.closure_residual(b.q)),
+                               rtol=0, atol=1e-13)
+            assert np.allclose(b.output_placement.homogeneous,
+                               model.kinematics(b.q).output_placement.homogeneous, atol=1e-13)
+
+
+def test_five_bar_forward_kinematics_equals_the_pinocchio_path():
+    """PlaCo's planar 5-bar: FK warm-started along 20 random targets through the compiled
+    solver equals the Pinocchio driver's, target by target."""
+    link = load_mechanism(ROOT / "benchmarks" / "data" / "planar_2dof" / "robot.urdf")
+    model = link.model
+    home = link.assemble(np.zeros(model.nq))
+    targets = home.q_actuated + np.random.default_rng(0).uniform(-0.3, 0.3, (20, 2))
+    qa, qb = home.q, home.q
+    for t in targets:
+        a = solve.solve_tree(model, qa, targets=t, tol=1e-10, compiled=False)
+        b = solve.solve_tree(model, qb, targets=t, tol=1e-10, compiled=True)
+        assert a.converged and b.converged
+        assert np.abs(a.q - b.q).max() <= 1e-12
+        qa, qb = a.q, b.q
+    fk = link.forward_kinematics(targets[-1], qb, starts=0, tol=1e-10)
+    assert np.abs(fk.q - qb).max() <= 1e-12
+    assert np.linalg.norm(model.closure_residual(fk.q)) <= 1e-10
+
+
+def test_unbounded_revolutes(tmp_path):
+    """Continuous joints (cos, sin coordinates): same rows as Pinocchio, FK through
+    either driver to the same configuration."""
+    src = ROOT / "models" / "loops"
+    text = (src / "five_bar.urdf").read_text().replace('type="revolute"', 'type="continuous"')
+    (tmp_path / "five_bar.urdf").write_text(text)
+    shutil.copy(src / "five_bar.yaml", tmp_path / "five_bar.yaml")
+    model = read_extended_urdf(tmp_path / "five_bar.urdf")
+    assert model.nq == 2 * model.nv
+    kern = tree_kernel.tree_kernel(model)
+    assert kern is not None and set(kern.kind[1:]) == {tree_kernel.UNBOUNDED}
+    rng = np.random.default_rng(2)
+    q = random_q(model, rng)
+    e, H, _, _, _ = compiled_rows(kern, q)
+    assert np.abs(e - model.closure_residual(q)).max() <= 1e-12
+    assert np.abs(H - model.closure_jacobian(q)).max() <= 1e-12
+    link = Linkage(model)
+    home = link.assemble()
+    t = home.q_actuated + 0.1
+    a = solve.solve_tree(model, home.q, targets=t, compiled=False)
+    b = solve.solve_tree(model, home.q, targets=t, compiled=True)
+    assert a.converged and b.converged
+    assert np.abs(pin.difference(model.tree, a.q, b.q)).max() <= 1e-10
+
+
+def test_mimic_joints_have_no_kernel():
+    """Mimic joints (the Delta's parallelograms) are left to the Pinocchio driver."""
+    assert tree_kernel.tree_kernel(_model("delta")) is None
+
+
+def test_unsupported_joint_falls_back_to_pinocchio():
+    """A tree with a joint the kernel does not represent (a planar joint) has no kernel;
+    solve_tree still solves it through Pinocchio."""
+    tree = pin.Model()
+    j1 = tree.addJoint(0, pin.JointModelPlanar(), pin.SE3.Identity(), "slider")
+    tree.addBodyFrame("tip", j1, pin.SE3(np.eye(3), np.array([0.1, 0.0, 0.0])),
+                      tree.addJointFrame(j1))
+    tree.addFrame(pin.Frame("anchor", 0, 0, pin.SE3(np.eye(3), np.array([0.3, 0.2, 0.0])),
+                            pin.FrameType.OP_FRAME))
+    model = ClosureModel(tree, (Closure("point", "anchor", "tip", name="pin"),), (), "tip")
+    assert tree_kernel.tree_kernel(model) is None
+    sol = solve.solve_tree(model, model.reference, compiled=True)
+    assert sol.converged and np.linalg.norm(model.closure_residual(sol.q)) <= 1e-12
+
+
+def test_disabled_kernel_uses_the_pinocchio_driver(monkeypatch):
+    """tree_kernel.ENABLED = False: solve_tree does not touch the compiled solver."""
+    model = load_mechanism(ROOT / "models" / "loops" / "four_bar.urdf").model
+    monkeypatch.setattr(tree_kernel, "ENABLED", False)
+    monkeypatch.setattr(tree_kernel, "SOLVE", None)  # would raise if called
+    assert solve.solve_tree(model, model.reference).converged
