@@ -28,6 +28,11 @@ forward kinematics first; ``--pose``: the output pose, inverse kinematics); ``ma
 sweeps two actuated coordinates (``--actuated NAME NAME``, ``--range A B C D``) in a snake
 so that each point is warm-started from its neighbour.
 
+``map`` and ``workspace`` (platform mechanisms) keep their results in
+``PREFIX.partial.npz`` while they run (:mod:`pkm_pin.checkpoint`): the first Ctrl-C or
+SIGTERM stops after the current chunk, prints how many cells are done and the command that
+continues (``--resume PREFIX``), and exits with 130 (SIGINT) or 143 (SIGTERM).
+
 User mistakes print one line ``pkm-pin: error: …`` on stderr and exit with status 2; no
 Python traceback. ``check`` exits with 1 when the file loads but has warnings.
 """
@@ -556,7 +561,10 @@ def cmd_map(args) -> int:
             raise InputError(f"{name} is given by both --at and --fixed")
         at[name] = value
     u, v, poses, held = map_poses(mech, axes, args.range, args.n, at)
-    result = _sweep_map(mech, args, poses, u.size, v.size)
+    cp = _checkpoint(args, prefix, {
+        "study": "map", "axes": list(axes), "at": {k: float(x) for k, x in sorted(at.items())},
+        "u": u, "v": v, "chunk_size": int(args.chunk_size)}, len(poses), mech.n_actuated)
+    result = _sweep_map(mech, args, poses, u.size, v.size, cp)
     shape = (v.size, u.size)
     i, j = (POSE_NAMES.index(a) for a in axes)
     data = {k: a.reshape(shape + a.shape[1:]) for k, a in result.arrays().items()}
@@ -569,15 +577,19 @@ def cmd_map(args) -> int:
                 failure_reason=np.array([f[1] for f in result.failures], dtype=str))
     npz = _save_npz(prefix, data)
     pngs = save_maps(data, prefix, title=mech.name)
+    cp.remove()  # the outputs are written: the partial results are not needed any more
     _print_map(mech, axes, u, v, at, held, result, isinstance(poses, list))
     for path in [npz, *pngs]:
         print(f"wrote      {path}")
     return 0
 
 
-def _sweep_map(mech, args, poses, n_u: int, n_v: int):
+def _sweep_map(mech, args, poses, n_u: int, n_v: int, cp=None):
     """The sweep of a map's poses (row-major); partial poses completed in snake order,
-    each from its neighbour, the result given back in row-major order."""
+    each from its neighbour, the result given back in row-major order; chunks of
+    ``--chunk-size`` poses recorded in the checkpoint ``cp`` (``PREFIX.partial.npz``)."""
+    from .checkpoint import graceful_stop
+
     executor = None
     if args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
@@ -586,20 +598,27 @@ def _sweep_map(mech, args, poses, n_u: int, n_v: int):
     order = _snake(n_u, n_v) if isinstance(poses, list) else np.arange(len(poses))
     ordered = [poses[k] for k in order] if isinstance(poses, list) else poses
     try:
-        result = mech.sweep(ordered, executor=executor, progress=not args.quiet,
-                            chunk_size=args.chunk_size if executor else max(len(poses), 1))
+        with graceful_stop(_stopping):
+            result = mech.sweep(ordered, executor=executor, progress=not args.quiet,
+                                chunk_size=args.chunk_size,
+                                checkpoint=cp.stage("cells") if cp is not None else None)
+    except KeyboardInterrupt as e:
+        _attach(e, cp)
+        raise
     finally:
         if executor is not None:
-            executor.shutdown()
+            executor.shutdown(cancel_futures=True)
     return result.unordered(order) if isinstance(poses, list) else result
 
 
 def _save_npz(prefix: Path, data: dict) -> Path:
-    """``data`` saved as ``<prefix>.npz`` (compressed); an unwritable place is an
-    :class:`InputError`."""
+    """``data`` saved as ``<prefix>.npz`` (compressed; a temporary name renamed: never
+    a truncated file); an unwritable place is an :class:`InputError`."""
+    from .checkpoint import atomic_savez
+
     npz = prefix.with_name(prefix.name + ".npz")
     try:
-        np.savez_compressed(npz, **data)
+        atomic_savez(npz, compressed=True, **data)
     except OSError as e:
         raise InputError(f"cannot write {npz}: {e.strerror or e}") from e
     return npz
@@ -632,11 +651,69 @@ def _print_map(mech, axes, u, v, at, held, result, completed: bool) -> None:
 
 
 def _map_prefix(args, tag: str) -> Path:
-    """The output prefix of ``map`` (default ``map_NAME_TAG``), its folder checked."""
-    prefix = Path(args.out if args.out else f"map_{_slug(args.mechanism)}_{tag}")
-    if not prefix.parent.is_dir():
-        raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
+    """The output prefix of ``map`` (default ``map_NAME_TAG``; ``--resume PREFIX``), its
+    folder checked (it exists, is a folder, is writable)."""
+    return _out_prefix(args, f"map_{_slug(args.mechanism)}_{tag}")
+
+
+def _out_prefix(args, default: str) -> Path:
+    """The output prefix: ``--out``, or ``--resume`` (the same when both are given), or
+    ``default``; an :class:`InputError` before any work when its folder is missing, is
+    not a folder or cannot be written."""
+    from .checkpoint import check_writable
+
+    resume = getattr(args, "resume", None)
+    if resume is not None and args.out is not None and Path(resume) != Path(args.out):
+        raise InputError(f"--resume {resume} continues the study whose outputs go to "
+                         f"{resume}; --out {args.out} differs (give one of them)")
+    prefix = Path(resume or args.out or default)
+    option = "--resume" if resume is not None else "--out"
+    check_writable(prefix.parent, f"{option} {prefix}")
     return prefix
+
+
+def _checkpoint(args, prefix: Path, study: dict, N: int, n_actuated: int):
+    """The :class:`~pkm_pin.checkpoint.Checkpoint` of a map or workspace at ``prefix``
+    (``PREFIX.partial.npz``; ``--resume``: continue it): the study's identity is
+    ``study``, the mechanism (name, file and the file's SHA-256) and the grid."""
+    from .checkpoint import Checkpoint
+
+    cp = Checkpoint(prefix, resume=getattr(args, "resume", None) is not None, keep=True,
+                    identity=_mechanism_identity(args))
+    cp.begin(study, need=3 * N * (8 * (8 + n_actuated) + 2))
+    return cp
+
+
+def _mechanism_identity(args) -> dict:
+    """The mechanism of a study: as named, the file read and its SHA-256 (a shipped
+    builder: its name)."""
+    from .builders import MECHANISMS
+    from .checkpoint import file_digest
+
+    spec = args.mechanism
+    path = Path(spec) if spec is not None else None
+    if spec is None or (spec in MECHANISMS and not _is_file(path)):
+        return {"mechanism": spec or "rpr3", "mechanism_file": None,
+                "mechanism_sha256": None}
+    if not _is_file(path):
+        path = models_dir() / f"{spec}.toml"
+    return {"mechanism": spec, "mechanism_file": str(path.resolve()),
+            "mechanism_sha256": file_digest(path)}
+
+
+def _stopping(signum: int) -> None:
+    """Said on the first SIGINT / SIGTERM of a checkpointed study."""
+    print("\npkm-pin: stopping after the current chunk (again to stop at once)",
+          file=sys.stderr, flush=True)
+
+
+def _attach(error: BaseException, cp) -> None:
+    """An :class:`~pkm_pin.checkpoint.Interrupted` raised before its study's loop
+    started is given the study's checkpoint (what an earlier stage saved)."""
+    from .checkpoint import Interrupted
+
+    if isinstance(error, Interrupted) and error.checkpoint is None:
+        error.checkpoint = cp
 
 
 def _map_axes(args, link) -> tuple[list[int], np.ndarray, list[np.ndarray]]:
@@ -702,6 +779,9 @@ def _map_linkage(args, link) -> int:
     if args.plane is not None:
         raise InputError("--plane is for platform mechanisms; a linkage is mapped over "
                          "actuated coordinates (--actuated NAME [NAME], --range)")
+    if args.resume is not None:
+        raise InputError("--resume is for platform mechanisms (a linkage's map follows its "
+                         "branch from cell to cell and is not checkpointed)")
     prefix = _map_prefix(args, "q")
     args.reference = link.assemble()
     varied, base, grids = _map_axes(args, link)
@@ -793,13 +873,12 @@ def cmd_workspace(args) -> int:
     errors, the inscribed shapes and the counts; write PREFIX.json, PREFIX.npz, the PNG
     pictures and PREFIX.html or ``--view FILE.html`` (a meshcat point cloud, with each
     kind's boundary surface for three coordinates)."""
+    from .checkpoint import Checkpoint, atomic_savez, atomic_write, graceful_stop
     from .plots import workspace_plots
     from .view import workspace_cloud
 
+    prefix = _out_prefix(args, f"workspace_{_slug(args.mechanism)}")
     mech = _load(args)
-    prefix = Path(args.out if args.out else f"workspace_{_slug(args.mechanism)}")
-    if not prefix.parent.is_dir():
-        raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
     coords = args.coords
     if args.range is not None and coords is None:
         raise InputError("--range needs --coords (the coordinates it bounds)")
@@ -811,10 +890,13 @@ def cmd_workspace(args) -> int:
     if args.sobol is not None:
         options.update(sampling="sobol", samples=args.sobol)
     if _is_linkage(mech):
-        if args.at or args.jobs > 1:
-            raise InputError("--at/--jobs are for platform mechanisms")
+        if args.at or args.jobs > 1 or args.resume:
+            raise InputError("--at/--jobs/--resume are for platform mechanisms (a linkage's "
+                             "workspace grows from cell to cell and is not checkpointed)")
     else:
-        options.update(at=at_values(args.at))
+        options.update(at=at_values(args.at), chunk_size=args.chunk_size)
+        options.update(checkpoint=Checkpoint(prefix, resume=args.resume is not None,
+                                             keep=True, identity=_mechanism_identity(args)))
     executor = None
     if not _is_linkage(mech) and args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
@@ -822,15 +904,19 @@ def cmd_workspace(args) -> int:
         executor = ProcessPoolExecutor(args.jobs)
         options.update(executor=executor, chunk_size=args.chunk_size)
     try:
-        ws = mech.workspace(coords, **options)
+        with graceful_stop(_stopping):
+            ws = mech.workspace(coords, **options)
+    except KeyboardInterrupt as e:
+        _attach(e, options.get("checkpoint"))
+        raise
     finally:
         if executor is not None:
-            executor.shutdown()
+            executor.shutdown(cancel_futures=True)
     data = ws.as_dict()
     files = [prefix.with_name(prefix.name + ".json"), prefix.with_name(prefix.name + ".npz")]
-    try:
-        files[0].write_text(_json(data))
-        np.savez_compressed(files[1], points=ws.points, shape=np.array(ws.shape),
+    try:  # written under temporary names, then renamed: never a truncated file
+        atomic_write(files[0], lambda tmp: Path(tmp).write_text(_json(data)))
+        atomic_savez(files[1], compressed=True, points=ws.points, shape=np.array(ws.shape),
                             coords=np.array(ws.coords), bounds=ws.bounds,
                             **{f"mask_{k}": m for k, m in ws.masks.items()},
                             **{k: v for k, v in ws.values.items()},
@@ -841,6 +927,8 @@ def cmd_workspace(args) -> int:
         files.append(html)
     except OSError as e:
         raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
+    if options.get("checkpoint") is not None:  # the outputs are written
+        options["checkpoint"].remove()
     data["files"] = [str(f) for f in files]
     if args.json:
         print(_json(data))
@@ -1002,7 +1090,11 @@ def build_parser() -> argparse.ArgumentParser:
                    "for a linkage: the other actuated joints, default their reference values)")
     p.add_argument("--actuated", nargs="+", metavar="NAME",
                    help="linkage: the one or two varied actuated joints (default the first two)")
-    p.add_argument("--out", metavar="PREFIX", help="output prefix (default map_NAME_PLANE)")
+    p.add_argument("--out", metavar="PREFIX", help="output prefix (default map_NAME_PLANE); "
+                   "the results so far are kept in PREFIX.partial.npz while it runs")
+    p.add_argument("--resume", metavar="PREFIX",
+                   help="continue the interrupted map of PREFIX.partial.npz (same command "
+                   "and options)")
     p.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     p.add_argument("--chunk-size", type=int, default=500, help="poses per worker task (500)")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -1030,7 +1122,11 @@ def build_parser() -> argparse.ArgumentParser:
                                                  "transmission"),
                    help="the workspaces computed (default all available)")
     _at_option(p, "values of other pose coordinates (default: home)")
-    p.add_argument("--out", metavar="PREFIX", help="output prefix (default workspace_NAME)")
+    p.add_argument("--out", metavar="PREFIX", help="output prefix (default workspace_NAME); "
+                   "the results so far are kept in PREFIX.partial.npz while it runs")
+    p.add_argument("--resume", metavar="PREFIX",
+                   help="continue the interrupted study of PREFIX.partial.npz (same command "
+                   "and options)")
     p.add_argument("--json", action="store_true", help="print the JSON numbers")
     p.add_argument("--view", metavar="FILE.html",
                    help="write the browser view there (default PREFIX.html): point cloud "
@@ -1057,6 +1153,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def resume_command(argv, error) -> str:
+    """The command that continues an interrupted study: this one with ``--out PREFIX``
+    replaced by ``--resume PREFIX``."""
+    import shlex
+
+    prefix = str(error.checkpoint.prefix) if error.checkpoint is not None else None
+    out, skip = [], False
+    for a in argv:
+        if skip:
+            skip = False
+            continue
+        if a in ("--out", "--resume"):
+            skip = True
+            continue
+        if a.startswith(("--out=", "--resume=")):
+            continue
+        out.append(a)
+    return shlex.join(["pkm-pin", *out, "--resume", prefix or "PREFIX"])
+
+
 def main(argv=None) -> int:
     """Entry point of ``pkm-pin``; returns the exit status."""
     parser = build_parser()
@@ -1064,8 +1180,14 @@ def main(argv=None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as e:  # --help (0) or a usage error (2), already printed
         return int(e.code or 0)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
+    from .checkpoint import Interrupted, interrupt_line
+
     try:
         return args.func(args)
+    except Interrupted as e:  # the chunks done are saved: say how to continue
+        print(interrupt_line(e, resume_command(args.argv, e)), file=sys.stderr)
+        return e.exit_status
     except PkmError as e:
         message = " ".join(str(e).split("\n"))
         print(f"pkm-pin: error: {message}", file=sys.stderr)

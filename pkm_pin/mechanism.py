@@ -524,7 +524,7 @@ class Mechanism:
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,
               singular_tol: float = CLOSENESS_SINGULAR_TOL,
-              transmission: bool = False) -> _sweep.SweepResult:
+              transmission: bool = False, checkpoint=None) -> _sweep.SweepResult:
         """Assemble and analyse the mechanism at every pose.
 
         ``poses``: full poses (a sequence of ``pin.SE3`` or an (N, 6) array), or partial
@@ -536,10 +536,12 @@ class Mechanism:
         snake for a continuous branch. A partial pose that cannot be completed is a
         failure of the result (its pose row holds the given coordinates, nan elsewhere).
 
-        See :func:`pkm_pin.sweep.sweep`.
+        See :func:`pkm_pin.sweep.sweep` (``checkpoint``: the sweep of the completed
+        poses is checkpointed; their completion is redone on a resume).
         """
         options = dict(executor=executor, chunk_size=chunk_size, progress=progress,
-                       rtol=rtol, singular_tol=singular_tol, transmission=transmission)
+                       rtol=rtol, singular_tol=singular_tol, transmission=transmission,
+                       checkpoint=checkpoint)
         partial = _partial_poses(poses)
         if partial is None:
             return _sweep.sweep(self, poses, **options)

@@ -25,6 +25,7 @@ Without kernels (a leg with a continuous or multi-DOF joint) the legs are solved
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import pickle
@@ -412,7 +413,8 @@ def _evaluate_shared(blob: bytes, digest: str, *args) -> dict:
 
 def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
           progress: bool = False, rtol: float | None = None,
-          singular_tol: float = SINGULAR_TOL, transmission: bool = False) -> SweepResult:
+          singular_tol: float = SINGULAR_TOL, transmission: bool = False,
+          checkpoint=None) -> SweepResult:
     """Assemble and analyse the mechanism at every pose.
 
     Args:
@@ -430,6 +432,14 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
             ``lti`` and ``cti`` (the engine then keeps every pose's actuation wrenches,
             platform and constraint bases, and the indices run in NumPy over the
             chunk); by default both are nan.
+        checkpoint: A :class:`pkm_pin.checkpoint.Checkpoint` (its stage ``"sweep"``)
+            or one of its stages: each chunk's results are recorded there as they come
+            (written to ``PREFIX.partial.npz``), chunks already done in it are not
+            evaluated again, and an interrupt (Ctrl-C, SIGTERM under
+            :func:`~pkm_pin.checkpoint.graceful_stop`) writes what is done and raises
+            :class:`~pkm_pin.checkpoint.Interrupted`. Chunks are pure tasks: a Dask
+            worker lost mid-sweep has its chunk run again elsewhere, with the same
+            result.
 
     Returns:
         A :class:`SweepResult`; poses that do not assemble are recorded in
@@ -443,32 +453,80 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
     order = visiting_order(X, mech.characteristic_length)
     reference = mech.sweep_layout.reference  # the home platform basis (carried determinant)
     chunks = [order[i:i + int(chunk_size)] for i in range(0, len(order), int(chunk_size))]
+    stage = _stage_of(checkpoint)
+    parts: list = [None] * len(chunks)
+    if stage is not None:
+        parts = stage.begin(X, chunks, {"rtol": rtol, "singular_tol": singular_tol,
+                                        "transmission": bool(transmission),
+                                        "reference": reference}, mech.n_actuated)
+    todo = [k for k, p in enumerate(parts) if p is None]
     bar = _progress_bar(len(X)) if progress else None
-    if executor is None:
-        tick = bar.update if bar is not None else None
-        parts = [evaluate_chunk(mech, X[c], reference, rtol, singular_tol, tick,
-                                transmission=transmission) for c in chunks]
-    else:
-        # the mechanism is pickled once per sweep and every worker unpickles its own
-        # copy once (:func:`_evaluate_shared`); bytes also spare Dask the tokenising of
-        # the object at each submit (~20 ms)
-        blob = pickle.dumps(mech, protocol=pickle.HIGHEST_PROTOCOL)
-        digest = hashlib.sha256(blob).hexdigest()
-        futures = [executor.submit(_evaluate_shared, blob, digest, X[c], reference, rtol,
-                                   singular_tol, None, 4, transmission) for c in chunks]
-        parts = []
-        try:
-            for c, fut in zip(chunks, futures):
-                parts.append(fut.result())
-                if bar is not None:
-                    bar.update(len(c))
-        except BaseException:  # Ctrl-C or a failed chunk: drop the chunks not started
-            for fut in futures:
-                fut.cancel()
-            raise
+    if bar is not None and len(todo) < len(chunks):
+        bar.update(len(X) - sum(len(chunks[k]) for k in todo))
+    running = stage.cp.running() if stage is not None else contextlib.nullcontext()
+    try:
+        with running:
+            if executor is None:
+                tick = bar.update if bar is not None else None
+                for k in todo:
+                    parts[k] = evaluate_chunk(mech, X[chunks[k]], reference, rtol,
+                                              singular_tol, tick, transmission=transmission)
+                    if stage is not None:
+                        stage.record(chunks[k], parts[k])
+            else:
+                _run_on(executor, mech, X, chunks, todo, parts, stage, bar, reference, rtol,
+                        singular_tol, transmission)
+    except BaseException as e:  # Ctrl-C, SIGTERM, a failed chunk: keep the chunks done
+        if stage is not None:
+            stage.cp.interrupted(e)
+        raise
+    if stage is not None:
+        stage.end()
     if bar is not None:
         bar.close()
     return _gather(X, chunks, parts, mech.n_actuated, singular_tol)
+
+
+def _stage_of(checkpoint):
+    """The checkpoint stage of a sweep: a Checkpoint's ``"sweep"``, or the stage given."""
+    if checkpoint is None:
+        return None
+    from .checkpoint import Checkpoint
+
+    return checkpoint.stage("sweep") if isinstance(checkpoint, Checkpoint) else checkpoint
+
+
+def _run_on(executor, mech, X, chunks, todo, parts, stage, bar, reference, rtol,
+            singular_tol, transmission) -> None:
+    """The chunks ``todo`` as tasks of ``executor``: ``parts`` filled as they finish
+    (recorded in ``stage`` in that order; a stop request is seen within half a
+    second). The mechanism is pickled once per sweep and every worker unpickles its own
+    copy once (:func:`_evaluate_shared`); bytes also spare Dask the tokenising of the
+    object at each submit (~20 ms). A task is pure (its poses in, its arrays out): an
+    executor may run it again (Dask does when a worker dies)."""
+    from concurrent.futures import FIRST_COMPLETED, wait
+
+    blob = pickle.dumps(mech, protocol=pickle.HIGHEST_PROTOCOL)
+    digest = hashlib.sha256(blob).hexdigest()
+    futures = {executor.submit(_evaluate_shared, blob, digest, X[chunks[k]], reference, rtol,
+                               singular_tol, None, 4, transmission): k for k in todo}
+    pending = set(futures)
+    try:
+        while pending:
+            finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+            for fut in sorted(finished, key=futures.get):
+                k = futures[fut]
+                parts[k] = fut.result()
+                if bar is not None:
+                    bar.update(len(chunks[k]))
+                if stage is not None:
+                    stage.record(chunks[k], parts[k], check=False)
+            if stage is not None:
+                stage.cp.poll()
+    except BaseException:  # Ctrl-C or a failed chunk: drop the chunks not started
+        for fut in pending:
+            fut.cancel()
+        raise
 
 
 def _unassembled(N: int, n: int) -> dict:

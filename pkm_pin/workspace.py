@@ -573,7 +573,8 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
               samples: int | None = None, seed: int = 0, at: Mapping | None = None,
               kinds: Sequence[str] | None = None, threshold: float | None = None,
               centre=None, executor: Executor | None = None, chunk_size: int = 2000,
-              progress: bool = False, subsamples: int | None = None) -> Workspace:
+              progress: bool = False, subsamples: int | None = None, checkpoint=None,
+              resume: bool = False) -> Workspace:
     """The workspaces of a mechanism over some of its pose coordinates (module docstring).
 
     Args:
@@ -598,6 +599,15 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
         subsamples: Sub-points per coordinate of each boundary cell for the refined
             volumes (grid; default 4 for one or two coordinates, 2 for three; 1: the
             cell count alone), evaluated on the sweep engine like the cells.
+        checkpoint: An output prefix, or a :class:`pkm_pin.checkpoint.Checkpoint`: the
+            cells' results (stage ``cells``) and the boundary sub-points' (stage
+            ``refine``) are written chunk by chunk to ``PREFIX.partial.npz``; an
+            interrupt writes what is done and raises
+            :class:`~pkm_pin.checkpoint.Interrupted`; the file is removed when the
+            study ends (unless the Checkpoint was made with ``keep=True``).
+        resume: With ``checkpoint`` a prefix: continue the study saved there (the same
+            arguments; another study is refused); the result is identical, bit for bit,
+            to an uninterrupted run.
 
     Raises:
         InputError: malformed coordinates, bounds or options; home outside the bounds
@@ -617,10 +627,18 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     half = np.array([L if c in COORDINATES[:3] else ANGLE_HALF_RANGE for c in coords])
     B = _bounds(bounds, coords, home, half)
     axes, shape, points = _samples(B, sampling, n, samples, seed)
+    sub = _default_subsamples(subsamples, len(coords))
+    cp = _begin_checkpoint(checkpoint, resume, {
+        "study": "workspace", "mechanism": mech.name, "coords": list(coords),
+        "bounds": B, "n": np.broadcast_to(np.asarray(n), (len(coords),)).tolist(),
+        "sampling": sampling, "samples": samples, "seed": seed,
+        "at": {k: float(v) for k, v in sorted(at.items())}, "kinds": list(kinds),
+        "threshold": threshold, "chunk_size": int(chunk_size), "subsamples": sub},
+        len(points), mech.n_actuated)
     method, X = _poses(mech, coords, plan, points, B, seed)
     t1 = time.perf_counter()
     res = _sweep_samples(mech, X, method, "transmission" in kinds, executor, chunk_size,
-                         progress)
+                         progress, cp and cp.stage("cells"))
     t2 = time.perf_counter()
     values = {"ok": res.ok.reshape(shape), "singularity": res.singularity.reshape(shape),
               "det": res.det.reshape(shape), "lti": res.lti.reshape(shape),
@@ -632,16 +650,30 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
         """The kinds' pointwise properties at the sub-points (the sweep engine)."""
         _, Xs = _poses(mech, coords, plan, P, B, seed, method)  # no second probe
         r = _sweep_samples(mech, Xs, method, "transmission" in kinds, executor,
-                           chunk_size, False)
+                           chunk_size, False, cp and cp.stage("refine"))
         return _pointwise({"ok": r.ok, "singularity": r.singularity, "det": r.det,
                            "lti": r.lti, "cti": r.cti, "dof": r.dof}, kinds, home_dof,
                           home_det, threshold)
 
     ws = _finish(mech.name, coords, _units(coords, mech.length_unit), B, sampling, axes,
                  shape, points, plan["fixed"], home, values, home_dof, home_det, kinds,
-                 threshold, centre, method, t0, t1, t2, len(res.failures),
-                 _default_subsamples(subsamples, len(coords)), (kinds, inside))
+                 threshold, centre, method, t0, t1, t2, len(res.failures), sub,
+                 (kinds, inside))
+    if cp is not None:
+        cp.finish()
     return ws
+
+
+def _begin_checkpoint(checkpoint, resume: bool, study: dict, N: int, n_actuated: int):
+    """The study's :class:`~pkm_pin.checkpoint.Checkpoint` (None without one), its
+    identity set (a resume of another study refused) and the folder's free space
+    checked: the partial file, its temporary copy and the outputs, before the work."""
+    from .checkpoint import checkpoint_of
+
+    cp = checkpoint_of(checkpoint, resume)
+    if cp is not None:
+        cp.begin(study, need=3 * N * (8 * (8 + n_actuated) + 2))
+    return cp
 
 
 def _kinds(kinds) -> tuple[str, ...]:
@@ -717,13 +749,14 @@ def _constant(mech, coords, plan, bounds, seed, probes: int = 6) -> bool:
     return done >= 2
 
 
-def _sweep_samples(mech, X, method, transmission, executor, chunk_size, progress):
+def _sweep_samples(mech, X, method, transmission, executor, chunk_size, progress,
+                   checkpoint=None):
     """The sweep of the samples (partial poses completed in a serpentine order, each from
-    its neighbour, and given back in the samples' order)."""
+    its neighbour, and given back in the samples' order); ``checkpoint``: its stage."""
     from .sweep import serpentine_order
 
     options = dict(executor=executor, chunk_size=chunk_size, progress=progress,
-                   transmission=transmission)
+                   transmission=transmission, checkpoint=checkpoint)
     if method == "poses":
         return mech.sweep(X, **options)
     keys = np.array([[p[c] for c in sorted(p)] for p in X])
