@@ -275,9 +275,7 @@ class Checkpoint:
         """Set the study's identity (a JSON-able mapping); on resume, refuse a partial
         file of another study with the first key that differs. ``need``: bytes the
         folder must have free (an :class:`InputError` before the work starts)."""
-        from . import __version__
-
-        text = study_json({"pkm_pin": __version__, **study, **self.identity})
+        text = study_json({"pkm_pin": _version(), **study, **self.identity})
         if self.resume:
             saved = str(self._saved["study"])
             if saved != text:
@@ -398,13 +396,12 @@ class _Stage:
         self.fingerprint = ""
         self.chunks_recorded = 0
 
-    def begin(self, X: np.ndarray, chunks: list, options: Mapping, n_actuated: int
-              ) -> list:
-        """Start the stage on the poses ``X`` cut in ``chunks``; returns per chunk the
+    def begin(self, X: np.ndarray, chunks: list, options: Mapping,
+              empty: dict[str, np.ndarray]) -> list:
+        """Start the stage on the poses ``X`` cut in ``chunks`` (``empty``: the caller's
+        per-pose arrays, not yet computed, filled from the file); returns per chunk the
         part restored from the file (as :func:`pkm_pin.sweep.evaluate_chunk` returns
         it), or None (to evaluate)."""
-        from .sweep import _unassembled
-
         h = hashlib.sha256(np.ascontiguousarray(X, dtype=float).tobytes())
         h.update(study_json({"options": options, "chunks": [len(c) for c in chunks],
                              "order": hashlib.sha256(np.concatenate(chunks).astype(np.int64)
@@ -414,7 +411,7 @@ class _Stage:
         N = len(X)
         saved = self.cp._saved
         key = f"{self.name}.fingerprint"
-        self.values = _unassembled(N, n_actuated)
+        self.values = empty
         self.done = np.zeros(N, bool)
         self.failures = {}
         parts: list = [None] * len(chunks)
@@ -526,3 +523,13 @@ def interrupt_line(error: Interrupted, command: str | None) -> str:
 __all__ = ["Checkpoint", "CheckpointError", "Interrupted", "atomic_savez", "atomic_write",
            "check_writable", "checkpoint_of", "file_digest",
            "graceful_stop", "stop_requested", "study_json"]
+
+
+def _version() -> str:
+    """pkm_pin's installed version (part of a study's identity)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("pkm_pin")
+    except PackageNotFoundError:  # pragma: no cover (run from a source tree)
+        return "unknown"

@@ -458,7 +458,8 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
     if stage is not None:
         parts = stage.begin(X, chunks, {"rtol": rtol, "singular_tol": singular_tol,
                                         "transmission": bool(transmission),
-                                        "reference": reference}, mech.n_actuated)
+                                        "reference": reference},
+                             _unassembled(len(X), mech.n_actuated))
     todo = [k for k, p in enumerate(parts) if p is None]
     bar = _progress_bar(len(X)) if progress else None
     if bar is not None and len(todo) < len(chunks):

@@ -25,16 +25,17 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
     0: ("foundations that need nothing above them: errors, tolerances, screw algebra, "
         "numba helpers, the engine's compiled linear algebra and stages, the papers' "
         "formulas",
-        ("errors", "tolerances", "screws", "compiling", "engine.linalg", "engine.stages",
-         "formulas", "formulas.orthoglide", "formulas.rpr3", "formulas.serial_reduction",
-         "formulas.stewart")),
+        ("errors", "tolerances", "screws", "compiling", "checkpoint", "engine.linalg",
+         "engine.stages", "formulas", "formulas.orthoglide", "formulas.rpr3",
+         "formulas.serial_reduction", "formulas.stewart")),
     1: ("descriptions: URDF reading and the closure model with its readers",
         ("urdf", "model", "model.closure_model", "model.extended_urdf", "model.mjcf",
          "model.pinned", "model.structure", "model.chain_urdf")),
     2: ("kinematics of one configuration: compiled leg kinematics, the Pinocchio pass, "
         "serial chains, the assembly record whose twists that pass verifies, the default "
         "output chosen from one configuration's motions",
-        ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly", "output_choice")),
+        ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
+         "output_choice")),
     3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
         ("solve", "leg")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
