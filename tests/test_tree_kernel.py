@@ -46,16 +46,49 @@ def model(request):
 
 
 def random_q(model, rng) -> np.ndarray:
-    """A random configuration: revolutes in [−π, π], prismatics in ±L, any rotation."""
+    """A random configuration drawn with ``rng`` (deterministic: Pinocchio's own random
+    draws are not seeded): revolutes in [−π, π], prismatics in ±L, any rotation; drawn
+    again while a weld's relative rotation is within 0.2 rad of π, where the rotation's
+    logarithm is ill-conditioned and two implementations differ by more than rounding."""
     L = model.length
-    q = pin.randomConfiguration(model.tree, -np.pi * np.ones(model.nq), np.pi * np.ones(model.nq))
-    for j in range(1, model.tree.njoints):
-        joint = model.tree.joints[j]
-        if joint.nq == 1 and model.velocity_units[joint.idx_v] != 1.0:
-            q[joint.idx_q] = rng.uniform(-L, L)
-        elif joint.nq == 7:
-            q[joint.idx_q:joint.idx_q + 3] = rng.uniform(-L, L, 3)
-    return q
+    for _ in range(100):
+        q = np.array(pin.neutral(model.tree))
+        for j in range(1, model.tree.njoints):
+            joint = model.tree.joints[j]
+            i = joint.idx_q
+            if joint.nq == 1:
+                q[i] = (rng.uniform(-np.pi, np.pi) if model.velocity_units[joint.idx_v] == 1.0
+                        else rng.uniform(-L, L))
+            elif joint.nq == 2:
+                a = rng.uniform(-np.pi, np.pi)
+                q[i:i + 2] = np.cos(a), np.sin(a)
+            elif joint.nq == 4:
+                q[i:i + 4] = unit_quaternion(rng)
+            elif joint.nq == 7:
+                q[i:i + 3] = rng.uniform(-L, L, 3)
+                q[i + 3:i + 7] = unit_quaternion(rng)
+        if not near_weld_cut_locus(model, q):
+            return q
+    raise AssertionError("no configuration away from the log's cut locus")
+
+
+def unit_quaternion(rng) -> np.ndarray:
+    """A uniformly random unit quaternion (x, y, z, w)."""
+    v = rng.normal(size=4)
+    return v / np.linalg.norm(v)
+
+
+def random_placement(rng) -> pin.SE3:
+    """A random placement drawn with ``rng``: any rotation, translation in [−1, 1]³."""
+    x, y, z, w = unit_quaternion(rng)
+    return pin.SE3(pin.Quaternion(w, x, y, z).matrix(), rng.uniform(-1, 1, 3))
+
+
+def near_weld_cut_locus(model, q, margin: float = 0.2) -> bool:
+    """Whether some weld's relative rotation at ``q`` is within ``margin`` of π."""
+    r, slices = model.closure_residual(q), model.closure_slices()
+    return any(np.linalg.norm(r[s][:3]) > np.pi - margin
+               for c, s in zip(model.closures, slices) if c.kind == "weld")
 
 
 def compiled_rows(kern, q):
@@ -101,8 +134,8 @@ def test_every_closure_kind_with_placements(name, kind):
     near the closed configuration (small rotation logs)."""
     base = load_mechanism(ROOT / "models" / "loops" / f"{name}.urdf").model
     rng = np.random.default_rng(13)
-    closures = tuple(Closure(kind, c.frame_a, c.frame_b, pin.SE3.Random(), pin.SE3.Random(),
-                             c.name) for c in base.closures)
+    closures = tuple(Closure(kind, c.frame_a, c.frame_b, random_placement(rng),
+                             random_placement(rng), c.name) for c in base.closures)
     model = ClosureModel(base.tree, closures, base.actuated, base.output, length=base.length)
     kern = tree_kernel.tree_kernel(model)
     for _ in range(4):
