@@ -62,7 +62,7 @@ from . import dynamics, screws
 from .errors import ForwardKinematicsError, InputError, PkmError
 from .model.closure_model import ClosureModel, configuration
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_limits
-from .tolerances import CLOSURE_TOL
+from .tolerances import CLOSURE_TOL, RANK_RTOL
 
 #: Duration [s] of the default motion.
 DEFAULT_DURATION = 2.0
@@ -422,6 +422,13 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
         t1 = time.perf_counter()
         try:
             vi, ai = dynamics.motion_from_actuated(model, q[i], Qd[i], Qdd[i])
+            if i > 0:  # idle rates: Heun's step of their own dynamics
+                v0 = vi
+                vi, ai, idle = _carry_idle(model, q[i], v0, Qdd[i], v[i - 1] + a[i - 1] * dt)
+                if idle:
+                    ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity)
+                    vi, ai, _ = _carry_idle(model, q[i], v0, Qdd[i],
+                                            v[i - 1] + 0.5 * (a[i - 1] + ai) * dt)
             ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity)
         except PkmError as e:  # SingularityError, InconsistentMotion
             raise _at_time(e, ti)
@@ -429,6 +436,36 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
         clock["kinematics"] += t1 - t0
         clock["motion"] += time.perf_counter() - t1
     return (q, v, a, Qa, Qd, Qdd), clock
+
+
+def _carry_idle(model: ClosureModel, q: np.ndarray, v: np.ndarray, qdd: np.ndarray,
+                v_pred: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """``(v, a, idle)`` at ``q``: the minimum-norm ``v`` (from the actuated rates) plus
+    the idle motions' rates carried from the previous sample (``v_pred``, its velocity
+    stepped by the idle dynamics, projected on the idle motions here); ``a`` the
+    minimum-norm solution of ``[J; S] a = [−J̇ v; q̈_a]`` for that velocity; ``idle``:
+    whether there is an idle motion at ``q``."""
+    units, rows = model.velocity_units, dynamics.row_units(model)
+    zero = np.zeros(model.nv)
+    J, _, _ = dynamics.closure_acceleration(model, q, v, zero)
+    act = list(model.actuated_v)
+    H = np.zeros((len(rows) + len(act), model.nv))
+    H[:len(rows)] = J / rows[:, None] * units
+    H[len(rows) + np.arange(len(act)), act] = 1.0
+    rank, Us, sv, Vt = screws.svd_rank(H, RANK_RTOL)
+    if rank == model.nv:
+        return v, _minimum_norm(Us, sv, Vt, rank, model, q, v, qdd, rows, units, act), False
+    Nd = Vt[rank:].T
+    v = v + units * (Nd @ (Nd.T @ ((v_pred - v) / units)))
+    return v, _minimum_norm(Us, sv, Vt, rank, model, q, v, qdd, rows, units, act), True
+
+
+def _minimum_norm(Us, sv, Vt, rank, model, q, v, qdd, rows, units, act) -> np.ndarray:
+    """The minimum-norm (dimensionless) ``a`` of ``[J; S] a = [−J̇ v; q̈_a]``."""
+    _, _, drift = dynamics.closure_acceleration(model, q, v, np.zeros(model.nv))
+    rhs = np.r_[-drift / rows, qdd / units[act]]
+    x = Vt[:rank].T @ ((Us[:, :rank].T @ rhs) / sv[:rank])
+    return units * x
 
 
 def study(mech, motion=None, *, samples: int = DEFAULT_SAMPLES, times=None,
