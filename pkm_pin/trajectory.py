@@ -428,14 +428,20 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
         t1 = time.perf_counter()
         try:
             vi, ai = dynamics.motion_from_actuated(model, q[i], Qd[i], Qdd[i])
-            if i > 0:  # idle rates: Heun's step of their own dynamics
-                v0 = vi
-                vi, ai, idle = _carry_idle(model, q[i], v0, Qdd[i], v[i - 1] + a[i - 1] * dt)
-                if idle:
-                    ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity)
-                    vi, ai, _ = _carry_idle(model, q[i], v0, Qdd[i],
-                                            v[i - 1] + 0.5 * (a[i - 1] + ai) * dt)
-            ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity)
+            system = _ActuatedSystem(model, q[i])
+            if system.idle is not None:
+                if i > 0:  # idle rates: Heun's step of their own dynamics
+                    v0 = vi
+                    for pred in (v[i - 1] + a[i - 1] * dt, None):
+                        if pred is None:
+                            pred = v[i - 1] + 0.5 * (a[i - 1] + ai) * dt
+                        vi = system.carry(v0, pred)
+                        ai = dynamics.idle_acceleration(
+                            model, q[i], vi, system.acceleration(vi, Qdd[i]),
+                            gravity=gravity, idle=system.idle)
+                else:
+                    ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity,
+                                                    idle=system.idle)
         except PkmError as e:  # SingularityError, InconsistentMotion
             raise _at_time(e, ti)
         v[i], a[i] = vi, ai
@@ -444,34 +450,35 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
     return (q, v, a, Qa, Qd, Qdd), clock
 
 
-def _carry_idle(model: ClosureModel, q: np.ndarray, v: np.ndarray, qdd: np.ndarray,
-                v_pred: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
-    """``(v, a, idle)`` at ``q``: the minimum-norm ``v`` (from the actuated rates) plus
-    the idle motions' rates carried from the previous sample (``v_pred``, its velocity
-    stepped by the idle dynamics, projected on the idle motions here); ``a`` the
-    minimum-norm solution of ``[J; S] a = [−J̇ v; q̈_a]`` for that velocity; ``idle``:
-    whether there is an idle motion at ``q``."""
-    units, rows = model.velocity_units, dynamics.row_units(model)
-    zero = np.zeros(model.nv)
-    J, _, _ = dynamics.closure_acceleration(model, q, v, zero)
-    act = list(model.actuated_v)
-    H = np.zeros((len(rows) + len(act), model.nv))
-    H[:len(rows)] = J / rows[:, None] * units
-    H[len(rows) + np.arange(len(act)), act] = 1.0
-    rank, Us, sv, Vt = screws.svd_rank(H, RANK_RTOL)
-    if rank == model.nv:
-        return v, _minimum_norm(Us, sv, Vt, rank, model, q, v, qdd, rows, units, act), False
-    Nd = Vt[rank:].T
-    v = v + units * (Nd @ (Nd.T @ ((v_pred - v) / units)))
-    return v, _minimum_norm(Us, sv, Vt, rank, model, q, v, qdd, rows, units, act), True
+class _ActuatedSystem:
+    """``[J; S]`` at ``q`` (dimensionless rows and coordinates), its SVD and the idle
+    motions (its null space: ``idle``, (nv, k) physical directions, or None)."""
 
+    def __init__(self, model: ClosureModel, q: np.ndarray):
+        self.model, self.q = model, q
+        self.units, self.rows = model.velocity_units, dynamics.row_units(model)
+        zero = np.zeros(model.nv)
+        J, _, _ = dynamics.closure_acceleration(model, q, zero, zero)
+        self.act = list(model.actuated_v)
+        H = np.zeros((len(self.rows) + len(self.act), model.nv))
+        H[:len(self.rows)] = J / self.rows[:, None] * self.units
+        H[len(self.rows) + np.arange(len(self.act)), self.act] = 1.0
+        self.rank, self.Us, self.sv, self.Vt = screws.svd_rank(H, RANK_RTOL)
+        self.null = self.Vt[self.rank:].T
+        self.idle = self.units[:, None] * self.null if self.rank < model.nv else None
 
-def _minimum_norm(Us, sv, Vt, rank, model, q, v, qdd, rows, units, act) -> np.ndarray:
-    """The minimum-norm (dimensionless) ``a`` of ``[J; S] a = [−J̇ v; q̈_a]``."""
-    _, _, drift = dynamics.closure_acceleration(model, q, v, np.zeros(model.nv))
-    rhs = np.r_[-drift / rows, qdd / units[act]]
-    x = Vt[:rank].T @ ((Us[:, :rank].T @ rhs) / sv[:rank])
-    return units * x
+    def carry(self, v: np.ndarray, v_pred: np.ndarray) -> np.ndarray:
+        """``v`` (minimum-norm, from the actuated rates) plus the idle part of
+        ``v_pred`` (the previous sample's velocity stepped by the idle dynamics)."""
+        N, U = self.null, self.units
+        return v + U * (N @ (N.T @ ((v_pred - v) / U)))
+
+    def acceleration(self, v: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """The minimum-norm (dimensionless) ``a`` of ``[J; S] a = [−J̇ v; q̈_a]``."""
+        model, r = self.model, self.rank
+        _, _, drift = dynamics.closure_acceleration(model, self.q, v, np.zeros(model.nv))
+        rhs = np.r_[-drift / self.rows, qdd / self.units[self.act]]
+        return self.units * (self.Vt[:r].T @ ((self.Us[:, :r].T @ rhs) / self.sv[:r]))
 
 
 def _inverse_dynamics(model: ClosureModel, q, v, a, g, w) -> dynamics.InverseDynamics:
