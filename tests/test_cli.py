@@ -320,8 +320,9 @@ def test_dynamics_text_table_and_csv_trajectory(tmp_path, capsys):
 
 
 def test_dynamics_refuses_a_file_without_masses(capsys):
-    """A file with no mass on any body (models/loops/four_bar.urdf): exit 2, one line
-    naming the bodies; with a payload it runs and says the efforts are the payload's."""
+    """A file with no mass on any body (models/loops/four_bar.urdf, the built-in 3-RPR):
+    exit 2, one line naming the bodies; with a payload it runs and says the efforts are
+    the payload's."""
     four_bar = MECHANISM_DIR.parent / "loops" / "four_bar.urdf"
     assert main(["dynamics", str(four_bar)]) == 2
     line = one_error_line(capsys)
@@ -329,3 +330,5 @@ def test_dynamics_refuses_a_file_without_masses(capsys):
     assert main(["dynamics", str(four_bar), "--payload", "0", "0", "0", "0", "0", "2",
                  "--samples", "5"]) == 0
     assert "note       no body of" in capsys.readouterr().out
+    assert main(["dynamics"]) == 2  # the built-in 3-RPR has no inertias either
+    assert "3-RPR (seed 000) has no mass on any body (A/A0_link" in one_error_line(capsys)
