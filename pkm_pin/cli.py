@@ -9,6 +9,9 @@
     pkm-pin ik MECHANISM [--pose X Y Z R P Y | --at NAME=V...] [--all]   pose -> actuated
     pkm-pin map MECHANISM --axes x z [--at NAME=V...] --range A B C D --n 100 --out PREFIX
     pkm-pin view MECHANISM [--pose ...] [--html FILE]   browser preview (meshcat)
+    pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N]
+                     [--payload FX FY FZ MX MY MZ] [--json] [--out PREFIX]
+                                                   actuator efforts along a motion
 
 ``MECHANISM`` is a mechanism file (``.toml``) or the name of a shipped model
 (``pkm-pin list``). Poses are x, y, z [m] and URDF roll, pitch, yaw [rad]. A partial
@@ -867,6 +870,86 @@ def cmd_view(args) -> int:
     return 0
 
 
+def cmd_dynamics(args) -> int:
+    """Efforts, speeds and powers of each actuator along a motion
+    (:func:`pkm_pin.trajectory.study`): the CSV of ``--trajectory`` (header
+    ``t,<actuated names>``, clamped cubic spline) or the default sine about home over
+    ``--duration``; per actuator peak and RMS effort, peak speed, peak power and energy
+    as a table or ``--json``; ``--out PREFIX``: PREFIX.npz and the PNG plots."""
+    from . import trajectory as tr
+
+    if args.trajectory is not None and args.duration is not None:
+        raise InputError("--duration is the default motion's; a --trajectory CSV gives its "
+                         "own times")
+    if not 2 <= args.samples <= 100_000:
+        raise InputError(f"--samples must be between 2 and 100000, got {args.samples}")
+    prefix = None
+    if args.out is not None:
+        prefix = Path(args.out)
+        if not prefix.parent.is_dir():
+            raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
+    mech = _load(args)
+    motion = None
+    if args.trajectory is not None:
+        model, _ = tr.closure_model_of(mech)
+        motion = tr.read_csv(args.trajectory, model.actuated)
+    st = tr.study(mech, motion, samples=args.samples, payload=args.payload,
+                  duration=tr.DEFAULT_DURATION if args.duration is None else args.duration)
+    files = []
+    if prefix is not None:
+        from .plots import trajectory_plots
+
+        files.append(_save_npz(prefix, dict(
+            t=st.t, q=st.q, v=st.v, a=st.a, efforts=st.efforts, q_actuated=st.q_actuated,
+            speeds=st.speeds, accelerations=st.accelerations, powers=st.powers,
+            payload_efforts=st.payload_efforts, actuated=np.array(st.actuated),
+            units=np.array(st.units), gravity=st.gravity)))
+        try:
+            files += trajectory_plots(st, prefix, title=mech.name)
+        except OSError as e:
+            raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
+    summary = st.summary()
+    if args.json:
+        print(_json({"mechanism": mech.name, "actuated": list(st.actuated),
+                     "motion": st.motion, "samples": int(st.t.size),
+                     "duration": float(st.t[-1] - st.t[0]), "gravity": st.gravity.tolist(),
+                     "payload": None if st.payload is None else st.payload.tolist(),
+                     "notes": list(st.notes), "massless_bodies": list(st.massless_bodies),
+                     "actuators": summary, "timing": st.timing,
+                     "files": [str(f) for f in files]}))
+        return 0
+    print(f"mechanism  {mech.name}")
+    print(f"motion     {st.motion}")
+    g = ", ".join(f"{x:g}" for x in st.gravity)
+    load = "none" if st.payload is None else (
+        "f (" + ", ".join(f"{x:g}" for x in st.payload[:3]) + ") N, m ("
+        + ", ".join(f"{x:g}" for x in st.payload[3:]) + ") N m at the output origin")
+    print(f"samples    {st.t.size} over [{st.t[0]:g}, {st.t[-1]:g}] s; gravity ({g}) m/s²; "
+          f"payload {load}")
+    for note in st.notes:
+        print(f"note       {note}")
+    if st.massless_bodies and not st.notes:
+        shown = ", ".join(st.massless_bodies[:6]) + (
+            f" and {len(st.massless_bodies) - 6} more" if len(st.massless_bodies) > 6 else "")
+        print(f"massless   {len(st.massless_bodies)} bodies have no mass in the file (taken "
+              f"massless, none invented): {shown}")
+    width = max(8, *(len(n) for n in st.actuated))
+    print(f"{'actuator':<{width}}  {'peak effort':>13}  {'rms effort':>13}  "
+          f"{'peak speed':>15}  {'peak power':>12}  {'∫|P|dt':>11}  {'∫P dt':>11}")
+    for name, s in summary.items():
+        print(f"{name:<{width}}  {s['peak_effort']:>9.4g} {s['effort_unit']:<3}  "
+              f"{s['rms_effort']:>9.4g} {s['effort_unit']:<3}  "
+              f"{s['peak_speed']:>9.4g} {s['speed_unit']:<5}  {s['peak_power']:>10.4g} W  "
+              f"{s['energy']:>9.4g} J  {s['net_energy']:>9.4g} J")
+    tm = st.timing
+    print(f"time       {tm['total']:.3g} s; per sample {1e3 * tm['kinematics']:.3g} ms forward "
+          f"kinematics, {1e3 * tm['motion']:.3g} ms v and a, {1e3 * tm['dynamics']:.3g} ms "
+          "inverse dynamics")
+    for path in files:
+        print(f"wrote      {path}")
+    return 0
+
+
 def cmd_workspace(args) -> int:
     """Reachable, singularity-free and good-transmission workspaces
     (:func:`pkm_pin.workspace.workspace`): print (or ``--json``) the volumes with their
@@ -1150,6 +1233,33 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-wrenches", action="store_true", help="do not draw the wrenches")
     _linkage_options(p, q=True)
     p.set_defaults(func=cmd_view)
+
+    p = sub.add_parser("dynamics", help="actuator efforts, speeds and powers along a motion",
+                       description="Closed-loop inverse dynamics along a motion of the "
+                       "actuators (docs/dynamics.md): the consistent motion of every joint, "
+                       "then per actuator peak and RMS effort, peak speed, peak power and "
+                       "energy (the file's inertias only: a model with no mass anywhere is "
+                       "refused unless a payload is given). With no MECHANISM: the built-in "
+                       "3-RPR; with no --trajectory: each actuator a sine about home.")
+    p.add_argument("mechanism", nargs="?", metavar="MECHANISM", help=_MECH_HELP)
+    p.add_argument("--trajectory", metavar="CSV",
+                   help="the motion: a CSV with the header t,<actuated names> (any order) "
+                   "and one row per sample [s, rad or m], splined (cubic, at rest at both "
+                   "ends)")
+    p.add_argument("--duration", type=float, metavar="T",
+                   help="duration of the default motion [s] (default 2)")
+    p.add_argument("--samples", type=int, default=201,
+                   help="samples, uniform in time (default 201)")
+    p.add_argument("--payload", nargs=6, type=float,
+                   metavar=("FX", "FY", "FZ", "MX", "MY", "MZ"),
+                   help="wrench on the output at its origin, world axes [N, N m] (a mass m: "
+                   "0 0 -9.81m 0 0 0)")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--out", metavar="PREFIX",
+                   help="write PREFIX.npz (t, q, v, a, efforts, ...) and PREFIX_efforts.png, "
+                   "_speeds.png, _powers.png, _torque_speed.png")
+    _linkage_options(p)
+    p.set_defaults(func=cmd_dynamics)
     return parser
 
 

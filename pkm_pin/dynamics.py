@@ -388,6 +388,45 @@ def motion_from_actuated(model: ClosureModel, q, qd_actuated, qdd_actuated
     return v, a
 
 
+def idle_acceleration(model: ClosureModel, q, v, a, *, gravity=GRAVITY,
+                      idle: np.ndarray | None = None) -> np.ndarray:
+    """``a`` (consistent at ``(q, v)``) with its component along the idle motions (tree
+    motions the closures allow with every actuator still: ``[J; S] n = 0``, the columns of
+    ``N``) set by the idle joints' own dynamics: ``a + N z`` with ``Nᵀ M N z =
+    −Nᵀ rnea(q, v, a)``, so that ``Nᵀ rnea(q, v, a + N z) = 0`` (no actuator and no
+    closure force acts along an idle motion; a massless idle direction gets ``z = 0``).
+    ``a`` itself where there is no idle motion. :func:`motion_from_actuated`'s
+    minimum-norm acceleration followed by this one is an acceleration
+    :func:`inverse_dynamics` balances (e.g. a rod spinning about its axis, its centre of
+    mass off the axis). ``idle``: the (nv, k) idle motions at ``q`` when the caller
+    has them (physical velocity directions), else found here (``[J; S]``'s null space
+    on dimensionless rows and coordinates, rank at :data:`RANK_RTOL`)."""
+    q, v, a = _check_motion(model, q, v, a)
+    g = screws.as_vector3(gravity, "gravity")
+    work = _work(model)
+    if idle is None:
+        kin = TreeKinematics(model, q, work.data)
+        Uv = model.velocity_units
+        n = len(work.act_v)
+        H = np.zeros((work.n_rows + n, model.nv))
+        H[:work.n_rows] = kin.closure_jacobian * Uv
+        H[work.n_rows + np.arange(n), work.act_v] = 1.0
+        rank, _, _, Vt = screws.svd_rank(H, RANK_RTOL)
+        if rank == model.nv:
+            return a
+        N = Uv[:, None] * Vt[rank:].T
+    else:
+        N = np.asarray(idle, dtype=float).reshape(model.nv, -1)
+        if N.shape[1] == 0:
+            return a
+    work.set_gravity(g)
+    r = pin.rnea(work.tree, work.data, q, v, a).copy()
+    M = pin.crba(work.tree, work.data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    z = np.linalg.lstsq(N.T @ M @ N, -(N.T @ r), rcond=RANK_RTOL)[0]
+    return a + N @ z
+
+
 def _check_free(model: ClosureModel, kin: TreeKinematics, Vt: np.ndarray, sv: np.ndarray,
                 rank: int) -> None:
     """Raise :class:`SingularityError` when a motion of ``[J; S]``'s (near) null space

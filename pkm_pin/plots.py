@@ -296,3 +296,65 @@ def workspace_plots(ws, prefix: str | Path, title: str = "") -> list[Path]:
     path = prefix.with_name(prefix.name + "_slices.png")
     fig.savefig(path)
     return [path]
+
+
+# ------------------------------------------------------------------ trajectories
+def _against_time(st, values: np.ndarray, units, what: str, title: str, path: Path) -> Path:
+    """One curve per actuator of ``values`` (N, n) against time, the unit in the legend."""
+    fig, ax = _figure(title, ("t [s]", what))
+    ax.set_facecolor("white")
+    ax.grid(True, lw=0.4, alpha=0.6)
+    for k, name in enumerate(st.actuated):
+        ax.plot(st.t, values[:, k], lw=1.3, label=f"{name} [{units[k]}]")
+    ax.axhline(0.0, color="0.3", lw=0.6)
+    ax.legend(loc="best", fontsize=8, framealpha=0.85)
+    fig.savefig(path)
+    return path
+
+
+def trajectory_plots(st, prefix: str | Path, title: str = "") -> list[Path]:
+    """PNG pictures of a :class:`~pkm_pin.trajectory.TrajectoryStudy`:
+    ``PREFIX_efforts.png``, ``PREFIX_speeds.png``, ``PREFIX_powers.png`` (one curve per
+    actuator against time) and ``PREFIX_torque_speed.png`` (each actuator's (speed,
+    effort) points, one panel per actuator, coloured by time, with its peak effort and
+    peak speed as a dashed box: the operating points a motor's torque–speed curve
+    must cover).
+
+    Returns:
+        The paths written.
+    """
+    prefix = Path(prefix)
+    head = f"{title}: " if title else ""
+
+    def name(tag: str) -> Path:
+        return prefix.with_name(f"{prefix.name}_{tag}.png")
+
+    out = [_against_time(st, st.efforts, st.effort_units, "effort", f"{head}actuator efforts",
+                         name("efforts")),
+           _against_time(st, st.speeds, st.speed_units, "speed", f"{head}actuator speeds",
+                         name("speeds")),
+           _against_time(st, st.powers, ["W"] * len(st.actuated), "power [W]",
+                         f"{head}actuator powers (τ q̇)", name("powers"))]
+    n = len(st.actuated)
+    cols = min(3, max(n, 1))
+    rows = max(1, int(np.ceil(n / cols)))
+    fig = Figure(figsize=(3.6 * cols + 1.0, 3.2 * rows + 0.6), dpi=100, layout="constrained")
+    FigureCanvasAgg(fig)
+    points = None
+    for k, actuator in enumerate(st.actuated):
+        ax = fig.add_subplot(rows, cols, k + 1)
+        ax.grid(True, lw=0.4, alpha=0.6)
+        x, y = st.speeds[:, k], st.efforts[:, k]
+        points = ax.scatter(x, y, c=st.t, s=6, cmap=colormaps["viridis"])
+        px, py = np.abs(x).max(), np.abs(y).max()
+        ax.plot([-px, px, px, -px, -px], [-py, -py, py, py, -py], "--", color="0.4", lw=0.8)
+        ax.set_xlabel(f"speed [{st.speed_units[k]}]")
+        ax.set_ylabel(f"effort [{st.effort_units[k]}]")
+        ax.set_title(actuator, fontsize=9)
+    if points is not None:
+        fig.colorbar(points, ax=fig.axes, label="t [s]", shrink=0.8)
+    fig.suptitle(f"{head}torque–speed points (dashed: peak effort × peak speed)")
+    path = name("torque_speed")
+    fig.savefig(path)
+    out.append(path)
+    return out

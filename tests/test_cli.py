@@ -65,7 +65,8 @@ RPR3_TOML = MECHANISM_DIR / "rpr3.toml"
 
 
 # --------------------------------------------------------------------------- help
-@pytest.mark.parametrize("command", ["list", "analyze", "check", "fk", "ik", "map", "view"])
+@pytest.mark.parametrize("command", ["list", "analyze", "check", "fk", "ik", "map", "view",
+                                     "dynamics"])
 def test_every_command_has_help(command, capsys):
     """'pkm-pin COMMAND --help' prints a usage and exits with 0."""
     assert main([command, "--help"]) == 0
@@ -264,3 +265,70 @@ def test_first_analyze_on_a_fresh_installation_compiles_nothing_long(tmp_path):
     assert out.returncode == 0, out.stderr
     assert "DOF                3" in out.stdout
     assert "compiling" not in out.stderr, out.stderr
+
+
+# ----------------------------------------------------------------------- dynamics
+CASSIE_LIKE = MECHANISM_DIR.parents[1] / "tests" / "data" / "gepetto" / "cassie_like" / \
+    "robot.urdf"
+
+
+def test_dynamics_on_a_file_with_inertias(tmp_path, capsys):
+    """'pkm-pin dynamics' on Gepetto's Cassie-like leg (its own inertias): exit 0, the
+    JSON numbers per actuator, PREFIX.npz with t, q, v, a, efforts of the right shapes,
+    and the four PNGs."""
+    prefix = tmp_path / "leg"
+    assert main(["dynamics", str(CASSIE_LIKE), "--samples", "31", "--json",
+                 "--out", str(prefix)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    actuated = data["actuated"]
+    assert len(actuated) == 5 and data["samples"] == 31 and data["duration"] == 2.0
+    for name in actuated:
+        s = data["actuators"][name]
+        for key in ("peak_effort", "rms_effort", "peak_speed", "peak_power", "energy",
+                    "net_energy"):
+            assert np.isfinite(s[key])
+        assert 0 < s["rms_effort"] <= s["peak_effort"]
+        assert s["peak_speed"] == pytest.approx(0.1 * 2 * np.pi / 2.0)  # 0.1 rad sine, 2 s
+    arrays = np.load(prefix.with_name("leg.npz"))
+    assert arrays["t"].shape == (31,) and arrays["efforts"].shape == (31, 5)
+    assert arrays["q"].shape[0] == arrays["v"].shape[0] == arrays["a"].shape[0] == 31
+    assert list(arrays["actuated"]) == actuated
+    for tag in ("efforts", "speeds", "powers", "torque_speed"):
+        png = tmp_path / f"leg_{tag}.png"
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and str(png) in data["files"]
+
+
+def test_dynamics_text_table_and_csv_trajectory(tmp_path, capsys):
+    """A CSV motion (columns in another order) gives a text table with one row per
+    actuator, the massless bodies named in one line; --duration with it is refused."""
+    names = ["motor_hip1", "motor_hip2", "motor_tigh", "motor_knee", "motor_ankle"]
+    t = np.linspace(0, 1, 11)
+    rows = [",".join(["t"] + names[::-1])]
+    rows += [",".join(f"{x:.9g}" for x in [ti] + [0.05 * np.sin(np.pi * ti)] * 5) for ti in t]
+    csv = tmp_path / "motion.csv"
+    csv.write_text("\n".join(rows) + "\n")
+    assert main(["dynamics", str(CASSIE_LIKE), "--trajectory", str(csv), "--samples",
+                 "21"]) == 0
+    out = capsys.readouterr().out
+    assert "cubic spline (clamped) through 11 samples" in out
+    assert "massless   8 bodies have no mass in the file" in out
+    for name in names:
+        assert sum(line.startswith(name + " ") for line in out.splitlines()) == 1
+    assert main(["dynamics", str(CASSIE_LIKE), "--trajectory", str(csv), "--duration",
+                 "3"]) == 2
+    assert "--duration" in one_error_line(capsys)
+
+
+def test_dynamics_refuses_a_file_without_masses(capsys):
+    """A file with no mass on any body (models/loops/four_bar.urdf, the built-in 3-RPR):
+    exit 2, one line naming the bodies; with a payload it runs and says the efforts are
+    the payload's."""
+    four_bar = MECHANISM_DIR.parent / "loops" / "four_bar.urdf"
+    assert main(["dynamics", str(four_bar)]) == 2
+    line = one_error_line(capsys)
+    assert "no mass on any body (crank, coupler, rocker)" in line
+    assert main(["dynamics", str(four_bar), "--payload", "0", "0", "0", "0", "0", "2",
+                 "--samples", "5"]) == 0
+    assert "note       no body of" in capsys.readouterr().out
+    assert main(["dynamics"]) == 2  # the built-in 3-RPR has no inertias either
+    assert "3-RPR (seed 000) has no mass on any body (A/A0_link" in one_error_line(capsys)

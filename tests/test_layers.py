@@ -41,8 +41,10 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
         "closed-loop dynamics",
         ("engine", "engine.core", "analysis", "transmission", "dynamics")),
-    5: ("position problems and studies built on the solver and the analysis",
-        ("position", "modes", "sweep", "workspace", "sensitivity", "calibration")),
+    5: ("position problems and studies built on the solver and the analysis (trajectory: "
+        "the efforts along a motion, on the closed-loop dynamics)",
+        ("position", "modes", "sweep", "workspace", "sensitivity", "calibration",
+         "trajectory")),
     6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
         "io reads every file format into one of them",
         ("mechanism", "linkage", "io")),

@@ -1,0 +1,597 @@
+"""Motions given as actuated values over time, and the efforts, speeds and powers each
+actuator needs along them (issue 26, items 2 and 3; docs/dynamics.md, "Trajectories").
+
+A motion is the actuated values ``q_a(t)`` (in the model's :attr:`~ClosureModel.actuated`
+order): samples ``(t, q_a)`` (arrays, or a CSV file with the header
+``t,<actuated names…>``) splined by :class:`SplineMotion`, or the default
+:class:`SineMotion` (:func:`default_motion`). At each time of the study:
+
+* ``q``: the whole tree by forward kinematics (:func:`pkm_pin.solve.solve_tree` with the
+  actuated targets, to :data:`~pkm_pin.tolerances.CLOSURE_TOL`, or :data:`FK_ACCEPT_RTOL`
+  where the Newton converges slowly), warm-started from the previous sample moved by its
+  own velocity and acceleration (``q ⊕ (v dt + a dt²/2)``: the branch is continued);
+* ``v, a``: :func:`pkm_pin.dynamics.motion_from_actuated` from the spline's ``q̇_a, q̈_a``
+  (``[J; S] v = [0; q̇_a]``, ``[J; S] a = [−J̇ v; q̈_a]``); along idle motions (the tree's
+  motions with every actuator still, e.g. a rod spinning about its axis) the velocity is
+  the minimum-norm one and the acceleration the one the idle joints' own dynamics give
+  (:func:`pkm_pin.dynamics.idle_acceleration`);
+* the efforts: :func:`pkm_pin.dynamics.inverse_dynamics` with the gravity asked for
+  (default ``(0, 0, −9.81)``) and the payload wrench.
+
+Decisions:
+
+* **Spline**: scipy's ``CubicSpline``, **clamped** (``q̇_a = 0`` at both ends) by default:
+  a motion given for motor sizing starts and ends at rest, and a clamped spline keeps the
+  accelerations of the start and the stop (a natural spline sets ``q̈_a = 0`` there and
+  lets the motion start with a speed: the peak efforts at start-up are lost).
+  ``bc_type="natural"``, ``"not-a-knot"`` or ``"periodic"`` are accepted for data that
+  are a piece of a longer motion. The acceleration is continuous (C²) in every case.
+* **Default motion**: each actuator ``q_a,k(t) = q_a,k(home) + A_k sin(2π t / T + 2π k /
+  n)`` over ``T = 2 s`` (one period; phases spread over the actuators so the output
+  moves in every direction the actuators give): ``A_k = 0.1 rad`` for a revolute,
+  ``0.1 L`` for a prismatic (``L`` the model's characteristic length), reduced to 10 %
+  of the joint's range and half the distance from home to its nearer limit when those
+  are finite and smaller.
+* **Payload**: a wrench ``(f; m)`` at the output frame's origin, world axes, constant in
+  the world (a payload of mass ``m``: ``(m g; 0)``); at each sample it is given to
+  :func:`~pkm_pin.dynamics.inverse_dynamics` about the world origin, ``(f; m + p × f)``.
+* **Energy**: trapezoidal rule on the samples: ``energy = ∫ |P| dt`` (what the motor
+  delivers when braking is not recovered: the sizing number) and ``net_energy = ∫ P dt``
+  (the change of the mechanism's kinetic and potential energy minus the payload's work).
+  RMS effort ``sqrt(∫ τ² dt / (t_end − t_0))`` (time-weighted), peaks ``max |·|`` over
+  the samples.
+* **Masses**: the file's inertias only, never invented ones. :func:`study` refuses a
+  model with no mass on any body unless a payload is given (its efforts would be zero:
+  :class:`~pkm_pin.errors.InputError` naming the bodies); a payload on a massless model
+  gives the payload's efforts, said in :attr:`TrajectoryStudy.notes`. Bodies without mass
+  in a model with some are listed in :attr:`TrajectoryStudy.massless_bodies`.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from . import dynamics, screws
+from .errors import ForwardKinematicsError, InconsistentMotion, InputError, PkmError
+from .model.closure_model import ClosureModel, configuration
+from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_limits
+from .tolerances import CLOSURE_TOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
+
+#: Duration [s] of the default motion.
+DEFAULT_DURATION = 2.0
+#: Samples of a study (uniform in time, both ends included).
+DEFAULT_SAMPLES = 201
+#: Amplitude of the default motion: this many rad (revolute) or characteristic lengths
+#: (prismatic).
+DEFAULT_AMPLITUDE = 0.1
+#: ... at most this fraction of the joint's range,
+DEFAULT_RANGE_FRACTION = 0.1
+#: ... and at most this fraction of the distance from home to the nearer limit.
+DEFAULT_MARGIN_FRACTION = 0.5
+#: Largest CSV file read [bytes], and rows.
+CSV_MAX_BYTES = 20_000_000
+CSV_MAX_ROWS = 1_000_000
+#: A sample's forward kinematics that stops above CLOSURE_TOL (slow, linear convergence
+#: near a constraint singularity) is kept when its relative residual is below this (100×
+#: below what :func:`pkm_pin.dynamics.inverse_dynamics` accepts).
+FK_ACCEPT_RTOL = 1e-10
+#: Boundary conditions of :class:`SplineMotion` (scipy's names).
+SPLINE_BC = ("clamped", "natural", "not-a-knot", "periodic")
+
+
+# ------------------------------------------------------------------- motions
+class SplineMotion:
+    """Actuated values over time from samples, a C² cubic spline per actuator.
+
+    Args:
+        t: (N,) strictly increasing times [s], N ≥ 2.
+        q_actuated: (N, n) actuated values [rad or m] (the model's actuated order).
+        names: Names of the n actuated joints (for messages).
+        bc_type: ``"clamped"`` (default: at rest at both ends), ``"natural"``,
+            ``"not-a-knot"`` or ``"periodic"`` (the first and last rows must then be
+            equal), module docstring.
+    """
+
+    def __init__(self, t, q_actuated, names=(), bc_type: str = "clamped"):
+        from scipy.interpolate import CubicSpline
+
+        t = screws.as_float_array(t, "t").ravel()
+        Q = screws.as_float_array(q_actuated, "q_actuated")
+        if Q.ndim == 1:
+            Q = Q[:, None]
+        if Q.ndim != 2 or Q.shape[0] != t.size:
+            raise InputError(f"q_actuated must have one row per time ({t.size}), got shape "
+                             f"{Q.shape}")
+        if t.size < 2:
+            raise InputError(f"a motion needs at least 2 samples, got {t.size}")
+        if not (np.isfinite(t).all() and np.isfinite(Q).all()):
+            raise InputError("the motion's times and values must be finite")
+        if not np.all(np.diff(t) > 0):
+            k = int(np.argmin(np.diff(t)))
+            raise InputError(f"the times must increase strictly: t[{k}] = {t[k]:g}, "
+                             f"t[{k + 1}] = {t[k + 1]:g}")
+        if bc_type not in SPLINE_BC:
+            raise InputError(f"bc_type must be one of {', '.join(SPLINE_BC)}, got {bc_type!r}")
+        if bc_type == "periodic" and not np.allclose(Q[0], Q[-1], rtol=0, atol=1e-12):
+            raise InputError("a periodic spline needs equal first and last values")
+        self.t, self.q_actuated, self.bc_type = t, Q, bc_type
+        self.names = tuple(names)
+        self.spline = CubicSpline(t, Q, axis=0, bc_type=bc_type)
+
+    @property
+    def start(self) -> float:
+        return float(self.t[0])
+
+    @property
+    def stop(self) -> float:
+        return float(self.t[-1])
+
+    def __call__(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(q_a, q̇_a, q̈_a)`` at ``times``, each (len(times), n)."""
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        s = self.spline
+        return s(times), s(times, 1), s(times, 2)
+
+    def describe(self) -> str:
+        return (f"cubic spline ({self.bc_type}) through {self.t.size} samples, "
+                f"t in [{self.start:g}, {self.stop:g}] s")
+
+
+@dataclass(frozen=True)
+class SineMotion:
+    """``q_a(t) = centre + amplitude sin(2π t / duration + phase)`` per actuator (the
+    default motion, :func:`default_motion`); exact derivatives."""
+
+    centre: np.ndarray
+    amplitude: np.ndarray
+    phase: np.ndarray
+    duration: float = DEFAULT_DURATION
+
+    start = 0.0
+
+    @property
+    def stop(self) -> float:
+        return float(self.duration)
+
+    def __call__(self, times) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        times = np.atleast_1d(np.asarray(times, dtype=float))
+        w = 2 * np.pi / self.duration
+        arg = w * times[:, None] + self.phase
+        A = self.amplitude
+        return (self.centre + A * np.sin(arg), A * w * np.cos(arg),
+                -A * w ** 2 * np.sin(arg))
+
+    def describe(self) -> str:
+        return (f"default: each actuator a sine about home over {self.duration:g} s, "
+                "amplitudes " + ", ".join(f"{a:.3g}" for a in self.amplitude))
+
+
+def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
+                   ) -> SineMotion:
+    """The default motion about the assembled ``q0`` (module docstring): one period of a
+    sine per actuator, phases ``2π k / n``, amplitude 0.1 rad or 0.1 L, at most 10 % of
+    the joint's range and half the distance to its nearer limit."""
+    duration = float(duration)
+    if not (np.isfinite(duration) and duration > 0):
+        raise InputError(f"the duration must be a positive number of seconds, got {duration}")
+    q0 = model.check_q(q0)
+    centre = np.asarray(model.actuated_values(q0), dtype=float)
+    lo, up = tree_limits(model)
+    tree = model.tree
+    amp = np.empty(len(model.actuated))
+    for k, name in enumerate(model.actuated):
+        joint = tree.joints[tree.getJointId(name)]
+        A = DEFAULT_AMPLITUDE * model.velocity_units[joint.idx_v]
+        if joint.nq == 1:
+            i = joint.idx_q
+            if np.isfinite(lo[i]) and np.isfinite(up[i]):
+                A = min(A, DEFAULT_RANGE_FRACTION * (up[i] - lo[i]))
+            margin = min(q0[i] - lo[i], up[i] - q0[i])
+            if 0 < margin < np.inf:
+                A = min(A, DEFAULT_MARGIN_FRACTION * margin)
+        amp[k] = A
+    n = len(amp)
+    return SineMotion(centre, amp, 2 * np.pi * np.arange(n) / max(n, 1), duration)
+
+
+def read_csv(path, names) -> SplineMotion:
+    """The motion of a CSV file: a header ``t,<actuated names…>`` (the names of
+    ``names``, in any order; blank lines and lines starting with ``#`` skipped), then
+    one row of numbers per sample [s; rad or m], splined (:class:`SplineMotion`,
+    clamped)."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > CSV_MAX_BYTES:
+            raise InputError(f"{path}: {size} bytes, more than the {CSV_MAX_BYTES} read")
+        text = path.read_text()
+    except UnicodeDecodeError as e:
+        raise InputError(f"{path}: not a text file ({e.reason})") from e
+    except OSError as e:
+        raise InputError(f"cannot read {path}: {e.strerror or e}") from e
+    lines = [(n, line) for n, line in enumerate(text.splitlines(), 1)
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not lines:
+        raise InputError(f"{path}: empty; give a header t,{','.join(names)} and rows")
+    rows = list(csv.reader(io.StringIO("\n".join(line for _, line in lines))))
+    header = [h.strip() for h in rows[0]]
+    names = tuple(names)
+    expected = "t," + ",".join(names)
+    if not header or header[0] != "t" or sorted(header[1:]) != sorted(names) \
+            or len(set(header)) != len(header):
+        shown = ",".join(header)[:200]
+        raise InputError(f"{path}: the header must be {expected} (the actuated joints in any "
+                         f"order), got {shown!r}")
+    if len(rows) - 1 > CSV_MAX_ROWS:
+        raise InputError(f"{path}: more than {CSV_MAX_ROWS} rows")
+    data = np.empty((len(rows) - 1, len(header)))
+    for k, row in enumerate(rows[1:]):
+        line = lines[k + 1][0]
+        if len(row) != len(header):
+            raise InputError(f"{path}:{line}: {len(row)} values for {len(header)} columns")
+        for c, text in enumerate(row):
+            try:
+                data[k, c] = float(text)
+            except ValueError as e:
+                raise InputError(f"{path}:{line}: {text.strip()[:40]!r} is not a number") from e
+    order = [header.index(n) for n in names]
+    try:
+        return SplineMotion(data[:, 0], data[:, order], names)
+    except InputError as e:
+        raise InputError(f"{path}: {e}") from e
+
+
+# ------------------------------------------------------------ the mechanism
+def closure_model_of(mech) -> tuple[ClosureModel, np.ndarray]:
+    """The closure model whose dynamics a mechanism's study uses, and its assembled home
+    configuration: a :class:`~pkm_pin.Mechanism` detected in a file: its
+    ``source_model`` (the file's tree, with the file's inertias); a TOML mechanism: its
+    ``closure_model`` (legs and platform, the inertias of the legs' URDFs); a
+    :class:`~pkm_pin.linkage.Linkage`: its ``model``; a :class:`ClosureModel`: itself,
+    assembled from its reference."""
+    if isinstance(mech, ClosureModel):
+        sol, _ = solve_tree_starts(mech, iter_tree_starts(mech, None, count=16))
+        if not sol.converged:
+            raise ForwardKinematicsError(f"{mech.name or 'the model'} does not assemble "
+                                         f"from its reference (residual {sol.residual:.3g})")
+        return mech, sol.q
+    if hasattr(mech, "source_model") and hasattr(mech, "closure_model"):  # Mechanism
+        if mech.source_model is not None:
+            return mech.source_model, mech.source_configuration()
+        return mech.closure_model, configuration(mech, mech.home_assembly)
+    model = getattr(mech, "model", None)
+    if isinstance(model, ClosureModel):  # Linkage
+        return model, mech.home_assembly.q
+    raise InputError(f"a mechanism, linkage or closure model is needed, got "
+                     f"{type(mech).__name__}")
+
+
+def body_names(model: ClosureModel) -> list[str]:
+    """Name of the body of each joint 1 … njoints − 1 of the tree: its first BODY frame
+    (the URDF link), else the joint's name."""
+    tree = model.tree
+    names = [""] * tree.njoints
+    for f in tree.frames:
+        if f.type == pin.FrameType.BODY and 0 < f.parentJoint and not names[f.parentJoint]:
+            names[f.parentJoint] = f.name
+    return [names[j] or tree.names[j] for j in range(1, tree.njoints)]
+
+
+def massless_bodies(model: ClosureModel) -> list[str]:
+    """The bodies (:func:`body_names`) whose mass in the model is zero."""
+    tree = model.tree
+    return [n for j, n in zip(range(1, tree.njoints), body_names(model))
+            if not tree.inertias[j].mass > 0]
+
+
+def _at_time(e: Exception, t: float) -> Exception:
+    """``e`` with its message prefixed by the sample's time (its attributes kept)."""
+    if e.args and isinstance(e.args[0], str):
+        e.args = (f"at t = {t:g} s: {e.args[0]}",) + e.args[1:]
+    return e
+
+
+# ------------------------------------------------------------------ results
+@dataclass(frozen=True)
+class TrajectoryStudy:
+    """Efforts, speeds and powers of each actuator along a motion (:func:`study`).
+
+    Arrays over the N samples (``n`` actuators in :attr:`actuated` order, the tree's
+    ``nq``/``nv``):
+
+    Attributes:
+        t: (N,) times [s].
+        q, v, a: (N, nq), (N, nv), (N, nv) the tree's consistent motion.
+        q_actuated, speeds, accelerations: (N, n) actuated values, rates, accelerations.
+        efforts: (N, n) [N m or N]; powers: (N, n) ``efforts × speeds`` [W].
+        payload_efforts: (N, n) the part of :attr:`efforts` due to the payload.
+        actuated: Actuated joint names; units: ``"rad"`` or ``"m"`` per actuator.
+        gravity, payload: As given (payload ``(f; m)`` at the output origin, or None).
+        motion: What the motion is (one line).
+        massless_bodies: Bodies with no mass in the model.
+        notes: Lines the reader must see (a massless model, idle motions).
+        timing: Seconds per sample of each stage (``kinematics``: forward kinematics,
+            ``motion``: ``v, a``, ``dynamics``) and ``total`` seconds.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    q_actuated: np.ndarray
+    speeds: np.ndarray
+    accelerations: np.ndarray
+    efforts: np.ndarray
+    payload_efforts: np.ndarray
+    actuated: tuple
+    units: tuple
+    gravity: np.ndarray
+    payload: np.ndarray | None
+    motion: str
+    massless_bodies: tuple = ()
+    notes: tuple = ()
+    timing: dict = field(default_factory=dict)
+
+    @property
+    def powers(self) -> np.ndarray:
+        """(N, n) mechanical power of each actuator ``τ q̇_a`` [W] (positive: the
+        actuator gives energy to the mechanism)."""
+        return self.efforts * self.speeds
+
+    @property
+    def effort_units(self) -> tuple:
+        return tuple("N m" if u == "rad" else "N" for u in self.units)
+
+    @property
+    def speed_units(self) -> tuple:
+        return tuple(f"{u}/s" for u in self.units)
+
+    def summary(self) -> dict:
+        """Per actuator: ``peak_effort`` ``max |τ|``, ``rms_effort`` ``sqrt(∫ τ² dt / T)``,
+        ``peak_speed`` ``max |q̇_a|``, ``peak_power`` ``max |P|``, ``energy`` ``∫ |P| dt``
+        and ``net_energy`` ``∫ P dt`` [J] (trapezoidal rule on the samples), and the
+        units."""
+        t, tau, P = self.t, self.efforts, self.powers
+        T = float(t[-1] - t[0])
+        out = {}
+        for k, name in enumerate(self.actuated):
+            out[name] = {
+                "peak_effort": float(np.abs(tau[:, k]).max()),
+                "rms_effort": float(np.sqrt(trapezoid(tau[:, k] ** 2, t) / T)),
+                "peak_speed": float(np.abs(self.speeds[:, k]).max()),
+                "peak_power": float(np.abs(P[:, k]).max()),
+                "energy": float(trapezoid(np.abs(P[:, k]), t)),
+                "net_energy": float(trapezoid(P[:, k], t)),
+                "effort_unit": self.effort_units[k], "speed_unit": self.speed_units[k],
+            }
+        return out
+
+
+def trapezoid(y: np.ndarray, t: np.ndarray) -> float:
+    """``∫ y dt`` by the trapezoidal rule on the samples."""
+    y, t = np.asarray(y, float), np.asarray(t, float)
+    return float(np.sum(0.5 * (y[1:] + y[:-1]) * np.diff(t)))
+
+
+# ---------------------------------------------------------------- the study
+def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GRAVITY,
+                  tol: float = CLOSURE_TOL) -> tuple:
+    """The consistent ``(q, v, a)`` of the tree (each (N, nq / nv)) and the actuated
+    ``(q_a, q̇_a, q̈_a)`` (each (N, n)) at ``times`` along ``motion`` (a callable
+    ``times -> (q_a, q̇_a, q̈_a)``: :class:`SplineMotion`, :class:`SineMotion`), the first
+    sample's forward kinematics from ``q0`` (module docstring; ``gravity`` sets the idle
+    joints' accelerations).
+
+    Raises:
+        ForwardKinematicsError: a sample's forward kinematics does not converge (the motion
+            leaves the workspace), with its time.
+        SingularityError, InconsistentMotion: as :func:`dynamics.motion_from_actuated`,
+            the message with the sample's time.
+    """
+    times = np.asarray(times, dtype=float).ravel()
+    Qa, Qd, Qdd = motion(times)
+    n = len(model.actuated)
+    if Qa.shape != (times.size, n):
+        raise InputError(f"the motion gives {Qa.shape[-1]} actuated values, the model has "
+                         f"{n} ({', '.join(model.actuated)})")
+    N = times.size
+    q, v, a = np.empty((N, model.nq)), np.empty((N, model.nv)), np.empty((N, model.nv))
+    clock = {"kinematics": 0.0, "motion": 0.0}
+    guess = model.check_q(q0)
+    for i, ti in enumerate(times):
+        t0 = time.perf_counter()
+        if i > 0:
+            dt = ti - times[i - 1]
+            guess = pin.integrate(model.tree, q[i - 1], v[i - 1] * dt + 0.5 * a[i - 1] * dt * dt)
+        sol = solve_tree(model, guess, targets=Qa[i], tol=tol)
+        if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
+            sol = solve_tree(model, sol.q, targets=Qa[i], tol=tol, max_iter=400)
+        if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
+            starts = iter_tree_starts(model, q[i - 1] if i else guess, count=16)
+            sol, _ = solve_tree_starts(model, starts, targets=Qa[i], tol=tol,
+                                       nearest=q[i - 1] if i else guess)
+        if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
+            values = ", ".join(f"{x:.6g}" for x in Qa[i])
+            raise ForwardKinematicsError(
+                f"at t = {ti:g} s the forward kinematics of {model.name or 'the model'} "
+                f"does not converge (actuated {values}; relative residual "
+                f"{sol.residual:.3g}): the motion leaves the workspace or crosses a "
+                "singularity")
+        q[i] = sol.q
+        t1 = time.perf_counter()
+        try:
+            vi, ai = dynamics.motion_from_actuated(model, q[i], Qd[i], Qdd[i])
+            system = _ActuatedSystem(model, q[i])
+            if system.idle is not None:
+                if i > 0:  # idle rates: Heun's step of their own dynamics
+                    v0 = vi
+                    for pred in (v[i - 1] + a[i - 1] * dt, None):
+                        if pred is None:
+                            pred = v[i - 1] + 0.5 * (a[i - 1] + ai) * dt
+                        vi = system.carry(v0, pred)
+                        ai = dynamics.idle_acceleration(
+                            model, q[i], vi, system.acceleration(vi, Qdd[i]),
+                            gravity=gravity, idle=system.idle)
+                else:
+                    ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity,
+                                                    idle=system.idle)
+        except PkmError as e:  # SingularityError, InconsistentMotion
+            raise _at_time(e, ti)
+        v[i], a[i] = vi, ai
+        clock["kinematics"] += t1 - t0
+        clock["motion"] += time.perf_counter() - t1
+    return (q, v, a, Qa, Qd, Qdd), clock
+
+
+class _ActuatedSystem:
+    """``[J; S]`` at ``q`` (dimensionless rows and coordinates), its SVD and the idle
+    motions (its null space: ``idle``, (nv, k) physical directions, or None)."""
+
+    def __init__(self, model: ClosureModel, q: np.ndarray):
+        self.model, self.q = model, q
+        self.units, self.rows = model.velocity_units, dynamics.row_units(model)
+        zero = np.zeros(model.nv)
+        J, _, _ = dynamics.closure_acceleration(model, q, zero, zero)
+        self.act = list(model.actuated_v)
+        H = np.zeros((len(self.rows) + len(self.act), model.nv))
+        H[:len(self.rows)] = J / self.rows[:, None] * self.units
+        H[len(self.rows) + np.arange(len(self.act)), self.act] = 1.0
+        self.rank, self.Us, self.sv, self.Vt = screws.svd_rank(H, RANK_RTOL)
+        self.null = self.Vt[self.rank:].T
+        self.idle = self.units[:, None] * self.null if self.rank < model.nv else None
+
+    def carry(self, v: np.ndarray, v_pred: np.ndarray) -> np.ndarray:
+        """``v`` (minimum-norm, from the actuated rates) plus the idle part of
+        ``v_pred`` (the previous sample's velocity stepped by the idle dynamics)."""
+        N, U = self.null, self.units
+        return v + U * (N @ (N.T @ ((v_pred - v) / U)))
+
+    def acceleration(self, v: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+        """The minimum-norm (dimensionless) ``a`` of ``[J; S] a = [−J̇ v; q̈_a]``."""
+        model, r = self.model, self.rank
+        _, _, drift = dynamics.closure_acceleration(model, self.q, v, np.zeros(model.nv))
+        rhs = np.r_[-drift / self.rows, qdd / self.units[self.act]]
+        return self.units * (self.Vt[:r].T @ ((self.Us[:, :r].T @ rhs) / self.sv[:r]))
+
+
+def _inverse_dynamics(model: ClosureModel, q, v, a, g, w) -> dynamics.InverseDynamics:
+    """:func:`dynamics.inverse_dynamics`; when its consistency check refuses the motion,
+    the motion is accepted if its closure residuals are at round-off of the norms
+    (``|J v| ≤ tol ‖J‖ ‖v‖``, ``|J a + J̇ v| ≤ tol (‖J‖ ‖a‖ + |J̇ v| + |g| / L)``, rows
+    and coordinates dimensionless, ``tol`` :data:`MOTION_CONSISTENCY_RTOL`): the check
+    of :mod:`~pkm_pin.dynamics` scales each row by its own entries, too strict when a
+    joint moves without entering the closure rows at all (a rod spinning about its
+    axis, its column of ``J`` at round-off)."""
+    try:
+        return dynamics.inverse_dynamics(model, q, v, a, gravity=g, wrench=w)
+    except InconsistentMotion as e:
+        if e.kind not in ("velocity", "acceleration"):
+            raise
+        units, rows = model.velocity_units, dynamics.row_units(model)
+        J, rdd, drift = dynamics.closure_acceleration(model, q, v, a)
+        Jd = J / rows[:, None] * units
+        norm = float(np.linalg.norm(Jd, 2))
+        rv = float(np.linalg.norm(Jd @ (v / units)))
+        ra = float(np.linalg.norm(rdd / rows))
+        if rv > MOTION_CONSISTENCY_RTOL * norm * np.linalg.norm(v / units) or \
+                ra > MOTION_CONSISTENCY_RTOL * (norm * np.linalg.norm(a / units)
+                                                + np.linalg.norm(drift / rows)
+                                                + np.linalg.norm(g) / model.length):
+            raise
+        return dynamics.inverse_dynamics(model, q, v, a, gravity=g, wrench=w, tol=np.inf)
+
+
+def study(mech, motion=None, *, samples: int = DEFAULT_SAMPLES, times=None,
+          duration: float = DEFAULT_DURATION, gravity=dynamics.GRAVITY, payload=None,
+          q0=None) -> TrajectoryStudy:
+    """Efforts, speeds and powers of each actuator along a motion.
+
+    Args:
+        mech: A :class:`~pkm_pin.Mechanism`, :class:`~pkm_pin.linkage.Linkage` or
+            :class:`ClosureModel` (:func:`closure_model_of`).
+        motion: A :class:`SplineMotion`, :class:`SineMotion` (or any callable ``times ->
+            (q_a, q̇_a, q̈_a)`` with ``start``/``stop``), a CSV path (:func:`read_csv`),
+            or ``None``: :func:`default_motion` over ``duration``.
+        samples: Number of times, uniform over the motion (both ends), ≥ 2.
+        times: The times instead (increasing).
+        gravity: [m/s²], world axes.
+        payload: ``(fx, fy, fz, mx, my, mz)`` [N, N m] applied to the output frame at its
+            origin, world axes (module docstring), or None.
+        q0: A configuration of the tree to start the forward kinematics from (default
+            the mechanism's home).
+
+    Raises:
+        InputError: bad arguments; a model with no mass on any body and no payload
+            (naming the bodies).
+        ForwardKinematicsError, SingularityError, InconsistentMotion: as :func:`motion_states`
+            and :func:`pkm_pin.dynamics.inverse_dynamics`, with the sample's time.
+    """
+    start_clock = time.perf_counter()
+    model, home = closure_model_of(mech)
+    q0 = home if q0 is None else model.check_q(q0)
+    g = screws.as_vector3(gravity, "gravity")
+    f = None if payload is None else screws.as_vector(payload, 6, "payload",
+                                                         "fx, fy, fz, mx, my, mz")
+    massless = massless_bodies(model)
+    names = body_names(model)
+    notes = []
+    if len(massless) == len(names):
+        listing = ", ".join(massless[:8]) + (f" and {len(massless) - 8} more"
+                                             if len(massless) > 8 else "")
+        if f is None:
+            raise InputError(
+                f"{model.name or 'the model'} has no mass on any body ({listing}): its "
+                "efforts would all be zero; give the bodies their inertias in the file "
+                "(URDF <inertial>, MJCF <inertial>/geoms), or a payload to size the "
+                "actuators for the payload alone")
+        notes.append(f"no body of {model.name or 'the model'} has a mass: the efforts "
+                     "are the payload's alone (no inertia, no gravity of the links)")
+    if motion is None:
+        motion = default_motion(model, q0, duration)
+    elif isinstance(motion, (str, Path)):
+        motion = read_csv(motion, model.actuated)
+    if times is None:
+        samples = int(samples)
+        if samples < 2:
+            raise InputError(f"samples must be at least 2, got {samples}")
+        times = np.linspace(motion.start, motion.stop, samples)
+    else:
+        times = screws.as_float_array(times, "times").ravel()
+        if times.size < 2 or not np.all(np.diff(times) > 0):
+            raise InputError("times must be at least 2 increasing values")
+    (q, v, a, Qa, Qd, Qdd), clock = motion_states(model, motion, times, q0, gravity=g)
+    n, N = len(model.actuated), times.size
+    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
+    t0 = time.perf_counter()
+    out = model.tree.getFrameId(model.output) if f is not None else None
+    data = model.tree.createData() if f is not None else None
+    for i in range(N):
+        w = None
+        if f is not None:
+            pin.framesForwardKinematics(model.tree, data, q[i])
+            p = data.oMf[out].translation
+            w = np.r_[f[:3], f[3:] + np.cross(p, f[:3])]
+        try:
+            r = _inverse_dynamics(model, q[i], v[i], a[i], g, w)
+        except PkmError as e:
+            raise _at_time(e, times[i])
+        efforts[i], from_payload[i] = r.efforts, r.payload_efforts
+    clock["dynamics"] = time.perf_counter() - t0
+    timing = {k: x / N for k, x in clock.items()}
+    timing["total"] = time.perf_counter() - start_clock
+    tree = model.tree
+    units = tuple("rad" if model.velocity_units[tree.joints[tree.getJointId(j)].idx_v] == 1.0
+                  else "m" for j in model.actuated)
+    return TrajectoryStudy(
+        t=times, q=q, v=v, a=a, q_actuated=Qa, speeds=Qd, accelerations=Qdd,
+        efforts=efforts, payload_efforts=from_payload, actuated=tuple(model.actuated),
+        units=units, gravity=g, payload=f, motion=motion.describe() if hasattr(
+            motion, "describe") else type(motion).__name__,
+        massless_bodies=tuple(massless), notes=tuple(notes), timing=timing)
