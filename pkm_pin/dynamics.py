@@ -487,7 +487,9 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     _check_closed(model, kin.residual)
     Uv = model.velocity_units
     JU = Jc * Uv  # dimensionless
-    _check_rows(model, "velocity", JU @ (v / Uv), np.abs(JU) @ np.abs(v / Uv), tol,
+    size_J = np.linalg.norm(JU, 2)  # normwise: a joint that no closure row sees (a rod's
+    # spin, its column round-off) moves freely without making its rows' own scale tiny
+    _check_rows(model, "velocity", JU @ (v / Uv), size_J * np.linalg.norm(v / Uv), tol,
                 work.row_units, "v")
     work.set_gravity(g)
     tau_tree = pin.rnea(work.tree, data, q, v, a).copy()
@@ -496,7 +498,7 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     Ja = J @ a
     drift = rdd - Ja
     _check_rows(model, "acceleration", rdd / work.row_units,  # gravity/L: its round-off
-                np.abs(JU) @ np.abs(a / Uv) + np.abs(drift / work.row_units)
+                size_J * np.linalg.norm(a / Uv) + np.linalg.norm(drift / work.row_units)
                 + np.linalg.norm(g) / model.length, tol, work.row_units, "a")
     # balance  [Sᵀ, −(J_c U)ᵀ] x = U (τ_tree − J_oᵀ Δ w)
     na, nr = len(work.act_v), work.n_rows
@@ -538,7 +540,8 @@ def _check_closed(model: ClosureModel, residual: np.ndarray) -> None:
 def _check_rows(model: ClosureModel, what: str, r: np.ndarray, size: np.ndarray,
                 tol: float, units: np.ndarray, arg: str) -> None:
     """An :class:`InconsistentMotion` when the dimensionless closure rows ``r`` exceed
-    ``tol`` times the size of their terms (``size``, per row)."""
+    ``tol`` times the size of their terms (``size``: normwise, ``‖J‖ ‖v‖`` and the
+    like)."""
     err, scale = float(np.linalg.norm(r)), float(np.linalg.norm(size))
     if err <= tol * scale or err == 0.0:
         return

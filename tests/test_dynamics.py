@@ -529,3 +529,18 @@ def test_compiled_second_derivative_equals_its_source():
             outs.append(np.r_[out[work.kind_codes.repeat([c.dim for c in cm.closures]) < 2],
                               nud.ravel(), Mh.ravel()])
         assert np.allclose(outs[0], outs[1], rtol=1e-13, atol=1e-13), name
+
+
+def test_consistency_check_is_normwise_for_a_joint_no_closure_row_sees():
+    """The consistency rule is normwise (``‖J v‖ ≤ tol ‖J‖ ‖v‖``): rows of round-off
+    against a unit ‖J‖ ‖v‖ pass — a rod spinning about its own axis moves a joint whose
+    closure-Jacobian column is round-off, which the row-by-row scale refused — and rows
+    of 1e-3 are refused."""
+    from pkm_pin.dynamics import _check_rows
+
+    model = Linkage(four_bar()).model
+    r = np.full(model.n_rows, 1e-18)
+    _check_rows(model, "velocity", r, np.array(1.0), 1e-6, np.ones(model.n_rows), "v")
+    with pytest.raises(InconsistentMotion, match="not consistent with the closures"):
+        _check_rows(model, "velocity", np.full(model.n_rows, 1e-3), np.array(1.0), 1e-6,
+                    np.ones(model.n_rows), "v")
