@@ -21,7 +21,6 @@ difference of the efforts.
 
 from __future__ import annotations
 
-import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -30,21 +29,13 @@ from timing import best_of_each
 
 from pkm_pin import dynamics as dyn
 from pkm_pin import load_mechanism
+from pkm_pin.builders.loops import with_random_inertias
 
 CASSIE = Path(__file__).resolve().parents[1] / "models" / "loops" / "cassie_knee.urdf"
 GRAVITY = np.array([0.0, 0.0, -9.81])
 
 
-def with_inertias(cm, seed: int = 0):
-    """``cm`` with a seeded random inertia on every body (as tests/test_dynamics.py)."""
-    rng = np.random.default_rng(seed)
-    tree, L = pin.Model(cm.tree), cm.length
-    for j in range(1, tree.njoints):
-        m = rng.uniform(0.5, 2.0)
-        d = m * (0.1 * L) ** 2 * (1 + 0.3 * rng.uniform(size=3))
-        R = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
-        tree.inertias[j] = pin.Inertia(m, rng.normal(size=3) * 0.2 * L, R @ np.diag(d) @ R.T)
-    return dataclasses.replace(cm, tree=tree)
+with_inertias = with_random_inertias  # seeded random inertias on every body
 
 
 def samples(n: int, size: float = 0.2):

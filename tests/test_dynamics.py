@@ -45,6 +45,7 @@ from linkage_models import five_bar, five_bar_q, four_bar, four_bar_q, spherical
 
 import pkm_pin
 from pkm_pin import dynamics as dyn
+from pkm_pin.builders.loops import with_random_inertias
 from pkm_pin.errors import InconsistentMotion, InputError, SingularityError
 from pkm_pin.linkage import Linkage
 from pkm_pin.model import configuration
@@ -54,16 +55,7 @@ ROOT = Path(__file__).resolve().parents[1]
 G = (0.3, -1.0, -9.81)
 
 
-def with_inertias(cm, seed: int = 0):
-    """``cm`` with a seeded random inertia on every body (module docstring)."""
-    rng = np.random.default_rng(seed)
-    tree, L = pin.Model(cm.tree), cm.length
-    for j in range(1, tree.njoints):
-        m = rng.uniform(0.5, 2.0)
-        d = m * (0.1 * L) ** 2 * (1 + 0.3 * rng.uniform(size=3))
-        R = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
-        tree.inertias[j] = pin.Inertia(m, rng.normal(size=3) * 0.2 * L, R @ np.diag(d) @ R.T)
-    return dataclasses.replace(cm, tree=tree)
+with_inertias = with_random_inertias  # seeded random inertias on every body
 
 
 def _loaded(path: str, inertias: bool = True):

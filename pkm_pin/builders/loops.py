@@ -18,12 +18,14 @@ Pinocchio's own parser reads the whole tree.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 
 
 @dataclass(frozen=True)
@@ -381,3 +383,20 @@ def write_loop_models(folder: str | Path) -> list[Path]:
 if __name__ == "__main__":
     for path in write_loop_models(Path(__file__).resolve().parents[2] / "models" / "loops"):
         print(path)
+
+
+def with_random_inertias(model, seed: int = 0):
+    """``model`` (a :class:`~pkm_pin.model.ClosureModel`) with a seeded random inertia on
+    every body: masses in [0.5, 2] kg, centres within 0.2 L of the joint, principal
+    moments m (0.1 L)² (1 + 0.3 u) in a random frame. For exercising dynamics on shipped
+    models that carry no masses (tests, benchmarks); never a designer's numbers."""
+
+
+    rng = np.random.default_rng(seed)
+    tree, L = pin.Model(model.tree), model.length
+    for j in range(1, tree.njoints):
+        m = rng.uniform(0.5, 2.0)
+        d = m * (0.1 * L) ** 2 * (1 + 0.3 * rng.uniform(size=3))
+        R = pin.rpy.rpyToMatrix(*rng.uniform(-np.pi, np.pi, 3))
+        tree.inertias[j] = pin.Inertia(m, rng.normal(size=3) * 0.2 * L, R @ np.diag(d) @ R.T)
+    return dataclasses.replace(model, tree=tree)
