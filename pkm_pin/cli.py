@@ -1013,27 +1013,31 @@ def cmd_workspace(args) -> int:
     if options.get("checkpoint") is not None:  # the outputs are written
         options["checkpoint"].remove()
     data["files"] = [str(f) for f in files]
-    if args.json:
-        print(_json(data))
-        return 0
-    print(f"mechanism  {mech.name}  ({ws.method})")
-    print("box        " + ", ".join(f"{c} in [{lo:g}, {hi:g}] {u}" for c, (lo, hi), u in
+    print(_json(data) if args.json else _workspace_text(mech.name, ws, files))
+    return 0
+
+
+def _workspace_text(name: str, ws, files: list) -> str:
+    """The text summary of ``pkm-pin workspace``: box, volumes, inscribed shapes, time
+    and the files written."""
+    out = [f"mechanism  {name}  ({ws.method})",
+           "box        " + ", ".join(f"{c} in [{lo:g}, {hi:g}] {u}" for c, (lo, hi), u in
                                     zip(ws.coords, ws.bounds, ws.units))
-          + f"; {ws.sampling} {' x '.join(map(str, ws.shape))}")
+           + f"; {ws.sampling} {' x '.join(map(str, ws.shape))}"]
     if ws.fixed:
-        print("fixed      " + ", ".join(f"{k}={v:g}" for k, v in ws.fixed.items()))
+        out.append("fixed      " + ", ".join(f"{k}={v:g}" for k, v in ws.fixed.items()))
     for kind, v in ws.volumes.items():
         s = ws.inscribed[kind]
-        print(f"{kind:<18} volume {v.value:.6g} ± {v.error:.2g} {v.unit} ({v.cells} cells); "
-              f"cube half side {s.cube:.4g}, cylinder r {s.cylinder_radius:.4g} "
-              f"h/2 {s.cylinder_half_height:.4g} (± {s.error:.2g})")
+        out.append(f"{kind:<18} volume {v.value:.6g} ± {v.error:.2g} {v.unit} ({v.cells} "
+                   f"cells); cube half side {s.cube:.4g}, cylinder r "
+                   f"{s.cylinder_radius:.4g} h/2 {s.cylinder_half_height:.4g} "
+                   f"(± {s.error:.2g})")
     if ws.counts["on_bounds"]:
-        print(f"note       {ws.counts['on_bounds']} reachable cells on the box's faces: the "
-              "workspace extends beyond --range")
-    print(f"time       {ws.timing['total']:.3g} s, {ws.timing['poses_per_s']:.0f} poses/s")
-    for path in files:
-        print(f"wrote      {path}")
-    return 0
+        out.append(f"note       {ws.counts['on_bounds']} reachable cells on the box's faces: "
+                   "the workspace extends beyond --range")
+    out.append(f"time       {ws.timing['total']:.3g} s, {ws.timing['poses_per_s']:.0f} poses/s")
+    out += [f"wrote      {path}" for path in files]
+    return "\n".join(out)
 
 
 def _write_text(path: str, text: str) -> None:

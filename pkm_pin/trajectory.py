@@ -508,6 +508,58 @@ def _inverse_dynamics(model: ClosureModel, q, v, a, g, w) -> dynamics.InverseDyn
         return dynamics.inverse_dynamics(model, q, v, a, gravity=g, wrench=w, tol=np.inf)
 
 
+def _mass_notes(model: ClosureModel, massless: list, payload) -> list[str]:
+    """Notes on the model's masses; an :class:`InputError` (naming the bodies) when no
+    body has a mass and no payload is given: its efforts would all be zero."""
+    if len(massless) < len(body_names(model)):
+        return []
+    listing = ", ".join(massless[:8]) + (f" and {len(massless) - 8} more"
+                                         if len(massless) > 8 else "")
+    if payload is None:
+        raise InputError(
+            f"{model.name or 'the model'} has no mass on any body ({listing}): its "
+            "efforts would all be zero; give the bodies their inertias in the file "
+            "(URDF <inertial>, MJCF <inertial>/geoms), or a payload to size the "
+            "actuators for the payload alone")
+    return [f"no body of {model.name or 'the model'} has a mass: the efforts are the "
+            "payload's alone (no inertia, no gravity of the links)"]
+
+
+def _sample_times(motion, samples: int, times) -> np.ndarray:
+    """The times of a study: ``times`` (checked increasing), or ``samples`` uniform over
+    the motion, both ends included."""
+    if times is None:
+        samples = int(samples)
+        if samples < 2:
+            raise InputError(f"samples must be at least 2, got {samples}")
+        return np.linspace(motion.start, motion.stop, samples)
+    times = screws.as_float_array(times, "times").ravel()
+    if times.size < 2 or not np.all(np.diff(times) > 0):
+        raise InputError("times must be at least 2 increasing values")
+    return times
+
+
+def _efforts_along(model: ClosureModel, times, q, v, a, g, f) -> tuple:
+    """The actuated efforts at each sample (N × actuated), and the part the payload ``f``
+    (force and moment at the output's origin, world axes) adds; errors carry the
+    sample's time."""
+    N, n = times.size, len(model.actuated)
+    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
+    out = model.tree.getFrameId(model.output) if f is not None else None
+    data = model.tree.createData() if f is not None else None
+    for i in range(N):
+        w = None
+        if f is not None:  # the payload's wrench about the world origin
+            pin.framesForwardKinematics(model.tree, data, q[i])
+            w = screws.from_point(np.r_[f[:3], f[3:]], data.oMf[out].translation)
+        try:
+            r = _inverse_dynamics(model, q[i], v[i], a[i], g, w)
+        except PkmError as e:
+            raise _at_time(e, times[i])
+        efforts[i], from_payload[i] = r.efforts, r.payload_efforts
+    return efforts, from_payload
+
+
 def study(mech, motion=None, *, samples: int = DEFAULT_SAMPLES, times=None,
           duration: float = DEFAULT_DURATION, gravity=dynamics.GRAVITY, payload=None,
           q0=None) -> TrajectoryStudy:
@@ -540,49 +592,16 @@ def study(mech, motion=None, *, samples: int = DEFAULT_SAMPLES, times=None,
     f = None if payload is None else screws.as_vector(payload, 6, "payload",
                                                          "fx, fy, fz, mx, my, mz")
     massless = massless_bodies(model)
-    names = body_names(model)
-    notes = []
-    if len(massless) == len(names):
-        listing = ", ".join(massless[:8]) + (f" and {len(massless) - 8} more"
-                                             if len(massless) > 8 else "")
-        if f is None:
-            raise InputError(
-                f"{model.name or 'the model'} has no mass on any body ({listing}): its "
-                "efforts would all be zero; give the bodies their inertias in the file "
-                "(URDF <inertial>, MJCF <inertial>/geoms), or a payload to size the "
-                "actuators for the payload alone")
-        notes.append(f"no body of {model.name or 'the model'} has a mass: the efforts "
-                     "are the payload's alone (no inertia, no gravity of the links)")
+    notes = _mass_notes(model, massless, f)
     if motion is None:
         motion = default_motion(model, q0, duration)
     elif isinstance(motion, (str, Path)):
         motion = read_csv(motion, model.actuated)
-    if times is None:
-        samples = int(samples)
-        if samples < 2:
-            raise InputError(f"samples must be at least 2, got {samples}")
-        times = np.linspace(motion.start, motion.stop, samples)
-    else:
-        times = screws.as_float_array(times, "times").ravel()
-        if times.size < 2 or not np.all(np.diff(times) > 0):
-            raise InputError("times must be at least 2 increasing values")
+    times = _sample_times(motion, samples, times)
     (q, v, a, Qa, Qd, Qdd), clock = motion_states(model, motion, times, q0, gravity=g)
-    n, N = len(model.actuated), times.size
-    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
+    N = times.size
     t0 = time.perf_counter()
-    out = model.tree.getFrameId(model.output) if f is not None else None
-    data = model.tree.createData() if f is not None else None
-    for i in range(N):
-        w = None
-        if f is not None:
-            pin.framesForwardKinematics(model.tree, data, q[i])
-            p = data.oMf[out].translation
-            w = np.r_[f[:3], f[3:] + np.cross(p, f[:3])]
-        try:
-            r = _inverse_dynamics(model, q[i], v[i], a[i], g, w)
-        except PkmError as e:
-            raise _at_time(e, times[i])
-        efforts[i], from_payload[i] = r.efforts, r.payload_efforts
+    efforts, from_payload = _efforts_along(model, times, q, v, a, g, f)
     clock["dynamics"] = time.perf_counter() - t0
     timing = {k: x / N for k, x in clock.items()}
     timing["total"] = time.perf_counter() - start_clock

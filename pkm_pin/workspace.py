@@ -621,39 +621,26 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     threshold = GOOD_LTI if threshold is None else float(threshold)
     coords = default_coordinates(mech) if coords is None else _check_coords(coords, COORDINATES)
     at = dict(at or {})
-    plan = _pose_plan(mech, coords, at)
-    home = plan["home"][[COORDINATES.index(c) for c in coords]]
-    L = mech.characteristic_length
-    half = np.array([L if c in COORDINATES[:3] else ANGLE_HALF_RANGE for c in coords])
-    B = _bounds(bounds, coords, home, half)
+    plan, home, B = _plan_and_box(mech, coords, at, bounds)
     axes, shape, points = _samples(B, sampling, n, samples, seed)
     sub = _default_subsamples(subsamples, len(coords))
-    cp = _begin_checkpoint(checkpoint, resume, {
-        "study": "workspace", "mechanism": mech.name, "coords": list(coords),
-        "bounds": B, "n": np.broadcast_to(np.asarray(n), (len(coords),)).tolist(),
-        "sampling": sampling, "samples": samples, "seed": seed,
-        "at": {k: float(v) for k, v in sorted(at.items())}, "kinds": list(kinds),
-        "threshold": threshold, "chunk_size": int(chunk_size), "subsamples": sub},
+    cp = _begin_checkpoint(checkpoint, resume, _study_identity(
+        mech, coords, B, n, sampling, samples, seed, at, kinds, threshold, chunk_size, sub),
         len(points), mech.n_actuated)
     method, X = _poses(mech, coords, plan, points, B, seed)
     t1 = time.perf_counter()
     res = _sweep_samples(mech, X, method, "transmission" in kinds, executor, chunk_size,
                          progress, cp and cp.stage("cells"))
     t2 = time.perf_counter()
-    values = {"ok": res.ok.reshape(shape), "singularity": res.singularity.reshape(shape),
-              "det": res.det.reshape(shape), "lti": res.lti.reshape(shape),
-              "cti": res.cti.reshape(shape), "dof": res.dof.reshape(shape)}
-    home_dof = mech.home_analysis.dof
-    home_det = _home_det(mech)
+    values = {key: value.reshape(shape) for key, value in _sweep_values(res).items()}
+    home_dof, home_det = mech.home_analysis.dof, _home_det(mech)
 
     def inside(P: np.ndarray) -> dict:
         """The kinds' pointwise properties at the sub-points (the sweep engine)."""
-        _, Xs = _poses(mech, coords, plan, P, B, seed, method)  # no second probe
+        Xs = _poses(mech, coords, plan, P, B, seed, method)[1]  # no second probe
         r = _sweep_samples(mech, Xs, method, "transmission" in kinds, executor,
                            chunk_size, False, cp and cp.stage("refine"))
-        return _pointwise({"ok": r.ok, "singularity": r.singularity, "det": r.det,
-                           "lti": r.lti, "cti": r.cti, "dof": r.dof}, kinds, home_dof,
-                          home_det, threshold)
+        return _pointwise(_sweep_values(r), kinds, home_dof, home_det, threshold)
 
     ws = _finish(mech.name, coords, _units(coords, mech.length_unit), B, sampling, axes,
                  shape, points, plan["fixed"], home, values, home_dof, home_det, kinds,
@@ -662,6 +649,33 @@ def workspace(mech, coords=None, *, bounds=None, n=30, sampling: str = "grid",
     if cp is not None:
         cp.finish()
     return ws
+
+
+def _plan_and_box(mech, coords, at: dict, bounds) -> tuple:
+    """The pose plan of the coordinates (:func:`_pose_plan`), home's coordinates and the
+    box (``bounds``, default ± the characteristic length / ANGLE_HALF_RANGE about home)."""
+    plan = _pose_plan(mech, coords, at)
+    home = plan["home"][[COORDINATES.index(c) for c in coords]]
+    L = mech.characteristic_length
+    half = np.array([L if c in COORDINATES[:3] else ANGLE_HALF_RANGE for c in coords])
+    return plan, home, _bounds(bounds, coords, home, half)
+
+
+def _study_identity(mech, coords, B, n, sampling, samples, seed, at, kinds, threshold,
+                    chunk_size, sub) -> dict:
+    """What identifies a workspace study in its checkpoint (a resume of another study is
+    refused)."""
+    return {"study": "workspace", "mechanism": mech.name, "coords": list(coords),
+            "bounds": B, "n": np.broadcast_to(np.asarray(n), (len(coords),)).tolist(),
+            "sampling": sampling, "samples": samples, "seed": seed,
+            "at": {k: float(v) for k, v in sorted(at.items())}, "kinds": list(kinds),
+            "threshold": threshold, "chunk_size": int(chunk_size), "subsamples": sub}
+
+
+def _sweep_values(res) -> dict:
+    """The per-pose arrays of a sweep the workspace kinds read."""
+    return {"ok": res.ok, "singularity": res.singularity, "det": res.det, "lti": res.lti,
+            "cti": res.cti, "dof": res.dof}
 
 
 def _begin_checkpoint(checkpoint, resume: bool, study: dict, N: int, n_actuated: int):
