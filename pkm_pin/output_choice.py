@@ -186,8 +186,8 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
     r_x, _, _, Vt = screws.svd_rank(ns.X, rtol)
     idle = Vt[r_x:].T  # null coordinates of the idle motions
     used = {name for c in model.closures for name in (c.frame_a, c.frame_b)}
-    frames = [(k, f) for k, f in enumerate(tree.frames)
-              if k > 0 and f.type == pin.FrameType.BODY
+    frames = [(k, f) for k, f in enumerate(tree.frames)  # bodies that can move
+              if k > 0 and f.type == pin.FrameType.BODY and f.parentJoint > 0
               and (f.name not in used or _own(tree, f))]
     units = ns.units[:, None] * ns.N
     placements = kin.frame_placements
@@ -213,7 +213,9 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
                                    idle_dim == 0 and dim == r_x and r_x > 0, j in massless,
                                    j in cranks, j in rods, depth[j], name_score(f.name),
                                    _own(tree, f)))
-    order = sorted(range(len(out)), key=lambda i: (out[i].key(), i))
+    # without an actuator that moves anything every motion is idle: controlled and idle
+    # dimensions tell nothing, the body's place in the machine does
+    order = sorted(range(len(out)), key=lambda i: (out[i].key()[0 if r_x else 2:], i))
     return tuple(out[i] for i in order), r_x
 
 

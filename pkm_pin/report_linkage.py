@@ -99,6 +99,7 @@ def assembly_data(link, assembly) -> dict:
         "pose": pose_dict(assembly.output_pose),
         "actuated": list(link.actuated),
         "actuator_matches": {name: list(joints) for name, joints in model.actuator_matches},
+        "notes": list(model.notes),
         "q_actuated": assembly.q_actuated.tolist(),
         "q": assembly.q.tolist(),
         "joint_names": list(model.tree.names[1:]),
@@ -231,6 +232,7 @@ def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()
            f"{len(r['closures'])} closure{'s' if len(r['closures']) != 1 else ''}"
            + ("; no closure: a tree, analysed as a serial chain)" if not r["closures"] else ")"),
            output_line(r, frames, likely)] + [line for line in (structure_line(r),) if line] + [
+           f"note               {n}" for n in r.get("notes", [])] + [
            f"output pose        xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
     out += [f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "
             f"{r['motion_type']}; singularity {r['singularity']})",

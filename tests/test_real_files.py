@@ -193,3 +193,25 @@ def test_report_lists_which_joints_each_actuator_identifier_picked(tmp_path, cap
     assert "(identifiers: 'mot' picked mot1, mot2)" in capsys.readouterr().out
     assert main(["analyze", str(tmp_path / "five_bar.urdf"), "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["actuator_matches"] == {"mot": ["mot1", "mot2"]}
+
+
+def test_a_free_joint_at_the_root_is_the_base(tmp_path, capsys):
+    """An MJCF whose root body floats (a <freejoint/>, as humanoids and Menagerie robots
+    are written) is analysed relative to that body, held as the base: the four-bar so
+    written has the shipped one's joints, configuration and DOF, and the report says
+    so."""
+    from pkm_pin.cli import main
+
+    text = (LOOPS / "four_bar.xml").read_text().replace(
+        '<body name="base">', '<body name="base" pos="0.3 -0.2 1.0"><freejoint/>', 1)
+    path = tmp_path / "floating_four_bar.xml"
+    path.write_text(text)
+    link, ref = pkm_pin.load_mechanism(path), pkm_pin.load_mechanism(LOOPS / "four_bar.xml")
+    assert list(link.model.tree.names) == list(ref.model.tree.names)
+    assert link.model.notes == ("base has a free joint in the file: it is held as the base, "
+                                "the mechanism analysed relative to it",)
+    a, b = link.home_assembly, ref.home_assembly
+    np.testing.assert_allclose(a.q, b.q, atol=1e-10)
+    assert link.analyze(a).dof == ref.analyze(b).dof == 1
+    assert main(["analyze", str(path)]) == 0
+    assert "note               base has a free joint in the file" in capsys.readouterr().out

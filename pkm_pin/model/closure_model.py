@@ -140,6 +140,8 @@ class ClosureModel:
             picked, ``((identifier, (joint, ...)), ...)`` in the file's order (an Extended
             URDF's ``name_mot`` entries, an MJCF's actuators); empty for a model made in
             code. Reports may list it.
+        notes: Sentences a reader adds about how it read the file (e.g. a free joint at
+            the root held as the base); reports print them.
     """
 
     tree: pin.Model = field(repr=False)
@@ -151,6 +153,7 @@ class ClosureModel:
     reference: np.ndarray | None = field(default=None, repr=False)
     output_point: bool = False
     actuator_matches: tuple = ()
+    notes: tuple[str, ...] = ()
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
     _plan: _Plan = field(init=False, repr=False)
@@ -178,6 +181,7 @@ class ClosureModel:
             raise InputError("actuator_matches must be pairs (identifier, joint names), got "
                              f"{type(matches).__name__}") from e
         set_(self, "actuator_matches", matches)
+        set_(self, "notes", tuple(str(n) for n in self.notes))
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_closures_join_two_bodies(tree, closures, self.name)
         _check_actuated(tree, self.actuated, self.name)

@@ -19,6 +19,9 @@ closures, the actuators and the reference configuration from the file itself:
 * Reference: Pinocchio's ``referenceConfigurations["qpos0"]`` (the joints' ``ref``), else
   the neutral configuration.
 * Output frame: ``output=`` if given, else a body named ``effector``, else the last body.
+* A free joint of a body directly under ``<worldbody>`` (a floating base) is removed:
+  that body is the base, the mechanism is analysed relative to it, and the model says so
+  in its ``notes``.
 * Frame names are made distinct (MuJoCo names bodies, joints and sites in separate name
   spaces; Pinocchio's frames share one): a body keeps its name, a joint or site frame of
   the same name gets the suffix ``_joint`` / ``_site`` (joint names are unchanged).
@@ -91,15 +94,18 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
     path = Path(path)
     label = _clip(str(path))
     root, rewritten = _parse(path)
-    tree = _build_tree(path, root, rewritten)
+    held = _hold_free_roots(root)
+    tree = _build_tree(path, root, rewritten or bool(held))
     renamed = _distinct_frame_names(tree)
     reference = (np.array(tree.referenceConfigurations["qpos0"])
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
     closures = _closures(label, root, tree, reference, renamed)
     actuated, matches = _actuated(label, root, tree)
     out = output if output is not None else _output_frame(tree)
+    notes = tuple(f"{body} has a free joint in the file: it is held as the base, the "
+                  "mechanism analysed relative to it" for body in held)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
-                        reference=reference, actuator_matches=matches)
+                        reference=reference, actuator_matches=matches, notes=notes)
 
 
 # ------------------------------------------------------------------------------ tree
@@ -304,6 +310,23 @@ def _check_numbers(label: str, root: ET.Element) -> None:
                     and values[0] > values[1]:
                 raise ClosureFileError(label, f"{where} range", f"has lower {values[0]:g} > "
                                        f"upper {values[1]:g}")
+
+
+def _hold_free_roots(root: ET.Element) -> list[str]:
+    """Remove the free joints (``<freejoint/>``, ``<joint type="free">``) of the bodies
+    directly under ``<worldbody>``, in place: a floating base (a humanoid's pelvis, a
+    robot dropped on a floor) is held, and the closed loops are analysed relative to it.
+    Returns the names of the bodies so held."""
+    held = []
+    for world in root.findall("worldbody"):
+        for body in world.findall("body"):
+            free = [c for c in body if c.tag == "freejoint"
+                    or (c.tag == "joint" and c.get("type") == "free")]
+            for joint in free:
+                body.remove(joint)
+            if free:
+                held.append(body.get("name", "the root body"))
+    return held
 
 
 def _build_tree(path: Path, root: ET.Element, rewritten: bool = False) -> pin.Model:
