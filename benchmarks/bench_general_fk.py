@@ -204,18 +204,14 @@ def five_bar(placo: str | None, repeat: int) -> dict:
 def cassie(repeat: int, n: int = 200) -> dict:
     """Time per pose [s] of the Cassie-like leg: ``{figure: (ours, hand-written,
     Pinocchio driver)}``."""
-    from bench_linkage import CASSIE, HandWritten, motor_path, run_hand, run_ours
+    from bench_linkage import CASSIE, HandWritten, path_solutions, run_hand, run_ours
     from timing import best_of_each
 
     from pkm_pin import load_mechanism, tree_kernel
 
     link = load_mechanism(CASSIE)
     hand = HandWritten(link)
-    Q = motor_path(n)
-    solutions, prev = [], link.assemble().q
-    for qa in Q:
-        prev = link.forward_kinematics(qa, prev, starts=0).q
-        solutions.append(prev)
+    Q, solutions = path_solutions(link, n)
     print(f"Cassie-like leg ({link.model.nv} joints, {len(link.model.closures)} loops), {n} "
           "poses along a motor path, time per pose [µs]:")
     rows = {}

@@ -39,6 +39,17 @@ def motor_path(n: int, size: float = 0.2) -> np.ndarray:
     return np.column_stack([size * np.sin(s), 0.7 * size * np.sin(2 * s + 0.4)])
 
 
+def path_solutions(link, n: int) -> tuple[np.ndarray, list]:
+    """The motor path (:func:`motor_path`) and pkm_pin's solution at each of its points,
+    each warm-started from the previous one."""
+    Q = motor_path(n)
+    solutions, prev = [], link.assemble().q
+    for qa in Q:
+        prev = link.forward_kinematics(qa, prev, starts=0).q
+        solutions.append(prev)
+    return Q, solutions
+
+
 
 # ============================================================ the hand-written loop
 class HandWritten:
@@ -143,11 +154,7 @@ def main(n: int = 200, repeat: int = 5) -> dict:
     """Time per pose [s] of each figure, ``{figure: (pkm_pin, hand-written)}``."""
     link = load_mechanism(CASSIE)
     hand = HandWritten(link)
-    Q = motor_path(n)
-    solutions, prev = [], link.assemble().q
-    for qa in Q:
-        prev = link.forward_kinematics(qa, prev, starts=0).q
-        solutions.append(prev)
+    Q, solutions = path_solutions(link, n)
     for a, b in zip(solutions, [hand.newton(s, qa) for s, qa in zip(solutions, Q)]):
         assert np.abs(pin.difference(hand.model, a, b)).max() < 1e-9
     rows = {}

@@ -170,25 +170,20 @@ def _linkage_file(path: Path, suffix: str, closures, output, point):
     mechanism exists to move (:func:`pkm_pin.output_choice.designer_output`: at the
     assembly from the reference, kept as :attr:`Linkage.home_assembly`; the readers'
     default when it does not assemble)."""
-    from .model import find_closures_file, read_closures_file, read_extended_urdf, read_mjcf
-    from .output_choice import designer_output, mjcf_output
+    from .model import read_extended_urdf, read_mjcf
+    from .output_choice import designer_output
 
     label = str(path)
     try:
         if suffix == ".urdf":
             model = read_extended_urdf(path, closures, output=output)
-            named = output is not None or read_closures_file(
-                closures if closures is not None else find_closures_file(path)
-            ).output is not None
         else:
             if closures is not None:
                 raise MechanismFileError(label, "", "an MJCF file holds its closures "
                                          "(<equality>): closures= is for a .urdf")
-            output = output if output is not None else mjcf_output(path)
             model = read_mjcf(path, output=output)
-            named = output is not None
         link = Linkage(model, point=point)
-        return link if named else designer_output(link)
+        return link if model.output_named else designer_output(link)
     except MechanismFileError:
         raise
     except (FrameNotFound, JointNotFound) as e:

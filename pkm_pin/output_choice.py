@@ -57,9 +57,6 @@ from .tolerances import RANK_RTOL
 END_BODY_NAMES = ("end_effector", "effector", "foot", "platform", "plate", "tool", "tcp",
                   "sole")
 
-#: Name of the MJCF ``<custom><text>`` element that names the output frame (its ``data``).
-MJCF_OUTPUT_KEY = "pkm_pin:output"
-
 _SIDE = re.compile(r"^(left|right|l|r)[_-]|[_-](left|right|l|r|\d+)$")
 
 
@@ -250,22 +247,6 @@ def designer_output(link):
     pose = chosen.model.kinematics(assembly.q).output_placement
     chosen.__dict__["home_assembly"] = replace(assembly, output_pose=pose)  # cached_property
     return chosen
-
-
-def mjcf_output(path) -> str | None:
-    """The output frame an MJCF file names, ``<custom><text name="pkm_pin:output"
-    data="FRAME"/></custom>`` (MuJoCo's element for user text; in the file or a file it
-    includes), or None (also for a file its reader refuses: the reader says why)."""
-    from .model.mjcf import parse_mjcf
-
-    try:
-        root = parse_mjcf(path)  # bounded, includes inlined
-    except PkmError:
-        return None
-    for text in root.iter("text"):
-        if text.get("name") == MJCF_OUTPUT_KEY and text.get("data"):
-            return text.get("data").strip()
-    return None
 
 
 def _own(tree: pin.Model, f: pin.Frame) -> bool:

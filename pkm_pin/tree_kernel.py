@@ -356,6 +356,18 @@ def _relative_columns(iv, kind, parent, ja, jb, S, W):
         j = parent[j]
 
 
+
+@register_jitable
+def _add_half_skew(M, x):
+    """``M += [x]× / 2`` (3 × 3), ``[x]×`` the cross-product matrix of ``x``
+    (``[x]× y = x × y``)."""
+    M[0, 1] -= 0.5 * x[2]
+    M[0, 2] += 0.5 * x[1]
+    M[1, 0] += 0.5 * x[2]
+    M[1, 2] -= 0.5 * x[0]
+    M[2, 0] -= 0.5 * x[1]
+    M[2, 1] += 0.5 * x[0]
+
 @register_jitable
 def jlog3(theta, w, J):
     """Pinocchio's ``Jlog3`` (3 × 3) at the rotation vector ``w`` of angle ``theta``."""
@@ -371,12 +383,7 @@ def jlog3(theta, w, J):
         for b in range(3):
             J[a, b] = alpha * w[a] * w[b]
         J[a, a] += diag
-    J[0, 1] -= 0.5 * w[2]
-    J[0, 2] += 0.5 * w[1]
-    J[1, 0] += 0.5 * w[2]
-    J[1, 2] -= 0.5 * w[0]
-    J[2, 0] -= 0.5 * w[1]
-    J[2, 1] += 0.5 * w[0]
+    _add_half_skew(J, w)
 
 
 @register_jitable
@@ -420,12 +427,7 @@ def log6_jlog6(R, p, out, J, w, A, Cm):
         for b in range(3):
             Cm[a, b] = v3 * w[b] + beta * w[a] * p[b]
         Cm[a, a] += wp * beta
-    Cm[0, 1] -= 0.5 * p[2]
-    Cm[0, 2] += 0.5 * p[1]
-    Cm[1, 0] += 0.5 * p[2]
-    Cm[1, 2] -= 0.5 * p[0]
-    Cm[2, 0] -= 0.5 * p[1]
-    Cm[2, 1] += 0.5 * p[0]
+    _add_half_skew(Cm, p)
     for a in range(3):
         for b in range(3):
             J[a, b] = A[a, b]

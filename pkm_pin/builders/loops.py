@@ -151,7 +151,7 @@ def four_bar(ground: float = 0.10, crank: float = 0.03, coupler: float = 0.09,
 def _mjcf(name: str, header: tuple[str, str], bodies: str, equality: str,
           motors: list[str], output: str | None = None) -> str:
     """MJCF text: ``bodies`` (unindented) under one joint-less ``base`` body; ``output``:
-    the output frame, named in ``<custom>`` (:data:`pkm_pin.output_choice.MJCF_OUTPUT_KEY`;
+    the output frame, named in ``<custom>`` (:data:`pkm_pin.model.mjcf.OUTPUT_KEY`;
     without it pkm_pin chooses the output by its rule)."""
     actuators = "".join(f'    <motor name="{m}_motor" joint="{m}"/>\n' for m in motors)
     inner = "".join(f"      {line}\n" for line in bodies.splitlines())

@@ -142,6 +142,10 @@ class ClosureModel:
             code. Reports may list it.
         notes: Sentences a reader adds about how it read the file (e.g. a free joint at
             the root held as the base); reports print them.
+        output_named: Whether the output was named (by the caller, or by the file)
+            rather than taken from a reader's fallback (a frame called ``effector``, the
+            last body): :func:`pkm_pin.io.load_mechanism` chooses a designer's output
+            (:mod:`pkm_pin.output_choice`) where it was not.
     """
 
     tree: pin.Model = field(repr=False)
@@ -154,6 +158,7 @@ class ClosureModel:
     output_point: bool = False
     actuator_matches: tuple = ()
     notes: tuple[str, ...] = ()
+    output_named: bool = True
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
     _plan: _Plan = field(init=False, repr=False)

@@ -154,7 +154,8 @@ def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.Pat
     out = output if output is not None else _output_frame(tree, spec)
     actuated, matches = _actuated(tree, spec)
     return ClosureModel(tree, closures, actuated, out, name=tree.name,
-                        output_point=spec.output_point, actuator_matches=matches)
+                        output_point=spec.output_point, actuator_matches=matches,
+                        output_named=output is not None or spec.output is not None)
 
 
 def find_closures_file(urdf_path: str | os.PathLike) -> Path:

@@ -18,7 +18,9 @@ closures, the actuators and the reference configuration from the file itself:
   an error.
 * Reference: Pinocchio's ``referenceConfigurations["qpos0"]`` (the joints' ``ref``), else
   the neutral configuration.
-* Output frame: ``output=`` if given, else a body named ``effector``, else the last body.
+* Output frame: ``output=`` if given, else the one the file names in
+  ``<custom><text name="pkm_pin:output" data="FRAME"/>``, else a body named
+  ``effector``, else the last body.
 * A free joint of a body directly under ``<worldbody>`` (a floating base) is removed:
   that body is the base, the mechanism is analysed relative to it, and the model says so
   in its ``notes``.
@@ -101,11 +103,13 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
     closures = _closures(label, root, tree, reference, renamed)
     actuated, matches = _actuated(label, root, tree)
-    out = output if output is not None else _output_frame(tree)
+    named = output if output is not None else _named_output(root)
+    out = named if named is not None else _output_frame(tree)
     notes = tuple(f"{body} has a free joint in the file: it is held as the base, the "
                   "mechanism analysed relative to it" for body in held)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
-                        reference=reference, actuator_matches=matches, notes=notes)
+                        reference=reference, actuator_matches=matches, notes=notes,
+                        output_named=named is not None)
 
 
 # ------------------------------------------------------------------------------ tree
@@ -497,6 +501,20 @@ def _actuated(label: str, root: ET.Element, tree: pin.Model) -> tuple[tuple[str,
             if joint not in out:
                 out.append(joint)
     return tuple(out), tuple(matches)
+
+
+#: The ``<custom><text name=...>`` whose ``data`` names the output frame of an MJCF file.
+OUTPUT_KEY = "pkm_pin:output"
+
+
+def _named_output(root: ET.Element) -> str | None:
+    """The output frame the file names, ``<custom><text name="pkm_pin:output"
+    data="FRAME"/></custom>`` (MuJoCo's element for user text; in the file or a file it
+    includes), or None."""
+    for text in root.iter("text"):
+        if text.get("name") == OUTPUT_KEY and text.get("data"):
+            return text.get("data").strip()
+    return None
 
 
 def _output_frame(tree: pin.Model) -> str:
