@@ -92,6 +92,7 @@ from .model.closure_model import (
     sparse_basis,
 )
 from .model.structure import detect_platform
+from .output_maps import OutputMaps
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
@@ -1301,7 +1302,7 @@ def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:
 
 # ====================================================================== analysis
 @dataclass(frozen=True, eq=False)
-class LinkageAnalysis:
+class LinkageAnalysis(OutputMaps):
     """The output frame of a linkage at one configuration (:meth:`Linkage.analyze`).
 
     Screws are axis-first about the world origin; ``reference_point`` [m] is the point
@@ -1340,6 +1341,31 @@ class LinkageAnalysis:
     length: float
     singular_tol: float
     _maps: tuple = field(repr=False)
+    #: Whether each actuated joint is prismatic (its rate in m/s).
+    actuated_prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool),
+                                           repr=False)
+
+    # ------------------------------------------------ hooks of OutputMaps
+    @property
+    def centre(self) -> np.ndarray:
+        """The point every decision is homogenised about (:attr:`reference_point`)."""
+        return self.reference_point
+
+    @property
+    def _twist_dim(self) -> int:
+        return self.output_dof
+
+    @property
+    def _actuated_prismatic(self) -> np.ndarray:
+        return self.actuated_prismatic
+
+    @property
+    def _closeness(self) -> tuple[float, float]:
+        """Seed 000's indices and the generalised ones together, as :attr:`singularity`
+        reads them."""
+        idx = self.indices
+        return (float(np.nanmin([idx["type_I"], idx["inverse"]])),
+                float(np.nanmin([idx["type_II"], idx["forward"]])))
 
     @property
     def dof(self) -> int:
@@ -1445,7 +1471,9 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
                                               or d != generic.output_dof)
     return LinkageAnalysis(kin.q, mob, d, d - rotations, from_homogenised(P_h, p, L),
                            from_homogenised(C_h, p, L), A, B, idx, singularity, csing, p, L,
-                           singular_tol, (Xr, Yr, M, ns.units, list(model.actuated_v)))
+                           singular_tol, (Xr, Yr, M, ns.units, list(model.actuated_v)),
+                           np.array([not np.linalg.norm(kin.joint_twists[c][:3]) > 0
+                                     for c in model.actuated_v], dtype=bool))
 
 
 def _transmission(A_n: np.ndarray, P_h: np.ndarray, d: int) -> tuple[float, float]:

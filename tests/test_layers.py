@@ -40,7 +40,7 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         ("solve", "leg")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
         "closed-loop dynamics",
-        ("engine", "engine.core", "analysis", "transmission", "dynamics")),
+        ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics")),
     5: ("position problems and studies built on the solver and the analysis (trajectory: "
         "the efforts along a motion, on the closed-loop dynamics)",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration",
