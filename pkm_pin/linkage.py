@@ -88,10 +88,11 @@ from .model.closure_model import (
     ClosureModel,
     NullSpace,
     TreeKinematics,
+    default_length,
     pose_rows,
     sparse_basis,
 )
-from .model.structure import detect_platform
+from .model.structure import detect_platform, legs_length
 from .output_maps import OutputMaps
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
@@ -228,7 +229,7 @@ class Linkage:
             model = replace(model, output=output)
         if point is not None and bool(point) != model.output_point:
             model = replace(model, output_point=bool(point))
-        self._model = model
+        self._model = _machine_length(model)
         self._loops = _loops_of_actuators(model)
         #: ``(rank J_c, rank with the actuated rows)`` at the first configuration whose
         #: nearby ones were sampled (:func:`_mobility`): later configurations with the
@@ -1298,6 +1299,19 @@ def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:
         if all(np.linalg.norm(p - u) > 1e-9 * model.length for u in unique):
             unique.append(np.array(p))
     return unique
+
+
+def _machine_length(model: ClosureModel) -> ClosureModel:
+    """``model`` with the characteristic length of the machine it describes: where a
+    base–legs–platform structure is detected and the model's length is the tree's
+    default, the legs' (:func:`pkm_pin.model.structure.legs_length`, that of the same
+    machine written as TOML legs), so that every homogenised index and rank decision is
+    the machine's, whatever tree the file wrote. A length given explicitly is kept."""
+    structure, _ = detect_platform(model)
+    if structure is None or model.length != default_length(model.tree, model.closures):
+        return model
+    L = legs_length(model, structure)
+    return model if L == model.length else replace(model, length=L)
 
 
 # ====================================================================== analysis

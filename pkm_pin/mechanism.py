@@ -214,8 +214,11 @@ class Mechanism:
 
     @cached_property
     def characteristic_length(self) -> float:
-        """Unit of length of the relative tolerances [m]: mean of the legs' lengths."""
-        return float(np.mean([leg.characteristic_length for leg in self.legs]))
+        """Unit of length of the relative tolerances [m]: mean of the legs' lengths
+        (:attr:`Leg.offset_length`) over the legs that have one (a leg whose joints and
+        tip all sit at one point brings no length); 1.0 when none has."""
+        lengths = [leg.offset_length for leg in self.legs if leg.offset_length > 0]
+        return float(np.mean(lengths)) if lengths else 1.0
 
     @cached_property
     def actuated_scales(self) -> np.ndarray:

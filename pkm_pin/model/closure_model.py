@@ -798,14 +798,23 @@ def _check_actuated(tree: pin.Model, actuated: tuple, name: str) -> None:
         raise InputError(f"an actuated joint is listed twice in {actuated}")
 
 
+def default_length(tree: pin.Model, closures: tuple) -> float:
+    """The default characteristic length [m] of a :class:`ClosureModel`: the offsets
+    between consecutive joints of the tree plus the closures' frame offsets (1.0 when
+    there are none). :class:`pkm_pin.linkage.Linkage` replaces it by the legs' length
+    (:func:`pkm_pin.model.structure.legs_length`) where a platform structure is
+    detected."""
+    L = sum(np.linalg.norm(tree.jointPlacements[j].translation)
+            for j in range(1, tree.njoints) if tree.parents[j] != 0)
+    L += sum(np.linalg.norm(p.translation) for c in closures
+             for p in (c.placement_a, c.placement_b))
+    return float(L) if L > 0 else 1.0
+
+
 def _length(tree: pin.Model, closures: tuple, length) -> float:
     """The characteristic length given, or the default of :class:`ClosureModel`."""
     if length is None:
-        L = sum(np.linalg.norm(tree.jointPlacements[j].translation)
-                for j in range(1, tree.njoints) if tree.parents[j] != 0)
-        L += sum(np.linalg.norm(p.translation) for c in closures
-                 for p in (c.placement_a, c.placement_b))
-        return float(L) if L > 0 else 1.0
+        return default_length(tree, closures)
     if isinstance(length, bool) or not isinstance(length, (int, float)) \
             or not (np.isfinite(length) and length > 0):
         raise InputError(f"length must be a positive number [m], got {length!r}")

@@ -33,11 +33,12 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
+import numpy as np
 import pinocchio as pin
 
 from .closure_model import Closure, ClosureModel
 
-__all__ = ["PlatformLeg", "PlatformStructure", "detect_platform"]
+__all__ = ["PlatformLeg", "PlatformStructure", "detect_platform", "legs_length"]
 
 
 @dataclass(frozen=True)
@@ -190,3 +191,31 @@ def _leg_name(tree: pin.Model, chain: tuple[int, ...], default: str) -> str:
     names = [tree.names[j] for j in chain]
     prefix = os.path.commonprefix(names).rstrip("_-/ .") if len(names) > 1 else ""
     return prefix if len(prefix) >= 2 else default
+
+
+def legs_length(model: ClosureModel, structure: PlatformStructure) -> float:
+    """The characteristic length [m] of the machine's legs: the mean over the legs of
+    :attr:`pkm_pin.leg.Leg.characteristic_length` of the legs that
+    :meth:`pkm_pin.Mechanism.from_closure_model` builds (the offsets between consecutive
+    joints from the second on, the offset of the closure's constraint frame from the
+    leg's last joint, half the range of each prismatic joint with finite limits; legs
+    with none are left out), read from the tree without building them. The same machine written as TOML legs or as
+    any tree plus closures gets the same length, hence the same homogenised indices."""
+    tree = model.tree
+    lengths = []
+    for leg in structure.legs:
+        L = sum(float(np.linalg.norm(tree.jointPlacements[j].translation))
+                for j in leg.joints[1:])
+        if leg.kind != "tree":
+            frame = tree.frames[tree.getFrameId(leg.frame)]
+            L += float(np.linalg.norm((frame.placement * leg.placement).translation))
+        for j in leg.joints:
+            joint = tree.joints[j]
+            if joint.nq == joint.nv == 1 and "P" in joint.shortname():  # prismatic
+                lo = tree.lowerPositionLimit[joint.idx_q]
+                up = tree.upperPositionLimit[joint.idx_q]
+                if np.isfinite(lo) and np.isfinite(up):
+                    L += 0.5 * (abs(lo) + abs(up))
+        if L > 0:
+            lengths.append(L)
+    return float(np.mean(lengths)) if lengths else 1.0
