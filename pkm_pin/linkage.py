@@ -733,6 +733,16 @@ class Linkage:
         model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
         return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
 
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model's tree from ``(q0, v0)`` (default: the home
+        assembly, at rest): :func:`pkm_pin.simulation.simulate` (``options``:
+        ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self.home_assembly.q if q0 is None else q0
+        return simulation.simulate(self._model, q0, v0, duration, dt, **options)
+
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×

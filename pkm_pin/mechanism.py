@@ -521,6 +521,20 @@ class Mechanism:
         model = self.closure_model if self.source_model is None else self.source_model
         return _dynamics.inverse_dynamics(model, q, v, a, gravity=gravity, wrench=wrench)
 
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model :meth:`inverse_dynamics` uses, from ``(q0, v0)``
+        (default: the home configuration, at rest): :func:`pkm_pin.simulation.simulate`
+        (``options``: ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        from .model import configuration as configuration_of
+        model = self.closure_model if self.source_model is None else self.source_model
+        if q0 is None:
+            q0 = (configuration_of(self, self.home_assembly) if self.source_model is None
+                  else self.source_configuration())
+        return simulation.simulate(model, q0, v0, duration, dt, **options)
+
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,
               singular_tol: float = CLOSENESS_SINGULAR_TOL,
