@@ -528,12 +528,43 @@ class Mechanism:
         (``options``: ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
         ``integrator``)."""
         from . import simulation
+        q0 = self._dynamics_q(self.home_assembly) if q0 is None else q0
+        return simulation.simulate(self._dynamics_model(), q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (a configuration of the model :meth:`inverse_dynamics` uses;
+        default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        return _indices.dynamic_indices(self._dynamics_model(),
+                                        self._dynamics_q(self.home_assembly) if q is None
+                                        else q)
+
+    def gravity_map(self, poses, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over ``poses`` (a sequence of ``pin.SE3``), each assembled
+        warm-started from the last one assembled (a pose that does not assemble: a nan
+        row): :func:`pkm_pin.dynamic_indices.gravity_efforts`."""
+        from . import dynamic_indices as _indices
+        model = self._dynamics_model()
+        Q, guess = np.full((len(poses), model.nq), np.nan), self.home_assembly
+        for i, pose in enumerate(poses):
+            try:
+                guess = self.assemble(pose, guess)
+            except PkmError:
+                continue
+            Q[i] = self._dynamics_q(guess)
+        return _indices.gravity_efforts(model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
+
+    def _dynamics_model(self):
+        return self.closure_model if self.source_model is None else self.source_model
+
+    def _dynamics_q(self, assembly: Assembly) -> np.ndarray:
+        if self.source_model is not None:
+            return self.source_configuration(assembly)
         from .model import configuration as configuration_of
-        model = self.closure_model if self.source_model is None else self.source_model
-        if q0 is None:
-            q0 = (configuration_of(self, self.home_assembly) if self.source_model is None
-                  else self.source_configuration())
-        return simulation.simulate(model, q0, v0, duration, dt, **options)
+        return configuration_of(self, assembly)
 
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,
