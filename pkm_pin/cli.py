@@ -9,7 +9,7 @@
     pkm-pin ik MECHANISM [--pose X Y Z R P Y | --at NAME=V...] [--all]   pose -> actuated
     pkm-pin map MECHANISM --axes x z [--at NAME=V...] --range A B C D --n 100 --out PREFIX
     pkm-pin view MECHANISM [--pose ...] [--html FILE]   browser preview (meshcat)
-    pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N]
+    pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N] [--indices]
                      [--payload FX FY FZ MX MY MZ] [--json] [--out PREFIX]
                                                    actuator efforts along a motion
 
@@ -889,6 +889,8 @@ def cmd_dynamics(args) -> int:
         if not prefix.parent.is_dir():
             raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
     mech = _load(args)
+    if args.indices:
+        return _print_dynamic_indices(mech, args)
     motion = None
     if args.trajectory is not None:
         model, _ = tr.closure_model_of(mech)
@@ -947,6 +949,33 @@ def cmd_dynamics(args) -> int:
           "inverse dynamics")
     for path in files:
         print(f"wrote      {path}")
+    return 0
+
+
+def _print_dynamic_indices(mech, args) -> int:
+    """``dynamics --indices``: :func:`pkm_pin.dynamic_indices.dynamic_indices` and the
+    gravity efforts at home."""
+    from . import dynamic_indices as di
+    from . import trajectory as tr
+
+    model, q = tr.closure_model_of(mech)
+    if not any(inertia.mass > 0 for inertia in model.tree.inertias):
+        raise InputError(f"{mech.name}: no body has a mass in the file; the dynamic indices "
+                         "need the file's inertias")
+    r = di.dynamic_indices(model, q)
+    tau = di.gravity_efforts(model, q[None]).efforts[0]
+    if args.json:
+        print(_json({"mechanism": mech.name, **r.summary(), "gravity_efforts": tau.tolist()}))
+        return 0
+    unit = {"rad": "N m", "m": "N"}
+    print(f"mechanism  {mech.name} (at home; docs/dynamics.md)")
+    for name, u, row, t in zip(r.actuated, r.units, r.inertia, tau):
+        print(f"actuator   {name} [{u}]: Λ row " + " ".join(f"{x:.4g}" for x in row)
+              + f"; gravity effort {t:.4g} {unit[u]}")
+    print("eigen      Λ̃ = Uₐ Λ Uₐ [kg m²]: " + " ".join(f"{x:.4g}" for x in r.eigenvalues)
+          + f"; condition {r.condition:.4g}; idle motions {r.idle_motions}")
+    for row in r.output_inertia:
+        print("output     Λ_x " + " ".join(f"{x:>10.4g}" for x in row))
     return 0
 
 
@@ -1262,6 +1291,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="PREFIX",
                    help="write PREFIX.npz (t, q, v, a, efforts, ...) and PREFIX_efforts.png, "
                    "_speeds.png, _powers.png, _torque_speed.png")
+    p.add_argument("--indices", action="store_true",
+                   help="print the dynamic indices at home instead: actuator-space inertia "
+                   "Gᵀ M G, its eigenvalues and condition, the apparent inertia at the "
+                   "output, the gravity efforts")
     _linkage_options(p)
     p.set_defaults(func=cmd_dynamics)
     return parser

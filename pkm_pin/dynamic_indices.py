@@ -82,6 +82,16 @@ class DynamicIndices:
     units: tuple
     length: float
 
+    def summary(self) -> dict:
+        """JSON-ready: ``actuated``, ``units``, ``inertia`` (nested lists),
+        ``eigenvalues`` [kg m²], ``condition`` (None when infinite), ``idle_motions``,
+        ``output_inertia``, ``length``."""
+        return {"actuated": list(self.actuated), "units": list(self.units),
+                "inertia": self.inertia.tolist(), "eigenvalues": self.eigenvalues.tolist(),
+                "condition": self.condition if np.isfinite(self.condition) else None,
+                "idle_motions": self.idle_motions,
+                "output_inertia": self.output_inertia.tolist(), "length": self.length}
+
 
 def mass_matrix(model: ClosureModel, q) -> np.ndarray:
     """The tree's joint-space inertia ``M(q)`` (nv × nv, symmetric; ``crba`` in its WORLD

@@ -233,3 +233,28 @@ def test_mechanism_gravity_map_over_poses():
         ref = dyn.inverse_dynamics(cm, q, np.zeros(cm.nv), np.zeros(cm.nv), wrench=w)
         assert np.allclose(tau, ref.efforts, rtol=1e-7)
     assert np.abs(gm.efforts[0]).max() > 0
+
+
+def test_cli_indices(capsys):
+    """pkm-pin dynamics FILE --indices [--json]: the indices at home, as the API gives
+    them; a model without mass: one line, exit 2."""
+    import json
+
+    from pkm_pin.cli import main
+
+    path = ROOT / "tests" / "data" / "gepetto" / "5bar_linkage" / "robot.urdf"
+    assert main(["dynamics", str(path), "--indices", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    link = pkm_pin.load_mechanism(path)
+    r = link.dynamic_indices()
+    assert np.allclose(out["inertia"], r.inertia, rtol=1e-12)
+    assert out["condition"] == pytest.approx(r.condition, rel=1e-12)
+    assert np.allclose(out["gravity_efforts"], dyn.inverse_dynamics(
+        link.model, link.home_assembly.q, np.zeros(link.model.nv), np.zeros(link.model.nv)
+    ).efforts, rtol=1e-12)
+    assert main(["dynamics", str(path), "--indices"]) == 0
+    text = capsys.readouterr().out
+    assert "condition" in text and text.count("output     Λ_x") == 6
+    assert main(["dynamics", "--indices"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no body has a mass" in err[0]
