@@ -131,19 +131,32 @@ def test_energy_balance_with_work_converges_at_fourth_order():
 
 @pytest.mark.parametrize("name", ["five_bar", "stewart", "gepetto_5bar"])
 def test_pinocchio_and_our_rows_give_the_same_acceleration(name):
-    """pin.constraintDynamics (RigidConstraintModel) and our KKT rows agree, with and
-    without Baumgarte terms, and so do the closure forces (non-redundant models)."""
+    """pin.constraintDynamics (RigidConstraintModel, Baumgarte corrector) and our KKT rows
+    agree, with and without gains, and so do the closure forces (non-redundant models).
+    The welds (Stewart, Gepetto 5-bar) off the closures (q moved by 1e-6, v by 1e-3, so
+    the gains act: they change a by 0.2–0.4 %) to 1e-10; the five-bar's point closure at
+    a consistent state only: off it, Pinocchio's CONTACT_3D constrains the relative
+    classical acceleration in C_a axes without our −ω_a × U term of φ̈ (U the relative
+    velocity: the velocity drift), 5e-4 relative with U ~ 1e-3."""
     cm, q = model(name)
     rng = np.random.default_rng(4)
     v = random_start(cm, q, rng)
     tau = sine_efforts(cm, q, rng)(0.0, q, v)
+    if name != "five_bar":
+        q = pin.integrate(cm.tree, q, 1e-6 * rng.normal(size=cm.nv))
+        v = v + 1e-3 * rng.normal(size=cm.nv)
     g = np.array(G)
+    a0, _ = sim._Dynamics(cm, g, (0.0, 0.0), "kkt").acceleration(q, v, tau)
     for gains in ((0.0, 0.0), (400.0, 40.0)):
         ap, lp = sim._Dynamics(cm, g, gains, "pinocchio").acceleration(q, v, tau)
         ak, lk = sim._Dynamics(cm, g, gains, "kkt").acceleration(q, v, tau)
-        assert np.linalg.norm(ap - ak) <= 1e-8 * np.linalg.norm(ak), name
-        if cm.redundant_constraints(q) == 0:
-            assert np.linalg.norm(lp - lk) <= 1e-7 * np.linalg.norm(lk), name
+        assert np.linalg.norm(ap - ak) <= 1e-10 * np.linalg.norm(ak), name
+        if cm.redundant_constraints(q) == 0:  # off the closure C_a and C_b differ by
+            # 1e-6: Pinocchio's λ in C_a's frame, ours in C_b's
+            tol = 1e-8 if name == "five_bar" else 1e-5
+            assert np.linalg.norm(lp - lk) <= tol * np.linalg.norm(lk), name
+    if name != "five_bar":
+        assert np.linalg.norm(ak - a0) > 1e-3 * np.linalg.norm(a0)
 
 
 @pytest.mark.parametrize("method", ["pinocchio", "kkt"])
