@@ -67,6 +67,25 @@ def test_five_bar_point_masses_closed_form(kind):
     assert r.units == ("rad", "rad") and r.idle_motions == 0
 
 
+def test_point_output_apparent_mass_closed_form():
+    """The five-bar's tip as a point output (3 × 3, kg): in the plane
+    Λ_x = m_p I + J_P⁻ᵀ diag(m_a, m_b) J_P⁻¹ (a lone tip mass: its own mass), zero out of
+    the plane the tip cannot leave."""
+    q = five_bar_q([0.6, 1.3])
+    cm = dataclasses.replace(point_mass_five_bar(), output_point=True)
+    r = di.dynamic_indices(cm, q)
+    Jp = five_bar_tip_jacobian(q)
+    Ji = np.linalg.inv(Jp)
+    expected = np.zeros((3, 3))
+    expected[:2, :2] = 2.1 * np.eye(2) + Ji.T @ np.diag([1.3, 0.7]) @ Ji
+    assert r.output_inertia.shape == (3, 3)
+    assert np.allclose(r.output_inertia, expected, rtol=1e-10, atol=1e-12)
+    assert np.allclose(r.output_jacobian[:2], Jp, rtol=1e-12, atol=1e-12)
+    alone = dataclasses.replace(point_mass_five_bar(0.0, 0.0, 2.1), output_point=True)
+    assert np.allclose(di.dynamic_indices(alone, q).output_inertia[:2, :2], 2.1 * np.eye(2),
+                       rtol=1e-10)
+
+
 def _models():
     stewart = pkm_pin.load_mechanism(ROOT / "models" / "mechanisms" / "stewart.toml")
     delta = pkm_pin.load_mechanism(ROOT / "models" / "mechanisms" / "delta.toml")
