@@ -9,7 +9,8 @@
     pkm-pin ik MECHANISM [--pose X Y Z R P Y | --at NAME=V...] [--all]   pose -> actuated
     pkm-pin map MECHANISM --axes x z [--at NAME=V...] --range A B C D --n 100 --out PREFIX
     pkm-pin view MECHANISM [--pose ...] [--html FILE]   browser preview (meshcat)
-    pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N] [--indices]
+    pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N]
+                     [--simulate | --indices]
                      [--payload FX FY FZ MX MY MZ] [--json] [--out PREFIX]
                                                    actuator efforts along a motion
 
@@ -911,8 +912,10 @@ def cmd_dynamics(args) -> int:
         except OSError as e:
             raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
     summary = st.summary()
+    replayed = _replay(mech, st) if args.simulate else None
     if args.json:
         print(_json({"mechanism": mech.name, "actuated": list(st.actuated),
+                     **({} if replayed is None else {"simulation": replayed}),
                      "motion": st.motion, "samples": int(st.t.size),
                      "duration": float(st.t[-1] - st.t[0]), "gravity": st.gravity.tolist(),
                      "payload": None if st.payload is None else st.payload.tolist(),
@@ -943,6 +946,13 @@ def cmd_dynamics(args) -> int:
               f"{s['rms_effort']:>9.4g} {s['effort_unit']:<3}  "
               f"{s['peak_speed']:>9.4g} {s['speed_unit']:<5}  {s['peak_power']:>10.4g} W  "
               f"{s['energy']:>9.4g} J  {s['net_energy']:>9.4g} J")
+    if replayed is not None:
+        print(f"simulated  forward dynamics ({replayed['method']}, RK4, dt "
+              f"{1e3 * replayed['dt']:.3g} ms) of these efforts + PD "
+              f"{replayed['bandwidth']:g} Hz: tracking error "
+              + ", ".join(f"{x:.3g}" for x in replayed["tracking_error"])
+              + f"; closure drift {replayed['max_drift']:.3g}; energy balance "
+              f"{replayed['energy_error']:.3g}")
     tm = st.timing
     print(f"time       {tm['total']:.3g} s; per sample {1e3 * tm['kinematics']:.3g} ms forward "
           f"kinematics, {1e3 * tm['motion']:.3g} ms v and a, {1e3 * tm['dynamics']:.3g} ms "
@@ -950,6 +960,20 @@ def cmd_dynamics(args) -> int:
     for path in files:
         print(f"wrote      {path}")
     return 0
+
+
+def _replay(mech, st) -> dict:
+    """``dynamics --simulate``: :func:`pkm_pin.simulation.replay` of the study."""
+    from . import simulation
+    from . import trajectory as tr
+
+    model, _ = tr.closure_model_of(mech)
+    r = simulation.replay(model, st.t, st.q[0], st.v[0], st.q_actuated, st.speeds,
+                          st.efforts, gravity=st.gravity, payload=st.payload)
+    s = r.simulation
+    return {"method": s.method, "dt": float(s.t[1] - s.t[0]), "bandwidth": r.bandwidth,
+            "tracking_error": r.tracking_error.tolist(), "max_drift": s.max_drift,
+            "energy_error": s.energy_error}
 
 
 def _print_dynamic_indices(mech, args) -> int:
@@ -1291,6 +1315,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="PREFIX",
                    help="write PREFIX.npz (t, q, v, a, efforts, ...) and PREFIX_efforts.png, "
                    "_speeds.png, _powers.png, _torque_speed.png")
+    p.add_argument("--simulate", action="store_true",
+                   help="then simulate the forward dynamics of these efforts (plus a PD on "
+                   "the actuators) and print the tracking error, closure drift and energy "
+                   "balance")
     p.add_argument("--indices", action="store_true",
                    help="print the dynamic indices at home instead: actuator-space inertia "
                    "Gᵀ M G, its eigenvalues and condition, the apparent inertia at the "

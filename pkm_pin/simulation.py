@@ -129,7 +129,8 @@ class Simulation:
             :mod:`pkm_pin.dynamics`' convention), physical units.
         drift: (N,) closure residual norm (dimensionless rows: m / L, rad).
         velocity_drift: (N,) ``‖J_c v‖`` (dimensionless rows) [1/s].
-        kinetic, potential, work: (N,) ``T``, ``V`` [J], the efforts' work ``W`` [J].
+        kinetic, potential, work: (N,) ``T``, ``V`` [J], the work ``W`` [J] of the
+            efforts (and of the wrench, if any).
         energy_error: relative energy balance error (module docstring).
         method: ``"pinocchio"`` or ``"kkt"``; integrator: its name.
         baumgarte: ``(K_p, K_d)`` [1/s², 1/s].
@@ -204,19 +205,23 @@ class _Dynamics:
         np.add.at(tau, self.act_v, tau_a)
         return tau
 
-    def acceleration(self, q: np.ndarray, v: np.ndarray, tau_a: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray]:
-        """``(a, λ)`` at ``(q, v)`` under the actuated efforts ``tau_a``."""
+    def acceleration(self, q: np.ndarray, v: np.ndarray, tau_a: np.ndarray,
+                     extra: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """``(a, λ)`` at ``(q, v)`` under the actuated efforts ``tau_a`` (plus the
+        generalized force ``extra``, (nv,), e.g. a wrench's ``J_oᵀ Δ w``)."""
+        tau = self.full(tau_a)
+        if extra is not None:
+            tau = tau + extra
         if self.method == "pinocchio":
-            a = pin.constraintDynamics(self.tree, self.data, q, v, self.full(tau_a),
+            a = pin.constraintDynamics(self.tree, self.data, q, v, tau,
                                        self.cmodels, self.cdatas, self.prox).copy()
             lam = np.concatenate([_pinocchio_force(c, d) for c, d in
                                   zip(self.model.closures, self.cdatas)]
                                  ) if self.cdatas else np.zeros(0)
             return a, lam
-        return self._kkt(q, v, tau_a)
+        return self._kkt(q, v, tau)
 
-    def _kkt(self, q: np.ndarray, v: np.ndarray, tau_a: np.ndarray) -> tuple:
+    def _kkt(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> tuple:
         model, nv = self.model, self.tree.nv
         M = pin.crba(self.tree, self.data, q, pin.Convention.WORLD)
         M = np.triu(M) + np.triu(M, 1).T
@@ -233,7 +238,7 @@ class _Dynamics:
         beta = max(float(np.abs(np.diag(Mu)).max(initial=0.0)), 1e-300)
         K[:nv, nv:] = -beta * Jd.T
         K[nv:, :nv] = beta * Jd
-        rhs = np.r_[U * (self.full(tau_a) - h),
+        rhs = np.r_[U * (tau - h),
                     beta * (-jdv - self.kd * (J @ v) - self.kp * phi) / s]
         x = np.linalg.lstsq(K, rhs, rcond=RANK_RTOL)[0]
         return U * x[:nv], -beta * x[nv:] / s  # μ = −λ
@@ -318,6 +323,22 @@ def _effort_function(model: ClosureModel, efforts, controller) -> Callable:
     return lambda t, q, v: const
 
 
+def _wrench_function(wrench) -> Callable | None:
+    if wrench is None or callable(wrench):
+        if wrench is None:
+            return None
+
+        def checked(t, q, v):
+            w = np.asarray(wrench(t, q, v), dtype=float).reshape(-1)
+            if w.shape != (6,) or not np.isfinite(w).all():
+                raise InputError(f"the wrench at t = {t:.6g} s must be 6 finite numbers "
+                                 f"(f; m_O), got {w!r}")
+            return w
+        return checked
+    const = screws.as_vector(wrench, 6, "wrench", "axis-first (f; m_O)")
+    return lambda t, q, v: const
+
+
 def _call(fn: Callable, n: int, t: float, q, v, names) -> np.ndarray:
     tau = np.asarray(fn(t, q, v), dtype=float).reshape(-1)
     if tau.shape != (n,) or not np.isfinite(tau).all():
@@ -339,8 +360,8 @@ def _steps(duration: float, dt: float) -> int:
 
 # ------------------------------------------------------------------ simulation
 def simulate(model: ClosureModel, q0, v0=None, duration: float = 1.0, dt: float = 1e-3, *,
-             efforts=None, controller=None, gravity=GRAVITY, baumgarte=None,
-             method: str = "auto", integrator: str = "rk4") -> Simulation:
+             efforts=None, controller=None, gravity=GRAVITY, wrench=None,
+             baumgarte=None, method: str = "auto", integrator: str = "rk4") -> Simulation:
     """Simulate the closed-loop dynamics from ``(q0, v0)`` over ``duration`` [s].
 
     Args:
@@ -354,6 +375,11 @@ def simulate(model: ClosureModel, q0, v0=None, duration: float = 1.0, dt: float 
         controller: Instead of ``efforts``: a callable ``(t, q_a, q̇_a) -> (n,)``, e.g.
             :class:`PD`. Neither: the mechanism moves under gravity alone.
         gravity: (3,) [m/s²], world axes.
+        wrench: What the environment applies to the output frame, axis-first ``(f;
+            m_O)`` about the world origin [N; N m] (:func:`pkm_pin.dynamics.
+            inverse_dynamics`' convention; a point output takes ``f`` at the point): a
+            constant (6,) or a callable ``(t, q, v) -> (6,)``. Its power ``(J_o v)ᵀ Δ w``
+            counts in :attr:`Simulation.work`.
         baumgarte: Drift stabilisation: None (default ``ω = 1/(20 dt)``), a natural
             frequency ω [1/s] (``K_p = ω², K_d = 2ω``; 0: none) or ``(K_p, K_d)``.
         method: ``"auto"``, ``"pinocchio"`` (``pin.constraintDynamics``) or ``"kkt"``
@@ -383,16 +409,30 @@ def simulate(model: ClosureModel, q0, v0=None, duration: float = 1.0, dt: float 
     fn = _effort_function(model, efforts, controller)
     n, act_v, names = len(model.actuated), dyn.act_v, model.actuated
 
+    load = _wrench_function(wrench)
+
     def rates(t, q, v):
         tau = _call(fn, n, t, q, v, names)
-        a, lam = dyn.acceleration(q, v, tau)
+        extra, power = None, float(tau @ v[act_v])
+        if load is not None:
+            w = screws.DELTA @ load(t, q, v)
+            Jo = model.output_jacobian(q)
+            extra, power = Jo.T @ w, power + float((Jo @ v) @ w)
+        a, lam = dyn.acceleration(q, v, tau, extra)
         if not np.isfinite(a).all():
             raise SimulationError(f"non-finite acceleration at t = {t:.6g} s "
                                   f"({model.name or 'the model'}): a singular "
                                   "configuration, or a time step too large")
-        return a, float(tau @ v[act_v]), tau, lam
+        return a, power, tau, lam
 
     rec = _Recorder(n_steps + 1, model, n)
+    with np.errstate(all="ignore"):  # a diverging motion: SimulationError, no warning
+        _run(model, rates, rec, q, v, n_steps, dt, integrator)
+    return rec.result(dyn, g, gains, integrator)
+
+
+def _run(model, rates, rec, q, v, n_steps, dt, integrator) -> float:
+    """The time steps, each sample recorded; the final work."""
     W = 0.0
     for k in range(n_steps + 1):
         t = k * dt
@@ -402,7 +442,7 @@ def simulate(model: ClosureModel, q0, v0=None, duration: float = 1.0, dt: float 
             break
         step = _rk4 if integrator == "rk4" else _semi_implicit
         q, v, W = step(model.tree, rates, t, q, v, W, dt, (a, p))
-    return rec.result(dyn, g, gains, integrator)
+    return W
 
 
 def _rk4(tree, rates, t, q, v, W, dt, first):
@@ -489,3 +529,84 @@ class _Recorder:
             velocity_drift=vdrift, kinetic=T, potential=V, work=self.W,
             energy_error=float(np.abs(e).max() / scale), method=dyn.method,
             integrator=integrator, baumgarte=tuple(gains), gravity=g)
+
+
+# ------------------------------------------------------------ replay of a study
+def _payload_wrench(model: ClosureModel, payload) -> Callable | None:
+    """``(f; m)`` at the output's origin, world axes → ``(f; m + p × f)`` about the world
+    origin at each state."""
+    if payload is None:
+        return None
+    fm = screws.as_vector(payload, 6, "payload", "fx, fy, fz, mx, my, mz")
+
+    def wrench(t, q, v):
+        p = model.kinematics(q).output_placement.translation
+        return np.r_[fm[:3], fm[3:] + np.cross(p, fm[:3])]
+    return wrench
+
+@dataclass(frozen=True)
+class Replay:
+    """A motion given by its samples and efforts, simulated back (:func:`replay`).
+
+    Attributes:
+        simulation: The :class:`Simulation` (its times from 0).
+        tracking_error: (n,) largest ``|q_a,sim − q_a,ref|`` over the samples [rad or m].
+        kp, kd: (n,) the PD gains used.
+        bandwidth: the PD's natural frequency [Hz].
+    """
+
+    simulation: Simulation
+    tracking_error: np.ndarray
+    kp: np.ndarray
+    kd: np.ndarray
+    bandwidth: float
+
+
+def replay(model: ClosureModel, t, q0, v0, q_actuated, speeds, efforts, *,
+           dt: float | None = None, bandwidth: float = 2.0, gravity=GRAVITY, payload=None,
+           method: str = "auto") -> Replay:
+    """Simulate a motion known by its samples (a trajectory study: times ``t`` (N,), the
+    start ``(q0, v0)``, actuated values and rates (N, n), efforts (N, n)) with the
+    efforts as feedforward (linear in time between samples) plus a PD on the actuated
+    joints towards the samples (cubic Hermite in time), gains below, ``f`` =
+    ``bandwidth`` [Hz] (0: feedforward alone). ``dt`` default: a tenth of the samples'
+    spacing. ``payload``: ``(f; m)`` on the output at its origin, world axes (as
+    :func:`pkm_pin.trajectory.study`'s). The tracking error witnesses that the forward
+    dynamics reproduces the motion the inverse dynamics was asked for.
+
+    Decision, gains: one stiffness for every actuator from the smallest eigenvalue
+    ``λ_min`` of the scaled actuator inertia ``Λ̃`` at the start,
+    ``kp_i = λ_min (2π f)² / Uₐ,i²``, ``kd_i = 2 λ_min (2π f) / Uₐ,i²`` (``Uₐ`` the
+    length for a prismatic actuator): the stiffest closed-loop mode stays near ``f``
+    where the inertia is smallest (gains on the diagonal of ``Λ`` made Gepetto's 5-bar,
+    whose inertia falls 13× along its default motion, too stiff for the step)."""
+    from scipy.interpolate import CubicHermiteSpline
+
+    from .dynamic_indices import dynamic_indices
+
+    t = screws.as_float_array(t, "t").reshape(-1)
+    n = len(model.actuated)
+    Qa, Qd, F = (screws.as_float_array(x, name) for x, name in
+                 ((q_actuated, "q_actuated"), (speeds, "speeds"), (efforts, "efforts")))
+    for x, name in ((Qa, "q_actuated"), (Qd, "speeds"), (F, "efforts")):
+        if x.shape != (len(t), n):
+            raise InputError(f"{name} must have shape ({len(t)}, {n}) (one row per time, "
+                             f"{', '.join(model.actuated)}), got {x.shape}")
+    if len(t) < 2 or not np.all(np.diff(t) > 0):
+        raise InputError("t must hold at least 2 strictly increasing times")
+    dt = float(np.min(np.diff(t))) / 10.0 if dt is None else float(dt)
+    ind = dynamic_indices(model, q0)
+    ua = np.where(np.array(ind.units) == "m", model.length, 1.0)
+    lam = max(float(ind.eigenvalues[0]), 0.0) / ua ** 2 if n else np.zeros(0)
+    w = 2.0 * np.pi * float(bandwidth)
+    kp, kd = lam * w * w, 2.0 * lam * w
+    ref = CubicHermiteSpline(t, Qa, Qd, axis=0)
+    t0 = t[0]
+    pd = PD(kp, kd, target=lambda s: ref(s + t0), target_rate=lambda s: ref(s + t0, 1),
+            feedforward=lambda s: np.array([np.interp(s + t0, t, F[:, k]) for k in range(n)]))
+    sim = simulate(model, q0, v0, t[-1] - t0, dt, controller=pd, gravity=gravity,
+                   wrench=_payload_wrench(model, payload), method=method)
+    qa = np.array([model.actuated_values(q) for q in sim.q])
+    at = np.column_stack([np.interp(t - t0, sim.t, qa[:, k]) for k in range(n)])
+    return Replay(simulation=sim, tracking_error=np.abs(at - Qa).max(axis=0), kp=kp, kd=kd,
+                  bandwidth=float(bandwidth))
