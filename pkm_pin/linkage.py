@@ -735,6 +735,34 @@ class Linkage:
         model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
         return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
 
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model's tree from ``(q0, v0)`` (default: the home
+        assembly, at rest): :func:`pkm_pin.simulation.simulate` (``options``:
+        ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self.home_assembly.q if q0 is None else q0
+        return simulation.simulate(self._model, q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        q = self.home_assembly.q if q is None else q
+        return _indices.dynamic_indices(self._model, q)
+
+    def gravity_map(self, q_actuated, guess=None, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over the rows of ``q_actuated`` (N × actuated), assembled by
+        :meth:`sweep` (continuation from ``guess``):
+        :func:`pkm_pin.dynamic_indices.gravity_efforts` (``condition``: the actuator
+        inertia's condition per row too)."""
+        from . import dynamic_indices as _indices
+        Q = self.sweep(q_actuated, guess).q
+        return _indices.gravity_efforts(self._model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
+
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×
