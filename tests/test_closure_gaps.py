@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 import pytest
-from linkage_models import CRANK, COUPLER, GROUND, ROCKER, four_bar
+from linkage_models import COUPLER, CRANK, GROUND, ROCKER, four_bar
 from test_view import page_commands
 
 import pkm_pin
