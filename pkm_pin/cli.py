@@ -845,7 +845,7 @@ def cmd_view(args) -> int:
     if args.html is not None and Path(args.html).is_dir():  # a folder: the page inside it
         args.html = str(Path(args.html) / f"{_slug(args.mechanism)}.html")
     if _is_linkage(mech):
-        where = _linkage_assembly(args, mech)
+        where = _open_or_assembled(args, mech)
     else:
         pose = _platform_pose(args)
         if args.q is not None and pose is not None:
@@ -868,7 +868,23 @@ def cmd_view(args) -> int:
         print("animated   the uncontrolled motion of this singular pose")
     for motion in getattr(scene, "idle_motions", ()):
         print(f"idle       {motion}")
+    if getattr(scene, "error", None) is not None:
+        print(f"open       drawn at the best configuration reached: {scene.error}")
     return 0
+
+
+def _open_or_assembled(args, link):
+    """:func:`_linkage_assembly`, or the :class:`LoopClosureError` of a linkage that does
+    not assemble when it carries the best configuration reached (``view`` draws it open,
+    with its gaps)."""
+    from .linkage import LoopClosureError
+
+    try:
+        return _linkage_assembly(args, link)
+    except LoopClosureError as e:
+        if e.q is None:
+            raise
+        return e
 
 
 def cmd_dynamics(args) -> int:

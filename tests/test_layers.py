@@ -36,8 +36,9 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         "output chosen from one configuration's motions",
         ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
          "output_choice")),
-    3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
-        ("solve", "leg")),
+    3: ("the closure solver, the Leg whose solve and inverse kinematics call it, and why "
+        "a linkage does not assemble (closure_gaps: open loops, joints at a limit)",
+        ("solve", "leg", "closure_gaps")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
         "closed-loop dynamics",
         ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics")),
