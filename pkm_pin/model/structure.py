@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import pinocchio as pin
 
-from .closure_model import Closure, ClosureModel
+from .closure_model import COUPLING, Closure, ClosureModel
 
 __all__ = ["PlatformLeg", "PlatformStructure", "detect_platform"]
 
@@ -113,6 +113,10 @@ def detect_platform(model: ClosureModel) -> tuple[PlatformStructure | None, str]
                                 model.output, pin.SE3.Identity()))
         used |= set(chain)
     for closure in model.closures:
+        if closure.kind == COUPLING:
+            return None, (f"closure {closure.name!r} couples the coordinates of two joints "
+                          f"({closure.frame_a!r}, {closure.frame_b!r}; a joint equality), "
+                          "which no leg of a base–legs–platform machine holds")
         leg, reason = _closure_leg(tree, closure, platform, model.output)
         if reason:
             return None, reason
