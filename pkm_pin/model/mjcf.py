@@ -100,7 +100,8 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
     label = _clip(str(path))
     root, rewritten = _parse(path)
     held = _hold_free_roots(root)
-    tree = _build_tree(path, root, rewritten or bool(held))
+    placed = _inline_default_joint_pos(root)
+    tree = _build_tree(path, root, rewritten or bool(held) or placed)
     renamed = _distinct_frame_names(tree)
     reference = (np.array(tree.referenceConfigurations["qpos0"])
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
@@ -334,6 +335,44 @@ def _hold_free_roots(root: ET.Element) -> list[str]:
             if free:
                 held.append(body.get("name", "the root body"))
     return held
+
+
+def _inline_default_joint_pos(root: ET.Element) -> bool:
+    """Write on every ``<joint>`` without ``pos`` the ``pos`` its default class gives,
+    in place (MuJoCo's rules: the joint's ``class``, else the nearest ``childclass`` of
+    its bodies, else ``main``; a nested ``<default>`` inherits its parent's). Pinocchio
+    4.1 takes a joint's type, axis, range and ref from its class but not its position
+    (Menagerie's Robotiq 2F-85 puts its fingers' follower joints there: without it the
+    joint axis passes through the loop's pin). Returns whether a joint was changed."""
+    defaults: dict = {}
+
+    def walk(el: ET.Element, inherited: dict) -> None:
+        own = dict(inherited)
+        joint = el.find("joint")
+        if joint is not None and joint.get("pos") is not None:
+            own["pos"] = joint.get("pos")
+        defaults[el.get("class", "main")] = own
+        for child in el.findall("default"):
+            walk(child, own)
+
+    for top in root.findall("default"):
+        walk(top, {})
+    if not any("pos" in d for d in defaults.values()):
+        return False
+    changed = False
+    stack = [(body, "main") for body in root.findall("worldbody")]
+    while stack:
+        el, cls = stack.pop()
+        cls = el.get("childclass", cls)
+        for child in el:
+            if child.tag == "joint" and child.get("pos") is None:
+                pos = defaults.get(child.get("class", cls), {}).get("pos")
+                if pos is not None:
+                    child.set("pos", pos)
+                    changed = True
+            elif child.tag in ("body", "frame"):
+                stack.append((child, cls))
+    return changed
 
 
 def _build_tree(path: Path, root: ET.Element, rewritten: bool = False) -> pin.Model:

@@ -21,8 +21,9 @@ The rule (:func:`detect_platform`):
 * legs share no joint, and every movable joint of the tree is on a leg (or is the
   platform's free flyer): a joint on no leg, a closure between two legs or from the
   platform to itself (refused by the closure model), a joint of several coordinates on
-  a leg (a ball joint), or
-  mimicking joints leave the model to the general elimination, with the reason.
+  a leg (a ball joint), a coupling of two joints' coordinates (an MJCF ``<joint>``
+  equality: no leg holds it), or mimicking joints leave the model to the general
+  elimination, with the reason.
 
 The structure only names joints and frames: the legs' Pinocchio models are built from it
 by :meth:`pkm_pin.Mechanism.from_closure_model`.
