@@ -11,11 +11,19 @@ closures, the actuators and the reference configuration from the file itself:
   ``C_a`` is ``body1`` at ``relpose * anchor`` when ``relpose`` (pos, quat w x y z) has a
   non-zero quaternion, else at the relative pose ``body1⁻¹ body2`` of the reference
   configuration times ``anchor``. Site form: the two sites' frames.
-* ``active="false"`` constraints are skipped; ``joint``, ``tendon``, ``flex`` and
-  ``distance`` equalities are not loop closures and are refused with an error.
-* Actuated joints: the ``joint`` (or ``jointinparent``) attribute of every ``<actuator>``
-  child, in file order (MuJoCo's ``ctrl`` order); an actuator on a tendon, site or body is
-  an error.
+* ``<equality><joint>``: a coupling closure (``kind="coupling"``, one row) when linear:
+  MuJoCo's ``q₁ − q₁₀ = c₀ + c₁ (q₂ − q₂₀)`` (``polycoef``, ``q₁₀``, ``q₂₀`` the
+  joints' ``qpos0``) is ``q₁ = (c₀ + q₁₀ − c₁ q₂₀) + c₁ q₂``, the closure's ``frame_a`` /
+  ``frame_b`` the two joints' frames (the universe's without ``joint2``: ``q₁ = c₀ +
+  q₁₀``); a non-zero ``c₂``, ``c₃`` or ``c₄`` is refused in a sentence naming the
+  equality.
+* ``active="false"`` equalities are skipped, each with a note (:attr:`ClosureModel.notes`);
+  ``tendon``, ``flex`` and ``distance`` equalities are refused with an error.
+* Actuated joints, one per ``<actuator>`` child in file order (MuJoCo's ``ctrl``
+  order): its ``joint`` (or ``jointinparent``); or, for ``tendon=`` on a fixed tendon,
+  the joint the tendon's length moves with on the file's linear joint couplings
+  (:func:`_tendon_joint`, with a note). A spatial tendon, a tendon over independent
+  joints, and ``site``/``body``/slider-crank transmissions are refused by name.
 * Reference: Pinocchio's ``referenceConfigurations["qpos0"]`` (the joints' ``ref``), else
   the neutral configuration.
 * Output frame: ``output=`` if given, else the one the file names in
@@ -34,7 +42,9 @@ serial (or branching) chain.
 Pinocchio 4.1's parser is worked around where it is wrong: it keeps only the first body
 under ``<worldbody>`` (the others, and sites on the world, are dropped), so the children of
 ``<worldbody>`` are wrapped in one joint-less body (:data:`WORLD_BODY`, a frame fixed to
-the universe) in a temporary copy of the file; it gives every constraint an empty name (the
+the universe) in a temporary copy of the file; it takes no joint ``pos`` from a default
+class, so the copy has it written on the joint (:func:`_inline_default_joint_pos`); it
+gives every constraint an empty name (the
 ``name`` attribute is lost), so the constraints are read here from the XML and only the
 tree is taken from Pinocchio (``buildModelAndConstraintsFromMJCF`` gives the same
 frames and placements; the tests compare them).
