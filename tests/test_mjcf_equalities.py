@@ -327,3 +327,15 @@ def test_joint_position_from_a_default_class(tmp_path):
     for j in range(1, a.njoints):
         assert np.allclose(a.jointPlacements[j].homogeneous, b.jointPlacements[j].homogeneous)
     assert np.allclose(a.jointPlacements[1].translation, [0.0, 0.032, 0.0065])
+
+
+def test_a_one_joint_tendon_on_an_unknown_joint_names_the_joint(tmp_path):
+    """A fixed tendon over a joint Pinocchio's model lacks: the actuator's error names
+    that joint (not a differential)."""
+    text = FOUR_BAR.format(extra="").replace(
+        '<actuator><motor name="m" joint="crank_joint"/>',
+        '<tendon><fixed name="t"><joint joint="ghost"/></fixed></tendon>'
+        '<actuator><motor name="m" tendon="t"/>')
+    with pytest.raises(pkm_pin.errors.ClosureFileError, match="joint 'ghost' is not a joint "
+                       "of Pinocchio's model"):
+        read_mjcf(_write(tmp_path, "t.xml", text))

@@ -679,9 +679,8 @@ def _tendon_joint(label: str, where: str, tendon: str, tendons: dict, tree: pin.
                                "non-zero coef (or a <joint> without joint=)")
     length = " ".join(f"{'−' if c < 0 else '+'} {abs(c):g}·{j}" for j, c in terms
                       ).removeprefix("+ ")
-    rates = {}
     for joint, _ in terms:
-        rates = _coupled_rates(tree, closures, joint)
+        rates = {joint: 1.0} if len(terms) == 1 else _coupled_rates(tree, closures, joint)
         if all(j in rates for j, _ in terms):
             k = sum(c * rates[j] for j, c in terms)
             if abs(k) <= 1e-12 * max(abs(c) for _, c in terms):
