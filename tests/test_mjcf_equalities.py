@@ -339,3 +339,25 @@ def test_a_one_joint_tendon_on_an_unknown_joint_names_the_joint(tmp_path):
     with pytest.raises(pkm_pin.errors.ClosureFileError, match="joint 'ghost' is not a joint "
                        "of Pinocchio's model"):
         read_mjcf(_write(tmp_path, "t.xml", text))
+
+
+def test_limits_of_a_joint_with_a_ref_are_its_range(tmp_path):
+    """MuJoCo's ``range`` bounds ``qpos``, the coordinate Pinocchio's tree uses (the body
+    at its ``pos`` when ``q = ref``): the tree's limits are the range, not Pinocchio's
+    ``range − ref``."""
+    text = ('<mujoco model="r"><compiler angle="radian"/><worldbody><body name="a">'
+            '<body name="b" pos="0 0.05 0"><joint name="h" axis="0 0 1" range="-0.5 0.7" '
+            'ref="0.2"/><body name="t" pos="0.1 0 0"/></body>'
+            '<body name="c" pos="0 0.05 0"><joint name="s" type="slide" axis="1 0 0" '
+            'range="-0.5 0.7" ref="0.2"/></body>'
+            '<body name="d"><joint name="free_h" axis="0 0 1" ref="0.3"/></body>'
+            '</body></worldbody></mujoco>')
+    model = read_mjcf(_write(tmp_path, "r.xml", text))
+    tree = model.tree
+    assert np.allclose(tree.lowerPositionLimit[:2], -0.5)
+    assert np.allclose(tree.upperPositionLimit[:2], 0.7)
+    assert tree.upperPositionLimit[2] > 1e300  # no range: no limit
+    assert np.allclose(model.reference, [0.2, 0.2, 0.3])
+    data = tree.createData()
+    pin.framesForwardKinematics(tree, data, model.reference)
+    assert np.allclose(data.oMf[tree.getFrameId("t")].translation, [0.1, 0.05, 0.0])

@@ -25,7 +25,8 @@ closures, the actuators and the reference configuration from the file itself:
   (:func:`_tendon_joint`, with a note). A spatial tendon, a tendon over independent
   joints, and ``site``/``body``/slider-crank transmissions are refused by name.
 * Reference: Pinocchio's ``referenceConfigurations["qpos0"]`` (the joints' ``ref``), else
-  the neutral configuration.
+  the neutral configuration; joint limits are MuJoCo's ``range`` of ``qpos``
+  (:func:`_limits_in_qpos`).
 * Output frame: ``output=`` if given, else the one the file names in
   ``<custom><text name="pkm_pin:output" data="FRAME"/>``, else a body named
   ``effector``, else the last body.
@@ -115,6 +116,7 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
     renamed = _distinct_frame_names(tree)
     reference = (np.array(tree.referenceConfigurations["qpos0"])
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
+    _limits_in_qpos(tree, reference)
     closures, notes = _closures(label, root, tree, reference, renamed)
     actuated, matches, drive_notes = _actuated(label, root, tree, closures)
     named = output if output is not None else _named_output(root)
@@ -439,6 +441,23 @@ def _distinct_frame_names(tree: pin.Model) -> dict:
             renamed[(frame.type, frame.name)] = name
             frame.name = name
     return renamed
+
+
+def _limits_in_qpos(tree: pin.Model, qpos0: np.ndarray) -> None:
+    """Shift the finite position limits of every one-coordinate joint by its ``qpos0``
+    (its ``ref``), in place. MuJoCo's ``range`` bounds ``qpos``; Pinocchio 4.1 places
+    the body so that its ``q`` is ``qpos`` (the body at its ``pos`` when ``q = ref``) but
+    stores ``range − ref`` as the limits."""
+    lower, upper = tree.lowerPositionLimit.copy(), tree.upperPositionLimit.copy()
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        i = joint.idx_q
+        if joint.nq != 1 or joint.nv != 1 or qpos0[i] == 0.0:
+            continue
+        for limits in (lower, upper):
+            if abs(limits[i]) < 1e300:  # Pinocchio's "no limit" is the largest float
+                limits[i] += qpos0[i]
+    tree.lowerPositionLimit, tree.upperPositionLimit = lower, upper
 
 
 def _pinocchio_model(filename: str, label: str) -> pin.Model:
