@@ -185,6 +185,9 @@ def test_parallel_jaw_coupling_rows_and_mobility(tmp_path):
     assert np.allclose(an.A, [np.r_[f, np.cross(p, f)]], atol=1e-12)
     assert an.B.shape == (1, 1) and an.B[0, 0] == pytest.approx(2.0, rel=1e-12)
     assert an.motion_type == "1T"
+    # inverse kinematics: the right jaw at x = 0.05 − 0.008 needs q_l = (0.01 + 0.008) / 2
+    ik = link.inverse_kinematics(pin.SE3(np.eye(3), np.array([0.042, 0.0, 0.15])))
+    assert ik.q_actuated == pytest.approx([0.009], abs=1e-12)
 
 
 def test_coupling_rows_of_the_compiled_kernel_equal_the_closure_model(tmp_path):
