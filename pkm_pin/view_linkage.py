@@ -254,6 +254,8 @@ class _LinkagePainter(_Painter):
         out = []
         for c in self.model.closures:
             for frame, P in ((c.frame_a, c.placement_a), (c.frame_b, c.placement_b)):
+                if not c.joins_frames:
+                    break
                 out.append((frame, self.frame_point(frame, P),
                             self.tree_.frames[self.tree_.getFrameId(frame)].parentJoint))
         fid = self.tree_.getFrameId(self.mech.output)
@@ -375,6 +377,8 @@ class _LinkagePainter(_Painter):
     def closures(self) -> None:
         """Each loop's ring, its constraint-frame marker and the gap, if any."""
         for k, c in enumerate(self.model.closures):
+            if not c.joins_frames:  # a coupling of joint coordinates: no loop to draw
+                continue
             path = f"{self.root}/closures/{node_name(c.name or f'closure_{k}')}"
             self.note("closure", CLOSURE_COLOUR)
             pts = self.loop_points(c)

@@ -88,6 +88,7 @@ CORPUS = [
     Case("pinocchio/closed_chain.xml", 16, 16, 2, 0, "left-foot",
          ("right-foot", "left-foot-crank", "right-foot-crank"), "2T3R", "II",
          singular_why="no <actuator> in the file: every motion is idle"),
+    Case("menagerie/robotiq_2f85/2f85.xml", 3, 2, 2, 1, "left_driver", (), "1R"),
 ]
 
 GEPETTO = [c for c in CORPUS if c.path.startswith("gepetto/")]
