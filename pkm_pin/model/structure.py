@@ -204,8 +204,9 @@ def legs_length(model: ClosureModel, structure: PlatformStructure) -> float:
     :meth:`pkm_pin.Mechanism.from_closure_model` builds (the offsets between consecutive
     joints from the second on, the offset of the closure's constraint frame from the
     leg's last joint, half the range of each prismatic joint with finite limits; legs
-    with none are left out), read from the tree without building them. The same machine written as TOML legs or as
-    any tree plus closures gets the same length, hence the same homogenised indices."""
+    with none are left out), read from the tree without building them. The same
+    machine written as TOML legs or as any tree plus closures gets the same length,
+    hence the same homogenised indices."""
     tree = model.tree
     lengths = []
     for leg in structure.legs:
