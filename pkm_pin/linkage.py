@@ -82,6 +82,7 @@ from . import dynamics as _dynamics
 from . import screws
 from .analysis import classify
 from .assembly import Assembly
+from .closure_gaps import Diagnosis, diagnose
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .mechanism import Mechanism
 from .model.closure_model import (
@@ -118,16 +119,28 @@ class LoopClosureError(AssemblyError):
     """A loop of a linkage does not close (an :class:`AssemblyError` whose ``leg`` is the
     name of the worst closure, or of the actuated or output targets).
 
+    The message names the worst loop and its residual, then (from :attr:`diagnosis`)
+    every loop left open with its gap in mm and degrees, the joints held at a limit and a
+    hint (:mod:`pkm_pin.closure_gaps`).
+
     Attributes:
         leg: Name of the loop (closure) that does not close.
         residual: Its residual (dimensionless, as :meth:`ClosureModel.closure_residual`).
+        q: The best configuration reached (nq,), or None: ``pkm-pin view`` draws the
+            open tree there.
+        diagnosis: The :class:`~pkm_pin.closure_gaps.Diagnosis` at :attr:`q`, or None.
     """
 
-    def __init__(self, loop: str, residual: float, detail: str = ""):
+    def __init__(self, loop: str, residual: float, detail: str = "", *, q=None,
+                 diagnosis: Diagnosis | None = None):
         super().__init__(loop, residual, detail)
+        self.q = None if q is None else np.array(q, dtype=float)
+        self.diagnosis = diagnosis
         message = (f"loop {loop!r} does not close: the best configuration found within the "
                    f"joint limits leaves a relative residual of {self.residual:.3g}")
-        self.args = (message + (f" ({detail})" if detail else ""),)
+        message += f" ({detail})" if detail else ""
+        words = "" if diagnosis is None else diagnosis.words()
+        self.args = (message + (f"; {words}" if words else ""),)
 
     def __str__(self) -> str:
         return self.args[0]
@@ -387,7 +400,8 @@ class Linkage:
                                             max_iter=max_iter,
                                             nearest=model.reference if warm is None else warm)
         if not sol.converged:
-            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets)
+            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets,
+                                tol=tol)
         off = self._off_representation(sol.q, targets, seed, tol, max_iter)
         if off is not None:
             sol, iterations = off[0], iterations + off[1]
@@ -434,6 +448,26 @@ class Linkage:
                     if final.converged else None
         return None
 
+    def reached(self, error: LoopClosureError) -> LinkageAssembly:
+        """The best configuration a failed assembly reached (``error.q``) as a
+        :class:`LinkageAssembly` whose loops do not all close (its ``residual`` is the
+        largest closure residual there): what ``pkm-pin view`` draws for a file that does
+        not assemble.
+
+        Raises:
+            InputError: ``error`` carries no configuration.
+        """
+        if not isinstance(error, LoopClosureError) or error.q is None:
+            raise InputError("reached() takes a LoopClosureError that carries the best "
+                             "configuration reached (its q)")
+        model = self._model
+        q = model.check_q(error.q)
+        kin = model.kinematics(q)
+        norms = model.closure_norms(kin.residual)
+        return LinkageAssembly(q.copy(), float(norms.max(initial=0.0)), 0,
+                               dict(zip(self._closure_names, norms.tolist())),
+                               _actuated_or_nan(model, q), kin.output_placement)
+
     def _assembly(self, sol, iterations: int) -> LinkageAssembly:
         """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
         Pinocchio pass, when it was at ``sol.q``)."""
@@ -446,18 +480,26 @@ class Linkage:
         return LinkageAssembly(q.copy(), float(sol.residual), int(iterations), names,
                                _actuated_or_nan(model, q), oMo)
 
-    def _failure(self, sol, n_starts: int, targets, what: str = "") -> LoopClosureError:
+    def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL
+                 ) -> LoopClosureError:
+        """The error for a best solution ``sol`` that did not converge, with its
+        :func:`~pkm_pin.closure_gaps.diagnose` (limits lifted only for a plain
+        assembly: no targets, no output pose)."""
         model = self._model
         residual = model.closure_residual(sol.q)
         norms = [float(np.linalg.norm(residual[s])) for s in model.closure_slices()]
         detail = f"{n_starts} starts, {sol.iterations} iterations in the best one"
+        found = diagnose(model, sol.q, tol=tol, lift_limits=targets is None and not what)
         if norms and max(norms) > sol.actuated and max(norms) >= sol.pose:
             k = int(np.argmax(norms))
-            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail)
+            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail,
+                                    q=sol.q, diagnosis=found)
         if targets is not None and sol.actuated >= sol.pose:
             return LoopClosureError("actuated targets", sol.actuated,
-                                    detail + f"; targets {np.round(targets, 6)}")
-        return LoopClosureError(what or "output pose", sol.pose, detail)
+                                    detail + f"; targets {np.round(targets, 6)}", q=sol.q,
+                                    diagnosis=found)
+        return LoopClosureError(what or "output pose", sol.pose, detail, q=sol.q,
+                                diagnosis=found)
 
     # ------------------------------------------------------------- mobility
     def mobility(self, q, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
@@ -734,6 +776,34 @@ class Linkage:
         """Actuated efforts and closure forces of the motion ``(q, v, a)`` of the
         model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
         return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
+
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model's tree from ``(q0, v0)`` (default: the home
+        assembly, at rest): :func:`pkm_pin.simulation.simulate` (``options``:
+        ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self.home_assembly.q if q0 is None else q0
+        return simulation.simulate(self._model, q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        q = self.home_assembly.q if q is None else q
+        return _indices.dynamic_indices(self._model, q)
+
+    def gravity_map(self, q_actuated, guess=None, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over the rows of ``q_actuated`` (N × actuated), assembled by
+        :meth:`sweep` (continuation from ``guess``):
+        :func:`pkm_pin.dynamic_indices.gravity_efforts` (``condition``: the actuator
+        inertia's condition per row too)."""
+        from . import dynamic_indices as _indices
+        Q = self.sweep(q_actuated, guess).q
+        return _indices.gravity_efforts(self._model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
 
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:

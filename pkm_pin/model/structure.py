@@ -21,8 +21,9 @@ The rule (:func:`detect_platform`):
 * legs share no joint, and every movable joint of the tree is on a leg (or is the
   platform's free flyer): a joint on no leg, a closure between two legs or from the
   platform to itself (refused by the closure model), a joint of several coordinates on
-  a leg (a ball joint), or
-  mimicking joints leave the model to the general elimination, with the reason.
+  a leg (a ball joint), a coupling of two joints' coordinates (an MJCF ``<joint>``
+  equality: no leg holds it), or mimicking joints leave the model to the general
+  elimination, with the reason.
 
 The structure only names joints and frames: the legs' Pinocchio models are built from it
 by :meth:`pkm_pin.Mechanism.from_closure_model`.
@@ -36,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .closure_model import Closure, ClosureModel
+from .closure_model import COUPLING, Closure, ClosureModel
 
 __all__ = ["PlatformLeg", "PlatformStructure", "detect_platform", "legs_length"]
 
@@ -114,6 +115,10 @@ def detect_platform(model: ClosureModel) -> tuple[PlatformStructure | None, str]
                                 model.output, pin.SE3.Identity()))
         used |= set(chain)
     for closure in model.closures:
+        if closure.kind == COUPLING:
+            return None, (f"closure {closure.name!r} couples the coordinates of two joints "
+                          f"({closure.frame_a!r}, {closure.frame_b!r}; a joint equality), "
+                          "which no leg of a base–legs–platform machine holds")
         leg, reason = _closure_leg(tree, closure, platform, model.output)
         if reason:
             return None, reason
