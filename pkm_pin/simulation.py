@@ -51,7 +51,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import dynamics, screws
-from .errors import InputError, PkmError
+from .errors import InputError, SimulationError
 from .model.closure_model import ClosureModel
 from .tolerances import ASSEMBLY_CHECK_RTOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
 
@@ -64,10 +64,6 @@ BAUMGARTE_STEPS = 20.0
 MAX_STEPS = 1_000_000
 METHODS = ("auto", "pinocchio", "kkt")
 INTEGRATORS = ("rk4", "semi-implicit")
-
-
-class SimulationError(PkmError):
-    """The simulation cannot continue (a non-finite acceleration, a singular system)."""
 
 
 # ------------------------------------------------------------------- controller
