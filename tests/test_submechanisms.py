@@ -104,6 +104,24 @@ def test_a_leg_moves_its_foot_as_in_the_whole_model():
                           - kin0.frame_placements[foot].translation) > 1e-3
 
 
+@pytest.mark.parametrize("name,dof,idle", [
+    ("digit_like_2legs_6D", 6, 0), ("digit_like_2legs_old", 6, 0),
+    ("old/digit_like_2legs", 9, 3)])
+def test_the_other_two_legged_files_split_into_regular_legs(name, dof, idle):
+    """The other bipeds of the corpus (docs/closed_loops.md's table): two legs of six
+    motors, each foot regular at home (old/digit_like_2legs: three spinning rods a leg,
+    9 − 3); the legs' DOF add up to the whole's."""
+    link = pkm_pin.load_mechanism(DATA / name / "robot.urdf")
+    a = link.home_assembly
+    subs = link.submechanisms(a.q)
+    got = []
+    for sub in subs:
+        an = sub.analyze(sub.home_assembly)
+        got.append((len(sub.actuated), sub.output, an.dof, an.idle_dof, an.singularity))
+    assert got == [(6, "foot", dof, idle, "none"), (6, "foot_left", dof, idle, "none")]
+    assert 2 * dof == link.mobility(a.q).dof
+
+
 def test_a_single_loop_is_its_own_only_submechanism():
     """The four-bar: one group (its loop and its motor), submechanisms() is [link]."""
     link = pkm_pin.load_mechanism(FOUR_BAR)
