@@ -168,3 +168,18 @@ def test_analyze_text_has_a_block_per_leg_after_the_summary(capsys):
     assert block[2].endswith("output foot_left")
     assert main(["analyze", str(FOUR_BAR)]) == 0
     assert "sub-mechanisms" not in capsys.readouterr().out
+
+
+def test_pinocchios_reduced_cassie_splits_into_its_two_legs():
+    """closed_chain.xml (no <actuator>, the free pelvis held as the base): two legs of
+    13 coordinates and two point loops (rank 5) each, 8 DOF all idle, as the whole's 16
+    split in two; with no motor each reads class II, like the whole."""
+    link = pkm_pin.load_mechanism(ROOT / "tests" / "data" / "pinocchio" / "closed_chain.xml")
+    a = link.home_assembly
+    got = []
+    for sub in link.submechanisms(a.q):
+        an = sub.analyze(sub.home_assembly)
+        got.append((sub.model.nv, sub.actuated, sub.output, an.dof, an.idle_dof,
+                    an.singularity))
+    assert got == [(13, (), "left-foot", 8, 8, "II"), (13, (), "right-foot", 8, 8, "II")]
+    assert link.mobility(a.q).dof == 16
