@@ -353,6 +353,16 @@ class Linkage:
         """The analysis of :attr:`home_assembly` (cached)."""
         return self.analyze(self.home_assembly)
 
+    def submechanisms(self, q=None) -> list:
+        """The independent sub-mechanisms (groups of closures and actuators that share no
+        movable joint: a biped's two legs) at the assembled tree configuration ``q``
+        (default: :attr:`home_assembly`), each a :class:`Linkage` with its own output,
+        the other groups' joints locked at ``q``; ``[self]`` for a single mechanism
+        (:func:`pkm_pin.submechanisms.submechanisms`)."""
+        from .submechanisms import submechanisms
+
+        return submechanisms(self, q)
+
     @property
     def grubler(self) -> int:
         """Grübler–Kutzbach count ``Σ joint nv − Σ closure rows`` (for comparison with

@@ -36,7 +36,8 @@ largest singular value over all frames.
 
 A mechanism whose independent actuators outnumber six (two legs of six motors each) has
 no fitting frame: the frame ranked first then moves with every motor of its own leg and
-not with the other leg's, which a single output reports as a type I singularity.
+not with the other leg's, which a single output reports as a type I singularity; each
+leg read alone (:mod:`pkm_pin.submechanisms`) has its own foot as output.
 """
 
 from __future__ import annotations

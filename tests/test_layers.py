@@ -33,9 +33,10 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
          "model.pinned", "model.structure", "model.chain_urdf")),
     2: ("kinematics of one configuration: compiled leg kinematics, the Pinocchio pass, "
         "serial chains, the assembly record whose twists that pass verifies, the default "
-        "output chosen from one configuration's motions",
+        "output chosen from one configuration's motions and the independent sub-mechanisms "
+        "split from the tree and its closures",
         ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
-         "output_choice")),
+         "output_choice", "submechanisms")),
     3: ("the closure solver, the Leg whose solve and inverse kinematics call it, and why "
         "a linkage does not assemble (closure_gaps: open loops, joints at a limit)",
         ("solve", "leg", "closure_gaps")),
