@@ -202,7 +202,8 @@ def submechanism_lines(r: dict) -> list[str]:
     if not subs:
         return []
     out = [f"sub-mechanisms     {len(subs)} independent (no movable joint shared; each "
-           "analysed with the others held):"]
+           "analysed with the others held, with its own output: the singularity class "
+           "above is that of one output for all of them):"]
     for s in subs:
         idx = ", ".join(f"{k} {_index(v, 'undefined', '.3g')}" for k, v in s["indices"].items())
         out += [f"    {s['name']}: {s['joints']} joints, {len(s['actuated'])} actuators "
