@@ -329,6 +329,18 @@ class Linkage:
         mech = self._legs("sensitivity to geometric errors")
         return mech.sensitivity(self.legs_assembly(q), parameters)
 
+    def calibrate(self, samples, parameters, **options):
+        """Identify geometric errors from measured output poses or positions after known
+        actuations (:func:`pkm_pin.calibration.calibrate`), read leg by leg through
+        :attr:`legs_mechanism`: ``samples`` are pairs ``(q_actuated, measured)`` with
+        the actuated values in :attr:`actuated` order, ``parameters`` the legs'
+        parameter names (:meth:`sensitivity`'s).
+
+        Raises:
+            InputError: not a base–legs–platform machine (the reason).
+        """
+        return self._legs("calibration").calibrate(samples, parameters, **options)
+
     def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0
                                ) -> list[LinkageAssembly]:
         """Every working mode at the output ``pose``: one assembly per distinct vector of

@@ -505,6 +505,14 @@ class Mechanism:
         """
         return _sensitivity.sensitivity(self, assembly, parameters)
 
+    def calibrate(self, samples, parameters, **options):
+        """Identify the errors of ``parameters`` from measured platform poses or
+        positions after known actuations: :func:`pkm_pin.calibration.calibrate`
+        (``samples``: pairs ``(q_actuated, measured)``)."""
+        from .calibration import calibrate
+
+        return calibrate(self, samples, parameters, **options)
+
     def workspace(self, coords=None, **options):
         """The reachable, singularity-free and good-transmission workspaces over some of
         the pose coordinates (default the independent ones), with volumes and inscribed
