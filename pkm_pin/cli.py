@@ -1014,8 +1014,11 @@ def _print_dynamic_indices(mech, args) -> int:
               + f"; gravity effort {t:.4g} {unit[u]}")
     print("eigen      Λ̃ = Uₐ Λ Uₐ [kg m²]: " + " ".join(f"{x:.4g}" for x in r.eigenvalues)
           + f"; condition {r.condition:.4g}; idle motions {r.idle_motions}")
-    for row in r.output_inertia:
-        print("output     Λ_x " + " ".join(f"{x:>10.4g}" for x in row))
+    X = r.output_inertia  # round-off of a rank-deficient Λ_x printed as 0
+    X = np.where(np.abs(X) <= 1e-12 * max(np.abs(X).max(initial=0.0), 1e-300), 0.0, X)
+    print("output     Λ_x about the output origin, world axes, rows and columns (ω; v):")
+    for row in X:
+        print("           " + " ".join(f"{x + 0.0:>10.4g}" for x in row))
     return 0
 
 

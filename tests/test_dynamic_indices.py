@@ -273,7 +273,13 @@ def test_cli_indices(capsys):
     ).efforts, rtol=1e-12)
     assert main(["dynamics", str(path), "--indices"]) == 0
     text = capsys.readouterr().out
-    assert "condition" in text and text.count("output     Λ_x") == 6
+    assert "condition" in text and text.count("output     Λ_x about the output origin") == 1
+    rows = text.split("(ω; v):\n", 1)[1].splitlines()[:6]
+    printed = np.array([[float(x) for x in row.split()] for row in rows])
+    X = r.output_inertia  # printed to 4 digits, round-off below 1e-12 of the largest as 0
+    assert printed.shape == (6, 6)
+    assert np.allclose(printed, np.where(np.abs(X) <= 1e-12 * np.abs(X).max(), 0, X),
+                       rtol=1e-3, atol=1e-12)
     assert main(["dynamics", "--indices"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no body has a mass" in err[0]
