@@ -269,6 +269,28 @@ class Linkage:
         """Names of the actuated joints."""
         return self._model.actuated
 
+    # The names every mechanism answers (a Mechanism has the same).
+    @property
+    def closure_model(self) -> ClosureModel:
+        """The closure model (:attr:`model`)."""
+        return self._model
+
+    @property
+    def actuated_names(self) -> list[str]:
+        """Names of the actuated joints (:attr:`actuated`), as a list."""
+        return list(self._model.actuated)
+
+    @property
+    def n_actuated(self) -> int:
+        """Number of actuated joints."""
+        return len(self._model.actuated)
+
+    @property
+    def characteristic_length(self) -> float:
+        """The unit of length of every homogenised index [m]: the model's length (the
+        legs' where a platform structure is detected: :func:`_machine_length`)."""
+        return self._model.length
+
     @property
     def output(self) -> str:
         """Name of the output frame."""

@@ -257,6 +257,25 @@ class Mechanism:
 
         return from_mechanism(self)
 
+    # The names every mechanism answers (a Linkage has the same): the closure model, its
+    # actuated joints and output frame.
+    @property
+    def model(self):
+        """The closure model (:attr:`closure_model`: the file's own when the mechanism
+        was detected in one, :attr:`source_model`)."""
+        return self.source_model if self.source_model is not None else self.closure_model
+
+    @property
+    def actuated(self) -> tuple:
+        """Names of the actuated joints, in the order of the actuated coordinates
+        (:attr:`actuated_names`)."""
+        return tuple(self.actuated_names)
+
+    @property
+    def output(self) -> str:
+        """The output frame: the platform frame of :attr:`model`."""
+        return self.model.output
+
     @cached_property
     def tree_pass(self) -> TreePass | None:
         """Pinocchio's pass over every leg in one call (:class:`pkm_pin.twists.TreePass`,

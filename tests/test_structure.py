@@ -374,3 +374,19 @@ def test_calibration_through_the_general_backend(stewart):
     cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
     with pytest.raises(InputError, match="calibration reads a machine leg by leg"):
         cassie.calibrate([], names)
+
+
+def test_both_facades_answer_the_same_names(stewart):
+    """The TOML Mechanism, its Extended URDF read as a Linkage (default) and through the
+    legs backend answer the same names with the same values: the closure model, the
+    actuated joints (six, in one order), the output frame, the characteristic length."""
+    toml, link, _, path = stewart
+    legs = pkm_pin.load_mechanism(path, backend="legs")
+    for m in (toml, link, legs):
+        assert isinstance(m.model, ClosureModel)
+        assert m.n_actuated == len(m.actuated) == len(m.actuated_names) == 6
+        assert m.characteristic_length == pytest.approx(toml.characteristic_length, rel=1e-12)
+        assert m.output == m.model.output
+    assert toml.model is toml.closure_model and link.model is link.closure_model
+    assert legs.model is legs.source_model and legs.actuated == tuple(legs.actuated_names)
+    assert [a.split("_")[-1] for a in link.actuated] == ["P"] * 6
