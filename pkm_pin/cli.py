@@ -875,7 +875,8 @@ def cmd_dynamics(args) -> int:
     (:func:`pkm_pin.trajectory.study`): the CSV of ``--trajectory`` (header
     ``t,<actuated names>`` or ``t`` and output coordinates, clamped cubic spline) or
     the default sine about home over ``--duration``; per actuator peak and RMS effort,
-    peak speed, peak power and energy as a table or ``--json``; ``--out PREFIX``: PREFIX.npz and the PNG plots."""
+    peak speed, peak power and energy as a table or ``--json``; ``--out PREFIX``:
+    PREFIX.npz and the PNG plots."""
     from . import trajectory as tr
 
     if args.trajectory is not None and args.duration is not None:
