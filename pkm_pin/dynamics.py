@@ -71,7 +71,7 @@ from numba.extending import register_jitable
 
 from . import screws
 from .compiling import PLAIN_CALLS, prefer_compiled
-from .engine.linalg import jacobi, largest
+from .engine.linalg import JACOBI_TOL, jacobi, largest
 from .errors import InconsistentMotion, InputError, PkmError, SingularityError
 from .model.closure_model import KINDS, ClosureModel, TreeKinematics
 from .tolerances import (
@@ -178,6 +178,10 @@ class _Work:
         self.row_units = units
         self.act_v = np.array(model.actuated_v, dtype=int)
         self.names = _velocity_names(tree)
+        #: per joint: mass, centre of mass (joint frame), rotational inertia by rows
+        self.body = np.array([np.r_[I.mass, I.lever, I.inertia.ravel()]
+                              for I in tree.inertias])
+        self.armature = np.array(tree.armature, dtype=float)
 
     def set_gravity(self, g: np.ndarray) -> None:
         self.tree.gravity = pin.Motion(g, np.zeros(3))
@@ -229,6 +233,22 @@ def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarra
         M = pin.SE3(Mh[i, :, :3], Mh[i, :, 3])
         out[rows[k]] = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(nud[i]))
     return out
+
+
+@register_jitable
+def _x3(a, b):
+    """``a × b`` as a tuple (no allocation; ``a``, ``b`` arrays or tuples)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@register_jitable
+def _p3(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@register_jitable
+def _m3(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
 @register_jitable
@@ -284,25 +304,25 @@ def closure_second_derivative(Hj, VA, local, kind, first, out, nud, Mh):
 @register_jitable
 def _closure_dd(end_a, end_b, kind, r0, out, nud, Mh):
     """One closure's second derivative from its ends' world quantities ``(p, ṗ, p̈, ω,
-    ω̇, R)`` (:func:`_end`): point and revolute rows into ``out`` from row ``r0``; a
-    weld's ``ν̇`` into ``nud`` (6) and ``M`` into ``Mh`` (3 × 4)."""
+    ω̇, R)`` (:func:`_end`, :func:`_end_world`): point and revolute rows into ``out``
+    from row ``r0``; a weld's ``ν̇`` into ``nud`` (6) and ``M`` into ``Mh`` (3 × 4).
+    Written on tuples (:func:`_x3`): no allocation."""
     pa, pda, pdda, wa, dwa, Ra = end_a
     pb, pdb, pddb, wb, dwb, Rb = end_b
-    d, dd, Wr, Wrd = pb - pa, pdb - pda, wb - wa, dwb - dwa
-    U = dd - _cross(wa, d)                    # velocity at p_b, relative motion
-    Ud = pddb - pdda - _cross(dwa, d) - _cross(wa, dd)
+    d, dd, Wr, Wrd = _m3(pb, pa), _m3(pdb, pda), _m3(wb, wa), _m3(dwb, dwa)
+    U = _m3(dd, _x3(wa, d))                    # velocity at p_b, relative motion
+    Ud = _m3(_m3(_m3(pddb, pdda), _x3(dwa, d)), _x3(wa, dd))
     if kind < 2:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U)
-        y = Ud - _cross(wa, U)
+        y = _m3(Ud, _x3(wa, U))
         for r in range(3):
             out[r0 + r] = _transposed(Ra, y, r)
         if kind == 1:  # d/dt R_aᵀ (W × z_b)
-            zb = np.array([Rb[0, 2], Rb[1, 2], Rb[2, 2]])
-            x = _cross(Wrd, zb) + _cross(Wr, _cross(wb, zb)) \
-                - _cross(wa, _cross(Wr, zb))
+            zb = (Rb[0, 2], Rb[1, 2], Rb[2, 2])
+            x = _m3(_p3(_x3(Wrd, zb), _x3(Wr, _x3(wb, zb))), _x3(wa, _x3(Wr, zb)))
             out[r0 + 3] = _transposed(Ra, x, 0)
             out[r0 + 4] = _transposed(Ra, x, 1)
     else:  # ν = (R_bᵀ W; R_bᵀ U): ν̇ = (R_bᵀ (Ẇ − ω_b × W); R_bᵀ (U̇ − ω_b × U))
-        x1, x2 = Wrd - _cross(wb, Wr), Ud - _cross(wb, U)
+        x1, x2 = _m3(Wrd, _x3(wb, Wr)), _m3(Ud, _x3(wb, U))
         for r in range(3):
             nud[r] = _transposed(Rb, x1, r)
             nud[3 + r] = _transposed(Rb, x2, r)
@@ -675,14 +695,15 @@ def _body_motions(k, S, v, a, Vb, Ab, sv):
 
 @register_jitable
 def _end_world(F, e, j, Vb, Ab):
-    """:func:`_end`'s quantities of constraint frame ``e`` (world placement ``F[e]``) on
-    joint ``j``'s body from its world twist and spatial acceleration."""
-    p = np.array([F[e, 0, 3], F[e, 1, 3], F[e, 2, 3]])
-    w, vo = Vb[j, :3].copy(), Vb[j, 3:].copy()
-    dw, ao = Ab[j, :3].copy(), Ab[j, 3:].copy()
-    pd = vo + _cross(w, p)
-    pdd = ao + _cross(dw, p) + _cross(w, pd)
-    return p, pd, pdd, w, dw, F[e, :3, :3].copy()
+    """:func:`_end`'s quantities (tuples, the rotation a view) of constraint frame ``e``
+    (world placement ``F[e]``) on joint ``j``'s body from its world twist and spatial
+    acceleration: ``ṗ = v_O + ω × p``, ``p̈ = a_O + ω̇ × p + ω × ṗ``."""
+    p = (F[e, 0, 3], F[e, 1, 3], F[e, 2, 3])
+    w, vo = (Vb[j, 0], Vb[j, 1], Vb[j, 2]), (Vb[j, 3], Vb[j, 4], Vb[j, 5])
+    dw, ao = (Ab[j, 0], Ab[j, 1], Ab[j, 2]), (Ab[j, 3], Ab[j, 4], Ab[j, 5])
+    pd = _p3(vo, _x3(w, p))
+    pdd = _p3(_p3(ao, _x3(dw, p)), _x3(w, pd))
+    return p, pd, pdd, w, dw, F[e, :3, :3]
 
 
 @register_jitable
@@ -840,9 +861,10 @@ def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons):
     """The balance ``A x = b``, ``A = [Sᵀ, −(J_c U)ᵀ]`` (nv × (na + nr)), by the
     one-sided Jacobi SVD of ``Aᵀ = W Vᵀ`` (:func:`pkm_pin.engine.linalg.jacobi`; ``V``:
     the previous sample's basis, a warm start): ``A = V Σ (W Σ⁻¹)ᵀ``, the truncated
-    solution ``y = Σ_j W_j (V_jᵀ b) / σ_j²`` over ``σ_j > RANK_RTOL σ_max``, then one
-    step of iterative refinement (``y += A⁺ (b − A y)``: the Jacobi basis leaves the
-    null columns at ~1e-12, which a condition of 10³ would carry into the solution);
+    solution ``y = Σ_j W_j (V_jᵀ b) / σ_j²`` over ``σ_j > RANK_RTOL σ_max``, then two
+    steps of iterative refinement (``y += A⁺ (b − A y)``): the Jacobi sweeps stop at
+    cosines below :data:`~pkm_pin.engine.linalg.JACOBI_TOL` and leave the null columns
+    at ~1e-12, which a condition of 10³ would carry into the solution;
     ``yw`` the same of ``bw``. Returns ``(rank, σ_max, σ_min kept, relative
     residual)``."""
     U, act = k.units, k.act_v
@@ -853,7 +875,7 @@ def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons):
     for i in range(nr):
         for c in range(nv):
             At[na + i, c] = -H[i, c] * U[c]
-    jacobi(At, na + nr, nv, Wj, V, sv)
+    jacobi(At, na + nr, nv, Wj, V, sv, JACOBI_TOL)
     smax = largest(sv, nv)
     thr = cons[1] * smax
     rank, smin = 0, np.inf
@@ -864,19 +886,81 @@ def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons):
     for rhs, x in ((b, y), (bw, yw)):
         x[:] = 0.0
         _pinv_add(At, Wj, V, sv, thr, rhs, x, r)
-        _residual(At, x, rhs, r)
-        _pinv_add(At, Wj, V, sv, thr, r, x, r.copy())
+        for _ in range(2):
+            _residual(At, x, rhs, r)
+            _pinv_add(At, Wj, V, sv, thr, r, x, r)
     res = _residual(At, y, b, r)
-    amax = np.abs(At).max() if At.size else 0.0
+    amax = 0.0
+    for i in range(At.shape[0]):
+        for c in range(nv):
+            amax = max(amax, abs(At[i, c]))
     scale = max(np.linalg.norm(b), amax * np.linalg.norm(y), 1e-300)
     return rank, smax, smin, res / scale
 
 
+@register_jitable
+def _rnea_world(k, oMi, S, Vb, Ab, a, body, armature, g, Fb, tau):
+    """``rnea(q, v, a)`` with gravity ``g`` from the bodies' world twists and spatial
+    accelerations: per body (``body[j]`` = mass, centre of mass in the joint frame, its
+    rotational inertia by rows) ``f = m (a_c − g)``, ``n_O = I ω̇ + ω × I ω + c × f``
+    (world, about the world origin; ``a_c`` the centre of mass's acceleration), summed
+    from the leaves (``Fb``: (nj, 6) work), then ``τ_k = S_kᵀ (n_O; f) + armature_k a_k``."""
+    nj = k.parent.shape[0]
+    for j in range(nj):
+        for r in range(6):
+            Fb[j, r] = 0.0
+    for j in range(1, nj):
+        m = body[j, 0]
+        c = (oMi[j, 0, 3] + oMi[j, 0, 0] * body[j, 1] + oMi[j, 0, 1] * body[j, 2]
+             + oMi[j, 0, 2] * body[j, 3],
+             oMi[j, 1, 3] + oMi[j, 1, 0] * body[j, 1] + oMi[j, 1, 1] * body[j, 2]
+             + oMi[j, 1, 2] * body[j, 3],
+             oMi[j, 2, 3] + oMi[j, 2, 0] * body[j, 1] + oMi[j, 2, 1] * body[j, 2]
+             + oMi[j, 2, 2] * body[j, 3])
+        w, vo = (Vb[j, 0], Vb[j, 1], Vb[j, 2]), (Vb[j, 3], Vb[j, 4], Vb[j, 5])
+        dw, ao = (Ab[j, 0], Ab[j, 1], Ab[j, 2]), (Ab[j, 3], Ab[j, 4], Ab[j, 5])
+        vc = _p3(vo, _x3(w, c))
+        ac = _m3(_p3(_p3(ao, _x3(dw, c)), _x3(w, vc)), g)
+        f = (m * ac[0], m * ac[1], m * ac[2])
+        # body frame: I (R_jᵀ ω̇) and I (R_jᵀ ω), then back to world axes
+        bd = (_transposed(oMi[j], dw, 0), _transposed(oMi[j], dw, 1),
+              _transposed(oMi[j], dw, 2))
+        bw = (_transposed(oMi[j], w, 0), _transposed(oMi[j], w, 1),
+              _transposed(oMi[j], w, 2))
+        for r in range(3):
+            s1, s2 = 0.0, 0.0
+            for t in range(3):
+                s1 += body[j, 4 + 3 * r + t] * bd[t]
+                s2 += body[j, 4 + 3 * r + t] * bw[t]
+            Fb[0, r], Fb[0, 3 + r] = s1, s2  # row 0 (the universe) as work
+        Id = (oMi[j, 0, 0] * Fb[0, 0] + oMi[j, 0, 1] * Fb[0, 1] + oMi[j, 0, 2] * Fb[0, 2],
+              oMi[j, 1, 0] * Fb[0, 0] + oMi[j, 1, 1] * Fb[0, 1] + oMi[j, 1, 2] * Fb[0, 2],
+              oMi[j, 2, 0] * Fb[0, 0] + oMi[j, 2, 1] * Fb[0, 1] + oMi[j, 2, 2] * Fb[0, 2])
+        Iw = (oMi[j, 0, 0] * Fb[0, 3] + oMi[j, 0, 1] * Fb[0, 4] + oMi[j, 0, 2] * Fb[0, 5],
+              oMi[j, 1, 0] * Fb[0, 3] + oMi[j, 1, 1] * Fb[0, 4] + oMi[j, 1, 2] * Fb[0, 5],
+              oMi[j, 2, 0] * Fb[0, 3] + oMi[j, 2, 1] * Fb[0, 4] + oMi[j, 2, 2] * Fb[0, 5])
+        n = _p3(_p3(Id, _x3(w, Iw)), _x3(c, f))
+        for r in range(3):
+            Fb[j, r] += f[r]
+            Fb[j, 3 + r] += n[r]
+    for j in range(nj - 1, 0, -1):
+        p = k.parent[j]
+        if p > 0:
+            for r in range(6):
+                Fb[p, r] += Fb[j, r]
+        c0 = k.iv[j]
+        for col in range(c0, c0 + _nv_of(k.kind[j])):
+            tau[col] = S[0, col] * Fb[j, 3] + S[1, col] * Fb[j, 4] + S[2, col] * Fb[j, 5] \
+                + S[3, col] * Fb[j, 0] + S[4, col] * Fb[j, 1] + S[5, col] * Fb[j, 2] \
+                + armature[col] * a[col]
+
+
 @njit(cache=True, nogil=True)
-def inverse_dynamics_kernel(k, Q, V_, A, T, W, has_w, point, row_units, cons, X, XW, RDD,
-                            DRIFT, INFO):
-    """Inverse dynamics of the samples ``Q, V_, A`` (rows; ``T`` their ``rnea``, ``W``
-    the wrenches when ``has_w``) on the tree kernel ``k``: per sample the efforts then
+def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row_units, cons,
+                            T, X, XW, RDD, DRIFT, INFO):
+    """Inverse dynamics of the samples ``Q, V_, A`` (rows; ``W`` the wrenches when
+    ``has_w``) on the tree kernel ``k`` (``body``, ``armature``: the tree's inertias,
+    :class:`_Work`; gravity ``g``): per sample ``rnea`` into ``T``, the efforts then
     closure forces ``X`` (physical), the payload's part ``XW``, ``J a + J̇ v`` (``RDD``)
     and ``J̇ v`` (``DRIFT``), ``INFO`` = (status, balance residual, condition, rank);
     status :data:`_TO_PYTHON` where a check does not pass. ``cons``: the assembly,
@@ -892,6 +976,7 @@ def inverse_dynamics_kernel(k, Q, V_, A, T, W, has_w, point, row_units, cons, X,
     Jo, At, Wj = np.empty((6, nv)), np.empty((na + nr, nv)), np.empty((na + nr, nv))
     V, sv, b, bw = np.eye(nv), np.empty(nv), np.empty(nv), np.empty(nv)
     y, yw, rv = np.empty(na + nr), np.empty(na + nr), np.empty(nv)
+    Fb = np.empty((nj, 6))
     for i in range(Q.shape[0]):
         info = INFO[i]
         info[0] = _TO_PYTHON
@@ -899,6 +984,7 @@ def inverse_dynamics_kernel(k, Q, V_, A, T, W, has_w, point, row_units, cons, X,
         if np.linalg.norm(e) > cons[0]:
             continue
         _body_motions(k, ws.S, V_[i], A[i], Vb, Ab, sv6)
+        _rnea_world(k, ws.oMi, ws.S, Vb, Ab, A[i], body, armature, g, Fb, T[i])
         _second_derivative_world(k, ws, Vb, Ab, RDD[i], nud, Mh, lg, Jl, A3)
         _drift(H, A[i], RDD[i], row_units, DRIFT[i])
         if not _consistent(H, k.units, row_units, V_[i], A[i], RDD[i], cons[5], cons[4]):
@@ -932,14 +1018,10 @@ def _compiled(model: ClosureModel, many: bool = False):
 
 
 def _run_kernel(model: ClosureModel, kern, work: _Work, Q, V, A, g, W, tol) -> tuple:
-    """``rnea`` of each sample (Pinocchio, gravity ``g``) and
-    :func:`inverse_dynamics_kernel`: ``(T, X, XW, RDD, DRIFT, INFO)``."""
+    """:func:`inverse_dynamics_kernel` on the samples: ``(T, X, XW, RDD, DRIFT,
+    INFO)``."""
     N, nv, nr, na = Q.shape[0], model.nv, work.n_rows, len(work.act_v)
-    work.set_gravity(g)
-    tree, data = work.tree, work.data
     T = np.empty((N, nv))
-    for i in range(N):
-        T[i] = pin.rnea(tree, data, Q[i], V[i], A[i])
     has_w = W is not None
     W = np.ascontiguousarray(W, dtype=float) if has_w else np.zeros((N, 6))
     cons = np.array([ASSEMBLY_CHECK_RTOL, RANK_RTOL, CLOSENESS_SINGULAR_TOL,
@@ -947,8 +1029,9 @@ def _run_kernel(model: ClosureModel, kern, work: _Work, Q, V, A, g, W, tol) -> t
                      float(np.linalg.norm(g)) / model.length])
     X, XW = np.zeros((N, na + nr)), np.zeros((N, na + nr))
     RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
-    inverse_dynamics_kernel(kern, Q, V, A, T, W, has_w, bool(model.output_point),
-                            work.row_units, cons, X, XW, RDD, DRIFT, INFO)
+    inverse_dynamics_kernel(kern, Q, V, A, work.body, work.armature, g, W, has_w,
+                            bool(model.output_point), work.row_units, cons, T, X, XW, RDD,
+                            DRIFT, INFO)
     return T, X, XW, RDD, DRIFT, INFO
 
 

@@ -516,6 +516,18 @@ def _at_time(e: Exception, t: float) -> Exception:
     return e
 
 
+def _at_sample(e: Exception, times) -> Exception:
+    """An error of :func:`dynamics.inverse_dynamics_batch` (``e.sample``, its message
+    prefixed ``sample i: ``) with the sample's time instead."""
+    i = getattr(e, "sample", None)
+    if i is None:
+        return e
+    prefix = f"sample {i}: "
+    if e.args and isinstance(e.args[0], str) and e.args[0].startswith(prefix):
+        e.args = (e.args[0][len(prefix):],) + e.args[1:]
+    return _at_time(e, times[i])
+
+
 # ------------------------------------------------------------------ results
 @dataclass(frozen=True)
 class TrajectoryStudy:
@@ -847,19 +859,30 @@ def _sample_times(motion, samples: int, times) -> np.ndarray:
 
 def _efforts_along(model: ClosureModel, times, q, v, a, g, f) -> tuple:
     """The actuated efforts at each sample (N × actuated), and the part the payload ``f``
-    (force and moment at the output's origin, world axes) adds; errors carry the
-    sample's time."""
+    (force and moment at the output's origin, world axes) adds, by
+    :func:`dynamics.inverse_dynamics_batch` (one compiled pass over the samples); where it
+    refuses a sample's motion as inconsistent, sample by sample with the normwise check
+    of :func:`_inverse_dynamics`. Errors carry the sample's time."""
     N, n = times.size, len(model.actuated)
-    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
-    out = model.tree.getFrameId(model.output) if f is not None else None
-    data = model.tree.createData() if f is not None else None
-    for i in range(N):
-        w = None
-        if f is not None:  # the payload's wrench about the world origin
+    W = None
+    if f is not None:  # the payload's wrench about the world origin
+        out, data = model.tree.getFrameId(model.output), model.tree.createData()
+        W = np.empty((N, 6))
+        for i in range(N):
             pin.framesForwardKinematics(model.tree, data, q[i])
-            w = screws.from_point(np.r_[f[:3], f[3:]], data.oMf[out].translation)
+            W[i] = screws.from_point(np.r_[f[:3], f[3:]], data.oMf[out].translation)
+    try:
+        b = dynamics.inverse_dynamics_batch(model, q, v, a, gravity=g, wrenches=W)
+        return b.efforts, b.payload_efforts
+    except InconsistentMotion as e:
+        if e.kind not in ("velocity", "acceleration"):
+            raise _at_sample(e, times)
+    except PkmError as e:
+        raise _at_sample(e, times)
+    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
+    for i in range(N):
         try:
-            r = _inverse_dynamics(model, q[i], v[i], a[i], g, w)
+            r = _inverse_dynamics(model, q[i], v[i], a[i], g, None if W is None else W[i])
         except PkmError as e:
             raise _at_time(e, times[i])
         efforts[i], from_payload[i] = r.efforts, r.payload_efforts
