@@ -91,7 +91,7 @@ class HandWritten:
         return np.linalg.lstsq(N.T @ self.S.T, N.T @ tau, rcond=None)[0]
 
 
-def main(n: int = 1000, single: int = 200, repeat: int = 7) -> None:
+def main(n: int = 1000, single: int = 200, repeat: int = 7) -> dict:
     cm, data = samples(n)
     Q, V, A = (np.array([d[k] for d in data]) for k in range(3))
     hand = HandWritten(cm)
@@ -136,6 +136,7 @@ def main(n: int = 1000, single: int = 200, repeat: int = 7) -> None:
     print(f"  ratio Python path / batch               {us['python'] / us['batch']:8.2f}")
     print(f"  largest relative difference of the efforts: single vs hand-written {diff:.1e}, "
           f"batch vs Python path {diff_batch:.1e}")
+    return {**us, "diff": diff, "diff_batch": diff_batch}
 
 
 if __name__ == "__main__":
