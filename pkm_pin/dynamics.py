@@ -857,7 +857,7 @@ def _residual(At, y, b, r) -> float:
 
 
 @register_jitable
-def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons):
+def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
     """The balance ``A x = b``, ``A = [Sᵀ, −(J_c U)ᵀ]`` (nv × (na + nr)), by the
     one-sided Jacobi SVD of ``Aᵀ = W Vᵀ`` (:func:`pkm_pin.engine.linalg.jacobi`; ``V``:
     the previous sample's basis, a warm start): ``A = V Σ (W Σ⁻¹)ᵀ``, the truncated
@@ -883,7 +883,10 @@ def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons):
         if sv[j] > thr:
             rank += 1
             smin = min(smin, sv[j])
+    yw[:] = 0.0
     for rhs, x in ((b, y), (bw, yw)):
+        if x is yw and not has_w:  # no payload: its part is zero
+            break
         x[:] = 0.0
         _pinv_add(At, Wj, V, sv, thr, rhs, x, r)
         for _ in range(2):
@@ -991,7 +994,7 @@ def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row
             continue
         _output_columns(k, ws, point, Jo)
         _right_side(k, Jo, T[i], W[i], has_w, point, b, bw)
-        rank, smax, smin, info[1] = _balance(k, H, At, Wj, V, sv, b, bw, y, yw, rv, cons)
+        rank, smax, smin, info[1] = _balance(k, H, At, Wj, V, sv, b, bw, y, yw, rv, cons, has_w)
         info[2], info[3] = smax / smin if rank else np.inf, rank
         for r in range(na + nr):
             unit = k.units[k.act_v[r]] if r < na else row_units[r - na]
@@ -1021,6 +1024,7 @@ def _run_kernel(model: ClosureModel, kern, work: _Work, Q, V, A, g, W, tol) -> t
     """:func:`inverse_dynamics_kernel` on the samples: ``(T, X, XW, RDD, DRIFT,
     INFO)``."""
     N, nv, nr, na = Q.shape[0], model.nv, work.n_rows, len(work.act_v)
+    Q, V, A, g = (np.ascontiguousarray(x, dtype=np.float64) for x in (Q, V, A, g))
     T = np.empty((N, nv))
     has_w = W is not None
     W = np.ascontiguousarray(W, dtype=float) if has_w else np.zeros((N, 6))
