@@ -52,6 +52,15 @@ that minus ``J a``. For a weld the second derivative is taken as ``Jlog6(M) ν̇
 the body twist of ``C_b`` relative to ``C_a``): the neglected ``(d/dt Jlog6) ν`` is
 ``O(|log M| |ν|²)``, zero on a closed weld since ``ad(ν) ν = 0``.
 
+Compiled path: where :mod:`pkm_pin.tree_kernel` represents the tree, one numba kernel
+(:func:`inverse_dynamics_kernel`) does a sample's whole work — closure rows, the bodies'
+world velocities and accelerations, ``rnea`` in world axes, the closures' second
+derivative, the checks, the balance by a warm-started Jacobi SVD with iterative
+refinement, the type II test — for one call (:func:`inverse_dynamics`) or N samples
+(:func:`inverse_dynamics_batch`); a sample it declines goes through the Python path
+below, which raises the error with its message or returns (docs/dynamics.md, "The
+compiled path").
+
 Gravity is set per call on a private copy of the tree kept per thread (Pinocchio reads
 the gravity from the ``Model``, not the ``Data``): the shared model is never modified
 and threads do not share working data.
