@@ -600,3 +600,28 @@ def test_batch_errors_name_the_sample():
     assert err.value.sample == 6 and err.value.kind == "acceleration"
     with pytest.raises(InputError, match=r"V must have shape \(N, 8\)"):
         dyn.inverse_dynamics_batch(cm, [q] * 9, np.zeros((9, 7)), A)
+
+
+def test_batch_with_coupling_closures(tmp_path):
+    """The gripper of tests/test_mjcf_equalities.py (two fingers coupled to a tendon's
+    joint: coupling rows): the batch (compiled kernel, which takes a coupling's second
+    derivative as J a) equals the Python path on 8 consistent samples to 1e-9."""
+    from pkm_pin import tree_kernel
+    from test_mjcf_equalities import GRIPPER, _write
+
+    link = pkm_pin.load_mechanism(_write(tmp_path, "g.xml", GRIPPER.format(r=0.04)))
+    cm, q = link.model, link.home_assembly.q
+    assert any(c.kind == "coupling" for c in cm.closures)
+    assert tree_kernel.tree_kernel(cm) is not None
+    rng = np.random.default_rng(4)
+    n = len(cm.actuated)
+    V, A = zip(*[dyn.motion_from_actuated(cm, q, rng.normal(size=n), rng.normal(size=n))
+                 for _ in range(8)])
+    A = [dyn.idle_acceleration(cm, q, v, a, gravity=G) for v, a in zip(V, A)]
+    b = dyn.inverse_dynamics_batch(cm, [q] * 8, V, A, gravity=G)
+    assert b.compiled.all()
+    for i in range(8):
+        r = dyn._python_path(cm, q, V[i], A[i], np.array(G), None,
+                             dyn.MOTION_CONSISTENCY_RTOL)
+        assert np.abs(b.efforts[i] - r.efforts).max() <= 1e-9 * np.abs(r.efforts).max()
+        assert np.abs(b.acceleration_residual[i] - r.acceleration_residual).max() <= 1e-12
