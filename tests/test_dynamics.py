@@ -606,8 +606,9 @@ def test_batch_with_coupling_closures(tmp_path):
     """The gripper of tests/test_mjcf_equalities.py (two fingers coupled to a tendon's
     joint: coupling rows): the batch (compiled kernel, which takes a coupling's second
     derivative as J a) equals the Python path on 8 consistent samples to 1e-9."""
-    from pkm_pin import tree_kernel
     from test_mjcf_equalities import GRIPPER, _write
+
+    from pkm_pin import tree_kernel
 
     link = pkm_pin.load_mechanism(_write(tmp_path, "g.xml", GRIPPER.format(r=0.04)))
     cm, q = link.model, link.home_assembly.q
