@@ -890,9 +890,10 @@ def _open_or_assembled(args, link):
 def cmd_dynamics(args) -> int:
     """Efforts, speeds and powers of each actuator along a motion
     (:func:`pkm_pin.trajectory.study`): the CSV of ``--trajectory`` (header
-    ``t,<actuated names>``, clamped cubic spline) or the default sine about home over
-    ``--duration``; per actuator peak and RMS effort, peak speed, peak power and energy
-    as a table or ``--json``; ``--out PREFIX``: PREFIX.npz and the PNG plots."""
+    ``t,<actuated names>`` or ``t`` and output coordinates, clamped cubic spline) or
+    the default sine about home over ``--duration``; per actuator peak and RMS effort,
+    peak speed, peak power and energy as a table or ``--json``; ``--out PREFIX``:
+    PREFIX.npz and the PNG plots."""
     from . import trajectory as tr
 
     if args.trajectory is not None and args.duration is not None:
@@ -970,7 +971,7 @@ def cmd_dynamics(args) -> int:
               + f"; closure drift {replayed['max_drift']:.3g}; energy balance "
               f"{replayed['energy_error']:.3g}")
     tm = st.timing
-    print(f"time       {tm['total']:.3g} s; per sample {1e3 * tm['kinematics']:.3g} ms forward "
+    print(f"time       {tm['total']:.3g} s; per sample {1e3 * tm['kinematics']:.3g} ms position "
           f"kinematics, {1e3 * tm['motion']:.3g} ms v and a, {1e3 * tm['dynamics']:.3g} ms "
           "inverse dynamics")
     for path in files:
@@ -1320,8 +1321,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("mechanism", nargs="?", metavar="MECHANISM", help=_MECH_HELP)
     p.add_argument("--trajectory", metavar="CSV",
                    help="the motion: a CSV with the header t,<actuated names> (any order) "
-                   "and one row per sample [s, rad or m], splined (cubic, at rest at both "
-                   "ends)")
+                   "or t and some of x,y,z,roll,pitch,yaw (the output's coordinates, the "
+                   "others held by the mechanism) and one row per sample [s, rad or m], "
+                   "splined (cubic, at rest at both ends)")
     p.add_argument("--duration", type=float, metavar="T",
                    help="duration of the default motion [s] (default 2)")
     p.add_argument("--samples", type=int, default=201,

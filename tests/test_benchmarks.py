@@ -14,6 +14,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import bench_analysis  # noqa: E402
+import bench_dynamics  # noqa: E402
 import bench_fk  # noqa: E402
 import bench_general_fk  # noqa: E402
 import bench_linkage  # noqa: E402
@@ -91,3 +92,14 @@ def test_bench_one_core_same_stewart_same_indices(capsys):
     assert rows["diff_urdf"] > 1e-3
     assert set(rows["per_pose"]) == {"toml", "urdf/legs", "urdf/general"}
     assert "urdf/legs" in capsys.readouterr().out
+
+
+def test_bench_dynamics_reports_both_ratios(capsys):
+    """bench_dynamics.main times single calls, the hand-written solve, the Python path
+    and the batch; the efforts agree (hand-written 1e-9, batch 1e-12) and both ratios
+    are printed."""
+    r = bench_dynamics.main(n=40, single=10, repeat=1)
+    assert all(r[k] > 0 for k in ("single", "hand", "python", "batch"))
+    assert r["diff"] < 1e-9 and r["diff_batch"] < 1e-12
+    out = capsys.readouterr().out
+    assert "inverse_dynamics / hand-written" in out and "single calls / batch" in out
