@@ -481,7 +481,8 @@ def idle_acceleration(model: ClosureModel, q, v, a, *, gravity=GRAVITY,
             return a
     work.set_gravity(g)
     r = pin.rnea(work.tree, work.data, q, v, a).copy()
-    M = pin.crba(work.tree, work.data, q)
+    M = pin.crba(work.tree, work.data, q, pin.Convention.WORLD)  # LOCAL on a reused Data is
+    # wrong with mimic joints in Pinocchio 4.1 (the Delta TOML: off by 0.5)
     M = np.triu(M) + np.triu(M, 1).T
     z = np.linalg.lstsq(N.T @ M @ N, -(N.T @ r), rcond=RANK_RTOL)[0]
     return a + N @ z

@@ -270,6 +270,10 @@ class Linkage:
         return self._model.actuated
 
     # The names every mechanism answers (a Mechanism has the same).
+    def tree_configuration(self, assembly: LinkageAssembly | None = None) -> np.ndarray:
+        """The configuration of :attr:`model`'s tree at ``assembly`` (default home)."""
+        return (self.home_assembly if assembly is None else assembly).q.copy()
+
     @property
     def closure_model(self) -> ClosureModel:
         """The closure model (:attr:`model`)."""

@@ -558,16 +558,16 @@ class Mechanism:
         (``options``: ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
         ``integrator``)."""
         from . import simulation
-        q0 = self._dynamics_q(self.home_assembly) if q0 is None else q0
-        return simulation.simulate(self._dynamics_model(), q0, v0, duration, dt, **options)
+        q0 = self.tree_configuration() if q0 is None else q0
+        return simulation.simulate(self.model, q0, v0, duration, dt, **options)
 
     def dynamic_indices(self, q=None):
         """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
         the output, at ``q`` (a configuration of the model :meth:`inverse_dynamics` uses;
         default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
         from . import dynamic_indices as _indices
-        return _indices.dynamic_indices(self._dynamics_model(),
-                                        self._dynamics_q(self.home_assembly) if q is None
+        return _indices.dynamic_indices(self.model,
+                                        self.tree_configuration() if q is None
                                         else q)
 
     def gravity_map(self, poses, *, gravity=(0, 0, -9.81), wrench=None,
@@ -576,21 +576,25 @@ class Mechanism:
         warm-started from the last one assembled (a pose that does not assemble: a nan
         row): :func:`pkm_pin.dynamic_indices.gravity_efforts`."""
         from . import dynamic_indices as _indices
-        model = self._dynamics_model()
+        model = self.model
         Q, guess = np.full((len(poses), model.nq), np.nan), self.home_assembly
         for i, pose in enumerate(poses):
             try:
                 guess = self.assemble(pose, guess)
             except PkmError:
                 continue
-            Q[i] = self._dynamics_q(guess)
+            Q[i] = self.tree_configuration(guess)
         return _indices.gravity_efforts(model, Q, gravity=gravity, wrench=wrench,
                                         condition=condition)
 
-    def _dynamics_model(self):
-        return self.closure_model if self.source_model is None else self.source_model
-
-    def _dynamics_q(self, assembly: Assembly) -> np.ndarray:
+    def tree_configuration(self, assembly: Assembly | None = None) -> np.ndarray:
+        """The configuration of :attr:`model`'s tree at ``assembly`` (default home): the
+        file's tree (:meth:`source_configuration`) for a mechanism detected in one,
+        else the legs-and-platform tree of :attr:`closure_model`
+        (:func:`pkm_pin.model.configuration`). Every mechanism answers it (a
+        :class:`~pkm_pin.linkage.Linkage` too), so the dynamics and studies that work on
+        the tree ask no question about the kind of mechanism."""
+        assembly = self.home_assembly if assembly is None else assembly
         if self.source_model is not None:
             return self.source_configuration(assembly)
         from .model import configuration as configuration_of

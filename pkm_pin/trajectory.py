@@ -71,7 +71,7 @@ from .errors import (
     PkmError,
     SingularityError,
 )
-from .model.closure_model import ClosureModel, configuration
+from .model.closure_model import ClosureModel
 from .newton import TREE_MAX_STEP, lm_damping
 from .solve import (
     POSE_COORDINATES,
@@ -480,13 +480,9 @@ def closure_model_of(mech) -> tuple[ClosureModel, np.ndarray]:
             raise ForwardKinematicsError(f"{mech.name or 'the model'} does not assemble "
                                          f"from its reference (residual {sol.residual:.3g})")
         return mech, sol.q
-    if hasattr(mech, "source_model") and hasattr(mech, "closure_model"):  # Mechanism
-        if mech.source_model is not None:
-            return mech.source_model, mech.source_configuration()
-        return mech.closure_model, configuration(mech, mech.home_assembly)
-    model = getattr(mech, "model", None)
-    if isinstance(model, ClosureModel):  # Linkage
-        return model, mech.home_assembly.q
+    if isinstance(getattr(mech, "model", None), ClosureModel) \
+            and hasattr(mech, "tree_configuration"):  # any mechanism
+        return mech.model, mech.tree_configuration()
     raise InputError(f"a mechanism, linkage or closure model is needed, got "
                      f"{type(mech).__name__}")
 

@@ -626,3 +626,31 @@ def test_batch_with_coupling_closures(tmp_path):
                              dyn.MOTION_CONSISTENCY_RTOL)
         assert np.abs(b.efforts[i] - r.efforts).max() <= 1e-9 * np.abs(r.efforts).max()
         assert np.abs(b.acceleration_residual[i] - r.acceleration_residual).max() <= 1e-12
+
+
+def test_idle_acceleration_mass_matrix_is_right_on_a_reused_data_with_mimic_joints():
+    """The Delta TOML's tree has mimic joints (its parallelograms); Pinocchio 4.1's crba
+    in its LOCAL convention returns a wrong M on a Data reused after other calls there
+    (off by up to 13 of 15 here), WORLD the right one: idle_acceleration, whose work Data
+    is reused across calls, equals the formula with a fresh crba at every configuration."""
+    from pkm_pin.builders.loops import with_random_inertias
+
+    delta = pkm_pin.load_mechanism(ROOT / "models" / "mechanisms" / "delta.toml")
+    model = with_random_inertias(delta.closure_model, seed=3)
+    tree = model.tree
+    assert any(tree.joints[j].shortname() == "JointModelMimic" for j in range(1, tree.njoints))
+    rng = np.random.default_rng(4)
+    N = rng.normal(size=(model.nv, 2))
+    for _ in range(3):
+        q = pin.integrate(tree, pin.neutral(tree), rng.uniform(-0.3, 0.3, model.nv))
+        v, a = rng.uniform(-1, 1, model.nv), rng.uniform(-1, 1, model.nv)
+        got = dyn.idle_acceleration(model, q, v, a, gravity=(0, 0, 0), idle=N)
+        data = tree.createData()
+        data_g = tree.createData()
+        tree_g = tree.copy()
+        tree_g.gravity = pin.Motion.Zero()
+        r = pin.rnea(tree_g, data_g, q, v, a)
+        M = pin.crba(tree, data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        z = np.linalg.solve(N.T @ M @ N, -(N.T @ r))
+        np.testing.assert_allclose(got, a + N @ z, rtol=1e-9, atol=1e-9)
