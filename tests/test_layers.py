@@ -39,8 +39,9 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
     3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
         ("solve", "leg")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
-        "closed-loop dynamics",
-        ("engine", "engine.core", "analysis", "transmission", "dynamics")),
+        "closed-loop dynamics, the compiled general elimination of a linkage's analysis",
+        ("engine", "engine.core", "analysis", "transmission", "dynamics",
+         "general_kernel")),
     5: ("position problems and studies built on the solver and the analysis (trajectory: "
         "the efforts along a motion, on the closed-loop dynamics)",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration",
