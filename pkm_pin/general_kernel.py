@@ -8,9 +8,11 @@ wrapper (~5 µs) plus the arrays around it, ~1 ms a pose. :func:`analysis_core` 
 the same algebra in one numba-compiled call: the closure and output Jacobians from
 the compiled tree (:func:`pkm_pin.tree_kernel.closure_rows`, no Pinocchio ``Data``),
 then each step of :mod:`pkm_pin.linkage`'s numpy path (``_numpy_core``) in the same
-order with the same LAPACK routines (``gesdd`` SVDs, ``geqrf`` QR, ``gelsd`` least
-squares) and the same rank rule (:func:`pkm_pin.screws.svd_rank`: singular values
-above ``rtol`` times the largest). It is an accelerator, not a second definition:
+order with the same LAPACK routines (``gesdd`` SVDs, ``geqrf`` QR) and the same rank
+rule (:func:`pkm_pin.screws.svd_rank`: singular values above ``rtol`` times the
+largest); the least-norm step of each actuation wrench, whose result does not depend
+on the bases it is computed in, by a one-sided Jacobi SVD instead of an SVD and a
+least-squares solve. It is an accelerator, not a second definition:
 tests compare every field with the numpy path's to 1e-9 at random assembled
 configurations. :data:`ENABLED` switches it off; trees that
 :func:`pkm_pin.tree_kernel.tree_kernel` does not represent (mimic joints) take the
@@ -34,6 +36,7 @@ from numba.extending import register_jitable
 
 from . import screws
 from .compiling import SameTypes
+from .engine.linalg import jacobi, largest
 from .model.closure_model import sparse_basis
 from .tolerances import ROTATION_COUNT_TOL
 from .tree_kernel import TreeKernel, closure_rows, tree_kernel, workspace
@@ -346,18 +349,41 @@ def _actuation_row(G, col, rtol):
         return np.zeros(6), False
     ZT = np.ascontiguousarray(_swap_halves(W[:, m - 6:]).T)  # 6 × rows of W
     y0 = b / np.sum(b * b)
-    nb = b.shape[0]
-    row = np.empty((1, nb))
-    row[0] = b
-    Vb = np.linalg.svd(row, True)[2]
-    Nb = np.ascontiguousarray(Vb[1:].T)
-    y = y0.copy()
-    if nb > 1:
-        z = np.linalg.lstsq(_mm(ZT, Nb), -_mv(ZT, y0), rtol)[0]
-        y += _mv(Nb, z)
-    zeta = _mv(ZT, y)
+    zeta = _least_on_plane(ZT, b, y0, rtol)
     # the closures alone hold the actuated rate: no wrench on the output carries it
     return zeta, _norm(zeta) > rtol * _norm(y0)
+
+
+@register_jitable
+def _least_on_plane(ZT, b, y0, rtol):
+    """The least ``Zᵀ y`` over ``y`` with ``bᵀ y = 1`` (``y0`` one of them): ``Zᵀ y0``
+    less its projection on the range of ``Zᵀ (I − b bᵀ / bᵀb)`` — numpy's
+    ``lstsq(Zᵀ N_b, −Zᵀ y0, rcond=rtol)`` with ``N_b`` an orthonormal basis of ``b⊥``:
+    the same range and nonzero singular values, from a one-sided Jacobi SVD
+    (:func:`pkm_pin.engine.linalg.jacobi`), those ≤ ``rtol`` times the largest dropped.
+    The result does not depend on the basis ``N_b`` (the least point of an affine set)."""
+    rows, nb = ZT.shape
+    r0 = _mv(ZT, y0)
+    if nb == 1:  # b⊥ = {0}
+        return r0
+    Zb = _mv(ZT, b)
+    bb = np.sum(b * b)
+    Ap = ZT.copy()
+    for i in range(rows):
+        for j in range(nb):
+            Ap[i, j] -= Zb[i] * b[j] / bb
+    V, W, sv = np.eye(nb), np.empty((rows, nb)), np.empty(nb)
+    jacobi(Ap, rows, nb, W, V, sv)
+    top = largest(sv, nb)
+    for j in range(nb):
+        if sv[j] > rtol * top:
+            c = 0.0
+            for i in range(rows):
+                c += W[i, j] * r0[i]
+            c /= sv[j] * sv[j]
+            for i in range(rows):
+                r0[i] -= c * W[i, j]
+    return r0
 
 
 @register_jitable
