@@ -10,13 +10,19 @@ the compiled tree (:func:`pkm_pin.tree_kernel.closure_rows`, no Pinocchio ``Data
 then each step of :mod:`pkm_pin.linkage`'s numpy path (``_numpy_core``) in the same
 order with the same LAPACK routines (``gesdd`` SVDs, ``geqrf`` QR) and the same rank
 rule (:func:`pkm_pin.screws.svd_rank`: singular values above ``rtol`` times the
-largest); the least-norm step of each actuation wrench, whose result does not depend
-on the bases it is computed in, by a one-sided Jacobi SVD instead of an SVD and a
-least-squares solve. It is an accelerator, not a second definition:
-tests compare every field with the numpy path's to 1e-9 at random assembled
-configurations. :data:`ENABLED` switches it off; trees that
-:func:`pkm_pin.tree_kernel.tree_kernel` does not represent (mimic joints) take the
-numpy path.
+largest). Where only singular values are read (the rotations of the twist system,
+the type II index, the forward and inverse indices), and for the least-norm step of
+each actuation wrench (whose result does not depend on the bases it is computed in),
+a one-sided Jacobi SVD (:func:`pkm_pin.engine.linalg.jacobi`) replaces LAPACK's SVD and
+least-squares solve: the same numbers to round-off, without LAPACK's fixed cost.
+
+It is an accelerator, not a second definition: ``tests/test_general_kernel.py``
+compares every field with the numpy path's to 1e-9 at random assembled configurations
+(bases through the projectors onto their spans). :data:`ENABLED` switches it off; trees
+that :func:`pkm_pin.tree_kernel.tree_kernel` does not represent (mimic joints) take the
+numpy path. The kernel runs as plain Python until its machine code is ready
+(:class:`~pkm_pin.compiling.SameTypes` with ``plain``: a one-off analysis on a fresh
+installation does not wait for numba).
 
 Conventions are :mod:`pkm_pin.linkage`'s: screws axis-first, twists ``(ω; v_O)`` and
 wrenches ``(f; m_O)`` about the world origin, homogenised ``(a; (b + a × p) / L)``
@@ -190,10 +196,17 @@ def _svd_rank(H, rtol):
 
 @register_jitable
 def _singular_values(H):
-    """Singular values of ``H`` (none without rows or columns)."""
-    if H.shape[0] == 0 or H.shape[1] == 0:
+    """The ``min(m, n)`` singular values of ``H`` (m × n), largest first (none without
+    rows or columns): a one-sided Jacobi SVD (:func:`pkm_pin.engine.linalg.jacobi`) of
+    ``H`` or ``Hᵀ``, whichever has fewer columns (accurate to round-off, as LAPACK's)."""
+    m, n = H.shape
+    if m == 0 or n == 0:
         return np.zeros(0)
-    return np.linalg.svd(np.ascontiguousarray(H), True)[1]
+    X = np.ascontiguousarray(H) if n <= m else np.ascontiguousarray(H.T)
+    r, c = X.shape
+    V, W, sv = np.eye(c), np.empty((r, c)), np.empty(c)
+    jacobi(X, r, c, W, V, sv)
+    return -np.sort(-sv)
 
 
 @register_jitable
