@@ -27,7 +27,9 @@ Equations (``v, a`` the tree's velocity and acceleration in Pinocchio's tangent 
   in ``C_b`` axes at its origin (``Jlog6 = I`` at a closed weld); a revolute's point rows
   as a point's, its two axis rows ``(λ_x, λ_y)`` [N m] the couple ``z_b × (λ_x, λ_y, 0)``
   = ``(−λ_y, λ_x, 0)`` in ``C_a`` axes (at a closed revolute) that keeps the axes
-  aligned.
+  aligned; a coupling's row ``q_a − c₁ q_b − c₀`` [joint a's unit, rad or m] has
+  ``J = (1, −c₁)`` in the two joints' columns and ``J̇ = 0``: its λ [N m or N] is the
+  generalized force ``+λ`` on joint a and ``−c₁ λ`` on joint b.
 * ``(τ, λ)`` by least squares on the dimensionless system ``[Sᵀ, −(J_c U)ᵀ] (Uₐτ; s λ) =
   U (τ_tree − J_oᵀΔw)`` (``U`` :attr:`ClosureModel.velocity_units`, ``s``
   :func:`row_units`, ``J_c`` the dimensionless closure Jacobian): every unknown and
@@ -163,7 +165,7 @@ class _Work:
                                   dtype=int) for k in KINDS}
         self.rows = {k: np.array([np.arange(ends[i], ends[i + 1]) for i in idx], dtype=int
                                  ).reshape(len(idx), KINDS[k]) for k, idx in self.kinds.items()}
-        codes = {"point": 0, "revolute": 1, "weld": 2}
+        codes = {"point": 0, "revolute": 1, "weld": 2, "coupling": 3}
         self.kind_codes = np.array([codes[c.kind] for c in model.closures], dtype=np.int64)
         self.first_rows = np.array(ends[:-1], dtype=np.int64)
         units = np.ones(self.n_rows)
@@ -171,8 +173,19 @@ class _Work:
         for kind in ("point", "revolute"):
             units[self.rows[kind][:, :3].ravel()] = L
         units[self.rows["weld"][:, 3:].ravel()] = L
+        for i, r in zip(self.kinds["coupling"], self.rows["coupling"][:, 0]):
+            units[r] = model.velocity_units[tree.joints[self.joints[i]].idx_v]
         units.setflags(write=False)
         self.row_units = units
+        #: a coupling's physical Jacobian row (nv,), by closure index
+        self.coupling_rows = {}
+        for i in self.kinds["coupling"]:
+            row = np.zeros(tree.nv)
+            ja, jb = self.joints[i], self.joints[C + i]
+            row[tree.joints[ja].idx_v] = 1.0
+            if jb > 0:
+                row[tree.joints[jb].idx_v] -= model.closures[i].coef[1]
+            self.coupling_rows[i] = row
         self.act_v = np.array(model.actuated_v, dtype=int)
         self.names = _velocity_names(tree)
 
@@ -205,13 +218,15 @@ def _velocity_names(tree: pin.Model) -> list[str]:
 
 
 # ------------------------------------------------------ closure second derivative
-def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarray:
+def _second_derivative(work: _Work, a: np.ndarray, Hj: np.ndarray, VA: np.ndarray
+                       ) -> np.ndarray:
     """``J a + J̇ v`` of every closure row (physical units) from the world placements
     ``Hj`` (2C × 4 × 4) of the ends' joints and their local spatial velocities and
     accelerations ``VA`` (2C × 2 × 6, Pinocchio's linear-first ``(v; ω)``): the
     compiled :func:`closure_second_derivative` (its plain-Python source for the first
     calls of a process, :func:`pkm_pin.compiling.prefer_compiled`), then ``Jlog6`` for
-    the welds."""
+    the welds; a coupling's is ``a_a − c₁ a_b`` (``a`` the tree's acceleration the
+    pass was made with)."""
     out = np.empty(work.n_rows)
     if work.C == 0:
         return out
@@ -225,6 +240,8 @@ def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarra
     for k, i in enumerate(idx):  # Jlog6(M) ν̇
         M = pin.SE3(Mh[i, :, :3], Mh[i, :, 3])
         out[rows[k]] = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(nud[i]))
+    for i, r in zip(work.kinds["coupling"], work.rows["coupling"][:, 0]):
+        out[r] = work.coupling_rows[i] @ a
     return out
 
 
@@ -269,11 +286,14 @@ def _transposed(R, x, r):
 def closure_second_derivative(Hj, VA, local, kind, first, out, nud, Mh):
     """The closures' second derivative (module docstring): for closure ``i`` (ends
     ``i`` and ``C + i`` of ``Hj``, ``VA``, ``local``; ``kind[i]`` 0 point, 1 revolute,
-    2 weld; rows from ``first[i]``), point and revolute rows into ``out``; for a weld
+    2 weld, 3 coupling (left to the caller); rows from ``first[i]``), point and
+    revolute rows into ``out``; for a weld
     ``ν̇`` (axis-first, ``C_b`` axes) into ``nud[i]`` and ``M = C_a⁻¹ C_b`` (3 × 4)
     into ``Mh[i]``, for the caller's ``Jlog6``."""
     C = kind.shape[0]
     for i in range(C):
+        if kind[i] == 3:
+            continue
         pa, pda, pdda, wa, dwa, Ra = _end(Hj, VA, local, i)
         pb, pdb, pddb, wb, dwb, Rb = _end(Hj, VA, local, C + i)
         d, dd, Wr, Wrd = pb - pa, pdb - pda, wb - wa, dwb - dwa
@@ -325,7 +345,7 @@ def closure_acceleration(model: ClosureModel, q, v, a) -> tuple[np.ndarray, np.n
     kin = TreeKinematics(model, q, work.data)
     J = work.row_units[:, None] * kin.closure_jacobian
     pin.forwardKinematics(work.tree, work.data, q, v, a)
-    rdd = _second_derivative(work, *_end_motions(work, work.data, None))
+    rdd = _second_derivative(work, a, *_end_motions(work, work.data, None))
     return J, rdd, rdd - J @ a
 
 
@@ -383,7 +403,8 @@ def motion_from_actuated(model: ClosureModel, q, qd_actuated, qdd_actuated
     zeros = np.zeros(work.n_rows)
     v = solve(np.r_[zeros, qd / ua], "velocity")
     pin.forwardKinematics(work.tree, work.data, q, v, np.zeros(model.nv))
-    drift = _second_derivative(work, *_end_motions(work, work.data, None))
+    drift = _second_derivative(work, np.zeros(model.nv),
+                               *_end_motions(work, work.data, None))
     a = solve(np.r_[-drift / work.row_units, qdd / ua], "acceleration")
     return v, a
 
@@ -493,7 +514,7 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
                 work.row_units, "v")
     work.set_gravity(g)
     tau_tree = pin.rnea(work.tree, data, q, v, a).copy()
-    rdd = _second_derivative(work, *_end_motions(work, data, g))
+    rdd = _second_derivative(work, a, *_end_motions(work, data, g))
     J = work.row_units[:, None] * Jc
     Ja = J @ a
     drift = rdd - Ja

@@ -218,3 +218,8 @@ class InconsistentMotion(InputError):
         self.residual = residual
         self.joints = tuple(joints)
         super().__init__(message)
+
+
+class SimulationError(PkmError):
+    """A forward-dynamics simulation (:mod:`pkm_pin.simulation`) cannot continue: a
+    non-finite acceleration, a singular constrained system."""

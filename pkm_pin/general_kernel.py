@@ -45,7 +45,7 @@ from .compiling import SameTypes
 from .engine.linalg import jacobi, largest
 from .model.closure_model import sparse_basis
 from .tolerances import ROTATION_COUNT_TOL
-from .tree_kernel import TreeKernel, closure_rows, tree_kernel, workspace
+from .tree_kernel import PRISMATIC, TreeKernel, closure_rows, tree_kernel, workspace
 
 #: Whether :meth:`Linkage.analyze` may use this module (False: the numpy path
 #: everywhere, for comparisons and diagnosis).
@@ -66,6 +66,7 @@ class Layout(NamedTuple):
     units: np.ndarray  # (nv,)
     length: float
     point_output: bool
+    act_translating: np.ndarray  # (na,) bool: the actuated joint is prismatic
 
 
 class Core(NamedTuple):
@@ -96,6 +97,7 @@ class Core(NamedTuple):
     M: np.ndarray
     forward: float
     inverse: float
+    translating: np.ndarray  # (na,) whether each actuated joint translates (prismatic)
 
 
 class LazyKinematics:
@@ -153,9 +155,11 @@ def layout(model, loops: tuple) -> Layout | None:
         for a, chosen in enumerate(loops):
             for c in chosen:
                 loop_rows[a, plan.slices[c]] = 1.0
+        joints = [model.tree.getJointId(name) for name in model.actuated]
         out = Layout(k, out_support, loop_rows, np.array(plan.act_v, np.int64),
                      np.array(model.velocity_units, float), float(model.length),
-                     bool(model.output_point))
+                     bool(model.output_point),
+                     np.array([k.kind[j] == PRISMATIC for j in joints], dtype=bool))
     _LAYOUTS[model] = out
     return out
 
@@ -174,7 +178,8 @@ def analysis_core(model, loops: tuple, q: np.ndarray, about_output: bool,
                                                           float(rtol))
     ns = CompiledNullSpace(rank, N, X, Yw, model.velocity_units, rtol, rank_x, idle_span)
     return Core(LazyKinematics(model, q), ns, p, d, rotations, twists, wrenches, A,
-                np.diag(B), type_I, type_II, cond, Xr, Yr, M, forward, inverse)
+                np.diag(B), type_I, type_II, cond, Xr, Yr, M, forward, inverse,
+                lay.act_translating.copy())
 
 
 # ============================================================ compiled algebra

@@ -83,16 +83,19 @@ from . import dynamics as _dynamics
 from . import general_kernel, screws
 from .analysis import classify
 from .assembly import Assembly
+from .closure_gaps import Diagnosis, diagnose
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .mechanism import Mechanism
 from .model.closure_model import (
     ClosureModel,
     NullSpace,
     TreeKinematics,
+    default_length,
     pose_rows,
     sparse_basis,
 )
-from .model.structure import detect_platform
+from .model.structure import detect_platform, legs_length
+from .output_maps import OutputMaps
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
@@ -117,16 +120,28 @@ class LoopClosureError(AssemblyError):
     """A loop of a linkage does not close (an :class:`AssemblyError` whose ``leg`` is the
     name of the worst closure, or of the actuated or output targets).
 
+    The message names the worst loop and its residual, then (from :attr:`diagnosis`)
+    every loop left open with its gap in mm and degrees, the joints held at a limit and a
+    hint (:mod:`pkm_pin.closure_gaps`).
+
     Attributes:
         leg: Name of the loop (closure) that does not close.
         residual: Its residual (dimensionless, as :meth:`ClosureModel.closure_residual`).
+        q: The best configuration reached (nq,), or None: ``pkm-pin view`` draws the
+            open tree there.
+        diagnosis: The :class:`~pkm_pin.closure_gaps.Diagnosis` at :attr:`q`, or None.
     """
 
-    def __init__(self, loop: str, residual: float, detail: str = ""):
+    def __init__(self, loop: str, residual: float, detail: str = "", *, q=None,
+                 diagnosis: Diagnosis | None = None):
         super().__init__(loop, residual, detail)
+        self.q = None if q is None else np.array(q, dtype=float)
+        self.diagnosis = diagnosis
         message = (f"loop {loop!r} does not close: the best configuration found within the "
                    f"joint limits leaves a relative residual of {self.residual:.3g}")
-        self.args = (message + (f" ({detail})" if detail else ""),)
+        message += f" ({detail})" if detail else ""
+        words = "" if diagnosis is None else diagnosis.words()
+        self.args = (message + (f"; {words}" if words else ""),)
 
     def __str__(self) -> str:
         return self.args[0]
@@ -228,7 +243,7 @@ class Linkage:
             model = replace(model, output=output)
         if point is not None and bool(point) != model.output_point:
             model = replace(model, output_point=bool(point))
-        self._model = model
+        self._model = _machine_length(model)
         self._loops = _loops_of_actuators(model)
         #: ``(rank J_c, rank with the actuated rows)`` at the first configuration whose
         #: nearby ones were sampled (:func:`_mobility`): later configurations with the
@@ -386,7 +401,8 @@ class Linkage:
                                             max_iter=max_iter,
                                             nearest=model.reference if warm is None else warm)
         if not sol.converged:
-            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets)
+            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets,
+                                tol=tol)
         off = self._off_representation(sol.q, targets, seed, tol, max_iter)
         if off is not None:
             sol, iterations = off[0], iterations + off[1]
@@ -433,6 +449,26 @@ class Linkage:
                     if final.converged else None
         return None
 
+    def reached(self, error: LoopClosureError) -> LinkageAssembly:
+        """The best configuration a failed assembly reached (``error.q``) as a
+        :class:`LinkageAssembly` whose loops do not all close (its ``residual`` is the
+        largest closure residual there): what ``pkm-pin view`` draws for a file that does
+        not assemble.
+
+        Raises:
+            InputError: ``error`` carries no configuration.
+        """
+        if not isinstance(error, LoopClosureError) or error.q is None:
+            raise InputError("reached() takes a LoopClosureError that carries the best "
+                             "configuration reached (its q)")
+        model = self._model
+        q = model.check_q(error.q)
+        kin = model.kinematics(q)
+        norms = model.closure_norms(kin.residual)
+        return LinkageAssembly(q.copy(), float(norms.max(initial=0.0)), 0,
+                               dict(zip(self._closure_names, norms.tolist())),
+                               _actuated_or_nan(model, q), kin.output_placement)
+
     def _assembly(self, sol, iterations: int) -> LinkageAssembly:
         """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
         Pinocchio pass, when it was at ``sol.q``)."""
@@ -445,18 +481,26 @@ class Linkage:
         return LinkageAssembly(q.copy(), float(sol.residual), int(iterations), names,
                                _actuated_or_nan(model, q), oMo)
 
-    def _failure(self, sol, n_starts: int, targets, what: str = "") -> LoopClosureError:
+    def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL
+                 ) -> LoopClosureError:
+        """The error for a best solution ``sol`` that did not converge, with its
+        :func:`~pkm_pin.closure_gaps.diagnose` (limits lifted only for a plain
+        assembly: no targets, no output pose)."""
         model = self._model
         residual = model.closure_residual(sol.q)
         norms = [float(np.linalg.norm(residual[s])) for s in model.closure_slices()]
         detail = f"{n_starts} starts, {sol.iterations} iterations in the best one"
+        found = diagnose(model, sol.q, tol=tol, lift_limits=targets is None and not what)
         if norms and max(norms) > sol.actuated and max(norms) >= sol.pose:
             k = int(np.argmax(norms))
-            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail)
+            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail,
+                                    q=sol.q, diagnosis=found)
         if targets is not None and sol.actuated >= sol.pose:
             return LoopClosureError("actuated targets", sol.actuated,
-                                    detail + f"; targets {np.round(targets, 6)}")
-        return LoopClosureError(what or "output pose", sol.pose, detail)
+                                    detail + f"; targets {np.round(targets, 6)}", q=sol.q,
+                                    diagnosis=found)
+        return LoopClosureError(what or "output pose", sol.pose, detail, q=sol.q,
+                                diagnosis=found)
 
     # ------------------------------------------------------------- mobility
     def mobility(self, q, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
@@ -733,6 +777,34 @@ class Linkage:
         """Actuated efforts and closure forces of the motion ``(q, v, a)`` of the
         model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
         return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
+
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model's tree from ``(q0, v0)`` (default: the home
+        assembly, at rest): :func:`pkm_pin.simulation.simulate` (``options``:
+        ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self.home_assembly.q if q0 is None else q0
+        return simulation.simulate(self._model, q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        q = self.home_assembly.q if q is None else q
+        return _indices.dynamic_indices(self._model, q)
+
+    def gravity_map(self, q_actuated, guess=None, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over the rows of ``q_actuated`` (N × actuated), assembled by
+        :meth:`sweep` (continuation from ``guess``):
+        :func:`pkm_pin.dynamic_indices.gravity_efforts` (``condition``: the actuator
+        inertia's condition per row too)."""
+        from . import dynamic_indices as _indices
+        Q = self.sweep(q_actuated, guess).q
+        return _indices.gravity_efforts(self._model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
 
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:
@@ -1302,9 +1374,22 @@ def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:
     return unique
 
 
+def _machine_length(model: ClosureModel) -> ClosureModel:
+    """``model`` with the characteristic length of the machine it describes: where a
+    base–legs–platform structure is detected and the model's length is the tree's
+    default, the legs' (:func:`pkm_pin.model.structure.legs_length`, that of the same
+    machine written as TOML legs), so that every homogenised index and rank decision is
+    the machine's, whatever tree the file wrote. A length given explicitly is kept."""
+    structure, _ = detect_platform(model)
+    if structure is None or model.length != default_length(model.tree, model.closures):
+        return model
+    L = legs_length(model, structure)
+    return model if L == model.length else replace(model, length=L)
+
+
 # ====================================================================== analysis
 @dataclass(frozen=True, eq=False)
-class LinkageAnalysis:
+class LinkageAnalysis(OutputMaps):
     """The output frame of a linkage at one configuration (:meth:`Linkage.analyze`).
 
     Screws are axis-first about the world origin; ``reference_point`` [m] is the point
@@ -1343,6 +1428,31 @@ class LinkageAnalysis:
     length: float
     singular_tol: float
     _maps: tuple = field(repr=False)
+    #: Whether each actuated joint is prismatic (its rate in m/s).
+    actuated_prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool),
+                                           repr=False)
+
+    # ------------------------------------------------ hooks of OutputMaps
+    @property
+    def centre(self) -> np.ndarray:
+        """The point every decision is homogenised about (:attr:`reference_point`)."""
+        return self.reference_point
+
+    @property
+    def _twist_dim(self) -> int:
+        return self.output_dof
+
+    @property
+    def _actuated_prismatic(self) -> np.ndarray:
+        return self.actuated_prismatic
+
+    @property
+    def _closeness(self) -> tuple[float, float]:
+        """Seed 000's indices and the generalised ones together, as :attr:`singularity`
+        reads them."""
+        idx = self.indices
+        return (float(np.nanmin([idx["type_I"], idx["inverse"]])),
+                float(np.nanmin([idx["type_II"], idx["forward"]])))
 
     @property
     def dof(self) -> int:
@@ -1441,7 +1551,8 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
     return LinkageAnalysis(core.kin.q, mob, d, d - core.rotations, core.twists,
                            core.wrenches, core.A, core.B, idx, singularity, csing, core.p,
                            model.length, singular_tol,
-                           (core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)))
+                           (core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
+                           core.translating)
 
 
 def _smaller(a: float, b: float) -> float:
@@ -1472,9 +1583,11 @@ def _numpy_core(link: Linkage, kin: TreeKinematics, about: str,
     A_n = A_h / np.where(norms > 0, norms, 1.0)[:, None]
     type_II, cond = _transmission(A_n, P_h, d) if np.all(norms > 0) else (np.nan, np.nan)
     Xr, Yr, M, forward, inverse = _generalised(ns, Yh, rtol)
+    translating = np.array([not np.linalg.norm(kin.joint_twists[c][:3]) > 0
+                            for c in model.actuated_v], dtype=bool)
     return general_kernel.Core(kin, ns, p, d, rotations, from_homogenised(P_h, p, L),
                                from_homogenised(C_h, p, L), A, B, type_I, type_II, cond,
-                               Xr, Yr, M, forward, inverse)
+                               Xr, Yr, M, forward, inverse, translating)
 
 
 def _transmission(A_n: np.ndarray, P_h: np.ndarray, d: int) -> tuple[float, float]:

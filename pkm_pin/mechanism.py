@@ -214,8 +214,11 @@ class Mechanism:
 
     @cached_property
     def characteristic_length(self) -> float:
-        """Unit of length of the relative tolerances [m]: mean of the legs' lengths."""
-        return float(np.mean([leg.characteristic_length for leg in self.legs]))
+        """Unit of length of the relative tolerances [m]: mean of the legs' lengths
+        (:attr:`Leg.offset_length`) over the legs that have one (a leg whose joints and
+        tip all sit at one point brings no length); 1.0 when none has."""
+        lengths = [leg.offset_length for leg in self.legs if leg.offset_length > 0]
+        return float(np.mean(lengths)) if lengths else 1.0
 
     @cached_property
     def actuated_scales(self) -> np.ndarray:
@@ -520,6 +523,51 @@ class Mechanism:
         that model's ``actuated`` order)."""
         model = self.closure_model if self.source_model is None else self.source_model
         return _dynamics.inverse_dynamics(model, q, v, a, gravity=gravity, wrench=wrench)
+
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model :meth:`inverse_dynamics` uses, from ``(q0, v0)``
+        (default: the home configuration, at rest): :func:`pkm_pin.simulation.simulate`
+        (``options``: ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self._dynamics_q(self.home_assembly) if q0 is None else q0
+        return simulation.simulate(self._dynamics_model(), q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (a configuration of the model :meth:`inverse_dynamics` uses;
+        default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        return _indices.dynamic_indices(self._dynamics_model(),
+                                        self._dynamics_q(self.home_assembly) if q is None
+                                        else q)
+
+    def gravity_map(self, poses, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over ``poses`` (a sequence of ``pin.SE3``), each assembled
+        warm-started from the last one assembled (a pose that does not assemble: a nan
+        row): :func:`pkm_pin.dynamic_indices.gravity_efforts`."""
+        from . import dynamic_indices as _indices
+        model = self._dynamics_model()
+        Q, guess = np.full((len(poses), model.nq), np.nan), self.home_assembly
+        for i, pose in enumerate(poses):
+            try:
+                guess = self.assemble(pose, guess)
+            except PkmError:
+                continue
+            Q[i] = self._dynamics_q(guess)
+        return _indices.gravity_efforts(model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
+
+    def _dynamics_model(self):
+        return self.closure_model if self.source_model is None else self.source_model
+
+    def _dynamics_q(self, assembly: Assembly) -> np.ndarray:
+        if self.source_model is not None:
+            return self.source_configuration(assembly)
+        from .model import configuration as configuration_of
+        return configuration_of(self, assembly)
 
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,

@@ -182,7 +182,8 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
     ns = NullSpace(model, kin, rtol)
     r_x, _, _, Vt = screws.svd_rank(ns.X, rtol)
     idle = Vt[r_x:].T  # null coordinates of the idle motions
-    used = {name for c in model.closures for name in (c.frame_a, c.frame_b)}
+    used = {name for c in model.closures if c.joins_frames
+            for name in (c.frame_a, c.frame_b)}
     frames = [(k, f) for k, f in enumerate(tree.frames)  # bodies that can move
               if k > 0 and f.type == pin.FrameType.BODY and f.parentJoint > 0
               and (f.name not in used or _own(tree, f))]
@@ -286,6 +287,8 @@ def _depths(model: ClosureModel, massless: set) -> list:
         edges[tree.parents[j]].append((j, w))
         edges[j].append((tree.parents[j], w))
     for c in model.closures:
+        if not c.joins_frames:  # a coupling of joint coordinates joins no bodies
+            continue
         a, b = (tree.frames[tree.getFrameId(n)].parentJoint for n in (c.frame_a, c.frame_b))
         w = 0 if c.kind == "weld" else 1
         edges[a].append((b, w))
@@ -311,7 +314,7 @@ def _rods(model: ClosureModel, used: set) -> set:
     tree = model.tree
     parents = set(tree.parents[1:])
     ends = [tree.frames[tree.getFrameId(name)].parentJoint
-            for c in model.closures for name in (c.frame_a, c.frame_b)]
+            for c in model.closures if c.joins_frames for name in (c.frame_a, c.frame_b)]
     named = {f.parentJoint for f in tree.frames
              if f.type == pin.FrameType.BODY and (f.name not in used or _own(tree, f))
              and name_score(f.name) >= 2}

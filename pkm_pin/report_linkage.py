@@ -195,8 +195,8 @@ def structure_line(r: dict) -> str:
         return f"structure          general linkage (not base–legs–platform: {s['reason']})"
     kinds = ", ".join(f"{leg['name']}: {leg['kind']}" for leg in s["legs"])
     return (f"structure          base–legs–platform machine, {len(s['legs'])} legs ({kinds}); "
-            "--backend legs analyses it per leg (indices that do not depend on how the file "
-            "cuts the loops)")
+            "--backend legs analyses it per leg (seed 000's indices, each actuation wrench "
+            "orthogonal to its own leg's constraints)")
 
 
 # ------------------------------------------------------------------------- text

@@ -88,6 +88,7 @@ def assert_same(a, b, L: float) -> None:
     np.testing.assert_allclose(a.reference_point, b.reference_point, atol=1e-12 * L)
     np.testing.assert_allclose(a.A, b.A, atol=1e-9)
     np.testing.assert_allclose(a.B, b.B, atol=1e-9)
+    np.testing.assert_array_equal(a.actuated_prismatic, b.actuated_prismatic)
     for name in ("platform_twists", "constraint_wrenches"):
         np.testing.assert_allclose(projector(getattr(a, name), a.reference_point, L),
                                    projector(getattr(b, name), b.reference_point, L),

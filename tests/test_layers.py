@@ -36,16 +36,18 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         "output chosen from one configuration's motions",
         ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
          "output_choice")),
-    3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
-        ("solve", "leg")),
+    3: ("the closure solver, the Leg whose solve and inverse kinematics call it, and why "
+        "a linkage does not assemble (closure_gaps: open loops, joints at a limit)",
+        ("solve", "leg", "closure_gaps")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
         "closed-loop dynamics, the compiled general elimination of a linkage's analysis",
-        ("engine", "engine.core", "analysis", "transmission", "dynamics",
+        ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics",
          "general_kernel")),
     5: ("position problems and studies built on the solver and the analysis (trajectory: "
-        "the efforts along a motion, on the closed-loop dynamics)",
+        "the efforts along a motion, on the closed-loop dynamics; simulation: its forward "
+        "dynamics; dynamic_indices: actuator-space and output inertias, gravity maps)",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration",
-         "trajectory")),
+         "trajectory", "simulation", "dynamic_indices")),
     6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
         "io reads every file format into one of them",
         ("mechanism", "linkage", "io")),
