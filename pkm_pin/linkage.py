@@ -71,6 +71,7 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -79,7 +80,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import dynamics as _dynamics
-from . import screws
+from . import general_kernel, screws
 from .analysis import classify
 from .assembly import Assembly
 from .closure_gaps import Diagnosis, diagnose
@@ -579,9 +580,8 @@ class Linkage:
         """
         if about not in ("output", "world"):
             raise InputError(f"about must be 'output' or 'world', got {about!r}")
-        q = q.q if isinstance(q, LinkageAssembly) else q
-        return _analyse(self, self._model.kinematics(q), about, generic, rtol, singular_tol,
-                        nearby)
+        q = self._model.check_q(q.q if isinstance(q, LinkageAssembly) else q)
+        return _analyse(self, q, about, generic, rtol, singular_tol, nearby)
 
     # ---------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, starts: int = 16, seed: int = 0,
@@ -712,9 +712,10 @@ class Linkage:
         model, kin = self._model, self._model.kinematics(q)
         an = analysis
         if an is None:
-            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL, 0)
-        elif not (np.array_equal(an.q, q) and np.array_equal(
-                an.reference_point, kin.output_placement.translation)):
+            an = _analyse(self, q, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL, 0)
+        elif not (np.array_equal(an.q, q) and np.allclose(  # compiled or Pinocchio pass
+                an.reference_point, kin.output_placement.translation, rtol=0.0,
+                atol=1e-12 * model.length)):
             raise InputError("analysis: not this linkage's analysis of q about its output "
                              "(Linkage.analyze(q))")
         tree, J = model.tree, kin.joint_twists
@@ -944,7 +945,7 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
         if known is None and rtol == RANK_RTOL:
             link._generic_ranks = generic
     return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], tuple(words),
-                    _independent(model, ns.X, rtol), link.grubler, ns.rank,
+                    _independent(model, ns.X, rtol, here[1] - here[0]), link.grubler, ns.rank,
                     None if generic is None else model.nv - generic[0],
                     None if generic is None else model.nv - generic[1], singular,
                     tuple(representation))
@@ -1089,12 +1090,14 @@ def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None
     return coords, words
 
 
-def _independent(model: ClosureModel, X: np.ndarray, rtol: float) -> tuple:
+def _independent(model: ClosureModel, X: np.ndarray, rtol: float,
+                 rank_x: int | None = None) -> tuple:
     """Greedy maximal set of actuated joints whose rates (rows of ``X``) are
-    independent over the allowed motions."""
+    independent over the allowed motions (``rank_x``: the rank of ``X``, if known)."""
     if X.shape[0] and X.shape[0] <= X.shape[1]:
-        sv = np.linalg.svd(X, compute_uv=False)  # full row rank: every subset is independent
-        if sv[-1] > rtol * sv[0]:
+        if rank_x is None:
+            rank_x = svd_rank(X, rtol)[0]
+        if rank_x == X.shape[0]:  # full row rank: every subset is independent
             return tuple(model.actuated)
     chosen: list[int] = []
     scale = np.linalg.norm(X) if X.size else 0.0
@@ -1576,13 +1579,46 @@ class LinkageAnalysis(OutputMaps):
         return U[act] * (Xr @ z)
 
 
-def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: float,
+def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
              singular_tol: float, nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
+    """The analysis at the checked ``q``: its numbers from the compiled path
+    (:func:`pkm_pin.general_kernel.analysis_core`) where the tree is compiled, else from
+    :func:`_numpy_core`; then the result objects."""
+    model = link.model
+    core = general_kernel.analysis_core(model, link._loops, q, about == "output", rtol)
+    if core is None:
+        core = _numpy_core(link, model.kinematics(q), about, rtol)
+    mob = _mobility(link, core.kin, core.ns, rtol, nearby)
+    idx = {"type_I": core.type_I, "type_II": core.type_II, "condition_A": core.condition,
+           "forward": core.forward, "inverse": core.inverse}
+    singularity = classify(_smaller(core.type_I, core.inverse),
+                           _smaller(core.type_II, core.forward), singular_tol)
+    d = core.d
+    csing = None if generic is None else bool(mob.dof != generic.dof
+                                              or d != generic.output_dof)
+    return LinkageAnalysis(core.kin.q, mob, d, d - core.rotations, core.twists,
+                           core.wrenches, core.A, core.B, idx, singularity, csing, core.p,
+                           model.length, singular_tol,
+                           (core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
+                           core.translating)
+
+
+def _smaller(a: float, b: float) -> float:
+    """``float(np.nanmin([a, b]))`` without numpy's warning when both are nan."""
+    if math.isnan(a):
+        return float(b)
+    return float(a) if math.isnan(b) else float(min(a, b))
+
+
+def _numpy_core(link: Linkage, kin: TreeKinematics, about: str,
+                rtol: float) -> general_kernel.Core:
+    """The numbers of an analysis by numpy from a Pinocchio pass (the reference of the
+    compiled :func:`pkm_pin.general_kernel.analysis_core`, and the path of trees it does
+    not represent)."""
     model = link.model
     L = model.length
     p = kin.output_placement.translation.copy() if about == "output" else np.zeros(3)
     ns = NullSpace(model, kin, rtol)
-    mob = _mobility(link, kin, ns, rtol, nearby)
     Yh = homogenised_about(ns.Y_world.T, p, L).T  # 6 × dof
     d, Uy, _, _ = svd_rank(Yh, rtol)
     P_h = Uy[:, :d].T
@@ -1595,17 +1631,11 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
     A_n = A_h / np.where(norms > 0, norms, 1.0)[:, None]
     type_II, cond = _transmission(A_n, P_h, d) if np.all(norms > 0) else (np.nan, np.nan)
     Xr, Yr, M, forward, inverse = _generalised(ns, Yh, rtol)
-    idx = {"type_I": type_I, "type_II": type_II, "condition_A": cond, "forward": forward,
-           "inverse": inverse}
-    singularity = classify(float(np.nanmin([type_I, inverse])),
-                           float(np.nanmin([type_II, forward])), singular_tol)
-    csing = None if generic is None else bool(mob.dof != generic.dof
-                                              or d != generic.output_dof)
-    return LinkageAnalysis(kin.q, mob, d, d - rotations, from_homogenised(P_h, p, L),
-                           from_homogenised(C_h, p, L), A, B, idx, singularity, csing, p, L,
-                           singular_tol, (Xr, Yr, M, ns.units, list(model.actuated_v)),
-                           np.array([not np.linalg.norm(kin.joint_twists[c][:3]) > 0
-                                     for c in model.actuated_v], dtype=bool))
+    translating = np.array([not np.linalg.norm(kin.joint_twists[c][:3]) > 0
+                            for c in model.actuated_v], dtype=bool)
+    return general_kernel.Core(kin, ns, p, d, rotations, from_homogenised(P_h, p, L),
+                               from_homogenised(C_h, p, L), A, B, type_I, type_II, cond,
+                               Xr, Yr, M, forward, inverse, translating)
 
 
 def _transmission(A_n: np.ndarray, P_h: np.ndarray, d: int) -> tuple[float, float]:

@@ -44,9 +44,10 @@ def test_bench_fk_solves_to_the_same_poses(capsys):
 
 def test_bench_linkage_times_the_three_figures(capsys):
     """bench_linkage.main times assembly, FK and analysis of the Cassie leg for pkm_pin
-    and the hand-written loop (same solutions, checked inside)."""
+    and the hand-written loop (same solutions, checked inside), and the analysis on its
+    numpy path."""
     rows = bench_linkage.main(n=10, repeat=1)
-    assert set(rows) == {"assemble", "fk", "analyze"}
+    assert set(rows) == {"assemble", "fk", "analyze", "analyze_numpy"}
     assert all(ours > 0 and hand > 0 for ours, hand in rows.values())
     assert "ratio pkm_pin / hand-written" in capsys.readouterr().out
 

@@ -41,8 +41,9 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         "a linkage does not assemble (closure_gaps: open loops, joints at a limit)",
         ("solve", "leg", "closure_gaps")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
-        "closed-loop dynamics",
-        ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics")),
+        "closed-loop dynamics, the compiled general elimination of a linkage's analysis",
+        ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics",
+         "general_kernel")),
     5: ("position problems and studies built on the solver and the analysis (trajectory: "
         "the efforts along a motion, on the closed-loop dynamics; simulation: its forward "
         "dynamics; dynamic_indices: actuator-space and output inertias, gravity maps)",
