@@ -89,6 +89,11 @@ CORPUS = [
          ("right-foot", "left-foot-crank", "right-foot-crank"), "2T3R", "II",
          singular_why="no <actuator> in the file: every motion is idle"),
     Case("menagerie/robotiq_2f85/2f85.xml", 3, 2, 2, 1, "left_driver", (), "1R"),
+    Case("menagerie/agility_cassie/cassie.xml", 16, 6, 2, 10, "left-knee", ("right-knee",),
+         "1T3R", "I", singular_why="the knee and heel springs (stiffness, no motor) are "
+         "idle and move every body below the knee (the foot: 3 of 5 dimensions set by "
+         "the motors, 2 idle), so the knee (4 set, none idle) ranks first; the foot motor "
+         "does not move it (type I)"),
 ]
 
 GEPETTO = [c for c in CORPUS if c.path.startswith("gepetto/")]
