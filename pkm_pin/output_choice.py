@@ -21,7 +21,9 @@ platform — by this rule (``docs/closed_loops.md``, "Default output"):
    ``idle_dim``; a body with mass before a massless one (an exporter's intermediate links
    between the revolutes of a spherical joint; only when the file gives masses); not a
    **crank** (every movable joint of its support actuated); not a **rod** (a leaf of the
-   tree carrying exactly one closure frame and no link named like an end body); the body
+   tree carrying exactly one closure frame and no link named like an end body, or an
+   unactuated zero-length link whose only child is a rod: the cross of a rod end's
+   universal joint, :func:`_rod_ends`); the body
    **furthest from the base** (:func:`_depths`: fewest joints from the base through the
    tree and the closures); a frame **named** like an end body (:func:`name_score`); the
    joint's own body frame before links fixed to it; tree order.
@@ -81,7 +83,9 @@ class OutputCandidate:
         crank: Every movable joint in its support is actuated: the motors move it
             alone (a motor's crank; every body of a serial arm).
         rod: A leaf body of the tree carrying exactly one closure frame and no link
-            named like an end body: a two-point link between its joint and a closure.
+            named like an end body: a two-point link between its joint and a closure;
+            or an unactuated zero-length link whose only child is a rod (the cross of
+            a rod end's universal joint).
         depth: Its distance from the base (:func:`_depths`: the fewest joints on a
             path through the tree and the closures).
         named: :func:`name_score` (3: an end body's name, 2: the same with a side
@@ -311,7 +315,8 @@ def _depths(model: ClosureModel, massless: set) -> list:
 
 def _rods(model: ClosureModel, used: set) -> set:
     """Joints whose body is a rod: a leaf of the tree carrying exactly one closure frame
-    and no link named like an end body (:func:`name_score` 2 or 3)."""
+    and no link named like an end body (:func:`name_score` 2 or 3), and the
+    intermediate links of its joint (:func:`_rod_ends`)."""
     tree = model.tree
     parents = set(tree.parents[1:])
     ends = [tree.frames[tree.getFrameId(name)].parentJoint
@@ -319,5 +324,30 @@ def _rods(model: ClosureModel, used: set) -> set:
     named = {f.parentJoint for f in tree.frames
              if f.type == pin.FrameType.BODY and (f.name not in used or _own(tree, f))
              and name_score(f.name) >= 2}
-    return {j for j in set(ends)
+    rods = {j for j in set(ends)
             if j > 0 and j not in parents and ends.count(j) == 1 and j not in named}
+    return rods | _rod_ends(model, rods, set(ends) | named)
+
+
+def _rod_ends(model: ClosureModel, rods: set, kept: set) -> set:
+    """The intermediate links of a rod's joint (the cross of a universal joint, the
+    first revolutes of a spherical one, with or without mass): climbing from each rod,
+    a parent whose only child is a rod (or such a link) jointed at the parent's own
+    joint origin (zero length: the two axes meet), whose own joint moves and is not
+    actuated, carrying no closure frame nor a link named like an end body (``kept``).
+    A link of length (a five-bar's distal link carrying its pin's marker link) is no
+    such link."""
+    tree = model.tree
+    actuated = {tree.getJointId(name) for name in model.actuated}
+    children: dict = {}
+    for j in range(1, tree.njoints):
+        children.setdefault(tree.parents[j], []).append(j)
+    out: set = set()
+    for j in rods:
+        p = tree.parents[j]
+        while (p > 0 and children.get(p) == [j] and p not in kept and p not in actuated
+               and tree.joints[p].nv > 0 and np.linalg.norm(
+                   tree.jointPlacements[j].translation) <= 1e-9 * model.length):
+            out.add(p)
+            j, p = p, tree.parents[p]
+    return out

@@ -89,6 +89,13 @@ CORPUS = [
          ("right-foot", "left-foot-crank", "right-foot-crank"), "2T3R", "II",
          singular_why="no <actuator> in the file: every motion is idle"),
     Case("menagerie/robotiq_2f85/2f85.xml", 3, 2, 2, 1, "left_driver", (), "1R"),
+    Case("menagerie/agility_cassie/cassie.xml", 16, 6, 2, 10, "left-knee", ("right-knee",),
+         "1T3R", "I", singular_why="the knee and heel springs (stiffness, no motor) are "
+         "idle and move every body below the knee (the foot: 3 of 5 dimensions set by "
+         "the motors, 2 idle), so the knee (4 set, none idle) ranks first; the foot motor "
+         "does not move it (type I)"),
+    Case("ankles/g1_ankle/g1_ankle.xml", 2, 0, 0, 2, "roll_link", (), "2R"),
+    Case("ankles/tiangong_ankle/tg10_ankle.xml", 4, 2, 0, 2, "foot_link", (), "2R"),
 ]
 
 GEPETTO = [c for c in CORPUS if c.path.startswith("gepetto/")]
@@ -267,3 +274,27 @@ def test_every_corpus_file_is_credited():
         assert case.path.split("/", 1)[1] in readme, case.path
         assert (folder / "LICENSE").is_file()
         assert (DATA / case.path).is_file()
+
+
+G1_ANKLE = "ankles/g1_ankle/g1_ankle.xml"
+
+
+def test_the_rule_on_a_parallel_ankle():
+    """G1-like ankle: the foot (roll_link, 2 motion dimensions = 2 motors, none idle)
+    is chosen over the crosses of the rods' universal joints (right_u_link: as deep as
+    a rod, zero length, its only child the rod), which fit as well; it reads 2R, class
+    none. The motor crank the readers used to pick reads 1R and type I."""
+    link, a = _home(G1_ANKLE)
+    choice = choose_output(link.model, a.q)
+    assert choice.frame == "roll_link" and choice.fits and choice.ties == ()
+    c = {x.frame: x for x in choice.candidates}
+    u = c["right_u_link"]
+    assert (u.fits, u.rod, u.depth, u.crank) == (True, True, 3, False)
+    assert not c["roll_link"].rod and c["roll_link"].depth == 2
+    assert not c["right_motor_link"].fits and c["right_motor_link"].crank
+    an = link.analyze(a)
+    assert (an.motion_type, an.singularity) == ("2R", "none")
+    assert an.indices["inverse"] > 0.4 and an.indices["forward"] > 0.7
+    motor = pkm_pin.load_mechanism(DATA / G1_ANKLE, output="right_motor_link")
+    an = motor.analyze(a)
+    assert (an.motion_type, an.singularity, an.indices["inverse"]) == ("1R", "I", 0.0)

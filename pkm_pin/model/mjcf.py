@@ -32,7 +32,8 @@ closures, the actuators and the reference configuration from the file itself:
   ``effector``, else the last body.
 * A free joint of a body directly under ``<worldbody>`` (a floating base) is removed:
   that body is the base, the mechanism is analysed relative to it, and the model says so
-  in its ``notes``.
+  in its ``notes``; its coordinates are removed from every ``<key>`` of the file's size
+  (:func:`_drop_from_keyframes`).
 * Frame names are made distinct (MuJoCo names bodies, joints and sites in separate name
   spaces; Pinocchio's frames share one): a body keeps its name, a joint or site frame of
   the same name gets the suffix ``_joint`` / ``_site`` (joint names are unchanged).
@@ -337,16 +338,64 @@ def _hold_free_roots(root: ET.Element) -> list[str]:
     directly under ``<worldbody>``, in place: a floating base (a humanoid's pelvis, a
     robot dropped on a floor) is held, and the closed loops are analysed relative to it.
     Returns the names of the bodies so held."""
-    held = []
+    held, removed, slots = [], [], _joint_slots(root)
     for world in root.findall("worldbody"):
         for body in world.findall("body"):
             free = [c for c in body if c.tag == "freejoint"
                     or (c.tag == "joint" and c.get("type") == "free")]
             for joint in free:
                 body.remove(joint)
+                removed.append(joint)
             if free:
                 held.append(body.get("name", "the root body"))
+    if held:
+        _drop_from_keyframes(root, slots, removed)
     return held
+
+
+#: Coordinates (qpos, qvel) of MuJoCo's joint types; ``hinge`` is the default type.
+_JOINT_SIZES = {"free": (7, 6), "ball": (4, 3), "slide": (1, 1), "hinge": (1, 1)}
+
+
+def _joint_slots(root: ET.Element) -> list:
+    """``[(element, nq, nv)]`` for every joint of the tree in MuJoCo's ``qpos`` order:
+    bodies depth first (through ``<frame>``), each body's joints in the file's order
+    before its children's."""
+    slots: list = []
+
+    def walk(el: ET.Element) -> None:
+        for child in el:
+            if child.tag == "freejoint":
+                slots.append((child, 7, 6))
+            elif child.tag == "joint":
+                slots.append((child, *_JOINT_SIZES.get(child.get("type", "hinge"), (1, 1))))
+        for child in el:
+            if child.tag in ("body", "frame"):
+                walk(child)
+
+    for world in root.findall("worldbody"):
+        walk(world)
+    return slots
+
+
+def _drop_from_keyframes(root: ET.Element, slots: list, removed: list) -> None:
+    """Remove the ``removed`` (held) free joints' entries from every ``<key>``'s ``qpos``
+    and ``qvel`` (a keyframe of the floating robot, e.g. Menagerie Cassie's ``home``; Pinocchio
+    refuses one whose size is not the model's), in place. ``slots``: :func:`_joint_slots`
+    before the free joints were removed. A key whose size is not the file's is left to
+    Pinocchio's own error."""
+    for attr, size in (("qpos", 1), ("qvel", 2)):
+        total = sum(s[size] for s in slots)
+        keep, start = [], 0
+        for el, *n in slots:  # n: (nq, nv)
+            if not any(el is r for r in removed):
+                keep.extend(range(start, start + n[size - 1]))
+            start += n[size - 1]
+        for keys in root.findall("keyframe"):
+            for key in keys.findall("key"):
+                values = (key.get(attr) or "").split()
+                if len(values) == total:
+                    key.set(attr, " ".join(values[i] for i in keep))
 
 
 def _inline_default_joint_pos(root: ET.Element) -> bool:
