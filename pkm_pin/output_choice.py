@@ -12,8 +12,10 @@ platform — by this rule (``docs/closed_loops.md``, "Default output"):
    frame used by a closure, as in MJCF, stays).
 2. **Controlled motion**: with ``N`` the motions the closures allow (null space of
    ``J_c``), ``X`` the actuated rates and ``Y`` the frame's homogenised twists over ``N``,
-   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked)
-   and ``controlled_dim = rank Y − idle_dim``. The frame **fits** when ``idle_dim = 0``
+   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked,
+   and every spring held: :attr:`ClosureModel.springs`, so that a leg's foot below
+   Cassie's shin and heel springs counts the motions its motors give it) and
+   ``controlled_dim = rank Y − idle_dim``. The frame **fits** when ``idle_dim = 0``
    and ``rank Y = rank X``: its motion and the motors' determine each other, so neither
    the forward nor the inverse index of the analysis is zero by construction. A rod that
    spins about its own axis, a crank that a motor moves alone, a base do not fit.
@@ -185,8 +187,12 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
     tree = model.tree
     kin = model.kinematics(q)
     ns = NullSpace(model, kin, rtol)
-    r_x, _, _, Vt = screws.svd_rank(ns.X, rtol)
-    idle = Vt[r_x:].T  # null coordinates of the idle motions
+    r_x = screws.svd_rank(ns.X, rtol)[0]
+    # idle: the motions with every motor locked and every spring held (null coordinates)
+    springs = [tree.joints[tree.getJointId(n)].idx_v for n in model.springs]
+    held = np.vstack([ns.X, ns.N[springs]]) if springs else ns.X
+    r_h, _, _, Vt = screws.svd_rank(held, rtol)
+    idle = Vt[r_h:].T
     used = {name for c in model.closures if c.joins_frames
             for name in (c.frame_a, c.frame_b)}
     frames = [(k, f) for k, f in enumerate(tree.frames)  # bodies that can move

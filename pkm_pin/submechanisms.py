@@ -104,7 +104,8 @@ def _sub(link, joints: tuple, q: np.ndarray, k: int):
                        name=f"{model.name or 'linkage'}[{k}]", reference=_restrict(tree,
                                                                                    reduced, q),
                        output_point=model.output_point, actuator_matches=matches,
-                       notes=model.notes, output_named=named)
+                       notes=model.notes, output_named=named,
+                       springs=tuple(n for n in model.springs if reduced.existJointName(n)))
     one = type(link)(sub)
     return one if named else designer_output(one)
 

@@ -89,11 +89,11 @@ CORPUS = [
          ("right-foot", "left-foot-crank", "right-foot-crank"), "2T3R", "II",
          singular_why="no <actuator> in the file: every motion is idle"),
     Case("menagerie/robotiq_2f85/2f85.xml", 3, 2, 2, 1, "left_driver", (), "1R"),
-    Case("menagerie/agility_cassie/cassie.xml", 16, 6, 2, 10, "left-knee", ("right-knee",),
-         "1T3R", "I", singular_why="the knee and heel springs (stiffness, no motor) are "
-         "idle and move every body below the knee (the foot: 3 of 5 dimensions set by "
-         "the motors, 2 idle), so the knee (4 set, none idle) ranks first; the foot motor "
-         "does not move it (type I)"),
+    Case("menagerie/agility_cassie/cassie.xml", 16, 6, 2, 10, "left-foot",
+         ("right-foot", "left-foot-crank", "right-foot-crank"), "2T3R", "III",
+         singular_why="the knee and heel springs (stiffness, no motor: ClosureModel.springs, "
+         "held when the output is chosen, so the foot is) are idle and move the foot: a "
+         "rigid-body reading of a compliant leg"),
     Case("ankles/g1_ankle/g1_ankle.xml", 2, 0, 0, 2, "roll_link", (), "2R"),
     Case("ankles/tiangong_ankle/tg10_ankle.xml", 4, 2, 0, 2, "foot_link", (), "2R"),
 ]
@@ -298,3 +298,25 @@ def test_the_rule_on_a_parallel_ankle():
     motor = pkm_pin.load_mechanism(DATA / G1_ANKLE, output="right_motor_link")
     an = motor.analyze(a)
     assert (an.motion_type, an.singularity, an.indices["inverse"]) == ("1R", "I", 0.0)
+
+
+def test_springs_are_read_and_held_when_the_output_is_chosen():
+    """Menagerie's Cassie: the shin and heel joints carry a stiffness and no motor; they
+    are the model's springs (a note says so), and with them held every body below the
+    knee counts 5 motor-set dimensions, so the foot (deepest, named like an end body) is
+    the default output instead of the knee; with no springs the knee wins, as before."""
+    import dataclasses
+
+    link = pkm_pin.load_mechanism(DATA / "menagerie/agility_cassie/cassie.xml")
+    assert link.model.springs == ("left-shin", "left-heel-spring", "right-shin",
+                                  "right-heel-spring")
+    assert any("a spring (stiffness)" in n for n in link.model.notes)
+    q = link.home_assembly.q
+    held = choose_output(link.model, q)
+    assert held.frame == "left-foot" and held.candidates[0].controlled_dim == 5
+    free = choose_output(dataclasses.replace(link.model, springs=()), q)
+    assert free.frame == "left-knee"
+    foot = next(c for c in free.candidates if c.frame == "left-foot")
+    assert (foot.motion_dim, foot.idle_dim) == (5, 2)
+    with pytest.raises(pkm_pin.InputError, match="springs: joint 'left-knee' must have"):
+        dataclasses.replace(link.model, springs=("left-knee",))

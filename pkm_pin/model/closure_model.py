@@ -69,7 +69,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import screws
-from ..errors import InputError, TreeFrameNotFound, TreeJointNotFound
+from ..errors import InputError, TreeFrameNotFound, TreeJointNotFound, _cut
 from ..tolerances import RANK_RTOL, SPARSE_ZERO_RTOL, ZERO_SCREW_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -177,6 +177,11 @@ class ClosureModel:
             rather than taken from a reader's fallback (a frame called ``effector``, the
             last body): :func:`pkm_pin.io.load_mechanism` chooses a designer's output
             (:mod:`pkm_pin.output_choice`) where it was not.
+        springs: Joints the file gives a spring and no actuator (an MJCF joint's
+            ``stiffness``: Cassie's shin and heel springs): they stay joints of the
+            analysis (their motions are idle), and the default output is chosen as if
+            they were held (:mod:`pkm_pin.output_choice`), so that it is the body the
+            motors move, not a link above the springs.
     """
 
     tree: pin.Model = field(repr=False)
@@ -190,6 +195,7 @@ class ClosureModel:
     actuator_matches: tuple = ()
     notes: tuple[str, ...] = ()
     output_named: bool = True
+    springs: tuple[str, ...] = ()
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
     _plan: _Plan = field(init=False, repr=False)
@@ -218,6 +224,7 @@ class ClosureModel:
                              f"{type(matches).__name__}") from e
         set_(self, "actuator_matches", matches)
         set_(self, "notes", tuple(str(n) for n in self.notes))
+        set_(self, "springs", _springs(tree, self.springs, self.actuated))
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_closures_join_two_bodies(tree, closures, self.name)
         _check_couplings(tree, closures, self.name)
@@ -889,6 +896,19 @@ def _check_actuated(tree: pin.Model, actuated: tuple, name: str) -> None:
                                     "the tree")
     if len(set(actuated)) != len(actuated):
         raise InputError(f"an actuated joint is listed twice in {actuated}")
+
+
+def _springs(tree: pin.Model, springs, actuated: tuple) -> tuple[str, ...]:
+    """``springs`` checked: names of one-coordinate joints of ``tree`` that no actuator
+    drives."""
+    out = tuple(str(n) for n in springs)
+    for name in out:
+        if not tree.existJointName(name):
+            raise InputError(f"springs: no joint {_cut(name)} in the tree")
+        if tree.joints[tree.getJointId(name)].nv != 1 or name in actuated:
+            raise InputError(f"springs: joint {_cut(name)} must have one coordinate and "
+                             "no actuator")
+    return out
 
 
 def default_length(tree: pin.Model, closures: tuple) -> float:

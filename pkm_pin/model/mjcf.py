@@ -124,9 +124,14 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
     out = named if named is not None else _output_frame(tree)
     notes = tuple(f"{body} has a free joint in the file: it is held as the base, the "
                   "mechanism analysed relative to it" for body in held) + notes + drive_notes
+    springs = _springs(root, tree, actuated)
+    if springs:
+        notes += (f"{', '.join(springs)}: a spring (stiffness) and no actuator in the file: "
+                  "they move with every motor locked (idle motions), and the default output "
+                  "is chosen as if they were held",)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
                         reference=reference, actuator_matches=matches, notes=notes,
-                        output_named=named is not None)
+                        output_named=named is not None, springs=springs)
 
 
 # ------------------------------------------------------------------------------ tree
@@ -398,27 +403,28 @@ def _drop_from_keyframes(root: ET.Element, slots: list, removed: list) -> None:
                     key.set(attr, " ".join(values[i] for i in keep))
 
 
-def _inline_default_joint_pos(root: ET.Element) -> bool:
-    """Write on every ``<joint>`` without ``pos`` the ``pos`` its default class gives,
-    in place (MuJoCo's rules: the joint's ``class``, else the nearest ``childclass`` of
-    its bodies, else ``main``; a nested ``<default>`` inherits its parent's). Pinocchio
-    4.1 takes a joint's type, axis, range and ref from its class but not its position
-    (Menagerie's Robotiq 2F-85 puts its fingers' follower joints there: without it the
-    joint axis passes through the loop's pin). Returns whether a joint was changed."""
+def _inline_default_joint_pos(root: ET.Element, attribute: str = "pos") -> bool:
+    """Write on every ``<joint>`` without ``attribute`` (``pos``) the value its default
+    class gives, in place (MuJoCo's rules: the joint's ``class``, else the nearest
+    ``childclass`` of its bodies, else ``main``; a nested ``<default>`` inherits its
+    parent's). Pinocchio 4.1 takes a joint's type, axis, range and ref from its class but
+    not its position (Menagerie's Robotiq 2F-85 puts its fingers' follower joints there:
+    without it the joint axis passes through the loop's pin). Returns whether a joint
+    was changed."""
     defaults: dict = {}
 
     def walk(el: ET.Element, inherited: dict) -> None:
         own = dict(inherited)
         joint = el.find("joint")
-        if joint is not None and joint.get("pos") is not None:
-            own["pos"] = joint.get("pos")
+        if joint is not None and joint.get(attribute) is not None:
+            own[attribute] = joint.get(attribute)
         defaults[el.get("class", "main")] = own
         for child in el.findall("default"):
             walk(child, own)
 
     for top in root.findall("default"):
         walk(top, {})
-    if not any("pos" in d for d in defaults.values()):
+    if not any(attribute in d for d in defaults.values()):
         return False
     changed = False
     stack = [(body, "main") for body in root.findall("worldbody")]
@@ -426,14 +432,30 @@ def _inline_default_joint_pos(root: ET.Element) -> bool:
         el, cls = stack.pop()
         cls = el.get("childclass", cls)
         for child in el:
-            if child.tag == "joint" and child.get("pos") is None:
-                pos = defaults.get(child.get("class", cls), {}).get("pos")
-                if pos is not None:
-                    child.set("pos", pos)
+            if child.tag == "joint" and child.get(attribute) is None:
+                value = defaults.get(child.get("class", cls), {}).get(attribute)
+                if value is not None:
+                    child.set(attribute, value)
                     changed = True
             elif child.tag in ("body", "frame"):
                 stack.append((child, cls))
     return changed
+
+
+def _springs(root: ET.Element, tree: pin.Model, actuated: tuple) -> tuple[str, ...]:
+    """The joints the file gives a spring (``stiffness`` > 0, its own or its class's)
+    and no actuator, in tree order (:attr:`ClosureModel.springs`)."""
+    _inline_default_joint_pos(root, "stiffness")
+    stiff = set()
+    for joint in root.iter("joint"):
+        try:
+            k = float(joint.get("stiffness", "0"))
+        except ValueError:
+            continue
+        if k > 0 and joint.get("name") and joint.get("name") not in actuated:
+            stiff.add(joint.get("name"))
+    return tuple(tree.names[j] for j in range(1, tree.njoints)
+                 if tree.names[j] in stiff and tree.joints[j].nv == 1)
 
 
 def _build_tree(path: Path, root: ET.Element, rewritten: bool = False) -> pin.Model:
