@@ -12,12 +12,13 @@ platform — by this rule (``docs/closed_loops.md``, "Default output"):
    frame used by a closure, as in MJCF, stays).
 2. **Controlled motion**: with ``N`` the motions the closures allow (null space of
    ``J_c``), ``X`` the actuated rates and ``Y`` the frame's homogenised twists over ``N``,
-   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked,
-   and every spring held: :attr:`ClosureModel.springs`, so that a leg's foot below
-   Cassie's shin and heel springs counts the motions its motors give it) and
-   ``controlled_dim = rank Y − idle_dim``. The frame **fits** when ``idle_dim = 0``
-   and ``rank Y = rank X``: its motion and the motors' determine each other, so neither
-   the forward nor the inverse index of the analysis is zero by construction. A rod that
+   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked)
+   and ``controlled_dim = rank Y − idle_dim``. Springs (:attr:`ClosureModel.springs`)
+   are held: ``N`` is restricted to the motions that leave them still, so that a leg's
+   foot below Cassie's shin and heel springs counts the motions its motors give it.
+   The frame **fits** when ``idle_dim = 0`` and ``rank Y = rank X``: its motion and the
+   motors' determine each other, so neither the forward nor the inverse index of the
+   analysis is zero by construction. A rod that
    spins about its own axis, a crank that a motor moves alone, a base do not fit.
 3. **Order** (:meth:`OutputCandidate.key`): the larger ``controlled_dim``; the smaller
    ``idle_dim``; a body with mass before a massless one (an exporter's intermediate links
@@ -187,18 +188,19 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
     tree = model.tree
     kin = model.kinematics(q)
     ns = NullSpace(model, kin, rtol)
-    r_x = screws.svd_rank(ns.X, rtol)[0]
-    # idle: the motions with every motor locked and every spring held (null coordinates)
-    springs = [tree.joints[tree.getJointId(n)].idx_v for n in model.springs]
-    held = np.vstack([ns.X, ns.N[springs]]) if springs else ns.X
-    r_h, _, _, Vt = screws.svd_rank(held, rtol)
-    idle = Vt[r_h:].T
+    N, X = ns.N, ns.X
+    if model.springs:  # springs held: only the motions that leave every spring still
+        springs = [tree.joints[tree.getJointId(n)].idx_v for n in model.springs]
+        r_s, _, _, Vs = screws.svd_rank(N[springs], rtol)
+        N, X = N @ Vs[r_s:].T, X @ Vs[r_s:].T
+    r_x, _, _, Vt = screws.svd_rank(X, rtol)
+    idle = Vt[r_x:].T  # null coordinates of the idle motions
     used = {name for c in model.closures if c.joins_frames
             for name in (c.frame_a, c.frame_b)}
     frames = [(k, f) for k, f in enumerate(tree.frames)  # bodies that can move
               if k > 0 and f.type == pin.FrameType.BODY and f.parentJoint > 0
               and (f.name not in used or _own(tree, f))]
-    units = ns.units[:, None] * ns.N
+    units = ns.units[:, None] * N
     placements = kin.frame_placements
     Y = []
     for k, f in frames:  # (6 or 3) × dof: the frame's motions over the null coordinates

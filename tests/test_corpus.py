@@ -297,7 +297,8 @@ def test_the_rule_on_a_parallel_ankle():
     assert an.indices["inverse"] > 0.4 and an.indices["forward"] > 0.7
     motor = pkm_pin.load_mechanism(DATA / G1_ANKLE, output="right_motor_link")
     an = motor.analyze(a)
-    assert (an.motion_type, an.singularity, an.indices["inverse"]) == ("1R", "I", 0.0)
+    assert (an.motion_type, an.singularity) == ("1R", "I")
+    assert an.indices["inverse"] < 1e-12  # 0 up to rounding (2.8e-17 on one processor)
 
 
 def test_springs_are_read_and_held_when_the_output_is_chosen():
