@@ -30,10 +30,10 @@ def fuzz_seed(request) -> int | None:
 
 @pytest.fixture(scope="session")
 def fork_server():
-    """The fork server, warmed up on one file of each reader (lazy imports, numba)."""
-    warm = [["analyze", str(MODELS / "loops" / "five_bar.urdf"), "--json"],
-            ["analyze", str(MJCF_CORPUS[-1]), "--json"],
-            ["analyze", str(TOML_CORPUS[0]), "--json"]]
+    """The fork server, warmed up on the small files of the corpus (lazy imports, numba's
+    kernels compiled or loaded)."""
+    files = [*TOML_CORPUS, *MJCF_CORPUS, *sorted((MODELS / "loops").glob("*.urdf"))]
+    warm = [["analyze", str(f), "--json"] for f in files]
     server = ForkServer(warm)
     yield server
     server.close()

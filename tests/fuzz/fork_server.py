@@ -4,8 +4,9 @@ time and memory.
 Starting ``python -m pkm_pin.cli`` costs 1–2 s (importing Pinocchio, numpy, numba); a
 fuzz run of 100 000 cases cannot pay that each time. The server is a long-lived process
 that imports :func:`pkm_pin.cli.main` once, runs it once on a few files (so that the lazy
-imports are done and numba's compiled kernels are loaded), then reads one request per
-line on stdin and ``os.fork()``\\ s a child per request:
+imports are done and numba's kernels are compiled or loaded; children never compile:
+:data:`pkm_pin.compiling.PLAIN_CALLS` is raised), then reads one request per line on
+stdin and ``os.fork()``\\ s a child per request:
 
 - the child sets ``RLIMIT_AS`` (its address space: the server's own plus a headroom) and
   an alarm (``SIGALRM`` kills it after the time limit, rounded up to whole seconds),
@@ -126,11 +127,17 @@ def serve(warm: list[list[str]]) -> None:
     import warnings
 
     warnings.simplefilter("default")  # what a user's interpreter shows
+    from pkm_pin import compiling
     from pkm_pin.cli import main
 
+    compiling.PLAIN_CALLS = 0  # warming up: compile (or load) every kernel it meets
     for argv in warm:
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
             main(argv)
+    # A child never compiles (40 s, killed at the time limit, its work lost with it): a
+    # kernel the warm-up did not meet runs its plain-Python path, as a one-off run on a
+    # fresh installation does.
+    compiling.PLAIN_CALLS = 10**9
     gc.collect()
     gc.freeze()  # the children's collector leaves the server's objects (and pages) alone
     protocol = sys.stdout

@@ -6,6 +6,8 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+import pytest
+
 from pkm_pin.cli import main
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -46,3 +48,50 @@ def test_a_line_separator_in_a_file_name_stays_on_one_line(tmp_path, capsys):
     path.write_text("name = 1\n")
     assert main(["analyze", str(path), "--json"]) == 2
     assert "x.toml" in one_error_line(capsys)
+
+
+FOUND = Path(__file__).resolve().parent / "found"
+
+
+def test_mjcf_empty_pos_is_refused_not_an_svd_traceback(tmp_path, capsys):
+    """models/loops/four_bar.xml with ``<compiler>`` dropped and the rocker's ``pos=""``
+    (found by the fuzz suite): Pinocchio 4.1 read the empty position as uninitialised
+    memory and the report's SVD raised LinAlgError. Now the MJCF reader refuses it,
+    naming the body and the attribute."""
+    path = tmp_path / "model.xml"
+    path.write_bytes((FOUND / "mjcf_empty_pos_svd.xml").read_bytes())
+    assert main(["analyze", str(path), "--json"]) == 2
+    line = one_error_line(capsys)
+    assert f"{path}, body[3] 'rocker' pos: must be 3 numbers, got ''" in line
+
+
+def test_mjcf_empty_pos_gives_no_overflow_warning(tmp_path, capsys):
+    """models/loops/five_bar.xml with proximal1's ``pos=""`` (found by the fuzz suite):
+    a numpy overflow warning, then "length must be a positive number [m], got inf" — two
+    lines, and an error that did not say which value was wrong. Now one line naming it."""
+    path = tmp_path / "model.xml"
+    path.write_bytes((FOUND / "mjcf_empty_pos_length_inf.xml").read_bytes())
+    assert main(["analyze", str(path), "--json"]) == 2
+    line = one_error_line(capsys)
+    assert "body[1] 'proximal1' pos: must be 3 numbers, got ''" in line
+
+
+@pytest.mark.parametrize("attribute,value,count", [
+    ("pos", "0.1 0", 3), ("axisangle", "0 0 1", 4), ("quat", "1 0 0 0 0", 4),
+    ("euler", " ", 3), ("axis", "", 3)])
+def test_mjcf_number_counts_are_checked(tmp_path, capsys, attribute, value, count):
+    """Every MJCF number attribute holds MuJoCo's count of numbers (a short or empty list
+    is what Pinocchio reads as uninitialised memory)."""
+    text = (FOUND / "mjcf_empty_pos_svd.xml").read_text().replace('pos=""', 'pos="0.1 0 0"')
+    (tmp_path / "ok.xml").write_text(text)
+    assert main(["analyze", str(tmp_path / "ok.xml"), "--json"]) == 0
+    capsys.readouterr()
+    first = {"pos": 'pos="0.03 0 0"', "axisangle": 'axisangle="0 0 1 1.0471975511966"',
+             "axis": 'axis="0 0 1"', "quat": '<body name="base"', "euler": '<body name="base"'}
+    new = f'{attribute}="{value}"' if attribute in ("pos", "axisangle", "axis") \
+        else f'<body name="base" {attribute}="{value}"'
+    bad = text.replace(first[attribute], new, 1)
+    assert bad != text
+    (tmp_path / "bad.xml").write_text(bad)
+    assert main(["analyze", str(tmp_path / "bad.xml"), "--json"]) == 2
+    assert f"{attribute}: must be {count} numbers, got {value!r}" in one_error_line(capsys)
