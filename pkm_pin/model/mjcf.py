@@ -293,6 +293,7 @@ def _check_numbers(label: str, root: ET.Element) -> None:
     axes and quaternions of non-zero length; joint ranges with lower ≤ upper. The error
     names the element, the attribute and the value."""
     counts: dict = {}
+    equalities = {el for equality in root.iter("equality") for el in equality}
     for el in root.iter():
         i = counts[el.tag] = counts.get(el.tag, -1) + 1
         keys = [k for k in _NUMERIC if k in el.attrib]
@@ -306,8 +307,8 @@ def _check_numbers(label: str, root: ET.Element) -> None:
             except ValueError as e:
                 raise ClosureFileError(label, f"{where} {key}", f"must be numbers, got "
                                        f"{_cut(text)}") from e
-            if values.size != _COUNTS[key]:
-                raise ClosureFileError(label, f"{where} {key}", f"must be {_COUNTS[key]} "
+            if values.size != _COUNTS[key] and el not in equalities:  # (_closures: those)
+                raise ClosureFileError(label, f"{where} {key}", f"must be {_COUNTS[key]} finite "
                                        f"numbers, got {_cut(text)}")
             if not np.all(np.abs(values) <= MAX_COORDINATE):
                 bad = values[~(np.abs(values) <= MAX_COORDINATE)][0]

@@ -62,7 +62,7 @@ def test_mjcf_empty_pos_is_refused_not_an_svd_traceback(tmp_path, capsys):
     path.write_bytes((FOUND / "mjcf_empty_pos_svd.xml").read_bytes())
     assert main(["analyze", str(path), "--json"]) == 2
     line = one_error_line(capsys)
-    assert f"{path}, body[3] 'rocker' pos: must be 3 numbers, got ''" in line
+    assert f"{path}, body[3] 'rocker' pos: must be 3 finite numbers, got ''" in line
 
 
 def test_mjcf_empty_pos_gives_no_overflow_warning(tmp_path, capsys):
@@ -73,7 +73,7 @@ def test_mjcf_empty_pos_gives_no_overflow_warning(tmp_path, capsys):
     path.write_bytes((FOUND / "mjcf_empty_pos_length_inf.xml").read_bytes())
     assert main(["analyze", str(path), "--json"]) == 2
     line = one_error_line(capsys)
-    assert "body[1] 'proximal1' pos: must be 3 numbers, got ''" in line
+    assert "body[1] 'proximal1' pos: must be 3 finite numbers, got ''" in line
 
 
 @pytest.mark.parametrize("attribute,value,count", [
@@ -94,4 +94,4 @@ def test_mjcf_number_counts_are_checked(tmp_path, capsys, attribute, value, coun
     assert bad != text
     (tmp_path / "bad.xml").write_text(bad)
     assert main(["analyze", str(tmp_path / "bad.xml"), "--json"]) == 2
-    assert f"{attribute}: must be {count} numbers, got {value!r}" in one_error_line(capsys)
+    assert f"{attribute}: must be {count} finite numbers, got {value!r}" in one_error_line(capsys)
