@@ -1,7 +1,8 @@
 """The outcomes of the fuzz cases, per reader: "cases", "seconds" (in the children) and
 the "slowest" case, "ok" (exit 0, strict finite JSON), "refused" (exit 2, one line naming
-the file), and each kind of failure. Printed at the end of the run (``conftest.py``) and, while a long
-run goes on, written to ``$PKM_FUZZ_TALLY`` every 50 cases of a reader."""
+the file), and each kind of failure. Printed at the end of the run (``conftest.py``)
+and, while a long run goes on, written to ``$PKM_FUZZ_TALLY`` every 50 cases of a
+reader."""
 
 from __future__ import annotations
 
