@@ -95,3 +95,17 @@ def test_mjcf_number_counts_are_checked(tmp_path, capsys, attribute, value, coun
     (tmp_path / "bad.xml").write_text(bad)
     assert main(["analyze", str(tmp_path / "bad.xml"), "--json"]) == 2
     assert f"{attribute}: must be {count} finite numbers, got {value!r}" in one_error_line(capsys)
+
+
+def test_urdf_axis_without_xyz_is_refused_not_a_singular_matrix(tmp_path, capsys):
+    """models/loops/delta_loops.urdf with joint wrist_3_2's ``<axis/>`` left without
+    ``xyz`` (and a duplicated ``<limit>`` elsewhere; found by the fuzz suite): urdfdom
+    reads such an axis as zero, the joint's rotations were not rotations, the weld
+    residual NaN: a numpy warning on success, or ``LinAlgError: Singular matrix`` from
+    the mobility search. The URDF reader now refuses it, naming the joint."""
+    shutil.copy(FOUND / "delta_axis_without_xyz.urdf", tmp_path / "delta.urdf")
+    shutil.copy(FOUND / "delta_axis_without_xyz.yaml", tmp_path / "delta.yaml")
+    assert main(["analyze", str(tmp_path / "delta.urdf"), "--json"]) == 2
+    line = one_error_line(capsys)
+    assert "URDF: joint 'wrist_3_2' has an <axis> without xyz" in line
+    assert str(tmp_path / "delta.urdf") in line
