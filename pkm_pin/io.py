@@ -53,7 +53,7 @@ from .errors import (
 from .leg import Leg
 from .linkage import Linkage
 from .mechanism import Mechanism
-from .urdf import LimitExceeded, read_bounded
+from .urdf import MAX_COORDINATE, LimitExceeded, read_bounded
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -337,6 +337,10 @@ def _numbers(value, n: int, label: str, where: str) -> np.ndarray:
     a = np.array(value, dtype=float)
     if not np.all(np.isfinite(a)):
         raise MechanismFileError(label, where, f"must be finite, got {value!r}")
+    if np.abs(a).max(initial=0.0) > MAX_COORDINATE:  # 1e154 overflowed the solvers' norms
+        big = a[np.argmax(np.abs(a))]
+        raise MechanismFileError(label, where, f"has {big:g}, beyond ±{MAX_COORDINATE:g} "
+                                 "(m or rad): a mechanism is not a thousand kilometres wide")
     return a
 
 

@@ -109,3 +109,32 @@ def test_urdf_axis_without_xyz_is_refused_not_a_singular_matrix(tmp_path, capsys
     line = one_error_line(capsys)
     assert "URDF: joint 'wrist_3_2' has an <axis> without xyz" in line
     assert str(tmp_path / "delta.urdf") in line
+
+
+def _found_toml(tmp_path, name: str) -> Path:
+    """A kept mechanism file, its leg URDF paths (the fuzz run's copy of models/urdf)
+    pointed at this checkout's models/urdf."""
+    text = (FOUND / name).read_text().replace("/tmp/fuzzrun/tree/models/urdf/",
+                                               f"{DATA.parents[1] / 'models' / 'urdf'}/")
+    path = tmp_path / "m.toml"
+    path.write_text(text)
+    return path
+
+
+def test_huge_home_q_is_refused_not_an_overflow_warning(tmp_path, capsys):
+    """The shipped agile eye with leg 1's home_q[2] = 3.68e287 (found by the fuzz suite):
+    finite, so it was taken, and ``analyze`` printed numpy overflow warnings before its
+    JSON. Now the numbers of a mechanism file are held within ±1e6 (m or rad), as the
+    URDF's are, and the error names the leg, the key and the value."""
+    assert main(["analyze", str(_found_toml(tmp_path, "toml_home_q_3e287.toml")), "--json"]) == 2
+    line = one_error_line(capsys)
+    assert "m.toml, leg '1' (legs[0]).home_q: has 3.68087e+287, beyond ±1e+06" in line
+
+
+def test_huge_base_position_is_refused_not_two_lines(tmp_path, capsys):
+    """The shipped agile eye with leg 1's base x = 1.34e154 (found by the fuzz suite):
+    a numpy warning, then "relative pose error of inf" — two lines, and not naming the
+    value. Now one line naming it."""
+    assert main(["analyze", str(_found_toml(tmp_path, "toml_base_xyz_1e154.toml")), "--json"]) \
+        == 2
+    assert "(legs[0]).base.xyz: has 1.34078e+154, beyond ±1e+06" in one_error_line(capsys)
