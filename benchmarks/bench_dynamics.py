@@ -1,22 +1,27 @@
-"""Per-sample cost of closed-loop inverse dynamics: pkm_pin against a hand-written
-Pinocchio null-space solve.
+"""Per-sample cost of closed-loop inverse dynamics (issue 26): pkm_pin against a
+hand-written Pinocchio null-space solve, and the batched path against single calls.
 
 The 3-loop Cassie-like leg (``models/loops/cassie_knee.urdf``: 8 revolutes, three point
 closures, two motors; the file has no inertias, so every body gets a seeded random one),
 along a closed path of motor values around home: ``q`` by forward kinematics, ``v`` and
-``a`` by :func:`pkm_pin.dynamics.motion_from_actuated` (made before timing). Per sample:
+``a`` by :func:`pkm_pin.dynamics.motion_from_actuated` (made before timing). Timed, per
+sample, best of ``repeat`` runs:
 
-  * pkm_pin: :func:`pkm_pin.dynamics.inverse_dynamics` (rnea, the closure Jacobian in
-    physical units, ``J̇ v`` from Pinocchio's accelerations, the consistency checks of
-    ``J v`` and ``J a + J̇ v``, the SVD of the balance matrix with its type II / idle
-    checks, efforts and minimum-norm closure forces);
+  * ``inverse_dynamics``: :func:`pkm_pin.dynamics.inverse_dynamics` called once per
+    sample (its compiled kernel: rnea, the closure Jacobian in physical units, ``J̇ v``,
+    the consistency checks of ``J v`` and ``J a + J̇ v``, the balance's SVD with its
+    type II / idle checks, efforts and minimum-norm closure forces);
   * hand-written: ``rnea`` on a tree with the gravity set, ``computeJointJacobians`` +
     ``updateFramePlacements``, the two ``LOCAL_WORLD_ALIGNED`` frame Jacobians per point
     closure (their linear rows' difference), the null space ``N`` of ``J`` by numpy's SVD,
-    ``τ = lstsq(Nᵀ Sᵀ, Nᵀ τ_tree)`` — no closure forces, no ``J̇ v``, no check.
+    ``τ = lstsq(Nᵀ Sᵀ, Nᵀ τ_tree)`` — no closure forces, no ``J̇ v``, no check;
+  * the Python path (the implementation before the kernel: Pinocchio passes and numpy),
+    for reference;
+  * ``inverse_dynamics_batch`` on the 1000 samples at once.
 
-Prints both per-sample times and their ratio (issue 26's target: ≤ 1) and the largest
-difference of the efforts.
+Prints the times, the ratio inverse_dynamics / hand-written (issue 26's target: ≤ 1),
+the ratio single calls / batch (target: ≥ 10) and the largest differences of the
+efforts.
 """
 
 from __future__ import annotations
@@ -86,28 +91,52 @@ class HandWritten:
         return np.linalg.lstsq(N.T @ self.S.T, N.T @ tau, rcond=None)[0]
 
 
-def main(n: int = 200, repeat: int = 7) -> None:
+def main(n: int = 1000, single: int = 200, repeat: int = 7) -> dict:
     cm, data = samples(n)
+    Q, V, A = (np.array([d[k] for d in data]) for k in range(3))
     hand = HandWritten(cm)
-    ours = [dyn.inverse_dynamics(cm, q, v, a, gravity=GRAVITY).efforts for q, v, a in data]
-    theirs = [hand(q, v, a) for q, v, a in data]
+    batch = dyn.inverse_dynamics_batch(cm, Q, V, A, gravity=GRAVITY)  # compiles once
+    part = data[:single]
+    ours = [dyn.inverse_dynamics(cm, q, v, a, gravity=GRAVITY).efforts for q, v, a in part]
+    python = [dyn._python_path(cm, q, v, a, GRAVITY, None, dyn.MOTION_CONSISTENCY_RTOL)
+              .efforts for q, v, a in part]
+    theirs = [hand(q, v, a) for q, v, a in part]
     diff = max(np.abs(x - y).max() / np.abs(y).max() for x, y in zip(ours, theirs))
+    diff_batch = max(np.abs(batch.efforts[i] - python[i]).max() / np.abs(python[i]).max()
+                     for i in range(single))
 
     def framework():
-        for q, v, a in data:
+        for q, v, a in part:
             dyn.inverse_dynamics(cm, q, v, a, gravity=GRAVITY)
 
+    def python_path():
+        for q, v, a in part:
+            dyn._python_path(cm, q, v, a, GRAVITY, None, dyn.MOTION_CONSISTENCY_RTOL)
+
     def reference():
-        for q, v, a in data:
+        for q, v, a in part:
             hand(q, v, a)
 
-    best = best_of_each({"pkm_pin": framework, "hand-written": reference}, repeat)
-    us, ref = (best[k] / n * 1e6 for k in ("pkm_pin", "hand-written"))
-    print(f"Cassie-like leg, {n} samples, inverse dynamics per sample:")
-    print(f"  pkm_pin.dynamics.inverse_dynamics   {us:8.1f} us")
-    print(f"  hand-written null-space solve       {ref:8.1f} us")
-    print(f"  ratio pkm_pin / hand-written        {us / ref:8.2f}")
-    print(f"  largest relative difference of the efforts {diff:.1e}")
+    def batched():
+        dyn.inverse_dynamics_batch(cm, Q, V, A, gravity=GRAVITY)
+
+    best = best_of_each({"single": framework, "hand": reference, "python": python_path,
+                         "batch": batched}, repeat)
+    us = {k: best[k] / (n if k == "batch" else single) * 1e6 for k in best}
+    print(f"Cassie-like leg, inverse dynamics per sample ({single} single calls, a batch "
+          f"of {n}; compiled kernel on {int(batch.compiled.sum())}/{n} samples):")
+    print(f"  pkm_pin inverse_dynamics (single)   {us['single']:8.1f} us")
+    print(f"  hand-written null-space solve       {us['hand']:8.1f} us")
+    print(f"  pkm_pin Python path (reference)     {us['python']:8.1f} us")
+    print(f"  pkm_pin inverse_dynamics_batch      {us['batch']:8.1f} us")
+    print(f"  ratio inverse_dynamics / hand-written   {us['single'] / us['hand']:8.2f}"
+          "  (target <= 1)")
+    print(f"  ratio single calls / batch              {us['single'] / us['batch']:8.2f}"
+          "  (target >= 10)")
+    print(f"  ratio Python path / batch               {us['python'] / us['batch']:8.2f}")
+    print(f"  largest relative difference of the efforts: single vs hand-written {diff:.1e}, "
+          f"batch vs Python path {diff_batch:.1e}")
+    return {**us, "diff": diff, "diff_batch": diff_batch}
 
 
 if __name__ == "__main__":

@@ -17,7 +17,9 @@ damped Newton on the closure (``computeJointJacobians`` + ``updateFramePlacement
 closure; numpy for the step), and the mobility, output twists and velocity maps from one
 numpy SVD of the closure Jacobian (``qa = X Y⁺ t``, ``t = Y X⁺ qa``). Same tolerance
 (residual 1e-12 L). Prints the times and their ratios measured in the same run (target:
-pkm_pin at most the hand-written loop, ratio ≤ 1).
+pkm_pin at most the hand-written loop, ratio ≤ 1; the analysis at most ×1.5), and the
+analysis on its numpy path (``general_kernel.ENABLED = False``), the general elimination
+before it was compiled.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 from timing import best_of_each
 
-from pkm_pin import load_mechanism
+from pkm_pin import general_kernel, load_mechanism
 
 CASSIE = Path(__file__).resolve().parents[1] / "models" / "loops" / "cassie_knee.urdf"
 
@@ -170,7 +172,28 @@ def main(n: int = 200, repeat: int = 5) -> dict:
               f"   ratio x{ours / ref:5.2f}")
     total = sum(r[0] for r in rows.values()) / sum(r[1] for r in rows.values())
     print(f"  all three: ratio pkm_pin / hand-written x{total:.2f}   (target: at most 1)")
+    rows["analyze_numpy"] = numpy_analysis(link, hand, Q, solutions, repeat)
     return rows
+
+
+def numpy_analysis(link, hand, Q, solutions, repeat: int) -> tuple:
+    """The analysis on its numpy path (``general_kernel.ENABLED = False``: before the
+    compiled elimination) against the hand-written loop, timed in the same rounds."""
+    n = len(Q)
+
+    def ours():
+        general_kernel.ENABLED = False
+        try:
+            run_ours(link, Q, solutions, "analyze", hand.act_q)
+        finally:
+            general_kernel.ENABLED = True
+
+    t = best_of_each({"ours": ours, "hand": lambda: run_hand(hand, Q, solutions, "analyze")},
+                     repeat)
+    ours_t, ref = t["ours"] / n, t["hand"] / n
+    print(f"  {'analysis, numpy path':28s} pkm_pin {1e6 * ours_t:8.1f}   hand-written "
+          f"{1e6 * ref:8.1f}   ratio x{ours_t / ref:5.2f}   (general_kernel.ENABLED = False)")
+    return ours_t, ref
 
 
 if __name__ == "__main__":

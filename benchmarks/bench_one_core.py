@@ -10,7 +10,8 @@ same machine, at the same poses (home and ``n`` random poses around it):
   * ``urdf/legs``: ``load_mechanism(urdf, backend="legs")`` at the TOML's home
     (:meth:`Mechanism.from_closure_model`: the structure detected in the file);
   * ``urdf/general``: ``load_mechanism(urdf)`` (the general elimination, the default
-    for a .urdf today).
+    for a .urdf today; its characteristic length is the detected legs' —
+    :func:`pkm_pin.model.structure.legs_length` — so its indices are the machine's too).
 
 Prints the largest difference of the type I/II indices and the condition of A between
 the TOML and each URDF reading (target: 1e-9 for ``urdf/legs``), and the analysis time
@@ -83,8 +84,8 @@ def main(n: int = 50, repeat: int = 5) -> dict:
           f"(type I, type II, condition of A)")
     print(f"  urdf/legs                         {diff_legs:.2e}   (target 1e-9)")
     print(f"  general, TOML's tree (welds)      {diff_general:.2e}")
-    print(f"  general, URDF's tree (points)     {diff_urdf:.2e}   at home: the general "
-          "elimination's indices depend on the tree")
+    print(f"  general, URDF's tree (points)     {diff_urdf:.2e}   (the legs' characteristic "
+          "length, legs_length: the machine's, not the tree's)")
     print("analysis per pose (assemble + analyze), ratio to the TOML's in this run:")
     for key, us in per_pose.items():
         print(f"  {key:<13} {us:9.1f} µs   x{us / per_pose['toml']:.2f}")

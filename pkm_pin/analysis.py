@@ -35,9 +35,9 @@ import numpy as np
 from . import engine, screws
 from .assembly import checked_twists
 from .errors import InputError, SingularityError
+from .output_maps import OutputMaps
 from .tolerances import CLOSENESS_SINGULAR_TOL, ROTATION_COUNT_TOL
 from .transmission import (
-    Ellipsoid,
     Transmission,
     constraint_transmission,
     leg_points,
@@ -63,7 +63,7 @@ class LegScrews:
     constraint_wrenches: np.ndarray
 
 
-class Analysis:
+class Analysis(OutputMaps):
     """Mobility, Jacobians and singularity classes of a mechanism at an assembly.
 
     The screw algebra is the analysis engine (:mod:`pkm_pin.engine`) at one pose: the
@@ -99,14 +99,22 @@ class Analysis:
         self._results = engine.analyse(self.joint_twists[None], layout,
                                        centres=self.centre[None])
 
-    def _to_origin(self, H: np.ndarray) -> np.ndarray:
-        """Screws homogenised about :attr:`centre` (the engine's) in world units about
-        the world origin."""
-        return screws.from_point(screws.dehomogenise(H, self.length), self.centre)
+    # ------------------------------------------------ hooks of OutputMaps
+    @property
+    def _twist_dim(self) -> int:
+        return self.dof
 
-    def _about_centre(self, S: np.ndarray) -> np.ndarray:
-        """Screws about the world origin written about :attr:`centre`."""
-        return screws.about(S, self.centre)
+    @property
+    def _platform_h(self) -> np.ndarray:
+        return self._results.platform[0, :self.dof]
+
+    @property
+    def _actuation_h(self) -> np.ndarray:
+        return self._results.A_h[0]
+
+    @property
+    def _actuated_prismatic(self) -> np.ndarray:
+        return ~(np.linalg.norm(self.actuated_twists[:, :3], axis=1) > 0)
 
     @cached_property
     def legs(self) -> list[LegScrews]:
@@ -196,11 +204,6 @@ class Analysis:
         """Twists (n × 6) of the actuated joints, in actuated-coordinate order."""
         return self.joint_twists[self.mechanism.engine_layout.act_col]
 
-    @property
-    def full_jacobian(self) -> np.ndarray:
-        """Actuation rows stacked on constraint rows: ``[A; C] Δ t = [B q̇_a; 0]``."""
-        return np.vstack([self.A, self.constraint_wrenches])
-
     # ------------------------------------------------------------- singularities
     @cached_property
     def indices(self) -> dict[str, float]:
@@ -235,36 +238,6 @@ class Analysis:
         """Whether this is the analysis of the mechanism's home assembly (the reference
         of the constraint singularities: compared with nothing)."""
         return self.assembly is self.mechanism.__dict__.get("home_assembly")
-
-    @cached_property
-    def uncontrolled_twist(self) -> np.ndarray | None:
-        """At a type II/III singularity, the platform twist the locked actuators allow
-        (unit once homogenised, axis-first); ``None`` elsewhere."""
-        if self.indices["type_II"] >= self.singular_tol or self.dof == 0:
-            return None
-        P = self._results.platform[0, :self.dof]
-        M = self._results.A_h[0] @ screws.DELTA @ P.T
-        _, _, Vt = np.linalg.svd(M, full_matrices=True)
-        return self._to_origin(Vt[-1] @ P)
-
-    @cached_property
-    def unresisted_wrench(self) -> np.ndarray | None:
-        """At a type II/III singularity, a platform wrench that no combination of
-        actuation and constraint wrenches balances; ``None`` elsewhere."""
-        if self.indices["type_II"] >= self.singular_tol:
-            return None
-        H = screws.normalised_rows(self._about_centre(self.full_jacobian), self.length)
-        _, _, Vt = np.linalg.svd(H, full_matrices=True)
-        return self._to_origin(Vt[-1])
-
-    @cached_property
-    def lost_actuated_rates(self) -> np.ndarray | None:
-        """At a type I/III singularity, actuated rates that move no platform twist."""
-        if self.indices["type_I"] >= self.singular_tol:
-            return None
-        e = np.zeros(self.mechanism.n_actuated)
-        e[int(np.argmin(np.abs(np.diag(self.B))))] = 1.0
-        return e
 
     # ---------------------------------------------------------------- velocities
     def _check_twist(self, twist) -> np.ndarray:
@@ -342,108 +315,6 @@ class Analysis:
         generic = None if self._is_home else mech.home_analysis.constraint_wrenches.shape[0]
         leg_cti = constraint_transmission(A, C, points, L, self.rtol, generic)
         return Transmission.of(iti, oti, leg_cti, lay.act_leg, [leg.name for leg in mech.legs])
-
-    # -------------------------------------------------------------------- statics
-    def _balance(self, wrench) -> tuple[np.ndarray, np.ndarray]:
-        """``(λ, μ)`` with ``wrench = Aᵀ λ + Cᵀ μ`` (C: :attr:`constraint_wrenches`),
-        solved on rows homogenised about :attr:`centre`."""
-        w = screws.as_vector(wrench, 6, "wrench", noun="components")
-        if self.indices["type_II"] < self.singular_tol:
-            raise SingularityError(
-                f"actuator efforts undefined: type II closeness index "
-                f"{self.indices['type_II']:.3g} < {self.singular_tol:g} (the actuators "
-                f"cannot balance every wrench here)", "forward", self.indices["type_II"])
-        L = self.length
-        rows = screws.homogenise(self._about_centre(self.full_jacobian), L)
-        rhs = screws.homogenise(self._about_centre(w), L)
-        x, *_ = np.linalg.lstsq(rows.T, rhs, rcond=None)
-        if np.linalg.norm(rows.T @ x - rhs) > 1e-9 * max(np.linalg.norm(rhs), 1e-300):
-            raise InputError("this wrench is not balanced by the actuation and constraint "
-                             "wrenches (fewer actuators than degrees of freedom)")
-        n = self.mechanism.n_actuated
-        return x[:n], x[n:]
-
-    def actuator_efforts(self, wrench) -> np.ndarray:
-        """Actuator efforts ``τ`` (n,) [N for a prismatic, N m for a revolute actuator]
-        with which the legs apply the wrench ``wrench`` (axis-first ``(f; m_O)`` about the
-        world origin [N, N m]) to the platform.
-
-        Virtual work: for every admissible platform twist ``t``, ``τ · q̇_a = w ∘ t``.
-        Writing ``w = Aᵀ λ + Cᵀ μ`` (actuation and constraint wrenches) and using
-        ``A Δ t = B q̇_a``, ``C Δ t = 0`` gives ``τ = B λ``. To hold an external load
-        ``w_ext`` (a payload's weight: :func:`pkm_pin.transmission.payload_wrench`), pass
-        ``−w_ext``. With redundant actuation, the minimum-norm ``(λ, μ)`` (homogenised).
-
-        Raises:
-            SingularityError: at or near a type II singularity.
-            InputError: the wrench cannot be balanced (fewer actuators than DOF).
-        """
-        lam, _ = self._balance(wrench)
-        return np.diag(self.B) * lam
-
-    def constraint_forces(self, wrench) -> np.ndarray:
-        """Magnitudes ``μ`` (6 − dof,) of the part of ``wrench`` carried by the
-        constraints: ``wrench = Aᵀ λ + Cᵀ μ`` with ``C`` = :attr:`constraint_wrenches`
-        (rows of unit norm once written about :attr:`centre` with moments divided by the
-        characteristic length, so ``μ`` is in newtons); the wrench they carry is
-        ``μ @ constraint_wrenches``. Same conventions and errors as
-        :meth:`actuator_efforts`."""
-        return self._balance(wrench)[1]
-
-    def _velocity_map(self) -> tuple[np.ndarray, np.ndarray]:
-        """``K`` (d × n) with ``x = K q̇_h`` (x: coordinates of the platform twist on the
-        orthonormal homogenised basis ``P_h`` about the centre; ``q̇_h``: actuated rates,
-        prismatic ones divided by L), and ``P_h``."""
-        n, d, L = self.mechanism.n_actuated, self.dof, self.length
-        if n != d:
-            raise InputError(f"ellipsoids need as many actuators as degrees of freedom "
-                             f"(here {n} actuators, {d} DOF)")
-        if self.indices["type_II"] < self.singular_tol:
-            raise SingularityError(
-                f"ellipsoids undefined: type II closeness index "
-                f"{self.indices['type_II']:.3g} < {self.singular_tol:g}", "forward",
-                self.indices["type_II"])
-        P_h = self._results.platform[0, :d]
-        A_h = screws.homogenise(self._about_centre(self.A), L)
-        prismatic = ~(np.linalg.norm(self.actuated_twists[:, :3], axis=1) > 0)
-        D = np.diag(self.B) * np.where(prismatic, L, 1.0) / L
-        return np.linalg.solve(A_h @ screws.DELTA @ P_h.T, np.diag(D)), P_h
-
-    def velocity_ellipsoid(self) -> Ellipsoid:
-        """Platform twists reached by actuated rates of unit norm.
-
-        Homogenised units, so that the answer does not depend on units or frame:
-        actuated rates as revolute [rad/s] and prismatic [m/s] divided by the
-        characteristic length L; twists about the platform centre as ``(ω; v_c / L)``
-        [1/s]. Semi-axes are the singular values of that map (largest first), axes the
-        twists (about the world origin) along them.
-
-        Raises:
-            InputError: actuators and DOF differ. SingularityError: type II.
-        """
-        K, P_h = self._velocity_map()
-        U, sv, _ = np.linalg.svd(K)
-        return Ellipsoid(sv, self._to_origin(U.T @ P_h), self.centre.copy(), self.length)
-
-    def force_ellipsoid(self) -> Ellipsoid:
-        """Platform wrenches produced by actuator efforts of unit norm (the dual of
-        :meth:`velocity_ellipsoid`: same principal directions, semi-axes inverted).
-
-        Homogenised units: efforts as prismatic [N] and revolute [N m] divided by L;
-        wrenches about the centre as ``(f; m_c / L)`` [N], each axis the wrench (about
-        the world origin) that does work only on its twist axis (modulo the constraint
-        wrenches, which the structure carries). Semi-axes largest first (inf at a
-        type I singularity).
-
-        Raises:
-            InputError: actuators and DOF differ. SingularityError: type II.
-        """
-        K, P_h = self._velocity_map()
-        U, sv, _ = np.linalg.svd(K)
-        with np.errstate(divide="ignore"):
-            semi = 1.0 / sv[::-1]
-        W_h = (U.T @ P_h)[::-1] @ screws.DELTA
-        return Ellipsoid(semi, self._to_origin(W_h), self.centre.copy(), self.length)
 
     def passive_rates(self, twist) -> list[np.ndarray]:
         """Every leg's joint rates (all joints, velocity order) for a platform twist."""

@@ -10,6 +10,7 @@
     pkm-pin map MECHANISM --axes x z [--at NAME=V...] --range A B C D --n 100 --out PREFIX
     pkm-pin view MECHANISM [--pose ...] [--html FILE]   browser preview (meshcat)
     pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N]
+                     [--simulate | --indices]
                      [--payload FX FY FZ MX MY MZ] [--json] [--out PREFIX]
                                                    actuator efforts along a motion
 
@@ -844,7 +845,7 @@ def cmd_view(args) -> int:
     if args.html is not None and Path(args.html).is_dir():  # a folder: the page inside it
         args.html = str(Path(args.html) / f"{_slug(args.mechanism)}.html")
     if _is_linkage(mech):
-        where = _linkage_assembly(args, mech)
+        where = _open_or_assembled(args, mech)
     else:
         pose = _platform_pose(args)
         if args.q is not None and pose is not None:
@@ -867,15 +868,32 @@ def cmd_view(args) -> int:
         print("animated   the uncontrolled motion of this singular pose")
     for motion in getattr(scene, "idle_motions", ()):
         print(f"idle       {motion}")
+    if getattr(scene, "error", None) is not None:
+        print(f"open       drawn at the best configuration reached: {scene.error}")
     return 0
+
+
+def _open_or_assembled(args, link):
+    """:func:`_linkage_assembly`, or the :class:`LoopClosureError` of a linkage that does
+    not assemble when it carries the best configuration reached (``view`` draws it open,
+    with its gaps)."""
+    from .linkage import LoopClosureError
+
+    try:
+        return _linkage_assembly(args, link)
+    except LoopClosureError as e:
+        if e.q is None:
+            raise
+        return e
 
 
 def cmd_dynamics(args) -> int:
     """Efforts, speeds and powers of each actuator along a motion
     (:func:`pkm_pin.trajectory.study`): the CSV of ``--trajectory`` (header
-    ``t,<actuated names>``, clamped cubic spline) or the default sine about home over
-    ``--duration``; per actuator peak and RMS effort, peak speed, peak power and energy
-    as a table or ``--json``; ``--out PREFIX``: PREFIX.npz and the PNG plots."""
+    ``t,<actuated names>`` or ``t`` and output coordinates, clamped cubic spline) or
+    the default sine about home over ``--duration``; per actuator peak and RMS effort,
+    peak speed, peak power and energy as a table or ``--json``; ``--out PREFIX``:
+    PREFIX.npz and the PNG plots."""
     from . import trajectory as tr
 
     if args.trajectory is not None and args.duration is not None:
@@ -889,6 +907,8 @@ def cmd_dynamics(args) -> int:
         if not prefix.parent.is_dir():
             raise InputError(f"--out {prefix}: the folder {prefix.parent} does not exist")
     mech = _load(args)
+    if args.indices:
+        return _print_dynamic_indices(mech, args)
     motion = None
     if args.trajectory is not None:
         model, _ = tr.closure_model_of(mech)
@@ -909,8 +929,10 @@ def cmd_dynamics(args) -> int:
         except OSError as e:
             raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
     summary = st.summary()
+    replayed = _replay(mech, st) if args.simulate else None
     if args.json:
         print(_json({"mechanism": mech.name, "actuated": list(st.actuated),
+                     **({} if replayed is None else {"simulation": replayed}),
                      "motion": st.motion, "samples": int(st.t.size),
                      "duration": float(st.t[-1] - st.t[0]), "gravity": st.gravity.tolist(),
                      "payload": None if st.payload is None else st.payload.tolist(),
@@ -941,12 +963,63 @@ def cmd_dynamics(args) -> int:
               f"{s['rms_effort']:>9.4g} {s['effort_unit']:<3}  "
               f"{s['peak_speed']:>9.4g} {s['speed_unit']:<5}  {s['peak_power']:>10.4g} W  "
               f"{s['energy']:>9.4g} J  {s['net_energy']:>9.4g} J")
+    if replayed is not None:
+        print(f"simulated  forward dynamics ({replayed['method']}, RK4, dt "
+              f"{1e3 * replayed['dt']:.3g} ms) of these efforts + PD "
+              f"{replayed['bandwidth']:g} Hz: tracking error "
+              + ", ".join(f"{x:.3g}" for x in replayed["tracking_error"])
+              + f"; closure drift {replayed['max_drift']:.3g}; energy balance "
+              f"{replayed['energy_error']:.3g}")
     tm = st.timing
-    print(f"time       {tm['total']:.3g} s; per sample {1e3 * tm['kinematics']:.3g} ms forward "
+    print(f"time       {tm['total']:.3g} s; per sample {1e3 * tm['kinematics']:.3g} ms position "
           f"kinematics, {1e3 * tm['motion']:.3g} ms v and a, {1e3 * tm['dynamics']:.3g} ms "
           "inverse dynamics")
     for path in files:
         print(f"wrote      {path}")
+    return 0
+
+
+def _replay(mech, st) -> dict:
+    """``dynamics --simulate``: :func:`pkm_pin.simulation.replay` of the study."""
+    from . import simulation
+    from . import trajectory as tr
+
+    model, _ = tr.closure_model_of(mech)
+    r = simulation.replay(model, st.t, st.q[0], st.v[0], st.q_actuated, st.speeds,
+                          st.efforts, gravity=st.gravity, payload=st.payload)
+    s = r.simulation
+    return {"method": s.method, "dt": float(s.t[1] - s.t[0]), "bandwidth": r.bandwidth,
+            "tracking_error": r.tracking_error.tolist(), "max_drift": s.max_drift,
+            "energy_error": s.energy_error}
+
+
+def _print_dynamic_indices(mech, args) -> int:
+    """``dynamics --indices``: :func:`pkm_pin.dynamic_indices.dynamic_indices` and the
+    gravity efforts at home."""
+    from . import dynamic_indices as di
+    from . import trajectory as tr
+
+    model, q = tr.closure_model_of(mech)
+    if not any(inertia.mass > 0 for inertia in model.tree.inertias):
+        raise InputError(f"{mech.name}: no body has a mass in the file; the dynamic indices "
+                         "need the file's inertias")
+    r = di.dynamic_indices(model, q)
+    tau = di.gravity_efforts(model, q[None]).efforts[0]
+    if args.json:
+        print(_json({"mechanism": mech.name, **r.summary(), "gravity_efforts": tau.tolist()}))
+        return 0
+    unit = {"rad": "N m", "m": "N"}
+    print(f"mechanism  {mech.name} (at home; docs/dynamics.md)")
+    for name, u, row, t in zip(r.actuated, r.units, r.inertia, tau):
+        print(f"actuator   {name} [{u}]: Λ row " + " ".join(f"{x:.4g}" for x in row)
+              + f"; gravity effort {t:.4g} {unit[u]}")
+    print("eigen      Λ̃ = Uₐ Λ Uₐ [kg m²]: " + " ".join(f"{x:.4g}" for x in r.eigenvalues)
+          + f"; condition {r.condition:.4g}; idle motions {r.idle_motions}")
+    X = r.output_inertia  # round-off of a rank-deficient Λ_x printed as 0
+    X = np.where(np.abs(X) <= 1e-12 * max(np.abs(X).max(initial=0.0), 1e-300), 0.0, X)
+    print("output     Λ_x about the output origin, world axes, rows and columns (ω; v):")
+    for row in X:
+        print("           " + " ".join(f"{x + 0.0:>10.4g}" for x in row))
     return 0
 
 
@@ -1248,8 +1321,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("mechanism", nargs="?", metavar="MECHANISM", help=_MECH_HELP)
     p.add_argument("--trajectory", metavar="CSV",
                    help="the motion: a CSV with the header t,<actuated names> (any order) "
-                   "and one row per sample [s, rad or m], splined (cubic, at rest at both "
-                   "ends)")
+                   "or t and some of x,y,z,roll,pitch,yaw (the output's coordinates, the "
+                   "others held by the mechanism) and one row per sample [s, rad or m], "
+                   "splined (cubic, at rest at both ends)")
     p.add_argument("--duration", type=float, metavar="T",
                    help="duration of the default motion [s] (default 2)")
     p.add_argument("--samples", type=int, default=201,
@@ -1262,6 +1336,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", metavar="PREFIX",
                    help="write PREFIX.npz (t, q, v, a, efforts, ...) and PREFIX_efforts.png, "
                    "_speeds.png, _powers.png, _torque_speed.png")
+    p.add_argument("--simulate", action="store_true",
+                   help="then simulate the forward dynamics of these efforts (plus a PD on "
+                   "the actuators) and print the tracking error, closure drift and energy "
+                   "balance")
+    p.add_argument("--indices", action="store_true",
+                   help="print the dynamic indices at home instead: actuator-space inertia "
+                   "Gᵀ M G, its eigenvalues and condition, the apparent inertia at the "
+                   "output, the gravity efforts")
     _linkage_options(p)
     p.set_defaults(func=cmd_dynamics)
     return parser

@@ -27,7 +27,9 @@ Equations (``v, a`` the tree's velocity and acceleration in Pinocchio's tangent 
   in ``C_b`` axes at its origin (``Jlog6 = I`` at a closed weld); a revolute's point rows
   as a point's, its two axis rows ``(λ_x, λ_y)`` [N m] the couple ``z_b × (λ_x, λ_y, 0)``
   = ``(−λ_y, λ_x, 0)`` in ``C_a`` axes (at a closed revolute) that keeps the axes
-  aligned.
+  aligned; a coupling's row ``q_a − c₁ q_b − c₀`` [joint a's unit, rad or m] has
+  ``J = (1, −c₁)`` in the two joints' columns and ``J̇ = 0``: its λ [N m or N] is the
+  generalized force ``+λ`` on joint a and ``−c₁ λ`` on joint b.
 * ``(τ, λ)`` by least squares on the dimensionless system ``[Sᵀ, −(J_c U)ᵀ] (Uₐτ; s λ) =
   U (τ_tree − J_oᵀΔw)`` (``U`` :attr:`ClosureModel.velocity_units`, ``s``
   :func:`row_units`, ``J_c`` the dimensionless closure Jacobian): every unknown and
@@ -52,6 +54,15 @@ that minus ``J a``. For a weld the second derivative is taken as ``Jlog6(M) ν̇
 the body twist of ``C_b`` relative to ``C_a``): the neglected ``(d/dt Jlog6) ν`` is
 ``O(|log M| |ν|²)``, zero on a closed weld since ``ad(ν) ν = 0``.
 
+Compiled path: where :mod:`pkm_pin.tree_kernel` represents the tree, one numba kernel
+(:func:`inverse_dynamics_kernel`) does a sample's whole work — closure rows, the bodies'
+world velocities and accelerations, ``rnea`` in world axes, the closures' second
+derivative, the checks, the balance by a warm-started Jacobi SVD with iterative
+refinement, the type II test — for one call (:func:`inverse_dynamics`) or N samples
+(:func:`inverse_dynamics_batch`); a sample it declines goes through the Python path
+below, which raises the error with its message or returns (docs/dynamics.md, "The
+compiled path").
+
 Gravity is set per call on a private copy of the tree kept per thread (Pinocchio reads
 the gravity from the ``Model``, not the ``Data``): the shared model is never modified
 and threads do not share working data.
@@ -59,6 +70,7 @@ and threads do not share working data.
 
 from __future__ import annotations
 
+import math
 import threading
 import weakref
 from dataclasses import dataclass
@@ -69,8 +81,15 @@ from numba import njit
 from numba.extending import register_jitable
 
 from . import screws
-from .compiling import prefer_compiled
-from .errors import InconsistentMotion, InertiaError, InputError, SingularityError
+from .compiling import PLAIN_CALLS, prefer_compiled
+from .engine.linalg import JACOBI_TOL, jacobi, largest
+from .errors import (
+    InconsistentMotion,
+    InertiaError,
+    InputError,
+    PkmError,
+    SingularityError,
+)
 from .model.closure_model import KINDS, ClosureModel, TreeKinematics
 from .tolerances import (
     ASSEMBLY_CHECK_RTOL,
@@ -79,6 +98,7 @@ from .tolerances import (
     MOTION_CONSISTENCY_RTOL,
     RANK_RTOL,
 )
+from .tree_kernel import _nv_of, _relative_columns, closure_rows, log6_jlog6, workspace
 
 #: Default gravity [m/s²] (world z up).
 GRAVITY = (0.0, 0.0, -9.81)
@@ -164,7 +184,7 @@ class _Work:
                                   dtype=int) for k in KINDS}
         self.rows = {k: np.array([np.arange(ends[i], ends[i + 1]) for i in idx], dtype=int
                                  ).reshape(len(idx), KINDS[k]) for k, idx in self.kinds.items()}
-        codes = {"point": 0, "revolute": 1, "weld": 2}
+        codes = {"point": 0, "revolute": 1, "weld": 2, "coupling": 3}
         self.kind_codes = np.array([codes[c.kind] for c in model.closures], dtype=np.int64)
         self.first_rows = np.array(ends[:-1], dtype=np.int64)
         units = np.ones(self.n_rows)
@@ -172,10 +192,25 @@ class _Work:
         for kind in ("point", "revolute"):
             units[self.rows[kind][:, :3].ravel()] = L
         units[self.rows["weld"][:, 3:].ravel()] = L
+        for i, r in zip(self.kinds["coupling"], self.rows["coupling"][:, 0]):
+            units[r] = model.velocity_units[tree.joints[self.joints[i]].idx_v]
         units.setflags(write=False)
         self.row_units = units
+        #: a coupling's physical Jacobian row (nv,), by closure index
+        self.coupling_rows = {}
+        for i in self.kinds["coupling"]:
+            row = np.zeros(tree.nv)
+            ja, jb = self.joints[i], self.joints[C + i]
+            row[tree.joints[ja].idx_v] = 1.0
+            if jb > 0:
+                row[tree.joints[jb].idx_v] -= model.closures[i].coef[1]
+            self.coupling_rows[i] = row
         self.act_v = np.array(model.actuated_v, dtype=int)
         self.names = _velocity_names(tree)
+        #: per joint: mass, centre of mass (joint frame), rotational inertia by rows
+        self.body = np.array([np.r_[I.mass, I.lever, I.inertia.ravel()]
+                              for I in tree.inertias])
+        self.armature = np.array(tree.armature, dtype=float)
 
     def set_gravity(self, g: np.ndarray) -> None:
         self.tree.gravity = pin.Motion(g, np.zeros(3))
@@ -275,13 +310,15 @@ def _velocity_names(tree: pin.Model) -> list[str]:
 
 
 # ------------------------------------------------------ closure second derivative
-def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarray:
+def _second_derivative(work: _Work, a: np.ndarray, Hj: np.ndarray, VA: np.ndarray
+                       ) -> np.ndarray:
     """``J a + J̇ v`` of every closure row (physical units) from the world placements
     ``Hj`` (2C × 4 × 4) of the ends' joints and their local spatial velocities and
     accelerations ``VA`` (2C × 2 × 6, Pinocchio's linear-first ``(v; ω)``): the
     compiled :func:`closure_second_derivative` (its plain-Python source for the first
     calls of a process, :func:`pkm_pin.compiling.prefer_compiled`), then ``Jlog6`` for
-    the welds."""
+    the welds; a coupling's is ``a_a − c₁ a_b`` (``a`` the tree's acceleration the
+    pass was made with)."""
     out = np.empty(work.n_rows)
     if work.C == 0:
         return out
@@ -295,7 +332,25 @@ def _second_derivative(work: _Work, Hj: np.ndarray, VA: np.ndarray) -> np.ndarra
     for k, i in enumerate(idx):  # Jlog6(M) ν̇
         M = pin.SE3(Mh[i, :, :3], Mh[i, :, 3])
         out[rows[k]] = screws.from_pinocchio(pin.Jlog6(M) @ screws.to_pinocchio(nud[i]))
+    for i, r in zip(work.kinds["coupling"], work.rows["coupling"][:, 0]):
+        out[r] = work.coupling_rows[i] @ a
     return out
+
+
+@register_jitable
+def _x3(a, b):
+    """``a × b`` as a tuple (no allocation; ``a``, ``b`` arrays or tuples)."""
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@register_jitable
+def _p3(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@register_jitable
+def _m3(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
 
 
 @register_jitable
@@ -339,36 +394,46 @@ def _transposed(R, x, r):
 def closure_second_derivative(Hj, VA, local, kind, first, out, nud, Mh):
     """The closures' second derivative (module docstring): for closure ``i`` (ends
     ``i`` and ``C + i`` of ``Hj``, ``VA``, ``local``; ``kind[i]`` 0 point, 1 revolute,
-    2 weld; rows from ``first[i]``), point and revolute rows into ``out``; for a weld
+    2 weld, 3 coupling (left to the caller); rows from ``first[i]``), point and
+    revolute rows into ``out``; for a weld
     ``ν̇`` (axis-first, ``C_b`` axes) into ``nud[i]`` and ``M = C_a⁻¹ C_b`` (3 × 4)
     into ``Mh[i]``, for the caller's ``Jlog6``."""
     C = kind.shape[0]
     for i in range(C):
-        pa, pda, pdda, wa, dwa, Ra = _end(Hj, VA, local, i)
-        pb, pdb, pddb, wb, dwb, Rb = _end(Hj, VA, local, C + i)
-        d, dd, Wr, Wrd = pb - pa, pdb - pda, wb - wa, dwb - dwa
-        U = dd - _cross(wa, d)                    # velocity at p_b, relative motion
-        Ud = pddb - pdda - _cross(dwa, d) - _cross(wa, dd)
-        r0 = first[i]
-        if kind[i] < 2:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U)
-            y = Ud - _cross(wa, U)
-            for r in range(3):
-                out[r0 + r] = _transposed(Ra, y, r)
-            if kind[i] == 1:  # d/dt R_aᵀ (W × z_b)
-                zb = np.array([Rb[0, 2], Rb[1, 2], Rb[2, 2]])
-                x = _cross(Wrd, zb) + _cross(Wr, _cross(wb, zb)) \
-                    - _cross(wa, _cross(Wr, zb))
-                out[r0 + 3] = _transposed(Ra, x, 0)
-                out[r0 + 4] = _transposed(Ra, x, 1)
-        else:  # ν = (R_bᵀ W; R_bᵀ U): ν̇ = (R_bᵀ (Ẇ − ω_b × W); R_bᵀ (U̇ − ω_b × U))
-            x1, x2 = Wrd - _cross(wb, Wr), Ud - _cross(wb, U)
-            for r in range(3):
-                nud[i, r] = _transposed(Rb, x1, r)
-                nud[i, 3 + r] = _transposed(Rb, x2, r)
-                Mh[i, r, 3] = _transposed(Ra, d, r)
-                for k in range(3):
-                    Mh[i, r, k] = Ra[0, r] * Rb[0, k] + Ra[1, r] * Rb[1, k] \
-                        + Ra[2, r] * Rb[2, k]
+        if kind[i] == 3:
+            continue
+        _closure_dd(_end(Hj, VA, local, i), _end(Hj, VA, local, C + i), kind[i], first[i],
+                    out, nud[i], Mh[i])
+
+
+@register_jitable
+def _closure_dd(end_a, end_b, kind, r0, out, nud, Mh):
+    """One closure's second derivative from its ends' world quantities ``(p, ṗ, p̈, ω,
+    ω̇, R)`` (:func:`_end`, :func:`_end_world`): point and revolute rows into ``out``
+    from row ``r0``; a weld's ``ν̇`` into ``nud`` (6) and ``M`` into ``Mh`` (3 × 4).
+    Written on tuples (:func:`_x3`): no allocation."""
+    pa, pda, pdda, wa, dwa, Ra = end_a
+    pb, pdb, pddb, wb, dwb, Rb = end_b
+    d, dd, Wr, Wrd = _m3(pb, pa), _m3(pdb, pda), _m3(wb, wa), _m3(dwb, dwa)
+    U = _m3(dd, _x3(wa, d))                    # velocity at p_b, relative motion
+    Ud = _m3(_m3(_m3(pddb, pdda), _x3(dwa, d)), _x3(wa, dd))
+    if kind < 2:  # d/dt (R_aᵀ U) = R_aᵀ (U̇ − ω_a × U)
+        y = _m3(Ud, _x3(wa, U))
+        for r in range(3):
+            out[r0 + r] = _transposed(Ra, y, r)
+        if kind == 1:  # d/dt R_aᵀ (W × z_b)
+            zb = (Rb[0, 2], Rb[1, 2], Rb[2, 2])
+            x = _m3(_p3(_x3(Wrd, zb), _x3(Wr, _x3(wb, zb))), _x3(wa, _x3(Wr, zb)))
+            out[r0 + 3] = _transposed(Ra, x, 0)
+            out[r0 + 4] = _transposed(Ra, x, 1)
+    else:  # ν = (R_bᵀ W; R_bᵀ U): ν̇ = (R_bᵀ (Ẇ − ω_b × W); R_bᵀ (U̇ − ω_b × U))
+        x1, x2 = _m3(Wrd, _x3(wb, Wr)), _m3(Ud, _x3(wb, U))
+        for r in range(3):
+            nud[r] = _transposed(Rb, x1, r)
+            nud[3 + r] = _transposed(Rb, x2, r)
+            Mh[r, 3] = _transposed(Ra, d, r)
+            for k in range(3):
+                Mh[r, k] = Ra[0, r] * Rb[0, k] + Ra[1, r] * Rb[1, k] + Ra[2, r] * Rb[2, k]
 
 
 def _end_motions(work: _Work, data: pin.Data, gravity: np.ndarray | None) -> tuple:
@@ -395,7 +460,7 @@ def closure_acceleration(model: ClosureModel, q, v, a) -> tuple[np.ndarray, np.n
     kin = TreeKinematics(model, q, work.data)
     J = work.row_units[:, None] * kin.closure_jacobian
     pin.forwardKinematics(work.tree, work.data, q, v, a)
-    rdd = _second_derivative(work, *_end_motions(work, work.data, None))
+    rdd = _second_derivative(work, a, *_end_motions(work, work.data, None))
     return J, rdd, rdd - J @ a
 
 
@@ -453,7 +518,8 @@ def motion_from_actuated(model: ClosureModel, q, qd_actuated, qdd_actuated
     zeros = np.zeros(work.n_rows)
     v = solve(np.r_[zeros, qd / ua], "velocity")
     pin.forwardKinematics(work.tree, work.data, q, v, np.zeros(model.nv))
-    drift = _second_derivative(work, *_end_motions(work, work.data, None))
+    drift = _second_derivative(work, np.zeros(model.nv),
+                               *_end_motions(work, work.data, None))
     a = solve(np.r_[-drift / work.row_units, qdd / ua], "acceleration")
     return v, a
 
@@ -491,7 +557,8 @@ def idle_acceleration(model: ClosureModel, q, v, a, *, gravity=GRAVITY,
             return a
     work.set_gravity(g)
     r = pin.rnea(work.tree, work.data, q, v, a).copy()
-    M = pin.crba(work.tree, work.data, q)
+    M = pin.crba(work.tree, work.data, q, pin.Convention.WORLD)  # LOCAL on a reused Data is
+    # wrong with mimic joints in Pinocchio 4.1 (the Delta TOML: off by 0.5)
     M = np.triu(M) + np.triu(M, 1).T
     z = np.linalg.lstsq(N.T @ M @ N, -(N.T @ r), rcond=RANK_RTOL)[0]
     return a + N @ z
@@ -550,7 +617,30 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     g = screws.as_vector3(gravity, "gravity")
     w = None if wrench is None else screws.as_vector(wrench, 6, "wrench",
                                                      "axis-first (f; m_O)")
-    work = _work(model, masses=True)
+    _work(model, masses=True)  # the masses checked first (once per model and thread)
+    kern = _compiled(model)
+    if kern is not None:  # the compiled kernel on one sample; Python where it declines
+        out = _run_kernel(model, kern, _work(model), q[None], v[None], a[None], g,
+                          None if w is None else w[None], tol)
+        if out[-1][0, 0] == _OK:
+            return _one_result(model, *(x[0] for x in out))
+    return _python_path(model, q, v, a, g, w, tol)
+
+
+def _one_result(model: ClosureModel, T, X, XW, RDD, DRIFT, INFO) -> InverseDynamics:
+    """:class:`InverseDynamics` of one kernel sample."""
+    na, nr = len(model.actuated), X.shape[0] - len(model.actuated)
+    return InverseDynamics(
+        efforts=X[:na], actuated=tuple(model.actuated), closure_forces=X[na:],
+        redundant_rows=int(na + nr - INFO[3]), payload_efforts=XW[:na],
+        payload_closure_forces=XW[na:], tree_efforts=T, acceleration_residual=RDD,
+        drift=DRIFT, balance_residual=float(INFO[1]), condition=float(INFO[2]))
+
+
+def _python_path(model: ClosureModel, q, v, a, g, w, tol) -> InverseDynamics:
+    """:func:`inverse_dynamics` by Pinocchio passes and numpy (checked arguments): every
+    error with its message."""
+    work = _work(model)
     data = work.data
     kin = TreeKinematics(model, q, data)  # computeJointJacobians: oMi, J
     Jc, Jo = kin.closure_jacobian, kin.output_jacobian
@@ -563,7 +653,7 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
                 work.row_units, "v")
     work.set_gravity(g)
     tau_tree = pin.rnea(work.tree, data, q, v, a).copy()
-    rdd = _second_derivative(work, *_end_motions(work, data, g))
+    rdd = _second_derivative(work, a, *_end_motions(work, data, g))
     J = work.row_units[:, None] * Jc
     Ja = J @ a
     drift = rdd - Ja
@@ -671,3 +761,502 @@ def _unbalanced(model: ClosureModel, work: _Work, res: np.ndarray, balance: floa
         f"every actuator still) of the joints {', '.join(map(repr, joints))}; give an "
         "acceleration of these joints that their own dynamics allows, or actuate one",
         kind="idle", residual=res / model.velocity_units, joints=tuple(joints))
+
+
+# ================================================================ compiled path
+# One numba kernel per batch of samples: the closure rows and the joints' world twists
+# of :mod:`pkm_pin.tree_kernel`, the bodies' world velocities and accelerations, the
+# closures' second derivative, the consistency checks, the balance's SVD and solve, and
+# the type II test. Pinocchio's ``rnea`` gives the tree efforts. A sample the kernel
+# does not pass (a check fails, a singular or unbalanced system, an idle motion) is
+# handed to the Python path above, which raises the error with its message, or returns.
+
+#: Status of a kernel sample.
+_OK, _TO_PYTHON = 0, 1
+
+
+@register_jitable
+def _body_motions(k, S, v, a, Vb, Ab, sv):
+    """World twists ``Vb`` (nj × 6) and spatial accelerations ``Ab`` (axis-first, about
+    the world origin) of every joint's body: ``V_j = V_p + S_j v_j``, ``A_j = A_p + S_j
+    a_j + V_j × S_j v_j`` (``S`` the joints' world twists, ``sv`` work (6))."""
+    for r in range(6):
+        Vb[0, r], Ab[0, r] = 0.0, 0.0
+    for j in range(1, k.parent.shape[0]):
+        p, c0 = k.parent[j], k.iv[j]
+        for r in range(6):
+            s_v, s_a = 0.0, 0.0
+            for c in range(c0, c0 + _nv_of(k.kind[j])):
+                s_v += S[r, c] * v[c]
+                s_a += S[r, c] * a[c]
+            sv[r] = s_v
+            Vb[j, r] = Vb[p, r] + s_v
+            Ab[j, r] = Ab[p, r] + s_a
+        w0, w1, w2, u0, u1, u2 = Vb[j, 0], Vb[j, 1], Vb[j, 2], Vb[j, 3], Vb[j, 4], Vb[j, 5]
+        Ab[j, 0] += w1 * sv[2] - w2 * sv[1]
+        Ab[j, 1] += w2 * sv[0] - w0 * sv[2]
+        Ab[j, 2] += w0 * sv[1] - w1 * sv[0]
+        Ab[j, 3] += w1 * sv[5] - w2 * sv[4] + u1 * sv[2] - u2 * sv[1]
+        Ab[j, 4] += w2 * sv[3] - w0 * sv[5] + u2 * sv[0] - u0 * sv[2]
+        Ab[j, 5] += w0 * sv[4] - w1 * sv[3] + u0 * sv[1] - u1 * sv[0]
+
+
+@register_jitable
+def _end_world(F, e, j, Vb, Ab):
+    """:func:`_end`'s quantities (tuples, the rotation a view) of constraint frame ``e``
+    (world placement ``F[e]``) on joint ``j``'s body from its world twist and spatial
+    acceleration: ``ṗ = v_O + ω × p``, ``p̈ = a_O + ω̇ × p + ω × ṗ``."""
+    p = (F[e, 0, 3], F[e, 1, 3], F[e, 2, 3])
+    w, vo = (Vb[j, 0], Vb[j, 1], Vb[j, 2]), (Vb[j, 3], Vb[j, 4], Vb[j, 5])
+    dw, ao = (Ab[j, 0], Ab[j, 1], Ab[j, 2]), (Ab[j, 3], Ab[j, 4], Ab[j, 5])
+    pd = _p3(vo, _x3(w, p))
+    pdd = _p3(_p3(ao, _x3(dw, p)), _x3(w, pd))
+    return p, pd, pdd, w, dw, F[e, :3, :3]
+
+
+@register_jitable
+def _weld_rows(Mh, nud, r0, out, lg, Jl, w3, A3, Cm):
+    """``Jlog6(M) ν̇`` into a weld's rows ``(θ; ρ)`` (Pinocchio's ``(v; ω)`` Jlog6)."""
+    R = Mh[:, :3].copy()
+    p = Mh[:, 3].copy()
+    log6_jlog6(R, p, lg, Jl, w3, A3, Cm)
+    for a in range(3):
+        ang, lin = 0.0, 0.0
+        for b in range(3):
+            ang += Jl[3 + a, b] * nud[3 + b] + Jl[3 + a, 3 + b] * nud[b]
+            lin += Jl[a, b] * nud[3 + b] + Jl[a, 3 + b] * nud[b]
+        out[r0 + a], out[r0 + 3 + a] = ang, lin
+
+
+@register_jitable
+def _second_derivative_world(k, ws, Vb, Ab, H, a, row_units, rdd, nud, Mh, lg, Jl, A3):
+    """Every closure's ``J a + J̇ v`` (physical) from the bodies' motions; a coupling's
+    (linear in q) is ``J a`` from its dimensionless row of ``H``."""
+    C = k.ckind.shape[0]
+    for c in range(C):
+        if k.ckind[c] == 3:  # a coupling: J is constant, J a + J̇ v = J a
+            r0 = k.rows[c]
+            s = 0.0
+            for col in range(H.shape[1]):
+                s += H[r0, col] * a[col]
+            rdd[r0] = row_units[r0] * s
+            continue
+        ea = _end_world(ws.F, c, k.fjoint[c], Vb, Ab)
+        eb = _end_world(ws.F, C + c, k.fjoint[C + c], Vb, Ab)
+        _closure_dd(ea, eb, k.ckind[c], k.rows[c], rdd, nud, Mh)
+        if k.ckind[c] == 2:
+            _weld_rows(Mh, nud, k.rows[c], rdd, lg, Jl, ws.w, A3, ws.Cm)
+
+
+@register_jitable
+def _output_columns(k, ws, point, Jo):
+    """The output Jacobian (6 × nv, axis-first, world origin; a point output: ``(0;
+    v_p)``) from the joints' twists."""
+    _relative_columns(k.iv, k.kind, k.parent, 0, k.fjoint[2 * k.ckind.shape[0]], ws.S, Jo)
+    if point:
+        o = 2 * k.ckind.shape[0]
+        px, py, pz = ws.F[o, 0, 3], ws.F[o, 1, 3], ws.F[o, 2, 3]
+        for c in range(Jo.shape[1]):
+            wx, wy, wz = Jo[0, c], Jo[1, c], Jo[2, c]
+            Jo[3, c] += wy * pz - wz * py
+            Jo[4, c] += wz * px - wx * pz
+            Jo[5, c] += wx * py - wy * px
+            Jo[0, c], Jo[1, c], Jo[2, c] = 0.0, 0.0, 0.0
+
+
+@register_jitable
+def _drift(H, a, rdd, row_units, out):
+    """``J̇ v = (J a + J̇ v) − s ∘ (J_c a)`` (physical rows)."""
+    for r in range(H.shape[0]):
+        s = 0.0
+        for c in range(H.shape[1]):
+            s += H[r, c] * a[c]
+        out[r] = rdd[r] - row_units[r] * s
+
+
+@register_jitable
+def _consistent(H, U, rows, v, a, rdd, gscale, tol):
+    """The checks of :func:`_check_rows` with ``‖J_c U‖₂`` bounded below by its
+    Frobenius norm over √min(m, n) (stricter: a sample at the limit goes to Python)."""
+    m, n = H.shape
+    fro, jv, nv_, na_, r2, d2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    for i in range(m):
+        s, sa = 0.0, 0.0
+        for c in range(n):
+            x = H[i, c] * U[c]
+            fro += x * x
+            s += H[i, c] * v[c]
+            sa += H[i, c] * a[c]
+        jv += s * s
+        r = rdd[i] / rows[i]
+        r2 += r * r
+        d = r - sa
+        d2 += d * d
+    for c in range(n):
+        nv_ += (v[c] / U[c]) ** 2
+        na_ += (a[c] / U[c]) ** 2
+    size = math.sqrt(fro / max(1, min(m, n)))
+    ev, ea = math.sqrt(jv), math.sqrt(r2)
+    ok_v = ev == 0.0 or ev <= tol * size * math.sqrt(nv_)
+    ok_a = ea == 0.0 or ea <= tol * (size * math.sqrt(na_) + math.sqrt(d2) + gscale)
+    return ok_v and ok_a
+
+
+@register_jitable
+def _type_two(V, sv, small, Jo, U, F, o, length, close):
+    """Whether a left singular vector of the balance matrix (column ``j`` of ``V``)
+    whose singular value is below ``small`` moves the output (homogenised about its
+    origin, > ``close``)."""
+    nv = V.shape[0]
+    px, py, pz = F[o, 0, 3], F[o, 1, 3], F[o, 2, 3]
+    t = np.zeros(6)
+    for j in range(nv):
+        if sv[j] >= small:
+            continue
+        for r in range(6):
+            s = 0.0
+            for c in range(nv):
+                s += Jo[r, c] * U[c] * V[c, j]
+            t[r] = s
+        hx = (t[3] + t[1] * pz - t[2] * py) / length
+        hy = (t[4] + t[2] * px - t[0] * pz) / length
+        hz = (t[5] + t[0] * py - t[1] * px) / length
+        if math.sqrt(t[0] ** 2 + t[1] ** 2 + t[2] ** 2 + hx * hx + hy * hy + hz * hz) > close:
+            return True
+    return False
+
+
+@register_jitable
+def _right_side(k, Jo, tau, w, has_w, point, b, bw):
+    """``b = U (τ_tree − J_oᵀ Δ w)`` and its payload part ``bw`` (for a point output
+    only the force acts, on the point's velocity)."""
+    U = k.units
+    for c in range(b.shape[0]):
+        bw[c] = 0.0
+        if has_w:
+            if point:
+                s = Jo[3, c] * w[0] + Jo[4, c] * w[1] + Jo[5, c] * w[2]
+            else:
+                s = Jo[0, c] * w[3] + Jo[1, c] * w[4] + Jo[2, c] * w[5] \
+                    + Jo[3, c] * w[0] + Jo[4, c] * w[1] + Jo[5, c] * w[2]
+            bw[c] = -U[c] * s
+        b[c] = U[c] * tau[c] + bw[c]
+
+
+@register_jitable
+def _pinv_add(At, Wj, V, sv, thr, rhs, y, r):
+    """``y += A⁺ rhs`` with ``Aᵀ = W Vᵀ`` (``A⁺ = Σ_j W_j V_jᵀ / σ_j²`` over ``σ_j >
+    thr``); ``r``: work (nv)."""
+    m, nv = At.shape
+    for j in range(nv):
+        if sv[j] > thr:
+            c = 0.0
+            for i in range(nv):
+                c += V[i, j] * rhs[i]
+            c /= sv[j] * sv[j]
+            for i in range(m):
+                y[i] += Wj[i, j] * c
+
+
+@register_jitable
+def _residual(At, y, b, r) -> float:
+    """``r = b − A y`` (``A = Atᵀ``); returns ``‖r‖``."""
+    m, nv = At.shape
+    out = 0.0
+    for c in range(nv):
+        s = 0.0
+        for i in range(m):
+            s += At[i, c] * y[i]
+        r[c] = b[c] - s
+        out += r[c] * r[c]
+    return math.sqrt(out)
+
+
+@register_jitable
+def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
+    """The balance ``A x = b``, ``A = [Sᵀ, −(J_c U)ᵀ]`` (nv × (na + nr)), by the
+    one-sided Jacobi SVD of ``Aᵀ = W Vᵀ`` (:func:`pkm_pin.engine.linalg.jacobi`; ``V``:
+    the previous sample's basis, a warm start): ``A = V Σ (W Σ⁻¹)ᵀ``, the truncated
+    solution ``y = Σ_j W_j (V_jᵀ b) / σ_j²`` over ``σ_j > RANK_RTOL σ_max``, then two
+    steps of iterative refinement (``y += A⁺ (b − A y)``): the Jacobi sweeps stop at
+    cosines below :data:`~pkm_pin.engine.linalg.JACOBI_TOL` and leave the null columns
+    at ~1e-12, which a condition of 10³ would carry into the solution;
+    ``yw`` the same of ``bw``. Returns ``(rank, σ_max, σ_min kept, relative
+    residual)``."""
+    U, act = k.units, k.act_v
+    nv, nr, na = H.shape[1], H.shape[0], act.shape[0]
+    At[:, :] = 0.0
+    for i in range(na):
+        At[i, act[i]] = 1.0
+    for i in range(nr):
+        for c in range(nv):
+            At[na + i, c] = -H[i, c] * U[c]
+    jacobi(At, na + nr, nv, Wj, V, sv, JACOBI_TOL)
+    smax = largest(sv, nv)
+    thr = cons[1] * smax
+    rank, smin = 0, np.inf
+    for j in range(nv):
+        if sv[j] > thr:
+            rank += 1
+            smin = min(smin, sv[j])
+    yw[:] = 0.0
+    for rhs, x in ((b, y), (bw, yw)):
+        if x is yw and not has_w:  # no payload: its part is zero
+            break
+        x[:] = 0.0
+        _pinv_add(At, Wj, V, sv, thr, rhs, x, r)
+        for _ in range(2):
+            _residual(At, x, rhs, r)
+            _pinv_add(At, Wj, V, sv, thr, r, x, r)
+    res = _residual(At, y, b, r)
+    amax = 0.0
+    for i in range(At.shape[0]):
+        for c in range(nv):
+            amax = max(amax, abs(At[i, c]))
+    scale = max(np.linalg.norm(b), amax * np.linalg.norm(y), 1e-300)
+    return rank, smax, smin, res / scale
+
+
+@register_jitable
+def _rnea_world(k, oMi, S, Vb, Ab, a, body, armature, g, Fb, tau):
+    """``rnea(q, v, a)`` with gravity ``g`` from the bodies' world twists and spatial
+    accelerations: per body (``body[j]`` = mass, centre of mass in the joint frame, its
+    rotational inertia by rows) ``f = m (a_c − g)``, ``n_O = I ω̇ + ω × I ω + c × f``
+    (world, about the world origin; ``a_c`` the centre of mass's acceleration), summed
+    from the leaves (``Fb``: (nj, 6) work), then ``τ_k = S_kᵀ (n_O; f) + armature_k a_k``."""
+    nj = k.parent.shape[0]
+    for j in range(nj):
+        for r in range(6):
+            Fb[j, r] = 0.0
+    for j in range(1, nj):
+        m = body[j, 0]
+        c = (oMi[j, 0, 3] + oMi[j, 0, 0] * body[j, 1] + oMi[j, 0, 1] * body[j, 2]
+             + oMi[j, 0, 2] * body[j, 3],
+             oMi[j, 1, 3] + oMi[j, 1, 0] * body[j, 1] + oMi[j, 1, 1] * body[j, 2]
+             + oMi[j, 1, 2] * body[j, 3],
+             oMi[j, 2, 3] + oMi[j, 2, 0] * body[j, 1] + oMi[j, 2, 1] * body[j, 2]
+             + oMi[j, 2, 2] * body[j, 3])
+        w, vo = (Vb[j, 0], Vb[j, 1], Vb[j, 2]), (Vb[j, 3], Vb[j, 4], Vb[j, 5])
+        dw, ao = (Ab[j, 0], Ab[j, 1], Ab[j, 2]), (Ab[j, 3], Ab[j, 4], Ab[j, 5])
+        vc = _p3(vo, _x3(w, c))
+        ac = _m3(_p3(_p3(ao, _x3(dw, c)), _x3(w, vc)), g)
+        f = (m * ac[0], m * ac[1], m * ac[2])
+        # body frame: I (R_jᵀ ω̇) and I (R_jᵀ ω), then back to world axes
+        bd = (_transposed(oMi[j], dw, 0), _transposed(oMi[j], dw, 1),
+              _transposed(oMi[j], dw, 2))
+        bw = (_transposed(oMi[j], w, 0), _transposed(oMi[j], w, 1),
+              _transposed(oMi[j], w, 2))
+        for r in range(3):
+            s1, s2 = 0.0, 0.0
+            for t in range(3):
+                s1 += body[j, 4 + 3 * r + t] * bd[t]
+                s2 += body[j, 4 + 3 * r + t] * bw[t]
+            Fb[0, r], Fb[0, 3 + r] = s1, s2  # row 0 (the universe) as work
+        Id = (oMi[j, 0, 0] * Fb[0, 0] + oMi[j, 0, 1] * Fb[0, 1] + oMi[j, 0, 2] * Fb[0, 2],
+              oMi[j, 1, 0] * Fb[0, 0] + oMi[j, 1, 1] * Fb[0, 1] + oMi[j, 1, 2] * Fb[0, 2],
+              oMi[j, 2, 0] * Fb[0, 0] + oMi[j, 2, 1] * Fb[0, 1] + oMi[j, 2, 2] * Fb[0, 2])
+        Iw = (oMi[j, 0, 0] * Fb[0, 3] + oMi[j, 0, 1] * Fb[0, 4] + oMi[j, 0, 2] * Fb[0, 5],
+              oMi[j, 1, 0] * Fb[0, 3] + oMi[j, 1, 1] * Fb[0, 4] + oMi[j, 1, 2] * Fb[0, 5],
+              oMi[j, 2, 0] * Fb[0, 3] + oMi[j, 2, 1] * Fb[0, 4] + oMi[j, 2, 2] * Fb[0, 5])
+        n = _p3(_p3(Id, _x3(w, Iw)), _x3(c, f))
+        for r in range(3):
+            Fb[j, r] += f[r]
+            Fb[j, 3 + r] += n[r]
+    for j in range(nj - 1, 0, -1):
+        p = k.parent[j]
+        if p > 0:
+            for r in range(6):
+                Fb[p, r] += Fb[j, r]
+        c0 = k.iv[j]
+        for col in range(c0, c0 + _nv_of(k.kind[j])):
+            tau[col] = S[0, col] * Fb[j, 3] + S[1, col] * Fb[j, 4] + S[2, col] * Fb[j, 5] \
+                + S[3, col] * Fb[j, 0] + S[4, col] * Fb[j, 1] + S[5, col] * Fb[j, 2] \
+                + armature[col] * a[col]
+
+
+@njit(cache=True, nogil=True)
+def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row_units, cons,
+                            T, X, XW, RDD, DRIFT, INFO):
+    """Inverse dynamics of the samples ``Q, V_, A`` (rows; ``W`` the wrenches when
+    ``has_w``) on the tree kernel ``k`` (``body``, ``armature``: the tree's inertias,
+    :class:`_Work`; gravity ``g``): per sample ``rnea`` into ``T``, the efforts then
+    closure forces ``X`` (physical), the payload's part ``XW``, ``J a + J̇ v`` (``RDD``)
+    and ``J̇ v`` (``DRIFT``), ``INFO`` = (status, balance residual, condition, rank);
+    status :data:`_TO_PYTHON` where a check does not pass. ``cons``: the assembly,
+    rank, closeness and balance tolerances, the consistency tolerance and ``|g| / L``."""
+    ws = workspace(k)
+    nv, nr, C = k.nv, k.rows[-1], k.ckind.shape[0]
+    nj, na = k.parent.shape[0], k.act_v.shape[0]
+    e, H = np.empty(nr), np.empty((nr, nv))
+    norms, oMo = np.empty(C), np.empty((4, 4))
+    Vb, Ab, sv6 = np.empty((nj, 6)), np.empty((nj, 6)), np.empty(6)
+    nud, Mh = np.zeros(6), np.zeros((3, 4))
+    lg, Jl, A3 = np.empty(6), np.empty((6, 6)), np.empty((3, 3))
+    Jo, At, Wj = np.empty((6, nv)), np.empty((na + nr, nv)), np.empty((na + nr, nv))
+    V, sv, b, bw = np.eye(nv), np.empty(nv), np.empty(nv), np.empty(nv)
+    y, yw, rv = np.empty(na + nr), np.empty(na + nr), np.empty(nv)
+    Fb = np.empty((nj, 6))
+    for i in range(Q.shape[0]):
+        info = INFO[i]
+        info[0] = _TO_PYTHON
+        closure_rows(k, Q[i], ws, e, H, norms, oMo)
+        if np.linalg.norm(e) > cons[0]:
+            continue
+        _body_motions(k, ws.S, V_[i], A[i], Vb, Ab, sv6)
+        _rnea_world(k, ws.oMi, ws.S, Vb, Ab, A[i], body, armature, g, Fb, T[i])
+        _second_derivative_world(k, ws, Vb, Ab, H, A[i], row_units, RDD[i], nud, Mh, lg,
+                                 Jl, A3)
+        _drift(H, A[i], RDD[i], row_units, DRIFT[i])
+        if not _consistent(H, k.units, row_units, V_[i], A[i], RDD[i], cons[5], cons[4]):
+            continue
+        _output_columns(k, ws, point, Jo)
+        _right_side(k, Jo, T[i], W[i], has_w, point, b, bw)
+        rank, smax, smin, info[1] = _balance(k, H, At, Wj, V, sv, b, bw, y, yw, rv, cons, has_w)
+        info[2], info[3] = smax / smin if rank else np.inf, rank
+        for r in range(na + nr):
+            unit = k.units[k.act_v[r]] if r < na else row_units[r - na]
+            X[i, r], XW[i, r] = y[r] / unit, yw[r] / unit
+        if _type_two(V, sv, cons[2] * smax, Jo, k.units, ws.F, 2 * C, k.length, cons[2]):
+            continue
+        if info[1] <= cons[3]:
+            info[0] = _OK
+
+
+def _compiled(model: ClosureModel, many: bool = False):
+    """The tree kernel of ``model`` when the compiled path applies (joints
+    :mod:`pkm_pin.tree_kernel` represents, the kernel ready, asked for often enough
+    (:func:`~pkm_pin.compiling.prefer_compiled`) or ``many`` samples at once), else
+    ``None``."""
+    from . import tree_kernel
+
+    if not tree_kernel.ENABLED:
+        return None
+    kern = tree_kernel.tree_kernel(model)
+    if kern is None or not (prefer_compiled(inverse_dynamics_kernel) or many):
+        return None
+    return kern
+
+
+def _run_kernel(model: ClosureModel, kern, work: _Work, Q, V, A, g, W, tol) -> tuple:
+    """:func:`inverse_dynamics_kernel` on the samples: ``(T, X, XW, RDD, DRIFT,
+    INFO)``."""
+    N, nv, nr, na = Q.shape[0], model.nv, work.n_rows, len(work.act_v)
+    Q, V, A, g = (np.ascontiguousarray(x, dtype=np.float64) for x in (Q, V, A, g))
+    T = np.empty((N, nv))
+    has_w = W is not None
+    W = np.ascontiguousarray(W, dtype=float) if has_w else np.zeros((N, 6))
+    cons = np.array([ASSEMBLY_CHECK_RTOL, RANK_RTOL, CLOSENESS_SINGULAR_TOL,
+                     EFFORT_BALANCE_RTOL, min(float(tol), 1e300),
+                     float(np.linalg.norm(g)) / model.length])
+    X, XW = np.zeros((N, na + nr)), np.zeros((N, na + nr))
+    RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
+    inverse_dynamics_kernel(kern, Q, V, A, work.body, work.armature, g, W, has_w,
+                            bool(model.output_point), work.row_units, cons, T, X, XW, RDD,
+                            DRIFT, INFO)
+    return T, X, XW, RDD, DRIFT, INFO
+
+
+@dataclass(frozen=True)
+class InverseDynamicsBatch:
+    """:class:`InverseDynamics` of N samples (:func:`inverse_dynamics_batch`): the same
+    attributes with a leading sample axis (``redundant_rows``, ``balance_residual`` and
+    ``condition``: (N,)); ``compiled``: (N,) whether each sample went through the
+    compiled kernel (else the Python path)."""
+
+    efforts: np.ndarray
+    actuated: tuple
+    closure_forces: np.ndarray
+    redundant_rows: np.ndarray
+    payload_efforts: np.ndarray
+    payload_closure_forces: np.ndarray
+    tree_efforts: np.ndarray
+    acceleration_residual: np.ndarray
+    drift: np.ndarray
+    balance_residual: np.ndarray
+    condition: np.ndarray
+    compiled: np.ndarray
+
+    def __len__(self) -> int:
+        return self.efforts.shape[0]
+
+    def __getitem__(self, i: int) -> InverseDynamics:
+        return InverseDynamics(
+            efforts=self.efforts[i], actuated=self.actuated,
+            closure_forces=self.closure_forces[i],
+            redundant_rows=int(self.redundant_rows[i]),
+            payload_efforts=self.payload_efforts[i],
+            payload_closure_forces=self.payload_closure_forces[i],
+            tree_efforts=self.tree_efforts[i],
+            acceleration_residual=self.acceleration_residual[i], drift=self.drift[i],
+            balance_residual=float(self.balance_residual[i]),
+            condition=float(self.condition[i]))
+
+
+def inverse_dynamics_batch(model: ClosureModel, Q, V, A, *, gravity=GRAVITY, wrenches=None,
+                           tol: float = MOTION_CONSISTENCY_RTOL) -> InverseDynamicsBatch:
+    """:func:`inverse_dynamics` of N samples at once (rows of ``Q`` (N, nq), ``V``, ``A``
+    (N, nv); ``wrenches`` None or (N, 6), axis-first about the world origin): the same
+    numbers (tests: 1e-10 relative), at a fraction of the cost of N calls. The shapes are
+    checked once, Pinocchio's ``rnea`` gives each sample's tree efforts, and one compiled
+    kernel (:func:`inverse_dynamics_kernel`: the closure rows and joint twists of
+    :mod:`pkm_pin.tree_kernel`, the bodies' world accelerations ``A_j = A_p + S_j a_j +
+    V_j × S_j v_j``, the closures' second derivative, the checks, the balance's SVD)
+    does the rest. Samples the kernel does not pass (a check fails, a singular or
+    unbalanced balance) and models it cannot represent (mimic joints) go through
+    :func:`inverse_dynamics`, which raises its error (message prefixed with the sample
+    index, attribute ``sample``) or returns.
+
+    Raises:
+        As :func:`inverse_dynamics`, for the first sample that fails.
+    """
+    Q, V, A, W = _batch_arrays(model, Q, V, A, wrenches)
+    g = screws.as_vector3(gravity, "gravity")
+    work, N = _work(model, masses=True), Q.shape[0]
+    na, nr = len(work.act_v), work.n_rows
+    kern = _compiled(model, many=N >= PLAIN_CALLS)
+    if kern is not None:
+        T, X, XW, RDD, DRIFT, INFO = _run_kernel(model, kern, work, Q, V, A, g, W, tol)
+    else:
+        T, X, XW = np.zeros((N, model.nv)), np.zeros((N, na + nr)), np.zeros((N, na + nr))
+        RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
+        INFO[:, 0] = _TO_PYTHON
+    for i in np.flatnonzero(INFO[:, 0] != _OK):
+        try:
+            r = _python_path(model, model.check_q(Q[i]), V[i], A[i], g,
+                             None if W is None else W[i], tol)
+        except PkmError as e:
+            e.sample = int(i)
+            if e.args and isinstance(e.args[0], str):
+                e.args = (f"sample {i}: {e.args[0]}",) + e.args[1:]
+            raise
+        X[i] = np.r_[r.efforts, r.closure_forces]
+        XW[i] = np.r_[r.payload_efforts, r.payload_closure_forces]
+        T[i], RDD[i], DRIFT[i] = r.tree_efforts, r.acceleration_residual, r.drift
+        INFO[i, 1:] = r.balance_residual, r.condition, na + nr - r.redundant_rows
+    return InverseDynamicsBatch(
+        efforts=X[:, :na], actuated=tuple(model.actuated), closure_forces=X[:, na:],
+        redundant_rows=(na + nr - INFO[:, 3]).astype(int), payload_efforts=XW[:, :na],
+        payload_closure_forces=XW[:, na:], tree_efforts=T, acceleration_residual=RDD,
+        drift=DRIFT, balance_residual=INFO[:, 1].copy(), condition=INFO[:, 2].copy(),
+        compiled=INFO[:, 0] == _OK)
+
+
+def _batch_arrays(model: ClosureModel, Q, V, A, wrenches) -> tuple:
+    """The samples as C-contiguous float arrays of the right shapes, or an InputError."""
+    Q = screws.as_float_array(Q, "Q")
+    V = screws.as_float_array(V, "V")
+    A = screws.as_float_array(A, "A")
+    N = Q.shape[0] if Q.ndim == 2 else -1
+    for name, X, n in (("Q", Q, model.nq), ("V", V, model.nv), ("A", A, model.nv)):
+        if X.ndim != 2 or X.shape != (N, n):
+            raise InputError(f"{name} must have shape (N, {n}) with N = {N} the samples of "
+                             f"Q, got {X.shape}")
+        if not np.isfinite(X).all():
+            raise InputError(f"{name} must be finite")
+    W = None
+    if wrenches is not None:
+        W = screws.as_float_array(wrenches, "wrenches")
+        if W.shape != (N, 6) or not np.isfinite(W).all():
+            raise InputError(f"wrenches must be finite, shape ({N}, 6), got {W.shape}")
+    return (np.ascontiguousarray(Q), np.ascontiguousarray(V), np.ascontiguousarray(A),
+            None if W is None else np.ascontiguousarray(W))

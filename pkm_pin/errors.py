@@ -220,6 +220,11 @@ class InconsistentMotion(InputError):
         super().__init__(message)
 
 
+class SimulationError(PkmError):
+    """A forward-dynamics simulation (:mod:`pkm_pin.simulation`) cannot continue: a
+    non-finite acceleration, a singular constrained system."""
+
+
 class InertiaError(InputError):
     """A body's mass or inertia cannot be a rigid body's: read where the dynamics uses
     them (:mod:`pkm_pin.dynamics`).

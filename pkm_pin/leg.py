@@ -215,12 +215,20 @@ class Leg(SerialChain):
 
     @cached_property
     def characteristic_length(self) -> float:
-        """Sum of the offsets between consecutive joint frames up to the tip [m].
+        """Sum of the offsets between consecutive joint frames up to the tip [m]
+        (:attr:`offset_length`).
 
         The unit of length for the leg's relative tolerances; 1.0 for a chain with no
         offset at all. For each prismatic joint with finite limits,
         ``(|lower| + |upper|) / 2`` is added.
         """
+        return self.offset_length if self.offset_length > 0 else 1.0
+
+    @cached_property
+    def offset_length(self) -> float:
+        """:attr:`characteristic_length` without the 1.0 of a chain with no offset (0.0
+        then): a mechanism averages the legs that have a length
+        (:attr:`pkm_pin.Mechanism.characteristic_length`)."""
         L = sum(np.linalg.norm(self.model.jointPlacements[j].translation)
                 for j in range(1, self.model.njoints))
         L += np.linalg.norm(self.model.frames[self.tip_id].placement.translation)
@@ -229,7 +237,7 @@ class Leg(SerialChain):
             lo, up = self.lower[iq], self.upper[iq]
             if np.isfinite(lo) and np.isfinite(up):
                 L += 0.5 * (abs(lo) + abs(up))
-        return float(L) if L > 0 else 1.0
+        return float(L)
 
     @cached_property
     def _prismatic_joints(self) -> list[int]:

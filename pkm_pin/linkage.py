@@ -71,6 +71,7 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
@@ -79,19 +80,22 @@ import numpy as np
 import pinocchio as pin
 
 from . import dynamics as _dynamics
-from . import screws
+from . import general_kernel, screws
 from .analysis import classify
 from .assembly import Assembly
+from .closure_gaps import Diagnosis, diagnose
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .mechanism import Mechanism
 from .model.closure_model import (
     ClosureModel,
     NullSpace,
     TreeKinematics,
+    default_length,
     pose_rows,
     sparse_basis,
 )
-from .model.structure import detect_platform
+from .model.structure import detect_platform, legs_length
+from .output_maps import OutputMaps
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
 from .tolerances import (
@@ -116,16 +120,28 @@ class LoopClosureError(AssemblyError):
     """A loop of a linkage does not close (an :class:`AssemblyError` whose ``leg`` is the
     name of the worst closure, or of the actuated or output targets).
 
+    The message names the worst loop and its residual, then (from :attr:`diagnosis`)
+    every loop left open with its gap in mm and degrees, the joints held at a limit and a
+    hint (:mod:`pkm_pin.closure_gaps`).
+
     Attributes:
         leg: Name of the loop (closure) that does not close.
         residual: Its residual (dimensionless, as :meth:`ClosureModel.closure_residual`).
+        q: The best configuration reached (nq,), or None: ``pkm-pin view`` draws the
+            open tree there.
+        diagnosis: The :class:`~pkm_pin.closure_gaps.Diagnosis` at :attr:`q`, or None.
     """
 
-    def __init__(self, loop: str, residual: float, detail: str = ""):
+    def __init__(self, loop: str, residual: float, detail: str = "", *, q=None,
+                 diagnosis: Diagnosis | None = None):
         super().__init__(loop, residual, detail)
+        self.q = None if q is None else np.array(q, dtype=float)
+        self.diagnosis = diagnosis
         message = (f"loop {loop!r} does not close: the best configuration found within the "
                    f"joint limits leaves a relative residual of {self.residual:.3g}")
-        self.args = (message + (f" ({detail})" if detail else ""),)
+        message += f" ({detail})" if detail else ""
+        words = "" if diagnosis is None else diagnosis.words()
+        self.args = (message + (f"; {words}" if words else ""),)
 
     def __str__(self) -> str:
         return self.args[0]
@@ -227,7 +243,7 @@ class Linkage:
             model = replace(model, output=output)
         if point is not None and bool(point) != model.output_point:
             model = replace(model, output_point=bool(point))
-        self._model = model
+        self._model = _machine_length(model)
         self._loops = _loops_of_actuators(model)
         #: ``(rank J_c, rank with the actuated rows)`` at the first configuration whose
         #: nearby ones were sampled (:func:`_mobility`): later configurations with the
@@ -253,6 +269,32 @@ class Linkage:
     def actuated(self) -> tuple:
         """Names of the actuated joints."""
         return self._model.actuated
+
+    # The names every mechanism answers (a Mechanism has the same).
+    def tree_configuration(self, assembly: LinkageAssembly | None = None) -> np.ndarray:
+        """The configuration of :attr:`model`'s tree at ``assembly`` (default home)."""
+        return (self.home_assembly if assembly is None else assembly).q.copy()
+
+    @property
+    def closure_model(self) -> ClosureModel:
+        """The closure model (:attr:`model`)."""
+        return self._model
+
+    @property
+    def actuated_names(self) -> list[str]:
+        """Names of the actuated joints (:attr:`actuated`), as a list."""
+        return list(self._model.actuated)
+
+    @property
+    def n_actuated(self) -> int:
+        """Number of actuated joints."""
+        return len(self._model.actuated)
+
+    @property
+    def characteristic_length(self) -> float:
+        """The unit of length of every homogenised index [m]: the model's length (the
+        legs' where a platform structure is detected: :func:`_machine_length`)."""
+        return self._model.length
 
     @property
     def output(self) -> str:
@@ -314,6 +356,18 @@ class Linkage:
         mech = self._legs("sensitivity to geometric errors")
         return mech.sensitivity(self.legs_assembly(q), parameters)
 
+    def calibrate(self, samples, parameters, **options):
+        """Identify geometric errors from measured output poses or positions after known
+        actuations (:func:`pkm_pin.calibration.calibrate`), read leg by leg through
+        :attr:`legs_mechanism`: ``samples`` are pairs ``(q_actuated, measured)`` with
+        the actuated values in :attr:`actuated` order, ``parameters`` the legs'
+        parameter names (:meth:`sensitivity`'s).
+
+        Raises:
+            InputError: not a base–legs–platform machine (the reason).
+        """
+        return self._legs("calibration").calibrate(samples, parameters, **options)
+
     def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0
                                ) -> list[LinkageAssembly]:
         """Every working mode at the output ``pose``: one assembly per distinct vector of
@@ -337,6 +391,16 @@ class Linkage:
     def home_analysis(self) -> LinkageAnalysis:
         """The analysis of :attr:`home_assembly` (cached)."""
         return self.analyze(self.home_assembly)
+
+    def submechanisms(self, q=None) -> list:
+        """The independent sub-mechanisms (groups of closures and actuators that share no
+        movable joint: a biped's two legs) at the assembled tree configuration ``q``
+        (default: :attr:`home_assembly`), each a :class:`Linkage` with its own output,
+        the other groups' joints locked at ``q``; ``[self]`` for a single mechanism
+        (:func:`pkm_pin.submechanisms.submechanisms`)."""
+        from .submechanisms import submechanisms
+
+        return submechanisms(self, q)
 
     @property
     def grubler(self) -> int:
@@ -385,7 +449,8 @@ class Linkage:
                                             max_iter=max_iter,
                                             nearest=model.reference if warm is None else warm)
         if not sol.converged:
-            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets)
+            raise self._failure(sol, int(starts) + 3 + (warm is not None), targets,
+                                tol=tol)
         off = self._off_representation(sol.q, targets, seed, tol, max_iter)
         if off is not None:
             sol, iterations = off[0], iterations + off[1]
@@ -432,6 +497,26 @@ class Linkage:
                     if final.converged else None
         return None
 
+    def reached(self, error: LoopClosureError) -> LinkageAssembly:
+        """The best configuration a failed assembly reached (``error.q``) as a
+        :class:`LinkageAssembly` whose loops do not all close (its ``residual`` is the
+        largest closure residual there): what ``pkm-pin view`` draws for a file that does
+        not assemble.
+
+        Raises:
+            InputError: ``error`` carries no configuration.
+        """
+        if not isinstance(error, LoopClosureError) or error.q is None:
+            raise InputError("reached() takes a LoopClosureError that carries the best "
+                             "configuration reached (its q)")
+        model = self._model
+        q = model.check_q(error.q)
+        kin = model.kinematics(q)
+        norms = model.closure_norms(kin.residual)
+        return LinkageAssembly(q.copy(), float(norms.max(initial=0.0)), 0,
+                               dict(zip(self._closure_names, norms.tolist())),
+                               _actuated_or_nan(model, q), kin.output_placement)
+
     def _assembly(self, sol, iterations: int) -> LinkageAssembly:
         """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
         Pinocchio pass, when it was at ``sol.q``)."""
@@ -444,18 +529,26 @@ class Linkage:
         return LinkageAssembly(q.copy(), float(sol.residual), int(iterations), names,
                                _actuated_or_nan(model, q), oMo)
 
-    def _failure(self, sol, n_starts: int, targets, what: str = "") -> LoopClosureError:
+    def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL
+                 ) -> LoopClosureError:
+        """The error for a best solution ``sol`` that did not converge, with its
+        :func:`~pkm_pin.closure_gaps.diagnose` (limits lifted only for a plain
+        assembly: no targets, no output pose)."""
         model = self._model
         residual = model.closure_residual(sol.q)
         norms = [float(np.linalg.norm(residual[s])) for s in model.closure_slices()]
         detail = f"{n_starts} starts, {sol.iterations} iterations in the best one"
+        found = diagnose(model, sol.q, tol=tol, lift_limits=targets is None and not what)
         if norms and max(norms) > sol.actuated and max(norms) >= sol.pose:
             k = int(np.argmax(norms))
-            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail)
+            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail,
+                                    q=sol.q, diagnosis=found)
         if targets is not None and sol.actuated >= sol.pose:
             return LoopClosureError("actuated targets", sol.actuated,
-                                    detail + f"; targets {np.round(targets, 6)}")
-        return LoopClosureError(what or "output pose", sol.pose, detail)
+                                    detail + f"; targets {np.round(targets, 6)}", q=sol.q,
+                                    diagnosis=found)
+        return LoopClosureError(what or "output pose", sol.pose, detail, q=sol.q,
+                                diagnosis=found)
 
     # ------------------------------------------------------------- mobility
     def mobility(self, q, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
@@ -487,9 +580,8 @@ class Linkage:
         """
         if about not in ("output", "world"):
             raise InputError(f"about must be 'output' or 'world', got {about!r}")
-        q = q.q if isinstance(q, LinkageAssembly) else q
-        return _analyse(self, self._model.kinematics(q), about, generic, rtol, singular_tol,
-                        nearby)
+        q = self._model.check_q(q.q if isinstance(q, LinkageAssembly) else q)
+        return _analyse(self, q, about, generic, rtol, singular_tol, nearby)
 
     # ---------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, starts: int = 16, seed: int = 0,
@@ -620,9 +712,10 @@ class Linkage:
         model, kin = self._model, self._model.kinematics(q)
         an = analysis
         if an is None:
-            an = _analyse(self, kin, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL, 0)
-        elif not (np.array_equal(an.q, q) and np.array_equal(
-                an.reference_point, kin.output_placement.translation)):
+            an = _analyse(self, q, "output", None, RANK_RTOL, CLOSENESS_SINGULAR_TOL, 0)
+        elif not (np.array_equal(an.q, q) and np.allclose(  # compiled or Pinocchio pass
+                an.reference_point, kin.output_placement.translation, rtol=0.0,
+                atol=1e-12 * model.length)):
             raise InputError("analysis: not this linkage's analysis of q about its output "
                              "(Linkage.analyze(q))")
         tree, J = model.tree, kin.joint_twists
@@ -733,6 +826,34 @@ class Linkage:
         model's tree (:func:`pkm_pin.dynamics.inverse_dynamics`)."""
         return _dynamics.inverse_dynamics(self._model, q, v, a, gravity=gravity, wrench=wrench)
 
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model's tree from ``(q0, v0)`` (default: the home
+        assembly, at rest): :func:`pkm_pin.simulation.simulate` (``options``:
+        ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self.home_assembly.q if q0 is None else q0
+        return simulation.simulate(self._model, q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        q = self.home_assembly.q if q is None else q
+        return _indices.dynamic_indices(self._model, q)
+
+    def gravity_map(self, q_actuated, guess=None, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over the rows of ``q_actuated`` (N × actuated), assembled by
+        :meth:`sweep` (continuation from ``guess``):
+        :func:`pkm_pin.dynamic_indices.gravity_efforts` (``condition``: the actuator
+        inertia's condition per row too)."""
+        from . import dynamic_indices as _indices
+        Q = self.sweep(q_actuated, guess).q
+        return _indices.gravity_efforts(self._model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
+
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
               about: str = "output", transmission: bool = False) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×
@@ -824,7 +945,7 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
         if known is None and rtol == RANK_RTOL:
             link._generic_ranks = generic
     return Mobility(dof, model.n_rows - ns.rank, idle.shape[1], tuple(words),
-                    _independent(model, ns.X, rtol), link.grubler, ns.rank,
+                    _independent(model, ns.X, rtol, here[1] - here[0]), link.grubler, ns.rank,
                     None if generic is None else model.nv - generic[0],
                     None if generic is None else model.nv - generic[1], singular,
                     tuple(representation))
@@ -969,12 +1090,14 @@ def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None
     return coords, words
 
 
-def _independent(model: ClosureModel, X: np.ndarray, rtol: float) -> tuple:
+def _independent(model: ClosureModel, X: np.ndarray, rtol: float,
+                 rank_x: int | None = None) -> tuple:
     """Greedy maximal set of actuated joints whose rates (rows of ``X``) are
-    independent over the allowed motions."""
+    independent over the allowed motions (``rank_x``: the rank of ``X``, if known)."""
     if X.shape[0] and X.shape[0] <= X.shape[1]:
-        sv = np.linalg.svd(X, compute_uv=False)  # full row rank: every subset is independent
-        if sv[-1] > rtol * sv[0]:
+        if rank_x is None:
+            rank_x = svd_rank(X, rtol)[0]
+        if rank_x == X.shape[0]:  # full row rank: every subset is independent
             return tuple(model.actuated)
     chosen: list[int] = []
     scale = np.linalg.norm(X) if X.size else 0.0
@@ -1299,9 +1422,22 @@ def _body_points(model: ClosureModel, kin: TreeKinematics, j: int) -> list:
     return unique
 
 
+def _machine_length(model: ClosureModel) -> ClosureModel:
+    """``model`` with the characteristic length of the machine it describes: where a
+    base–legs–platform structure is detected and the model's length is the tree's
+    default, the legs' (:func:`pkm_pin.model.structure.legs_length`, that of the same
+    machine written as TOML legs), so that every homogenised index and rank decision is
+    the machine's, whatever tree the file wrote. A length given explicitly is kept."""
+    structure, _ = detect_platform(model)
+    if structure is None or model.length != default_length(model.tree, model.closures):
+        return model
+    L = legs_length(model, structure)
+    return model if L == model.length else replace(model, length=L)
+
+
 # ====================================================================== analysis
 @dataclass(frozen=True, eq=False)
-class LinkageAnalysis:
+class LinkageAnalysis(OutputMaps):
     """The output frame of a linkage at one configuration (:meth:`Linkage.analyze`).
 
     Screws are axis-first about the world origin; ``reference_point`` [m] is the point
@@ -1340,6 +1476,31 @@ class LinkageAnalysis:
     length: float
     singular_tol: float
     _maps: tuple = field(repr=False)
+    #: Whether each actuated joint is prismatic (its rate in m/s).
+    actuated_prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool),
+                                           repr=False)
+
+    # ------------------------------------------------ hooks of OutputMaps
+    @property
+    def centre(self) -> np.ndarray:
+        """The point every decision is homogenised about (:attr:`reference_point`)."""
+        return self.reference_point
+
+    @property
+    def _twist_dim(self) -> int:
+        return self.output_dof
+
+    @property
+    def _actuated_prismatic(self) -> np.ndarray:
+        return self.actuated_prismatic
+
+    @property
+    def _closeness(self) -> tuple[float, float]:
+        """Seed 000's indices and the generalised ones together, as :attr:`singularity`
+        reads them."""
+        idx = self.indices
+        return (float(np.nanmin([idx["type_I"], idx["inverse"]])),
+                float(np.nanmin([idx["type_II"], idx["forward"]])))
 
     @property
     def dof(self) -> int:
@@ -1418,13 +1579,46 @@ class LinkageAnalysis:
         return U[act] * (Xr @ z)
 
 
-def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: float,
+def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
              singular_tol: float, nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
+    """The analysis at the checked ``q``: its numbers from the compiled path
+    (:func:`pkm_pin.general_kernel.analysis_core`) where the tree is compiled, else from
+    :func:`_numpy_core`; then the result objects."""
+    model = link.model
+    core = general_kernel.analysis_core(model, link._loops, q, about == "output", rtol)
+    if core is None:
+        core = _numpy_core(link, model.kinematics(q), about, rtol)
+    mob = _mobility(link, core.kin, core.ns, rtol, nearby)
+    idx = {"type_I": core.type_I, "type_II": core.type_II, "condition_A": core.condition,
+           "forward": core.forward, "inverse": core.inverse}
+    singularity = classify(_smaller(core.type_I, core.inverse),
+                           _smaller(core.type_II, core.forward), singular_tol)
+    d = core.d
+    csing = None if generic is None else bool(mob.dof != generic.dof
+                                              or d != generic.output_dof)
+    return LinkageAnalysis(core.kin.q, mob, d, d - core.rotations, core.twists,
+                           core.wrenches, core.A, core.B, idx, singularity, csing, core.p,
+                           model.length, singular_tol,
+                           (core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
+                           core.translating)
+
+
+def _smaller(a: float, b: float) -> float:
+    """``float(np.nanmin([a, b]))`` without numpy's warning when both are nan."""
+    if math.isnan(a):
+        return float(b)
+    return float(a) if math.isnan(b) else float(min(a, b))
+
+
+def _numpy_core(link: Linkage, kin: TreeKinematics, about: str,
+                rtol: float) -> general_kernel.Core:
+    """The numbers of an analysis by numpy from a Pinocchio pass (the reference of the
+    compiled :func:`pkm_pin.general_kernel.analysis_core`, and the path of trees it does
+    not represent)."""
     model = link.model
     L = model.length
     p = kin.output_placement.translation.copy() if about == "output" else np.zeros(3)
     ns = NullSpace(model, kin, rtol)
-    mob = _mobility(link, kin, ns, rtol, nearby)
     Yh = homogenised_about(ns.Y_world.T, p, L).T  # 6 × dof
     d, Uy, _, _ = svd_rank(Yh, rtol)
     P_h = Uy[:, :d].T
@@ -1437,15 +1631,11 @@ def _analyse(link: Linkage, kin: TreeKinematics, about: str, generic, rtol: floa
     A_n = A_h / np.where(norms > 0, norms, 1.0)[:, None]
     type_II, cond = _transmission(A_n, P_h, d) if np.all(norms > 0) else (np.nan, np.nan)
     Xr, Yr, M, forward, inverse = _generalised(ns, Yh, rtol)
-    idx = {"type_I": type_I, "type_II": type_II, "condition_A": cond, "forward": forward,
-           "inverse": inverse}
-    singularity = classify(float(np.nanmin([type_I, inverse])),
-                           float(np.nanmin([type_II, forward])), singular_tol)
-    csing = None if generic is None else bool(mob.dof != generic.dof
-                                              or d != generic.output_dof)
-    return LinkageAnalysis(kin.q, mob, d, d - rotations, from_homogenised(P_h, p, L),
-                           from_homogenised(C_h, p, L), A, B, idx, singularity, csing, p, L,
-                           singular_tol, (Xr, Yr, M, ns.units, list(model.actuated_v)))
+    translating = np.array([not np.linalg.norm(kin.joint_twists[c][:3]) > 0
+                            for c in model.actuated_v], dtype=bool)
+    return general_kernel.Core(kin, ns, p, d, rotations, from_homogenised(P_h, p, L),
+                               from_homogenised(C_h, p, L), A, B, type_I, type_II, cond,
+                               Xr, Yr, M, forward, inverse, translating)
 
 
 def _transmission(A_n: np.ndarray, P_h: np.ndarray, d: int) -> tuple[float, float]:

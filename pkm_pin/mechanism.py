@@ -214,8 +214,11 @@ class Mechanism:
 
     @cached_property
     def characteristic_length(self) -> float:
-        """Unit of length of the relative tolerances [m]: mean of the legs' lengths."""
-        return float(np.mean([leg.characteristic_length for leg in self.legs]))
+        """Unit of length of the relative tolerances [m]: mean of the legs' lengths
+        (:attr:`Leg.offset_length`) over the legs that have one (a leg whose joints and
+        tip all sit at one point brings no length); 1.0 when none has."""
+        lengths = [leg.offset_length for leg in self.legs if leg.offset_length > 0]
+        return float(np.mean(lengths)) if lengths else 1.0
 
     @cached_property
     def actuated_scales(self) -> np.ndarray:
@@ -253,6 +256,25 @@ class Mechanism:
         from .model import from_mechanism
 
         return from_mechanism(self)
+
+    # The names every mechanism answers (a Linkage has the same): the closure model, its
+    # actuated joints and output frame.
+    @property
+    def model(self):
+        """The closure model (:attr:`closure_model`: the file's own when the mechanism
+        was detected in one, :attr:`source_model`)."""
+        return self.source_model if self.source_model is not None else self.closure_model
+
+    @property
+    def actuated(self) -> tuple:
+        """Names of the actuated joints, in the order of the actuated coordinates
+        (:attr:`actuated_names`)."""
+        return tuple(self.actuated_names)
+
+    @property
+    def output(self) -> str:
+        """The output frame: the platform frame of :attr:`model`."""
+        return self.model.output
 
     @cached_property
     def tree_pass(self) -> TreePass | None:
@@ -502,6 +524,14 @@ class Mechanism:
         """
         return _sensitivity.sensitivity(self, assembly, parameters)
 
+    def calibrate(self, samples, parameters, **options):
+        """Identify the errors of ``parameters`` from measured platform poses or
+        positions after known actuations: :func:`pkm_pin.calibration.calibrate`
+        (``samples``: pairs ``(q_actuated, measured)``)."""
+        from .calibration import calibrate
+
+        return calibrate(self, samples, parameters, **options)
+
     def workspace(self, coords=None, **options):
         """The reachable, singularity-free and good-transmission workspaces over some of
         the pose coordinates (default the independent ones), with volumes and inscribed
@@ -520,6 +550,55 @@ class Mechanism:
         that model's ``actuated`` order)."""
         model = self.closure_model if self.source_model is None else self.source_model
         return _dynamics.inverse_dynamics(model, q, v, a, gravity=gravity, wrench=wrench)
+
+    def simulate(self, q0=None, v0=None, duration: float = 1.0, dt: float = 1e-3,
+                 **options):
+        """Forward dynamics of the model :meth:`inverse_dynamics` uses, from ``(q0, v0)``
+        (default: the home configuration, at rest): :func:`pkm_pin.simulation.simulate`
+        (``options``: ``efforts``, ``controller``, ``gravity``, ``baumgarte``, ``method``,
+        ``integrator``)."""
+        from . import simulation
+        q0 = self.tree_configuration() if q0 is None else q0
+        return simulation.simulate(self.model, q0, v0, duration, dt, **options)
+
+    def dynamic_indices(self, q=None):
+        """Actuator-space inertia, its eigenvalues and condition, the apparent inertia at
+        the output, at ``q`` (a configuration of the model :meth:`inverse_dynamics` uses;
+        default home): :func:`pkm_pin.dynamic_indices.dynamic_indices`."""
+        from . import dynamic_indices as _indices
+        return _indices.dynamic_indices(self.model,
+                                        self.tree_configuration() if q is None
+                                        else q)
+
+    def gravity_map(self, poses, *, gravity=(0, 0, -9.81), wrench=None,
+                    condition: bool = False):
+        """Gravity efforts over ``poses`` (a sequence of ``pin.SE3``), each assembled
+        warm-started from the last one assembled (a pose that does not assemble: a nan
+        row): :func:`pkm_pin.dynamic_indices.gravity_efforts`."""
+        from . import dynamic_indices as _indices
+        model = self.model
+        Q, guess = np.full((len(poses), model.nq), np.nan), self.home_assembly
+        for i, pose in enumerate(poses):
+            try:
+                guess = self.assemble(pose, guess)
+            except PkmError:
+                continue
+            Q[i] = self.tree_configuration(guess)
+        return _indices.gravity_efforts(model, Q, gravity=gravity, wrench=wrench,
+                                        condition=condition)
+
+    def tree_configuration(self, assembly: Assembly | None = None) -> np.ndarray:
+        """The configuration of :attr:`model`'s tree at ``assembly`` (default home): the
+        file's tree (:meth:`source_configuration`) for a mechanism detected in one,
+        else the legs-and-platform tree of :attr:`closure_model`
+        (:func:`pkm_pin.model.configuration`). Every mechanism answers it (a
+        :class:`~pkm_pin.linkage.Linkage` too), so the dynamics and studies that work on
+        the tree ask no question about the kind of mechanism."""
+        assembly = self.home_assembly if assembly is None else assembly
+        if self.source_model is not None:
+            return self.source_configuration(assembly)
+        from .model import configuration as configuration_of
+        return configuration_of(self, assembly)
 
     def sweep(self, poses, *, executor: Executor | None = None, chunk_size: int = 2000,
               progress: bool = False, rtol: float | None = None,

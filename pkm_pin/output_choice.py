@@ -12,8 +12,10 @@ platform — by this rule (``docs/closed_loops.md``, "Default output"):
    frame used by a closure, as in MJCF, stays).
 2. **Controlled motion**: with ``N`` the motions the closures allow (null space of
    ``J_c``), ``X`` the actuated rates and ``Y`` the frame's homogenised twists over ``N``,
-   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked)
-   and ``controlled_dim = rank Y − idle_dim``. The frame **fits** when ``idle_dim = 0``
+   ``idle_dim`` is the rank of ``Y`` on ``ker X`` (its motions with every motor locked,
+   and every spring held: :attr:`ClosureModel.springs`, so that a leg's foot below
+   Cassie's shin and heel springs counts the motions its motors give it) and
+   ``controlled_dim = rank Y − idle_dim``. The frame **fits** when ``idle_dim = 0``
    and ``rank Y = rank X``: its motion and the motors' determine each other, so neither
    the forward nor the inverse index of the analysis is zero by construction. A rod that
    spins about its own axis, a crank that a motor moves alone, a base do not fit.
@@ -21,7 +23,9 @@ platform — by this rule (``docs/closed_loops.md``, "Default output"):
    ``idle_dim``; a body with mass before a massless one (an exporter's intermediate links
    between the revolutes of a spherical joint; only when the file gives masses); not a
    **crank** (every movable joint of its support actuated); not a **rod** (a leaf of the
-   tree carrying exactly one closure frame and no link named like an end body); the body
+   tree carrying exactly one closure frame and no link named like an end body, or an
+   unactuated zero-length link whose only child is a rod: the cross of a rod end's
+   universal joint, :func:`_rod_ends`); the body
    **furthest from the base** (:func:`_depths`: fewest joints from the base through the
    tree and the closures); a frame **named** like an end body (:func:`name_score`); the
    joint's own body frame before links fixed to it; tree order.
@@ -36,7 +40,8 @@ largest singular value over all frames.
 
 A mechanism whose independent actuators outnumber six (two legs of six motors each) has
 no fitting frame: the frame ranked first then moves with every motor of its own leg and
-not with the other leg's, which a single output reports as a type I singularity.
+not with the other leg's, which a single output reports as a type I singularity; each
+leg read alone (:mod:`pkm_pin.submechanisms`) has its own foot as output.
 """
 
 from __future__ import annotations
@@ -80,7 +85,9 @@ class OutputCandidate:
         crank: Every movable joint in its support is actuated: the motors move it
             alone (a motor's crank; every body of a serial arm).
         rod: A leaf body of the tree carrying exactly one closure frame and no link
-            named like an end body: a two-point link between its joint and a closure.
+            named like an end body: a two-point link between its joint and a closure;
+            or an unactuated zero-length link whose only child is a rod (the cross of
+            a rod end's universal joint).
         depth: Its distance from the base (:func:`_depths`: the fewest joints on a
             path through the tree and the closures).
         named: :func:`name_score` (3: an end body's name, 2: the same with a side
@@ -180,9 +187,14 @@ def _judge(model: ClosureModel, q, rtol: float) -> tuple:
     tree = model.tree
     kin = model.kinematics(q)
     ns = NullSpace(model, kin, rtol)
-    r_x, _, _, Vt = screws.svd_rank(ns.X, rtol)
-    idle = Vt[r_x:].T  # null coordinates of the idle motions
-    used = {name for c in model.closures for name in (c.frame_a, c.frame_b)}
+    r_x = screws.svd_rank(ns.X, rtol)[0]
+    # idle: the motions with every motor locked and every spring held (null coordinates)
+    springs = [tree.joints[tree.getJointId(n)].idx_v for n in model.springs]
+    held = np.vstack([ns.X, ns.N[springs]]) if springs else ns.X
+    r_h, _, _, Vt = screws.svd_rank(held, rtol)
+    idle = Vt[r_h:].T
+    used = {name for c in model.closures if c.joins_frames
+            for name in (c.frame_a, c.frame_b)}
     frames = [(k, f) for k, f in enumerate(tree.frames)  # bodies that can move
               if k > 0 and f.type == pin.FrameType.BODY and f.parentJoint > 0
               and (f.name not in used or _own(tree, f))]
@@ -286,6 +298,8 @@ def _depths(model: ClosureModel, massless: set) -> list:
         edges[tree.parents[j]].append((j, w))
         edges[j].append((tree.parents[j], w))
     for c in model.closures:
+        if not c.joins_frames:  # a coupling of joint coordinates joins no bodies
+            continue
         a, b = (tree.frames[tree.getFrameId(n)].parentJoint for n in (c.frame_a, c.frame_b))
         w = 0 if c.kind == "weld" else 1
         edges[a].append((b, w))
@@ -307,13 +321,39 @@ def _depths(model: ClosureModel, massless: set) -> list:
 
 def _rods(model: ClosureModel, used: set) -> set:
     """Joints whose body is a rod: a leaf of the tree carrying exactly one closure frame
-    and no link named like an end body (:func:`name_score` 2 or 3)."""
+    and no link named like an end body (:func:`name_score` 2 or 3), and the
+    intermediate links of its joint (:func:`_rod_ends`)."""
     tree = model.tree
     parents = set(tree.parents[1:])
     ends = [tree.frames[tree.getFrameId(name)].parentJoint
-            for c in model.closures for name in (c.frame_a, c.frame_b)]
+            for c in model.closures if c.joins_frames for name in (c.frame_a, c.frame_b)]
     named = {f.parentJoint for f in tree.frames
              if f.type == pin.FrameType.BODY and (f.name not in used or _own(tree, f))
              and name_score(f.name) >= 2}
-    return {j for j in set(ends)
+    rods = {j for j in set(ends)
             if j > 0 and j not in parents and ends.count(j) == 1 and j not in named}
+    return rods | _rod_ends(model, rods, set(ends) | named)
+
+
+def _rod_ends(model: ClosureModel, rods: set, kept: set) -> set:
+    """The intermediate links of a rod's joint (the cross of a universal joint, the
+    first revolutes of a spherical one, with or without mass): climbing from each rod,
+    a parent whose only child is a rod (or such a link) jointed at the parent's own
+    joint origin (zero length: the two axes meet), whose own joint moves and is not
+    actuated, carrying no closure frame nor a link named like an end body (``kept``).
+    A link of length (a five-bar's distal link carrying its pin's marker link) is no
+    such link."""
+    tree = model.tree
+    actuated = {tree.getJointId(name) for name in model.actuated}
+    children: dict = {}
+    for j in range(1, tree.njoints):
+        children.setdefault(tree.parents[j], []).append(j)
+    out: set = set()
+    for j in rods:
+        p = tree.parents[j]
+        while (p > 0 and children.get(p) == [j] and p not in kept and p not in actuated
+               and tree.joints[p].nv > 0 and np.linalg.norm(
+                   tree.jointPlacements[j].translation) <= 1e-9 * model.length):
+            out.add(p)
+            j, p = p, tree.parents[p]
+    return out

@@ -126,9 +126,10 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
     (readable bases about the output origin, with ``words``), ``A``, ``B``,
     ``singularity``, ``constraint_singular`` (``None``: not decided), ``indices``
-    (``None`` where undefined), and, as in the platform report, ``uncontrolled_twist``,
-    ``crosscheck``, ``crosscheck_max_error`` (``None``: no hand-written formulas) and
-    ``plots``.
+    (``None`` where undefined), ``submechanisms`` (:func:`submechanisms_data`: ``[]``
+    for a single mechanism, ``None`` when it failed), and, as in the platform report,
+    ``uncontrolled_twist``, ``crosscheck``, ``crosscheck_max_error`` (``None``: no
+    hand-written formulas) and ``plots``.
     """
     an = analysis if analysis is not None else link.analyze(assembly)
     centre = assembly.output_pose.translation
@@ -164,6 +165,8 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "indices": {k: finite_or_none(v) for k, v in an.indices.items()},
         "transmission": optional("transmission", lambda: _transmission(link, assembly),
                                  failed),
+        "submechanisms": optional("submechanisms",
+                                  lambda: submechanisms_data(link, assembly), failed),
         "uncontrolled_twist": None,
         "crosscheck": None,
         "crosscheck_max_error": None,
@@ -171,6 +174,43 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "failed_sections": failed,
     })
     return data
+
+
+def submechanisms_data(link, assembly) -> list:
+    """The independent sub-mechanisms of the linkage at the assembly
+    (:meth:`Linkage.submechanisms`: a biped's legs), each ``{"name", "joints"`` (its
+    tree's joints), ``"actuated", "output", "dof", "idle_dof", "motion_type",
+    "singularity", "indices"}``; ``[]`` when the linkage is one mechanism (the report is
+    its own)."""
+    subs = link.submechanisms(assembly.q)
+    if len(subs) == 1 and subs[0] is link:
+        return []
+    out = []
+    for sub in subs:
+        an = sub.analyze(sub.home_assembly)
+        out.append({"name": sub.name, "joints": sub.model.tree.njoints - 1,
+                    "actuated": list(sub.actuated), "output": sub.output, "dof": an.dof,
+                    "idle_dof": an.idle_dof, "motion_type": an.motion_type,
+                    "singularity": an.singularity,
+                    "indices": {k: finite_or_none(v) for k, v in an.indices.items()}})
+    return out
+
+
+def submechanism_lines(r: dict) -> list[str]:
+    """Two text lines per sub-mechanism (:func:`submechanisms_data`), none for one."""
+    subs = r.get("submechanisms") or []
+    if not subs:
+        return []
+    out = [f"sub-mechanisms     {len(subs)} independent (no movable joint shared; each "
+           "analysed with the others held, with its own output: the singularity class "
+           "above is that of one output for all of them):"]
+    for s in subs:
+        idx = ", ".join(f"{k} {_index(v, 'undefined', '.3g')}" for k, v in s["indices"].items())
+        out += [f"    {s['name']}: {s['joints']} joints, {len(s['actuated'])} actuators "
+                f"({', '.join(s['actuated'])}), output {s['output']}",
+                f"        DOF {s['dof']} (idle DOF {s['idle_dof']}; output motion "
+                f"{s['motion_type']}; singularity {s['singularity']}); {idx}"]
+    return out
 
 
 def structure_data(link) -> dict:
@@ -195,8 +235,8 @@ def structure_line(r: dict) -> str:
         return f"structure          general linkage (not base–legs–platform: {s['reason']})"
     kinds = ", ".join(f"{leg['name']}: {leg['kind']}" for leg in s["legs"])
     return (f"structure          base–legs–platform machine, {len(s['legs'])} legs ({kinds}); "
-            "--backend legs analyses it per leg (indices that do not depend on how the file "
-            "cuts the loops)")
+            "--backend legs analyses it per leg (seed 000's indices, each actuation wrench "
+            "orthogonal to its own leg's constraints)")
 
 
 # ------------------------------------------------------------------------- text
@@ -241,6 +281,7 @@ def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()
     out += [f"    {m}" for m in r["idle_motions"]]
     if r.get("singular_words"):
         out += [f"singular           {r['singular_words']}"]
+    out += submechanism_lines(r)
     out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
             for a, b in r.get("duplicate_closures", [])]
     out += [f"Grübler count      {r['grubler']}  (redundant closure equations: "

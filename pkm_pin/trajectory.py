@@ -4,7 +4,12 @@ actuator needs along them (issue 26, items 2 and 3; docs/dynamics.md, "Trajector
 A motion is the actuated values ``q_a(t)`` (in the model's :attr:`~ClosureModel.actuated`
 order): samples ``(t, q_a)`` (arrays, or a CSV file with the header
 ``t,<actuated names…>``) splined by :class:`SplineMotion`, or the default
-:class:`SineMotion` (:func:`default_motion`). At each time of the study:
+:class:`SineMotion` (:func:`default_motion`); or the output's pose coordinates over
+time, all or some of x, y, z, roll, pitch, yaw (:class:`OutputMotion`,
+:func:`pose_motion` from poses, a CSV with the header ``t,<coordinates…>``): ``q`` by
+inverse kinematics on the closure and coordinate rows, ``v, a`` from ``[J; K] v = [0;
+ċ]``, ``[J; K] a = [−J̇ v; c̈ − κ(q, v)]`` (``K`` the coordinates' rates,
+:class:`_OutputCoordinates`). At each time of an actuated motion:
 
 * ``q``: the whole tree by forward kinematics (:func:`pkm_pin.solve.solve_tree` with the
   actuated targets, to :data:`~pkm_pin.tolerances.CLOSURE_TOL`, or :data:`FK_ACCEPT_RTOL`
@@ -60,9 +65,24 @@ import pinocchio as pin
 
 from . import dynamics, screws
 from .dynamics import body_names
-from .errors import ForwardKinematicsError, InconsistentMotion, InputError, PkmError
-from .model.closure_model import ClosureModel, configuration
-from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_limits
+from .errors import (
+    ForwardKinematicsError,
+    InconsistentMotion,
+    InputError,
+    PkmError,
+    SingularityError,
+)
+from .model.closure_model import ClosureModel
+from .newton import TREE_MAX_STEP, lm_damping
+from .solve import (
+    POSE_COORDINATES,
+    coordinate_scales,
+    iter_tree_starts,
+    pose_coordinates,
+    solve_tree,
+    solve_tree_starts,
+    tree_limits,
+)
 from .tolerances import CLOSURE_TOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
 
 #: Duration [s] of the default motion.
@@ -99,6 +119,10 @@ class SplineMotion:
             ``"not-a-knot"`` or ``"periodic"`` (the first and last rows must then be
             equal), module docstring.
     """
+
+    #: What the motion's values drive: the actuated joints (an :class:`OutputMotion`:
+    #: "output").
+    driven = "actuated"
 
     def __init__(self, t, q_actuated, names=(), bc_type: str = "clamped"):
         from scipy.interpolate import CubicSpline
@@ -203,10 +227,12 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
 
 
 def read_csv(path, names) -> SplineMotion:
-    """The motion of a CSV file: a header ``t,<actuated names…>`` (the names of
-    ``names``, in any order; blank lines and lines starting with ``#`` skipped), then
-    one row of numbers per sample [s; rad or m], splined (:class:`SplineMotion`,
-    clamped)."""
+    """The motion of a CSV file, splined (clamped): a header ``t`` then either the
+    actuated joints' names (``names``, in any order: a :class:`SplineMotion` of the
+    actuated values [rad or m]) or some of the output's coordinates x, y, z [m], roll,
+    pitch, yaw [rad] (an :class:`OutputMotion`, the others held by the mechanism), then
+    one row of numbers per sample [s; …]. Blank lines and lines starting with ``#``
+    are skipped."""
     path = Path(path)
     try:
         size = path.stat().st_size
@@ -225,11 +251,14 @@ def read_csv(path, names) -> SplineMotion:
     header = [h.strip() for h in rows[0]]
     names = tuple(names)
     expected = "t," + ",".join(names)
-    if not header or header[0] != "t" or sorted(header[1:]) != sorted(names) \
+    actuated = sorted(header[1:]) == sorted(names)
+    output = bool(header[1:]) and all(h in POSE_COORDINATES for h in header[1:])
+    if not header or header[0] != "t" or not (actuated or output) \
             or len(set(header)) != len(header):
         shown = ",".join(header)[:200]
         raise InputError(f"{path}: the header must be {expected} (the actuated joints in any "
-                         f"order), got {shown!r}")
+                         f"order) or t and some of {','.join(POSE_COORDINATES)} (output "
+                         f"coordinates), got {shown!r}")
     if len(rows) - 1 > CSV_MAX_ROWS:
         raise InputError(f"{path}: more than {CSV_MAX_ROWS} rows")
     data = np.empty((len(rows) - 1, len(header)))
@@ -242,11 +271,200 @@ def read_csv(path, names) -> SplineMotion:
                 data[k, c] = float(text)
             except ValueError as e:
                 raise InputError(f"{path}:{line}: {text.strip()[:40]!r} is not a number") from e
-    order = [header.index(n) for n in names]
     try:
-        return SplineMotion(data[:, 0], data[:, order], names)
+        if not actuated:
+            return OutputMotion(data[:, 0], data[:, 1:], header[1:])
+        return SplineMotion(data[:, 0], data[:, [header.index(n) for n in names]], names)
     except InputError as e:
         raise InputError(f"{path}: {e}") from e
+
+
+# ------------------------------------------------------ motions of the output
+class OutputMotion(SplineMotion):
+    """Output pose coordinates over time, a C² cubic spline per coordinate.
+
+    ``coordinates``: some of x, y, z [m] (the output frame's origin, world) and roll,
+    pitch, yaw [rad] (``R = Rz(yaw) Ry(pitch) Rx(roll)``, world), the others held by the
+    mechanism (:func:`motion_states`: the parasitic motions of a lower-mobility machine
+    follow its closures; with fewer coordinates than the output's degrees of freedom,
+    the first others in the order x, y, z, roll, pitch, yaw that complete an independent
+    set are held at their values at the start configuration). Stored in that order;
+    angles unwrapped along time (a yaw through ±π stays continuous).
+    """
+
+    driven = "output"
+
+    def __init__(self, t, values, coordinates=POSE_COORDINATES, bc_type: str = "clamped"):
+        coordinates = tuple(coordinates)
+        unknown = [c for c in coordinates if c not in POSE_COORDINATES]
+        if not coordinates or unknown or len(set(coordinates)) != len(coordinates):
+            raise InputError(f"output coordinates must be distinct names among "
+                             f"{', '.join(POSE_COORDINATES)}, got {', '.join(coordinates)}")
+        V = screws.as_float_array(values, "values")
+        V = V[:, None] if V.ndim == 1 else V
+        if V.ndim != 2 or V.shape[1] != len(coordinates):
+            raise InputError(f"values must have one column per coordinate "
+                             f"({', '.join(coordinates)}), got shape {V.shape}")
+        order = sorted(range(len(coordinates)),
+                       key=lambda k: POSE_COORDINATES.index(coordinates[k]))
+        V, coordinates = V[:, order].copy(), tuple(coordinates[k] for k in order)
+        angles = [k for k, c in enumerate(coordinates) if c in POSE_COORDINATES[3:]]
+        if angles and np.isfinite(V).all():
+            V[:, angles] = np.unwrap(V[:, angles], axis=0)
+        super().__init__(t, V, coordinates, bc_type)
+        self.coordinates = coordinates
+
+    def describe(self) -> str:
+        return (f"output {', '.join(self.coordinates)}: cubic spline ({self.bc_type}) "
+                f"through {self.t.size} samples, t in [{self.start:g}, {self.stop:g}] s")
+
+
+def pose_motion(t, poses, coordinates=POSE_COORDINATES, bc_type: str = "clamped"
+                ) -> OutputMotion:
+    """An :class:`OutputMotion` from output poses over time: ``poses`` a sequence of
+    ``pinocchio.SE3`` (world placements of the output frame), an (N, 4, 4) array of
+    homogeneous matrices, or an (N, 6) array of x, y, z, roll, pitch, yaw; only
+    ``coordinates`` of them are followed (default all six; a 3-DOF machine: its own
+    three, the others are what its closures impose)."""
+    if len(poses) and isinstance(poses[0], pin.SE3):
+        C = np.array([pose_coordinates(p) for p in poses])
+    else:
+        P = screws.as_float_array(poses, "poses")
+        if P.ndim == 3 and P.shape[1:] == (4, 4):
+            C = np.array([pose_coordinates(pin.SE3(M)) for M in P])
+        elif P.ndim == 2 and P.shape[1] == 6:
+            C = P
+        else:
+            raise InputError(f"poses must be SE3s, (N, 4, 4) or (N, 6) x, y, z, roll, "
+                             f"pitch, yaw, got shape {P.shape}")
+    idx = [POSE_COORDINATES.index(c) for c in coordinates if c in POSE_COORDINATES]
+    if len(idx) != len(tuple(coordinates)):
+        raise InputError(f"coordinates must be among {', '.join(POSE_COORDINATES)}")
+    return OutputMotion(t, C[:, idx], tuple(coordinates), bc_type)
+
+
+class _OutputCoordinates:
+    """The output frame's pose coordinates on a closure model's tree and their first
+    and second derivatives (Pinocchio's frame Jacobian, velocity and accelerations):
+    ``c = (p; rpy)``, ``ċ = K v`` with ``K = [J_p; E(rpy)⁻¹ J_ω]`` (``ω = E ṙ``, world),
+    ``c̈ = K a + κ(q, v)``, ``κ = (p̈₀; E⁻¹ (ω̇₀ − Ė ṙ))`` where ``p̈₀``, ``ω̇₀`` are the
+    origin's classical and the frame's angular acceleration at ``a = 0``."""
+
+    def __init__(self, model: ClosureModel):
+        self.model, self.tree = model, model.tree
+        self.data = model.tree.createData()
+        self.fid = model.tree.getFrameId(model.output)
+        self.scales = coordinate_scales(model.length)
+
+    def values(self, q) -> np.ndarray:
+        pin.framesForwardKinematics(self.tree, self.data, q)
+        return pose_coordinates(self.data.oMf[self.fid])
+
+    def rates(self, q) -> tuple[np.ndarray, np.ndarray]:
+        """``(c, K)`` at ``q``, physical units (6,), (6 × nv)."""
+        tree, data = self.tree, self.data
+        pin.computeJointJacobians(tree, data, q)
+        pin.updateFramePlacements(tree, data)
+        c = pose_coordinates(data.oMf[self.fid])
+        J = pin.getFrameJacobian(tree, data, self.fid, pin.LOCAL_WORLD_ALIGNED)
+        K = np.vstack([J[:3], pin.rpy.computeRpyJacobianInverse(c[3:], pin.WORLD) @ J[3:]])
+        return c, K
+
+    def drift(self, q, v) -> np.ndarray:
+        """``κ(q, v)`` (6,): ``c̈`` at ``a = 0``."""
+        tree, data, f = self.tree, self.data, self.fid
+        pin.forwardKinematics(tree, data, q, v, np.zeros(tree.nv))
+        pin.updateFramePlacements(tree, data)
+        rpy = pin.rpy.matrixToRpy(data.oMf[f].rotation)
+        w = pin.getFrameVelocity(tree, data, f, pin.LOCAL_WORLD_ALIGNED).angular
+        Einv = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD)
+        rd = Einv @ w
+        Ed = pin.rpy.computeRpyJacobianTimeDerivative(rpy, rd, pin.WORLD)
+        lin = pin.getFrameClassicalAcceleration(tree, data, f, pin.LOCAL_WORLD_ALIGNED).linear
+        ang = pin.getFrameAcceleration(tree, data, f, pin.LOCAL_WORLD_ALIGNED).angular
+        return np.r_[lin, Einv @ (ang - Ed @ rd)]
+
+
+class _OutputDriver:
+    """The rows of a motion given by output coordinates: the given ones, then the held
+    ones (:class:`OutputMotion`), chosen at ``q0`` (dimensionless: coordinates divided
+    by :func:`pkm_pin.solve.coordinate_scales`, velocity coordinates by the units)."""
+
+    def __init__(self, model: ClosureModel, motion: OutputMotion, q0: np.ndarray):
+        self.model, self.oc = model, _OutputCoordinates(model)
+        given = [POSE_COORDINATES.index(c) for c in motion.coordinates]
+        if model.output_point and max(given) > 2:
+            raise InputError(f"the output of {model.name or 'the model'} is a point: give "
+                             "x, y, z only")
+        c0, K = self.oc.rates(q0)
+        U = model.velocity_units
+        Jc = model.closure_jacobian(q0) * U
+        rank, _, _, Vt = screws.svd_rank(Jc, RANK_RTOL) if Jc.size else (0, 0, 0,
+                                                                           np.eye(model.nv))
+        G = (K / self.oc.scales[:, None] * U) @ Vt[rank:].T
+        top = max(float(np.linalg.norm(G, 2)), 1e-300)
+
+        def rank_of(rows):
+            s = np.linalg.svd(G[rows], compute_uv=False) if rows else np.zeros(0)
+            return int(np.sum(s > 1e-6 * top))
+        if rank_of(given) < len(given):
+            raise InputError(
+                f"the output coordinates {', '.join(motion.coordinates)} are not independent "
+                f"for {model.name or 'the model'} (its output moves in {rank_of(list(range(6)))}"
+                " dimensions): give fewer, or others")
+        rows, full = list(given), rank_of(list(range(6)))
+        for k in range(6):
+            if len(rows) < full and k not in rows and rank_of(rows + [k]) > len(rows):
+                rows.append(k)
+        self.rows, self.n_given, self.held = np.array(rows), len(given), c0[rows[len(given):]]
+        self.names = tuple(POSE_COORDINATES[k] for k in rows)
+
+    def targets(self, C, Cd, Cdd) -> tuple:
+        """The targets of every row (given, then held) over the samples."""
+        n, h = C.shape[0], len(self.held)
+        return (np.c_[C, np.tile(self.held, (n, 1))], np.c_[Cd, np.zeros((n, h))],
+                np.c_[Cdd, np.zeros((n, h))])
+
+    def position(self, guess, target, tol: float) -> tuple[np.ndarray, float]:
+        """Damped Newton (Levenberg–Marquardt as :func:`pkm_pin.solve.solve_tree`:
+        damping :func:`~pkm_pin.newton.lm_damping`, steps at most
+        :data:`~pkm_pin.newton.TREE_MAX_STEP`, dimensionless) on the closure rows and
+        the coordinate rows (angles wrapped) from ``guess``: ``(q, residual)``."""
+        model, rows, s = self.model, self.rows, self.oc.scales[self.rows]
+        U, q = model.velocity_units, guess.copy()
+        lo, up = tree_limits(model)
+        for _ in range(100):
+            c, K = self.oc.rates(q)
+            e = np.r_[model.closure_residual(q), coordinate_errors_of(c[rows], target, rows) / s]
+            r = float(np.abs(e).max(initial=0.0))
+            if r <= tol:
+                break
+            H = np.vstack([model.closure_jacobian(q), K[rows] / s[:, None]]) * U
+            N = H.T @ H
+            N.flat[::N.shape[0] + 1] += lm_damping(r)
+            dx = -np.linalg.solve(N, H.T @ e)
+            big = np.abs(dx).max(initial=0.0)
+            if big > TREE_MAX_STEP:
+                dx *= TREE_MAX_STEP / big
+            q = np.clip(pin.integrate(model.tree, q, U * dx), lo, up)
+        return q, r
+
+    def system(self, q) -> "_ActuatedSystem":
+        c, K = self.oc.rates(q)
+        return _ActuatedSystem(self.model, q, K[self.rows] / self.oc.scales[self.rows, None])
+
+    def rhs(self, q, v, cdd) -> np.ndarray:
+        """The dimensionless right-hand side of the coordinate rows of ``[J; K] a``."""
+        s = self.oc.scales[self.rows]
+        return (cdd - self.oc.drift(q, v)[self.rows]) / s
+
+
+def coordinate_errors_of(c, target, rows) -> np.ndarray:
+    """``c − target`` with the angle rows wrapped to (−π, π]."""
+    d = np.asarray(c, float) - target
+    angle = np.asarray(rows) >= 3
+    d[angle] = (d[angle] + np.pi) % (2 * np.pi) - np.pi
+    return d
 
 
 # ------------------------------------------------------------ the mechanism
@@ -263,13 +481,9 @@ def closure_model_of(mech) -> tuple[ClosureModel, np.ndarray]:
             raise ForwardKinematicsError(f"{mech.name or 'the model'} does not assemble "
                                          f"from its reference (residual {sol.residual:.3g})")
         return mech, sol.q
-    if hasattr(mech, "source_model") and hasattr(mech, "closure_model"):  # Mechanism
-        if mech.source_model is not None:
-            return mech.source_model, mech.source_configuration()
-        return mech.closure_model, configuration(mech, mech.home_assembly)
-    model = getattr(mech, "model", None)
-    if isinstance(model, ClosureModel):  # Linkage
-        return model, mech.home_assembly.q
+    if isinstance(getattr(mech, "model", None), ClosureModel) \
+            and hasattr(mech, "tree_configuration"):  # any mechanism
+        return mech.model, mech.tree_configuration()
     raise InputError(f"a mechanism, linkage or closure model is needed, got "
                      f"{type(mech).__name__}")
 
@@ -288,6 +502,18 @@ def _at_time(e: Exception, t: float) -> Exception:
     if e.args and isinstance(e.args[0], str):
         e.args = (f"at t = {t:g} s: {e.args[0]}",) + e.args[1:]
     return e
+
+
+def _at_sample(e: Exception, times) -> Exception:
+    """An error of :func:`dynamics.inverse_dynamics_batch` (``e.sample``, its message
+    prefixed ``sample i: ``) with the sample's time instead."""
+    i = getattr(e, "sample", None)
+    if i is None:
+        return e
+    prefix = f"sample {i}: "
+    if e.args and isinstance(e.args[0], str) and e.args[0].startswith(prefix):
+        e.args = (e.args[0][len(prefix):],) + e.args[1:]
+    return _at_time(e, times[i])
 
 
 # ------------------------------------------------------------------ results
@@ -377,9 +603,10 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
                   tol: float = CLOSURE_TOL) -> tuple:
     """The consistent ``(q, v, a)`` of the tree (each (N, nq / nv)) and the actuated
     ``(q_a, q̇_a, q̈_a)`` (each (N, n)) at ``times`` along ``motion`` (a callable
-    ``times -> (q_a, q̇_a, q̈_a)``: :class:`SplineMotion`, :class:`SineMotion`), the first
-    sample's forward kinematics from ``q0`` (module docstring; ``gravity`` sets the idle
-    joints' accelerations).
+    ``times -> (q_a, q̇_a, q̈_a)``: :class:`SplineMotion`, :class:`SineMotion`; or an
+    :class:`OutputMotion` of output coordinates: inverse kinematics and
+    ``[J; K] (v, a)``), the first sample's position solved from ``q0`` (module
+    docstring; ``gravity`` sets the idle joints' accelerations).
 
     Raises:
         ForwardKinematicsError: a sample's forward kinematics does not converge (the motion
@@ -388,6 +615,8 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
             the message with the sample's time.
     """
     times = np.asarray(times, dtype=float).ravel()
+    if getattr(motion, "driven", "actuated") == "output":
+        return _output_states(model, motion, times, q0, gravity, tol)
     Qa, Qd, Qdd = motion(times)
     n = len(model.actuated)
     if Qa.shape != (times.size, n):
@@ -402,38 +631,15 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
         if i > 0:
             dt = ti - times[i - 1]
             guess = pin.integrate(model.tree, q[i - 1], v[i - 1] * dt + 0.5 * a[i - 1] * dt * dt)
-        sol = solve_tree(model, guess, targets=Qa[i], tol=tol)
-        if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
-            sol = solve_tree(model, sol.q, targets=Qa[i], tol=tol, max_iter=400)
-        if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
-            starts = iter_tree_starts(model, q[i - 1] if i else guess, count=16)
-            sol, _ = solve_tree_starts(model, starts, targets=Qa[i], tol=tol,
-                                       nearest=q[i - 1] if i else guess)
-        if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
-            values = ", ".join(f"{x:.6g}" for x in Qa[i])
-            raise ForwardKinematicsError(
-                f"at t = {ti:g} s the forward kinematics of {model.name or 'the model'} "
-                f"does not converge (actuated {values}; relative residual "
-                f"{sol.residual:.3g}): the motion leaves the workspace or crosses a "
-                "singularity")
-        q[i] = sol.q
+        q[i] = _forward_kinematics(model, guess, q[i - 1] if i else guess, Qa[i], ti, tol)
         t1 = time.perf_counter()
         try:
             vi, ai = dynamics.motion_from_actuated(model, q[i], Qd[i], Qdd[i])
             system = _ActuatedSystem(model, q[i])
-            if system.idle is not None:
-                if i > 0:  # idle rates: Heun's step of their own dynamics
-                    v0 = vi
-                    for pred in (v[i - 1] + a[i - 1] * dt, None):
-                        if pred is None:
-                            pred = v[i - 1] + 0.5 * (a[i - 1] + ai) * dt
-                        vi = system.carry(v0, pred)
-                        ai = dynamics.idle_acceleration(
-                            model, q[i], vi, system.acceleration(vi, Qdd[i]),
-                            gravity=gravity, idle=system.idle)
-                else:
-                    ai = dynamics.idle_acceleration(model, q[i], vi, ai, gravity=gravity,
-                                                    idle=system.idle)
+            rhs = Qdd[i] / system.units[system.act]
+            vi, ai = _carry_idle(model, system, q[i], vi, ai,
+                                 (v[i - 1], a[i - 1], ti - times[i - 1]) if i else None,
+                                 lambda _: rhs, gravity)
         except PkmError as e:  # SingularityError, InconsistentMotion
             raise _at_time(e, ti)
         v[i], a[i] = vi, ai
@@ -442,35 +648,143 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
     return (q, v, a, Qa, Qd, Qdd), clock
 
 
+def _forward_kinematics(model: ClosureModel, guess, previous, qa, ti: float, tol: float):
+    """One sample's forward kinematics from ``guess`` (then restarts about
+    ``previous``); a :class:`ForwardKinematicsError` with its time when it does not
+    close."""
+    sol = solve_tree(model, guess, targets=qa, tol=tol)
+    if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
+        sol = solve_tree(model, sol.q, targets=qa, tol=tol, max_iter=400)
+    if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
+        starts = iter_tree_starts(model, previous, count=16)
+        sol, _ = solve_tree_starts(model, starts, targets=qa, tol=tol, nearest=previous)
+    if not sol.converged and sol.residual > FK_ACCEPT_RTOL:
+        values = ", ".join(f"{x:.6g}" for x in qa)
+        raise ForwardKinematicsError(
+            f"at t = {ti:g} s the forward kinematics of {model.name or 'the model'} "
+            f"does not converge (actuated {values}; relative residual "
+            f"{sol.residual:.3g}): the motion leaves the workspace or crosses a "
+            "singularity")
+    return sol.q
+
+
+def _carry_idle(model: ClosureModel, system, q, v, a, previous, driven_rhs, gravity):
+    """``(v, a)`` with the idle motions' part set by their own dynamics: at rest at the
+    first sample (``previous`` None) with :func:`dynamics.idle_acceleration`; later a
+    Heun step from ``previous = (v, a, dt)`` of the sample before (``driven_rhs(v)``:
+    the driven rows' right-hand side of the acceleration at velocity ``v``)."""
+    if system.idle is None:
+        return v, a
+    if previous is None:
+        return v, dynamics.idle_acceleration(model, q, v, a, gravity=gravity,
+                                             idle=system.idle)
+    v_prev, a_prev, dt = previous
+    v0 = v
+    for pred in (v_prev + a_prev * dt, None):
+        if pred is None:
+            pred = v_prev + 0.5 * (a_prev + a) * dt
+        v = system.carry(v0, pred)
+        a = dynamics.idle_acceleration(model, q, v, system.acceleration(v, driven_rhs(v)),
+                                       gravity=gravity, idle=system.idle)
+    return v, a
+
+
+def _output_states(model: ClosureModel, motion, times, q0, gravity, tol) -> tuple:
+    """:func:`motion_states` of an :class:`OutputMotion`: per sample the inverse
+    kinematics on the closure and coordinate rows (warm-started as the forward
+    kinematics), ``[J; K] v = [0; ċ]``, ``[J; K] a = [−J̇ v; c̈ − κ(q, v)]``
+    (:class:`_OutputCoordinates`), the idle motions as for actuated motions."""
+    q0 = model.check_q(q0)
+    driver = _OutputDriver(model, motion, q0)
+    C, Cd, Cdd = driver.targets(*motion(times))
+    N, s = times.size, driver.oc.scales[driver.rows]
+    q, v, a = np.empty((N, model.nq)), np.empty((N, model.nv)), np.empty((N, model.nv))
+    clock, guess = {"kinematics": 0.0, "motion": 0.0}, q0
+    for i, ti in enumerate(times):
+        t0 = time.perf_counter()
+        if i > 0:
+            dt = ti - times[i - 1]
+            guess = pin.integrate(model.tree, q[i - 1], v[i - 1] * dt + 0.5 * a[i - 1] * dt * dt)
+        q[i], r = driver.position(guess, C[i], tol)
+        if r > FK_ACCEPT_RTOL:
+            values = ", ".join(f"{n} {x:.6g}" for n, x in zip(driver.names, C[i]))
+            raise ForwardKinematicsError(
+                f"at t = {ti:g} s the inverse kinematics of {model.name or 'the model'} "
+                f"does not converge ({values}; residual {r:.3g}): the motion leaves the "
+                "workspace or crosses a singularity")
+        t1 = time.perf_counter()
+        try:
+            system = driver.system(q[i])
+            _check_drives(model, system, driver.names)
+            rhs_v = np.r_[np.zeros(len(system.rows)), Cd[i] / s]
+            vi = system.solve(rhs_v)
+            ai = system.acceleration(vi, driver.rhs(q[i], vi, Cdd[i]))
+            vi, ai = _carry_idle(model, system, q[i], vi, ai,
+                                 (v[i - 1], a[i - 1], ti - times[i - 1]) if i else None,
+                                 lambda vel, qi=q[i], c=Cdd[i]: driver.rhs(qi, vel, c),
+                                 gravity)
+        except PkmError as e:
+            raise _at_time(e, ti)
+        v[i], a[i] = vi, ai
+        clock["kinematics"] += t1 - t0
+        clock["motion"] += time.perf_counter() - t1
+    act = list(model.actuated_v)
+    Qa = np.array([model.actuated_values(x) for x in q]).reshape(N, len(act))
+    return (q, v, a, Qa, v[:, act].copy(), a[:, act].copy()), clock
+
+
+def _check_drives(model: ClosureModel, system, names) -> None:
+    """A :class:`SingularityError` when the actuators can move with the output
+    coordinates still (a motion of ``[J; K]``'s null space that moves one): a type I
+    singularity, or coordinates that do not fix the mechanism's motion."""
+    if system.idle is None:
+        return
+    moved = np.abs(system.null[system.act]).max(initial=0.0)
+    if moved > 1e-6:
+        raise SingularityError(
+            f"{model.name or 'the model'}: with the output coordinates "
+            f"{', '.join(names)} still an actuator can move: a type I singularity, or a "
+            "mechanism with more degrees of freedom than its output's; give its motion as "
+            "actuated values", kind="type I", index=0.0)
+
+
 class _ActuatedSystem:
-    """``[J; S]`` at ``q`` (dimensionless rows and coordinates), its SVD and the idle
+    """``[J; D]`` at ``q`` (dimensionless rows and coordinates; ``D`` the driven rows:
+    the actuated coordinates ``S``, or ``driven`` (k × nv, dimensionless coordinate per
+    unit of each velocity coordinate), the output's coordinates), its SVD and the idle
     motions (its null space: ``idle``, (nv, k) physical directions, or None)."""
 
-    def __init__(self, model: ClosureModel, q: np.ndarray):
+    def __init__(self, model: ClosureModel, q: np.ndarray, driven=None):
         self.model, self.q = model, q
         self.units, self.rows = model.velocity_units, dynamics.row_units(model)
         zero = np.zeros(model.nv)
         J, _, _ = dynamics.closure_acceleration(model, q, zero, zero)
         self.act = list(model.actuated_v)
-        H = np.zeros((len(self.rows) + len(self.act), model.nv))
-        H[:len(self.rows)] = J / self.rows[:, None] * self.units
-        H[len(self.rows) + np.arange(len(self.act)), self.act] = 1.0
+        if driven is None:
+            driven = np.zeros((len(self.act), model.nv))
+            driven[np.arange(len(self.act)), self.act] = 1.0 / self.units[self.act]
+        self.H = H = np.vstack([J / self.rows[:, None], driven]) * self.units
         self.rank, self.Us, self.sv, self.Vt = screws.svd_rank(H, RANK_RTOL)
         self.null = self.Vt[self.rank:].T
         self.idle = self.units[:, None] * self.null if self.rank < model.nv else None
 
     def carry(self, v: np.ndarray, v_pred: np.ndarray) -> np.ndarray:
-        """``v`` (minimum-norm, from the actuated rates) plus the idle part of
+        """``v`` (minimum-norm, from the driven rates) plus the idle part of
         ``v_pred`` (the previous sample's velocity stepped by the idle dynamics)."""
         N, U = self.null, self.units
         return v + U * (N @ (N.T @ ((v_pred - v) / U)))
 
-    def acceleration(self, v: np.ndarray, qdd: np.ndarray) -> np.ndarray:
-        """The minimum-norm (dimensionless) ``a`` of ``[J; S] a = [−J̇ v; q̈_a]``."""
-        model, r = self.model, self.rank
-        _, _, drift = dynamics.closure_acceleration(model, self.q, v, np.zeros(model.nv))
-        rhs = np.r_[-drift / self.rows, qdd / self.units[self.act]]
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """The minimum-norm physical ``x`` of ``[J; D] x = rhs`` (dimensionless rows)."""
+        r = self.rank
         return self.units * (self.Vt[:r].T @ ((self.Us[:, :r].T @ rhs) / self.sv[:r]))
+
+    def acceleration(self, v: np.ndarray, driven_rhs: np.ndarray) -> np.ndarray:
+        """The minimum-norm (dimensionless) ``a`` of ``[J; D] a = [−J̇ v; driven_rhs]``
+        (``driven_rhs``: dimensionless, e.g. ``q̈_a / s_a``)."""
+        model = self.model
+        _, _, drift = dynamics.closure_acceleration(model, self.q, v, np.zeros(model.nv))
+        return self.solve(np.r_[-drift / self.rows, driven_rhs])
 
 
 def _inverse_dynamics(model: ClosureModel, q, v, a, g, w) -> dynamics.InverseDynamics:
@@ -533,19 +847,30 @@ def _sample_times(motion, samples: int, times) -> np.ndarray:
 
 def _efforts_along(model: ClosureModel, times, q, v, a, g, f) -> tuple:
     """The actuated efforts at each sample (N × actuated), and the part the payload ``f``
-    (force and moment at the output's origin, world axes) adds; errors carry the
-    sample's time."""
+    (force and moment at the output's origin, world axes) adds, by
+    :func:`dynamics.inverse_dynamics_batch` (one compiled pass over the samples); where it
+    refuses a sample's motion as inconsistent, sample by sample with the normwise check
+    of :func:`_inverse_dynamics`. Errors carry the sample's time."""
     N, n = times.size, len(model.actuated)
-    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
-    out = model.tree.getFrameId(model.output) if f is not None else None
-    data = model.tree.createData() if f is not None else None
-    for i in range(N):
-        w = None
-        if f is not None:  # the payload's wrench about the world origin
+    W = None
+    if f is not None:  # the payload's wrench about the world origin
+        out, data = model.tree.getFrameId(model.output), model.tree.createData()
+        W = np.empty((N, 6))
+        for i in range(N):
             pin.framesForwardKinematics(model.tree, data, q[i])
-            w = screws.from_point(np.r_[f[:3], f[3:]], data.oMf[out].translation)
+            W[i] = screws.from_point(np.r_[f[:3], f[3:]], data.oMf[out].translation)
+    try:
+        b = dynamics.inverse_dynamics_batch(model, q, v, a, gravity=g, wrenches=W)
+        return b.efforts, b.payload_efforts
+    except InconsistentMotion as e:
+        if e.kind not in ("velocity", "acceleration"):
+            raise _at_sample(e, times)
+    except PkmError as e:
+        raise _at_sample(e, times)
+    efforts, from_payload = np.empty((N, n)), np.zeros((N, n))
+    for i in range(N):
         try:
-            r = _inverse_dynamics(model, q[i], v[i], a[i], g, w)
+            r = _inverse_dynamics(model, q[i], v[i], a[i], g, None if W is None else W[i])
         except PkmError as e:
             raise _at_time(e, times[i])
         efforts[i], from_payload[i] = r.efforts, r.payload_efforts
@@ -561,8 +886,10 @@ def study(mech, motion=None, *, samples: int = DEFAULT_SAMPLES, times=None,
         mech: A :class:`~pkm_pin.Mechanism`, :class:`~pkm_pin.linkage.Linkage` or
             :class:`ClosureModel` (:func:`closure_model_of`).
         motion: A :class:`SplineMotion`, :class:`SineMotion` (or any callable ``times ->
-            (q_a, q̇_a, q̈_a)`` with ``start``/``stop``), a CSV path (:func:`read_csv`),
-            or ``None``: :func:`default_motion` over ``duration``.
+            (q_a, q̇_a, q̈_a)`` with ``start``/``stop``), an :class:`OutputMotion` (output
+            coordinates over time, :func:`pose_motion`), a CSV path (:func:`read_csv`:
+            actuated or output columns), or ``None``: :func:`default_motion` over
+            ``duration``.
         samples: Number of times, uniform over the motion (both ends), ≥ 2.
         times: The times instead (increasing).
         gravity: [m/s²], world axes.

@@ -46,8 +46,9 @@ from .tolerances import NEWTON_STALL_RTOL
 #: Joint kinds of the compiled tree.
 REVOLUTE, PRISMATIC, UNBOUNDED, SPHERICAL, FREE_FLYER = 0, 1, 2, 3, 4
 #: Closure kinds of the compiled tree.
-POINT, REVOLUTE_CLOSURE, WELD = 0, 1, 2
-_CLOSURE_KINDS = {"point": POINT, "revolute": REVOLUTE_CLOSURE, "weld": WELD}
+POINT, REVOLUTE_CLOSURE, WELD, COUPLING = 0, 1, 2, 3
+_CLOSURE_KINDS = {"point": POINT, "revolute": REVOLUTE_CLOSURE, "weld": WELD,
+                  "coupling": COUPLING}
 
 #: Whether :func:`pkm_pin.solve.solve_tree` may use this module (False: the Pinocchio
 #: driver everywhere, for comparisons and diagnosis).
@@ -63,7 +64,10 @@ class TreeKernel(NamedTuple):
     translation ``rate[j] · q · axis[j]`` (prismatic), the quaternion's rotation
     (spherical) or the free flyer's placement. Frames: the closures' ``frame_a`` (C),
     their ``frame_b`` (C), then the output frame: parent joint ``fjoint`` and constant
-    ``fplace`` (the frame's placement times the closure's constraint placement).
+    ``fplace`` (the frame's placement times the closure's constraint placement). A
+    coupling closure's row is ``(q_a − c₁ q_b − c₀) / u_a`` with ``ccoef[c] = (c₀, c₁,
+    1 / u_a)``, ``a`` and ``b`` the parent joints of its two frames (``b`` = 0: no
+    ``q_b``).
     """
 
     parent: np.ndarray  # (nj + 1,) parent joint
@@ -77,6 +81,7 @@ class TreeKernel(NamedTuple):
     fplace: np.ndarray  # (2C + 1, 4, 4)
     ckind: np.ndarray  # (C,)
     rows: np.ndarray  # (C + 1,) first row of each closure
+    ccoef: np.ndarray  # (C, 3) a coupling's (c0, c1, 1 / u_a)
     lower: np.ndarray  # (nq,)
     upper: np.ndarray  # (nq,)
     units: np.ndarray  # (nv,)
@@ -183,6 +188,10 @@ def _build(model) -> TreeKernel | None:
                        for n, P in zip(names, extra)]).reshape(2 * C + 1, 4, 4)
     ckind = np.array([_CLOSURE_KINDS[c.kind] for c in closures], np.int64)
     rows = np.cumsum([0] + [c.dim for c in closures]).astype(np.int64)
+    ccoef = np.zeros((C, 3))
+    for c, cl in enumerate(closures):
+        if cl.kind == "coupling":
+            ccoef[c] = cl.coef + (1.0 / model.velocity_units[iv[fjoint[c]]],)
     plan = model._plan
     lo, up = plan.limits
     joints = [tree.joints[tree.getJointId(a)] for a in model.actuated]
@@ -190,7 +199,8 @@ def _build(model) -> TreeKernel | None:
     if not plan.act_ok:
         return None
     return TreeKernel(parent, place, kind, axis, rate, iq, iv, fjoint, fplace, ckind, rows,
-                      np.array(lo), np.array(up), np.array(model.velocity_units, dtype=float),
+                      ccoef, np.array(lo), np.array(up),
+                      np.array(model.velocity_units, dtype=float),
                       np.array(plan.act_q, np.int64), np.array(plan.act_v, np.int64), act_two,
                       np.array(plan.act_scales, dtype=float), np.ones(tree.nv, np.bool_),
                       float(model.length),
@@ -488,6 +498,9 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
     worst = 0.0
     for c in range(C):
         ca, cb = c, C + c
+        if ckind[c] == COUPLING:
+            worst = max(worst, _coupling_row(k, q, c, e, H, norms))
+            continue
         _relative_columns(jiv, jkind, jparent, fjoint[c], fjoint[C + c], S, W)
         r0 = rows[c]
         pbx, pby, pbz = F[cb, 0, 3], F[cb, 1, 3], F[cb, 2, 3]
@@ -544,6 +557,23 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
         norms[c] = math.sqrt(s)
         worst = max(worst, norms[c])
     return worst
+
+
+@register_jitable
+def _coupling_row(k, q, c, e, H, norms):
+    """Coupling closure ``c``'s row (class docstring) into ``e``, ``H`` and
+    ``norms``; returns its norm."""
+    r0, ja, jb = k.rows[c], k.fjoint[c], k.fjoint[k.ckind.shape[0] + c]
+    c0, c1, iu = k.ccoef[c, 0], k.ccoef[c, 1], k.ccoef[c, 2]
+    qb = q[k.iq[jb]] if jb > 0 else 0.0
+    e[r0] = (q[k.iq[ja]] - c1 * qb - c0) * iu
+    for col in range(k.nv):
+        H[r0, col] = 0.0
+    H[r0, k.iv[ja]] = iu
+    if jb > 0:
+        H[r0, k.iv[jb]] -= c1 * iu
+    norms[c] = abs(e[r0])
+    return norms[c]
 
 
 @njit(cache=True, nogil=True)

@@ -26,18 +26,31 @@ Title, legend, camera and grid as :func:`pkm_pin.view.view` has them; the title 
 the output frame (or point) and its pose, the DOF, the idle DOF, the output's motion type
 and the singularity class.
 
+A linkage that does not assemble (a :class:`~pkm_pin.linkage.LoopClosureError` that
+carries the best configuration reached, given as ``where`` or raised by the assembly from
+the reference) is drawn **open**: the tree, the loops and the output at that
+configuration (:meth:`Linkage.reached`), no idle motion nor wrench (nothing is analysed
+off the closure manifold) nor screw axis (they would hide the gaps), and for each open
+loop (:mod:`pkm_pin.closure_gaps`) a bar and
+a line between its two constraint frames in a colour of its own (:data:`GAP_COLOURS`)
+with a legend entry giving the gap in mm and degrees; the title says that it does not
+assemble and names the worst loop; :attr:`LinkageScene.error` keeps the error.
+
 Scene layout (meshcat paths; ``<m>`` is :func:`~pkm_pin.view.node_name` of the name)::
 
     pkm/<m>/links/<joint or frame>       skeleton bars
     pkm/<m>/joints/<joint>               joint markers
     pkm/<m>/closures/<closure>/ring/<k>  the loop's ring, marker, gap
+    pkm/<m>/gaps/<closure>/bar|line      an open loop's gap (open drawing only)
     pkm/<m>/output/ball, output/x|y|z
     pkm/<m>/idle/<k>/axis, idle/<k>/joints/<joint>
     pkm/<m>/screws/<joint>
     pkm/<m>/wrenches/actuation/<joint>, wrenches/constraint/<k>
 
 Sizes are fractions of the drawing's size (half the diagonal of the box around the
-joints, at least :attr:`ClosureModel.length`), so millimetres and metres look the same.
+joints, at least :data:`DRAWING_LENGTH_FLOOR` times :attr:`ClosureModel.length`, which
+sums every offset of the tree and so exceeds the drawing of a many-jointed leg several
+times), so millimetres and metres look the same.
 """
 
 from __future__ import annotations
@@ -49,7 +62,7 @@ import pinocchio as pin
 
 from . import screws
 from .errors import InputError
-from .linkage import Linkage, LinkageAssembly, _body_points
+from .linkage import Linkage, LinkageAssembly, LoopClosureError, _body_points
 from .model.closure_model import NullSpace
 from .report import readable_basis
 from .scene import (
@@ -60,6 +73,7 @@ from .scene import (
     PASSIVE_SCREW_COLOUR,
     PLATFORM_COLOUR,
     SINGULARITY_WORDS,
+    LegendEntry,
     Scene,
     SceneRecorder,
     _meshcat,
@@ -75,6 +89,12 @@ CLOSURE_COLOUR = 0xE7298A
 IDLE_COLOUR = 0x00CC66
 GROUND_COLOUR = 0x808080
 OUTPUT_AXIS_COLOURS = (0xE41A1C, 0x4DAF4A, 0x377EB8)
+#: The drawing's size is at least this share of :attr:`ClosureModel.length`.
+DRAWING_LENGTH_FLOOR = 0.1
+#: Colours of the open loops' gaps (cycled), none of the other colours of a linkage
+#: scene.
+GAP_COLOURS = (0xD62728, 0x1F3A93, 0x2CA02C, 0x9467BD, 0x8C564B, 0x4B0082, 0x006D6F,
+               0x7B7B00, 0x000000, 0xB8860B)
 
 
 class LinkageScene(Scene):
@@ -82,23 +102,30 @@ class LinkageScene(Scene):
 
     Attributes:
         linkage: The linkage (also :attr:`mechanism`, for the page title).
-        assembly: The :class:`~pkm_pin.linkage.LinkageAssembly` drawn.
-        analysis: Its :class:`~pkm_pin.linkage.LinkageAnalysis`.
-        idle_motions: The idle motions drawn, in words.
+        assembly: The :class:`~pkm_pin.linkage.LinkageAssembly` drawn (for an open
+            drawing, :meth:`Linkage.reached`: its loops do not all close).
+        analysis: Its :class:`~pkm_pin.linkage.LinkageAnalysis` (None when open).
+        idle_motions: The idle motions drawn, in words (none when open).
+        error: The :class:`~pkm_pin.linkage.LoopClosureError` of an open drawing, else
+            None.
+        gaps: The open loops drawn (:class:`~pkm_pin.closure_gaps.Gap`, worst first).
         visualizer, recorder, root, animated: As :class:`pkm_pin.view.Scene`
             (``animated`` is False: nothing is animated).
     """
 
     def __init__(self, visualizer, recorder: SceneRecorder, link: Linkage,  # noqa: D107
-                 assembly: LinkageAssembly, analysis, root: str):
+                 assembly: LinkageAssembly, analysis, root: str,
+                 error: LoopClosureError | None = None):
         self.visualizer = visualizer
         self.recorder = recorder
         self.linkage = self.mechanism = link
         self.assembly = assembly
         self.analysis = analysis
-        self.idle_motions = tuple(analysis.mobility.idle_motions)
+        self.idle_motions = () if analysis is None else tuple(analysis.mobility.idle_motions)
         self.root = root
         self.animated = False
+        self.error = error
+        self.gaps = () if error is None or error.diagnosis is None else error.diagnosis.gaps
 
 
 def idle_velocities(link: Linkage, q) -> np.ndarray:
@@ -110,9 +137,18 @@ def idle_velocities(link: Linkage, q) -> np.ndarray:
     return (ns.units[:, None] * ns.idle(RANK_RTOL)).T
 
 
-def _assembly(link: Linkage, where) -> LinkageAssembly:
+def _assembly(link: Linkage, where) -> LinkageAssembly | LoopClosureError:
+    """The assembly drawn, or the error of a linkage that does not assemble (when it
+    carries the best configuration reached: drawn open)."""
+    if isinstance(where, LoopClosureError) and where.q is not None:
+        return where
     if where is None:
-        return link.assemble()
+        try:
+            return link.assemble()
+        except LoopClosureError as e:
+            if e.q is None:
+                raise
+            return e
     if isinstance(where, LinkageAssembly):
         return where
     from .assembly import as_pose
@@ -129,34 +165,45 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
     Args:
         link: The linkage.
         where: A :class:`~pkm_pin.linkage.LinkageAssembly`, or an output pose
-            (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw: inverse kinematics);
-            default: assembled from the reference configuration.
+            (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw: inverse kinematics),
+            or a :class:`~pkm_pin.linkage.LoopClosureError` (drawn open at its best
+            configuration); default: assembled from the reference configuration, drawn
+            open when it does not assemble (see the module docstring).
         visualizer, open, html: As :func:`pkm_pin.view.view`.
         show_screws: Draw the joint screw axes.
         show_wrenches: Draw the actuation and constraint wrenches on the output.
 
     Raises:
         InputError: ``link`` is not a linkage or the pose is malformed.
-        LoopClosureError: the linkage does not assemble.
+        LoopClosureError: the inverse kinematics of a pose fails (a pose is not
+            drawn open).
     """
     if not isinstance(link, Linkage):
         raise InputError(f"view_linkage() takes a pkm_pin Linkage, got {type(link).__name__}")
     assembly = _assembly(link, where)
-    analysis = link.analyze(assembly)
+    error = assembly if isinstance(assembly, LoopClosureError) else None
+    if error is not None:
+        assembly, analysis = link.reached(error), None
+    else:
+        analysis = link.analyze(assembly)
     meshcat = _meshcat()[0]
     recorder = SceneRecorder(forward=None if visualizer is None else visualizer.window)
     vis = meshcat.Visualizer(window=recorder)
     if visualizer is not None:
         vis.path = visualizer.path
-    scene = LinkageScene(vis, recorder, link, assembly, analysis, f"pkm/{node_name(link.name)}")
+    scene = LinkageScene(vis, recorder, link, assembly, analysis, f"pkm/{node_name(link.name)}",
+                         error)
     painter = _LinkagePainter(scene)
     painter.tree()
     painter.closures()
     painter.output()
-    painter.idle()
-    if show_screws:
+    if error is None:
+        painter.idle()
+    else:
+        painter.gaps()
+    if show_screws and error is None:
         painter.screws()
-    if show_wrenches:
+    if show_wrenches and error is None:
         painter.wrenches()
     painter.settings()
     painter.finish()
@@ -186,7 +233,7 @@ class _LinkagePainter(_Painter):
         self.grid_height = 0.0
         P = self.mech_points()
         self.L = max(0.5 * float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))),
-                     float(self.model.length))
+                     DRAWING_LENGTH_FLOOR * float(self.model.length))
         self.radius = self.L
 
     def centre(self) -> np.ndarray:
@@ -207,6 +254,8 @@ class _LinkagePainter(_Painter):
         out = []
         for c in self.model.closures:
             for frame, P in ((c.frame_a, c.placement_a), (c.frame_b, c.placement_b)):
+                if not c.joins_frames:
+                    break
                 out.append((frame, self.frame_point(frame, P),
                             self.tree_.frames[self.tree_.getFrameId(frame)].parentJoint))
         fid = self.tree_.getFrameId(self.mech.output)
@@ -243,6 +292,8 @@ class _LinkagePainter(_Painter):
     def title_lines(self) -> tuple[str, ...]:
         """Name; output frame and its pose; DOF, output motion type, idle DOF and
         singularity class."""
+        if self.scene.error is not None:
+            return self.open_title_lines()
         a = self.scene.analysis
         M = self.kin.output_placement
         what = "point" if self.model.output_point else "frame"
@@ -252,6 +303,26 @@ class _LinkagePainter(_Painter):
                 f"{pose_words(M, self.L, point=self.model.output_point)}",
                 f"{a.dof} DOF{idle}, output motion {a.motion_type}, singularity: "
                 f"{SINGULARITY_WORDS.get(a.singularity, a.singularity)}")
+
+    def open_title_lines(self) -> tuple[str, ...]:
+        """Name; that it does not assemble and how many loops stay open; the worst."""
+        gaps, e = self.scene.gaps, self.scene.error
+        worst = f"worst: {gaps[0].words()}" if gaps else f"worst: {e.leg!r}"
+        n = len(gaps)
+        return (self.mech.name,
+                f"does not assemble: {n} loop{'s' * (n != 1)} open at the best "
+                f"configuration reached (relative residual {e.residual:.3g})",
+                worst)
+
+    def legend(self) -> tuple:
+        """The legend of :meth:`_Painter.legend`, then one entry per open loop."""
+        out = list(super().legend())
+        for k, g in enumerate(self.scene.gaps):
+            angle = "" if g.kind == "point" else f", {np.degrees(g.angle):.3g}°"
+            out.append(LegendEntry(f"gap:{g.name}", f"gap of {g.name}",
+                                   f"open loop: its frames {1e3 * g.distance:.3g} mm{angle} "
+                                   "apart", (GAP_COLOURS[k % len(GAP_COLOURS)],)))
+        return tuple(out)
 
     # ----------------------------------------------------------------------- tree
     def tree(self) -> None:
@@ -306,6 +377,8 @@ class _LinkagePainter(_Painter):
     def closures(self) -> None:
         """Each loop's ring, its constraint-frame marker and the gap, if any."""
         for k, c in enumerate(self.model.closures):
+            if not c.joins_frames:  # a coupling of joint coordinates: no loop to draw
+                continue
             path = f"{self.root}/closures/{node_name(c.name or f'closure_{k}')}"
             self.note("closure", CLOSURE_COLOUR)
             pts = self.loop_points(c)
@@ -328,7 +401,19 @@ class _LinkagePainter(_Painter):
                 marker.set_object(shape, self.material(CLOSURE_COLOUR, 0.8))
                 T = Ca.homogeneous.copy() if c.kind == "weld" else _translation(Ca.translation)
                 marker.set_transform(T)
-            self.bar(f"{path}/gap", pts[0], pts[-1], CLOSURE_COLOUR, self.size("link"))
+            if self.scene.error is None:  # open: gaps() draws them in their colours
+                self.bar(f"{path}/gap", pts[0], pts[-1], CLOSURE_COLOUR, self.size("link"))
+
+    def gaps(self) -> None:
+        """Each open loop: a bar and a line between its two constraint frames, in its
+        own colour (its legend entry: :meth:`legend`)."""
+        for k, g in enumerate(self.scene.gaps):
+            colour = GAP_COLOURS[k % len(GAP_COLOURS)]
+            path = f"{self.root}/gaps/{node_name(g.name)}"
+            self.bar(f"{path}/bar", g.a, g.b, colour, 2.5 * self.size("link"))
+            self.vis[f"{path}/line"].set_object(self.g.Line(
+                self.g.PointsGeometry(np.array([g.a, g.b], dtype=np.float32).T),
+                self.g.LineBasicMaterial(color=colour, linewidth=3.0)))
 
     # --------------------------------------------------------------------- output
     def output(self) -> None:

@@ -14,6 +14,7 @@ import pytest
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
 
 import bench_analysis  # noqa: E402
+import bench_dynamics  # noqa: E402
 import bench_fk  # noqa: E402
 import bench_general_fk  # noqa: E402
 import bench_linkage  # noqa: E402
@@ -43,9 +44,10 @@ def test_bench_fk_solves_to_the_same_poses(capsys):
 
 def test_bench_linkage_times_the_three_figures(capsys):
     """bench_linkage.main times assembly, FK and analysis of the Cassie leg for pkm_pin
-    and the hand-written loop (same solutions, checked inside)."""
+    and the hand-written loop (same solutions, checked inside), and the analysis on its
+    numpy path."""
     rows = bench_linkage.main(n=10, repeat=1)
-    assert set(rows) == {"assemble", "fk", "analyze"}
+    assert set(rows) == {"assemble", "fk", "analyze", "analyze_numpy"}
     assert all(ours > 0 and hand > 0 for ours, hand in rows.values())
     assert "ratio pkm_pin / hand-written" in capsys.readouterr().out
 
@@ -91,3 +93,14 @@ def test_bench_one_core_same_stewart_same_indices(capsys):
     assert rows["diff_urdf"] > 1e-3
     assert set(rows["per_pose"]) == {"toml", "urdf/legs", "urdf/general"}
     assert "urdf/legs" in capsys.readouterr().out
+
+
+def test_bench_dynamics_reports_both_ratios(capsys):
+    """bench_dynamics.main times single calls, the hand-written solve, the Python path
+    and the batch; the efforts agree (hand-written 1e-9, batch 1e-12) and both ratios
+    are printed."""
+    r = bench_dynamics.main(n=40, single=10, repeat=1)
+    assert all(r[k] > 0 for k in ("single", "hand", "python", "batch"))
+    assert r["diff"] < 1e-9 and r["diff_batch"] < 1e-12
+    out = capsys.readouterr().out
+    assert "inverse_dynamics / hand-written" in out and "single calls / batch" in out

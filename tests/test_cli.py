@@ -7,6 +7,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pinocchio as pin
 import pytest
 from helpers import MECHANISM_DIR, one_error_line
 
@@ -317,6 +318,37 @@ def test_dynamics_text_table_and_csv_trajectory(tmp_path, capsys):
     assert main(["dynamics", str(CASSIE_LIKE), "--trajectory", str(csv), "--duration",
                  "3"]) == 2
     assert "--duration" in one_error_line(capsys)
+
+
+def test_dynamics_csv_of_output_coordinates(tmp_path, capsys):
+    """A CSV of the foot's x and z over time (the Cassie-like leg's output moves in 5
+    dimensions: y, roll, pitch held at home): exit 0, the motion described as the
+    output's; the hip motors, which only the held coordinates move, stay still (peak
+    speed at round-off) and the npz's q follows the CSV's z at its knots."""
+    t = np.linspace(0, 1, 11)
+    z = -0.09961938 + 0.01 * np.sin(np.pi * t)
+    x = -0.2479085 + 0.005 * np.sin(np.pi * t)
+    csv = tmp_path / "foot.csv"
+    csv.write_text("t,z,x\n" + "\n".join(f"{a:.9g},{b:.9g},{c:.9g}" for a, b, c in
+                                          zip(t, z, x)) + "\n")
+    prefix = tmp_path / "foot"
+    assert main(["dynamics", str(CASSIE_LIKE), "--trajectory", str(csv), "--samples", "11",
+                 "--json", "--out", str(prefix)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["motion"].startswith("output x, z: cubic spline (clamped) through 11")
+    assert data["actuators"]["motor_hip1"]["peak_speed"] < 1e-9
+    assert data["actuators"]["motor_knee"]["peak_speed"] > 0.05
+    arrays = np.load(prefix.with_name("foot.npz"))
+    from pkm_pin import load_mechanism
+    from pkm_pin.solve import pose_coordinates
+
+    link = load_mechanism(CASSIE_LIKE)
+    tree = link.model.tree
+    data_ = tree.createData()
+    for q, zk in zip(arrays["q"], z):
+        pin.framesForwardKinematics(tree, data_, q)
+        assert abs(pose_coordinates(data_.oMf[tree.getFrameId(link.model.output)])[2] - zk) \
+            < 1e-10
 
 
 def test_dynamics_refuses_a_file_without_masses(capsys):

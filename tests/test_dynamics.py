@@ -605,3 +605,121 @@ def test_consistency_check_is_normwise_for_a_joint_no_closure_row_sees():
     with pytest.raises(InconsistentMotion, match="not consistent with the closures"):
         _check_rows(model, "velocity", np.full(model.n_rows, 1e-3), np.array(1.0), 1e-6,
                     np.ones(model.n_rows), "v")
+
+
+# ------------------------------------------------- the batched, compiled path
+@pytest.mark.parametrize("name", sorted(MODELS) + ["five_bar_revolute"] + list(OTHER_TOML)
+                         + list(CORPUS))
+def test_batch_equals_the_python_path_and_round_trips(name):
+    """8 samples (random consistent velocities, random efforts → constrained
+    accelerations, random payload wrenches): inverse_dynamics_batch (the compiled kernel
+    wherever pkm_pin.tree_kernel represents the tree) gives the efforts back (1e-8) and
+    equals the Python path sample by sample: efforts, closure forces, payload parts,
+    tree efforts to 1e-9 of their size, J̇ v to 1e-8 of |J a| (it is J a + J̇ v − J a);
+    redundant rows equal."""
+    from pkm_pin import tree_kernel
+
+    cm, q = model(name)
+    rng = np.random.default_rng(5)
+    Q, V, A, W, taus = [], [], [], [], []
+    for _ in range(8):
+        v = random_velocity(cm, q, rng)
+        tau_a = random_efforts(cm, q, rng)
+        a = (kkt_acceleration(cm, q, v, full_efforts(cm, tau_a)) if has_mimic(cm) or
+             any(c.kind == "revolute" for c in cm.closures) else
+             pinocchio_acceleration(cm, q, v, full_efforts(cm, tau_a))[0])
+        Q.append(q)
+        V.append(v)
+        A.append(a)
+        W.append(rng.normal(size=6))
+        taus.append(tau_a)
+    W = np.array(W)
+    b = dyn.inverse_dynamics_batch(cm, Q, V, A, gravity=G, wrenches=W)
+    assert b.compiled.all() == (tree_kernel.tree_kernel(cm) is not None), name
+    g = np.array(G)
+    for i in range(8):
+        r = dyn._python_path(cm, q, V[i], A[i], g, W[i], dyn.MOTION_CONSISTENCY_RTOL)
+        bi = b[i]
+        assert np.linalg.norm(bi.efforts - r.payload_efforts - taus[i]) <= \
+            1e-8 * np.linalg.norm(taus[i]), name
+        Ja = dyn.closure_acceleration(cm, q, V[i], A[i])[0] @ A[i]  # J̇ v = rdd − J a
+        for key in ("efforts", "closure_forces", "payload_efforts", "payload_closure_forces",
+                    "drift", "tree_efforts"):
+            x, y = getattr(bi, key), getattr(r, key)
+            size = max(np.abs(y).max(initial=0.0), np.abs(Ja).max(initial=0.0)
+                       if key == "drift" else 0.0, 1e-12)
+            tol = 1e-8 if key == "drift" else 1e-9  # two routes to J a + J̇ v, minus J a
+            assert np.abs(x - y).max(initial=0.0) <= tol * size, (name, key)
+        assert bi.redundant_rows == r.redundant_rows
+        assert bi.condition == pytest.approx(r.condition, rel=1e-6)
+
+
+def test_batch_errors_name_the_sample():
+    """A sample whose acceleration breaks the closures: the batch raises the Python
+    path's InconsistentMotion, prefixed with the sample's index (attribute ``sample``);
+    shapes are checked once (InputError)."""
+    cm, q = model("cassie_knee")
+    rng = np.random.default_rng(2)
+    V, A = zip(*[dyn.motion_from_actuated(cm, q, rng.normal(size=2), rng.normal(size=2))
+                 for _ in range(9)])
+    A = list(A)
+    A[6] = A[6] + 0.5
+    with pytest.raises(InconsistentMotion, match=r"^sample 6: the acceleration") as err:
+        dyn.inverse_dynamics_batch(cm, [q] * 9, V, A, gravity=G)
+    assert err.value.sample == 6 and err.value.kind == "acceleration"
+    with pytest.raises(InputError, match=r"V must have shape \(N, 8\)"):
+        dyn.inverse_dynamics_batch(cm, [q] * 9, np.zeros((9, 7)), A)
+
+
+def test_batch_with_coupling_closures(tmp_path):
+    """The gripper of tests/test_mjcf_equalities.py (two fingers coupled to a tendon's
+    joint: coupling rows): the batch (compiled kernel, which takes a coupling's second
+    derivative as J a) equals the Python path on 8 consistent samples to 1e-9."""
+    from test_mjcf_equalities import GRIPPER, _write
+
+    from pkm_pin import tree_kernel
+
+    link = pkm_pin.load_mechanism(_write(tmp_path, "g.xml", GRIPPER.format(r=0.04)))
+    cm, q = link.model, link.home_assembly.q
+    assert any(c.kind == "coupling" for c in cm.closures)
+    assert tree_kernel.tree_kernel(cm) is not None
+    rng = np.random.default_rng(4)
+    n = len(cm.actuated)
+    V, A = zip(*[dyn.motion_from_actuated(cm, q, rng.normal(size=n), rng.normal(size=n))
+                 for _ in range(8)])
+    A = [dyn.idle_acceleration(cm, q, v, a, gravity=G) for v, a in zip(V, A)]
+    b = dyn.inverse_dynamics_batch(cm, [q] * 8, V, A, gravity=G)
+    assert b.compiled.all()
+    for i in range(8):
+        r = dyn._python_path(cm, q, V[i], A[i], np.array(G), None,
+                             dyn.MOTION_CONSISTENCY_RTOL)
+        assert np.abs(b.efforts[i] - r.efforts).max() <= 1e-9 * np.abs(r.efforts).max()
+        assert np.abs(b.acceleration_residual[i] - r.acceleration_residual).max() <= 1e-12
+
+
+def test_idle_acceleration_mass_matrix_is_right_on_a_reused_data_with_mimic_joints():
+    """The Delta TOML's tree has mimic joints (its parallelograms); Pinocchio 4.1's crba
+    in its LOCAL convention returns a wrong M on a Data reused after other calls there
+    (off by up to 13 of 15 here), WORLD the right one: idle_acceleration, whose work Data
+    is reused across calls, equals the formula with a fresh crba at every configuration."""
+    from pkm_pin.builders.loops import with_random_inertias
+
+    delta = pkm_pin.load_mechanism(ROOT / "models" / "mechanisms" / "delta.toml")
+    model = with_random_inertias(delta.closure_model, seed=3)
+    tree = model.tree
+    assert any(tree.joints[j].shortname() == "JointModelMimic" for j in range(1, tree.njoints))
+    rng = np.random.default_rng(4)
+    N = rng.normal(size=(model.nv, 2))
+    for _ in range(3):
+        q = pin.integrate(tree, pin.neutral(tree), rng.uniform(-0.3, 0.3, model.nv))
+        v, a = rng.uniform(-1, 1, model.nv), rng.uniform(-1, 1, model.nv)
+        got = dyn.idle_acceleration(model, q, v, a, gravity=(0, 0, 0), idle=N)
+        data = tree.createData()
+        data_g = tree.createData()
+        tree_g = tree.copy()
+        tree_g.gravity = pin.Motion.Zero()
+        r = pin.rnea(tree_g, data_g, q, v, a)
+        M = pin.crba(tree, data, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        z = np.linalg.solve(N.T @ M @ N, -(N.T @ r))
+        np.testing.assert_allclose(got, a + N @ z, rtol=1e-9, atol=1e-9)

@@ -33,18 +33,22 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
          "model.pinned", "model.structure", "model.chain_urdf")),
     2: ("kinematics of one configuration: compiled leg kinematics, the Pinocchio pass, "
         "serial chains, the assembly record whose twists that pass verifies, the default "
-        "output chosen from one configuration's motions",
+        "output chosen from one configuration's motions and the independent sub-mechanisms "
+        "split from the tree and its closures",
         ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
-         "output_choice")),
-    3: ("the closure solver, and the Leg whose solve and inverse kinematics call it",
-        ("solve", "leg")),
+         "output_choice", "submechanisms")),
+    3: ("the closure solver, the Leg whose solve and inverse kinematics call it, and why "
+        "a linkage does not assemble (closure_gaps: open loops, joints at a limit)",
+        ("solve", "leg", "closure_gaps")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
-        "closed-loop dynamics",
-        ("engine", "engine.core", "analysis", "transmission", "dynamics")),
+        "closed-loop dynamics, the compiled general elimination of a linkage's analysis",
+        ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics",
+         "general_kernel")),
     5: ("position problems and studies built on the solver and the analysis (trajectory: "
-        "the efforts along a motion, on the closed-loop dynamics)",
+        "the efforts along a motion, on the closed-loop dynamics; simulation: its forward "
+        "dynamics; dynamic_indices: actuator-space and output inertias, gravity maps)",
         ("position", "modes", "sweep", "workspace", "sensitivity", "calibration",
-         "trajectory")),
+         "trajectory", "simulation", "dynamic_indices")),
     6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
         "io reads every file format into one of them",
         ("mechanism", "linkage", "io")),

@@ -299,10 +299,26 @@ BAD_MJCF = [
      "equality/connect[0] 'c' body2", "'ghost' is not a body"),
     (MJCF.format(ref=0, equality='<connect site1="coupler_tip" site2="nosite"/>'),
      "equality/connect[0] site2", "'nosite' is not a site"),
-    (MJCF.format(ref=0, equality='<joint joint1="crank_joint" joint2="rocker_joint"/>'),
-     "equality/joint[0]", "is not a loop closure"),
+    (MJCF.format(ref=0, equality='<joint joint1="crank_joint" joint2="rocker_joint" '
+                 'polycoef="0 1 0.5"/>'),
+     "equality/joint[0]", "by a polynomial of degree 2 (polycoef '0 1 0.5'); pkm_pin reads "
+     "linear couplings only"),
+    (MJCF.format(ref=0, equality='<joint joint1="ghost" joint2="rocker_joint"/>'),
+     "equality/joint[0] joint1", "'ghost' is not a hinge or slide joint"),
+    (MJCF.format(ref=0, equality='<tendon tendon1="t"/>'),
+     "equality/tendon[0]", "couples tendon lengths"),
     (MJCF.format(ref=0, equality=CONNECT).replace('joint="crank_joint"', 'tendon="t"'),
-     "actuator/motor[0] 'm'", "drives no joint"),
+     "actuator/motor[0] 'm' tendon", "'t' is not a tendon of the file"),
+    (MJCF.format(ref=0, equality=CONNECT).replace('joint="crank_joint"', 'site="coupler_tip"'),
+     "actuator/motor[0] 'm'", "drives a site (a force or moment at a point)"),
+    (MJCF.format(ref=0, equality=CONNECT).replace('joint="crank_joint"', 'tendon="sp"')
+     .replace("<actuator>", '<tendon><spatial name="sp"><site site="coupler_tip"/>'
+              '<site site="rocker_tip"/></spatial></tendon><actuator>'),
+     "actuator/motor[0] 'm'", "drives the spatial tendon 'sp'"),
+    (MJCF.format(ref=0, equality=CONNECT).replace('joint="crank_joint"', 'tendon="diff"')
+     .replace("<actuator>", '<tendon><fixed name="diff"><joint joint="crank_joint" coef="1"/>'
+              '<joint joint="rocker_joint" coef="1"/></fixed></tendon><actuator>'),
+     "actuator/motor[0] 'm'", "a differential of several independent joints"),
     (MJCF.format(ref=0, equality=CONNECT).replace('joint="crank_joint"', 'joint="j9"'),
      "actuator/motor[0] 'm'", "joint 'j9' is not a joint"),
     (MJCF.format(ref=0, equality=CONNECT.replace('anchor="0.09 0 0"', 'anchor="0.09 0"')),

@@ -215,3 +215,19 @@ def test_a_free_joint_at_the_root_is_the_base(tmp_path, capsys):
     assert link.analyze(a).dof == ref.analyze(b).dof == 1
     assert main(["analyze", str(path)]) == 0
     assert "note               base has a free joint in the file" in capsys.readouterr().out
+
+
+def test_a_keyframe_of_a_floating_robot_loses_its_free_joints_coordinates(tmp_path):
+    """A <key> written for the floating robot (7 free-joint coordinates first, as
+    Menagerie's Cassie ``home``) loads once the free joint is held: its joint part is
+    kept as Pinocchio's reference configuration of that name, in the file's order."""
+    text = (LOOPS / "four_bar.xml").read_text().replace(
+        '<body name="base">', '<body name="base" pos="0.3 -0.2 1.0"><freejoint/>', 1)
+    key = ('<keyframe><key name="home" qpos="0.3 -0.2 1 1 0 0 0 0.1 0.2 0.3" '
+           'qvel="0 0 0 0 0 0 1 2 3"/></keyframe></mujoco>')
+    path = tmp_path / "floating_four_bar.xml"
+    path.write_text(text.replace("</mujoco>", key, 1))
+    link = pkm_pin.load_mechanism(path)
+    home = link.model.tree.referenceConfigurations["home"]
+    np.testing.assert_array_equal(home, [0.1, 0.2, 0.3])
+    assert link.model.tree.nq == 3

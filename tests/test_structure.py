@@ -315,3 +315,78 @@ def test_chain_urdf_round_trip_keeps_joints_axes_and_ranges():
     pin.framesForwardKinematics(m, ref, q)
     np.testing.assert_allclose(data.oMf[back.getFrameId("tip")].homogeneous,
                                ref.oMf[m.getFrameId("tip")].homogeneous, atol=1e-12)
+
+
+def test_default_backend_gives_the_machines_indices(stewart):
+    """The Extended URDF read by the default (general) backend: the characteristic
+    length is the legs' (legs_length, without building them), so at the TOML's home the
+    seed 000 indices are the TOML's to 1e-9 — the indices of the machine, not of the
+    tree the file wrote (issue 24's 0.993/0.958, 0.166/0.400 came from two lengths)."""
+    toml, link, q, _ = stewart
+    assert isinstance(link, Linkage)
+    assert link.model.length == pytest.approx(toml.characteristic_length, rel=1e-12)
+    a, b = link.analyze(q), toml.home_analysis
+    assert (a.dof, a.singularity) == (b.dof, b.singularity)
+    for key in ("type_I", "type_II", "condition_A"):
+        assert a.indices[key] == pytest.approx(b.indices[key], rel=1e-9), key
+    for g, l in ((a.velocity_ellipsoid(), b.velocity_ellipsoid()),
+                 (a.force_ellipsoid(), b.force_ellipsoid())):
+        np.testing.assert_allclose(g.semi_axes, l.semi_axes, rtol=1e-9)
+    w = np.array([1.0, -2.0, 30.0, 0.5, 0.2, -0.1])
+    np.testing.assert_allclose(a.actuator_efforts(w), b.actuator_efforts(w), rtol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["loops/delta_loops.urdf", "loops/four_bar.urdf",
+                                  "loops/four_bar.xml", "loops/five_bar.xml"])
+def test_legs_length_is_the_built_legs_length(name):
+    """legs_length reads from the tree the characteristic length of the legs that
+    Mechanism.from_closure_model builds; the general backend analyses with it."""
+    from pkm_pin.model.structure import legs_length
+
+    link = pkm_pin.load_mechanism(MODELS / name, backend="general")
+    legs = pkm_pin.load_mechanism(MODELS / name, backend="legs")
+    structure, _ = detect_platform(link.model)
+    assert legs_length(link.model, structure) == pytest.approx(legs.characteristic_length,
+                                                               rel=1e-12)
+    assert link.model.length == pytest.approx(legs.characteristic_length, rel=1e-12)
+
+
+def test_calibration_through_the_general_backend(stewart):
+    """Errors injected into two legs of the Stewart read from its Extended URDF come back
+    to 1e-9 from exact poses, through Linkage.calibrate (leg by leg); a multi-loop leg
+    refuses calibration with a sentence saying why."""
+    from pkm_pin.sensitivity import perturb
+
+    _, link, _, _ = stewart
+    legs = link.legs_mechanism
+    names = ["leg2/leg2_U1/origin.x", "leg5/leg5_U1/origin.z"]
+    assert set(names) <= set(link.sensitivity().parameters)
+    true = {names[0]: 2e-3, names[1]: -1.5e-3}
+    truth = perturb(legs, true)
+    rng = np.random.default_rng(5)
+    home = legs.home_assembly.q_actuated
+    qs = [home + rng.uniform(-0.02, 0.02, home.size) for _ in range(10)]
+    res = link.calibrate([(q, truth.forward_kinematics(q).pose) for q in qs], names)
+    assert res.converged and res.parameters == names
+    for n in names:
+        assert res.errors[n] == pytest.approx(true[n], abs=1e-9), n
+    assert res.residual_before > 1e-4 and res.residual_after < 1e-10
+    cassie = pkm_pin.load_mechanism(MODELS / "loops/cassie_knee.urdf")
+    with pytest.raises(InputError, match="calibration reads a machine leg by leg"):
+        cassie.calibrate([], names)
+
+
+def test_both_facades_answer_the_same_names(stewart):
+    """The TOML Mechanism, its Extended URDF read as a Linkage (default) and through the
+    legs backend answer the same names with the same values: the closure model, the
+    actuated joints (six, in one order), the output frame, the characteristic length."""
+    toml, link, _, path = stewart
+    legs = pkm_pin.load_mechanism(path, backend="legs")
+    for m in (toml, link, legs):
+        assert isinstance(m.model, ClosureModel)
+        assert m.n_actuated == len(m.actuated) == len(m.actuated_names) == 6
+        assert m.characteristic_length == pytest.approx(toml.characteristic_length, rel=1e-12)
+        assert m.output == m.model.output
+    assert toml.model is toml.closure_model and link.model is link.closure_model
+    assert legs.model is legs.source_model and legs.actuated == tuple(legs.actuated_names)
+    assert [a.split("_")[-1] for a in link.actuated] == ["P"] * 6

@@ -30,6 +30,7 @@ from test_dynamics import G, with_inertias
 import pkm_pin
 from pkm_pin import dynamics as dyn
 from pkm_pin import trajectory as tr
+from pkm_pin.builders import MECHANISMS
 from pkm_pin.errors import InputError
 from pkm_pin.linkage import Linkage
 
@@ -264,3 +265,97 @@ def test_time_is_named_when_the_motion_leaves_the_workspace():
     with pytest.raises(pkm_pin.errors.ForwardKinematicsError,
                        match=r"at t = 0.575 s .* \(actuated 0.611656, 0.611656"):
         tr.study(cm, m, samples=41, q0=q0)
+
+
+# ------------------------------------------------- motions of the output (item 2)
+def _output_case(name: str):
+    """``(closure model, q0, OutputMotion, held coordinates)``: the Gepetto 5-bar by its
+    y, z; the Stewart by z and yaw (x, y, roll, pitch held at home); the 3-RPS by z,
+    roll, pitch (x, y, yaw parasitic, none held)."""
+    t = np.linspace(0.0, 2.0, 21)
+    s = np.sin(np.pi * t)
+    if name == "5bar_linkage":
+        cm, q0 = model(name)
+        c0 = tr._OutputCoordinates(cm).values(q0)
+        return cm, q0, tr.OutputMotion(t, np.c_[c0[1] + 0.005 * s, c0[2] + 0.005 * s],
+                                       ("y", "z")), ()
+    cm, q0 = tr.closure_model_of(MECHANISMS[name]().build())
+    c0 = tr._OutputCoordinates(cm).values(q0)
+    if name == "stewart":
+        return cm, q0, tr.OutputMotion(t, np.c_[0.2 * s + c0[5], c0[2] + 0.05 * s],
+                                       ("yaw", "z")), ("x", "y", "roll", "pitch")
+    return cm, q0, tr.OutputMotion(t, np.c_[c0[2] + 0.05 * s, 0.1 * s, 0.1 * np.cos(np.pi * t)
+                                            - 0.1], ("z", "roll", "pitch")), ()
+
+
+@pytest.mark.parametrize("name", ["5bar_linkage", "stewart", "rps3"])
+def test_output_motion_is_followed_and_v_a_are_the_derivatives_of_q(name):
+    """A motion given by some output coordinates: at each sample the loops close
+    (1e-10), the given coordinates are the spline's (1e-10), the held ones keep their
+    home values (1e-10); v and a equal central differences of q(t) and v(t) (h = 1e-4 s,
+    between knots) to 1e-6 of their size, and J v, J a + J̇ v vanish (1e-8)."""
+    cm, q0, motion, held = _output_case(name)
+    oc = tr._OutputCoordinates(cm)
+    home = oc.values(q0)
+    t = np.linspace(0.0, 2.0, 9)
+    (q, v, a, Qa, Qd, Qdd), _ = tr.motion_states(cm, motion, t, q0)
+    given = [tr.POSE_COORDINATES.index(c) for c in motion.coordinates]
+    kept = [tr.POSE_COORDINATES.index(c) for c in held]
+    act = list(cm.actuated_v)
+    for i in range(len(t)):
+        c = oc.values(q[i])
+        assert np.linalg.norm(cm.closure_residual(q[i])) < 1e-10
+        assert np.allclose(c[given], motion(t[i])[0][0], rtol=0, atol=1e-10)
+        assert np.allclose(c[kept], home[kept], rtol=0, atol=1e-10)
+        assert np.allclose(Qd[i], v[i, act]) and np.allclose(Qdd[i], a[i, act])
+        J, rdd, drift = dyn.closure_acceleration(cm, q[i], v[i], a[i])
+        assert np.linalg.norm(J @ v[i]) <= 1e-8 * np.linalg.norm(J) * np.linalg.norm(v[i])
+        assert np.linalg.norm(rdd) <= 1e-8 * (np.linalg.norm(J) * np.linalg.norm(a[i])
+                                              + np.linalg.norm(drift))
+    h = 1e-4
+    for tc in (0.513, 1.234):
+        (qq, vv, aa, *_), _ = tr.motion_states(cm, motion, [tc - h, tc, tc + h], q0)
+        vd = pin.difference(cm.tree, qq[0], qq[2]) / (2 * h)
+        ad = (vv[2] - vv[0]) / (2 * h)
+        assert np.abs(vd - vv[1]).max() <= 1e-6 * np.abs(vv[1]).max(), (name, tc)
+        assert np.abs(ad - aa[1]).max() <= 1e-6 * np.abs(aa[1]).max(), (name, tc)
+
+
+def test_output_motion_power_balance():
+    """Σ τ q̇_a = d(T + V)/dt along a motion of the Gepetto 5-bar's y, z (its own
+    inertias; central differences h = 1e-4 s) to 1e-6 of Σ |τ q̇_a|."""
+    cm, q0, motion, _ = _output_case("5bar_linkage")
+    h = 1e-4
+    for t in (0.37, 1.41):
+        st = tr.study(cm, motion, times=[t - h, t, t + h], gravity=G, q0=q0)
+        E = [_energy(cm, st.q[k], st.v[k], G) for k in (0, 2)]
+        scale = np.abs(st.efforts[1] * st.speeds[1]).sum()
+        assert abs(st.efforts[1] @ st.speeds[1] - (E[1] - E[0]) / (2 * h)) <= 1e-6 * scale
+
+
+def test_pose_motion_and_coordinate_csv(tmp_path):
+    """Poses as SE3s, as (N, 4, 4) and as (N, 6) give the same OutputMotion; a CSV with
+    the header t,z,yaw reads as an OutputMotion (coordinates in the POSE_COORDINATES
+    order); a header that is neither actuated names nor coordinates names both;
+    dependent coordinates (the 5-bar moves in 2 dimensions of y, z, roll; x is fixed) are an
+    InputError."""
+    t = np.linspace(0, 1, 6)
+    C = np.c_[0.1 * t, 0 * t, 1 + t, 0.1 * t, -0.2 * t, 3.0 + 0.5 * t]  # yaw through π
+    poses = [pin.SE3(pin.rpy.rpyToMatrix(c[3:]), c[:3]) for c in C]
+    a = tr.pose_motion(t, poses, ("z", "yaw"))
+    b = tr.pose_motion(t, np.array([p.homogeneous for p in poses]), ("z", "yaw"))
+    c = tr.pose_motion(t, C, ("yaw", "z"))
+    for m in (a, b, c):
+        assert m.coordinates == ("z", "yaw")
+        assert np.allclose(m(t)[0], C[:, [2, 5]], atol=1e-12)  # unwrapped yaw
+    path = tmp_path / "m.csv"
+    path.write_text("t,yaw,z\n" + "\n".join(f"{x},{y},{z}" for x, z, y in
+                                            zip(t, C[:, 2], C[:, 5])) + "\n")
+    m = tr.read_csv(path, ("a", "b"))
+    assert isinstance(m, tr.OutputMotion) and np.allclose(m(t)[0], C[:, [2, 5]])
+    path.write_text("t,z,q\n0,1,2\n1,2,3\n")
+    with pytest.raises(InputError, match="t,a,b .* or t and some of x,y,z,roll,pitch,yaw"):
+        tr.read_csv(path, ("a", "b"))
+    cm, q0 = model("5bar_linkage")
+    with pytest.raises(InputError, match=r"x, z are not independent .* moves in 2 dimensions"):
+        tr.motion_states(cm, tr.OutputMotion(t, np.c_[t, t], ("x", "z")), t, q0)

@@ -182,7 +182,7 @@ def test_integration_equals_pinocchio(model):
 @pytest.mark.parametrize("name", ["cassie_knee", "delta_loops", "ankle"])
 def test_solve_tree_compiled_equals_the_pinocchio_driver(name):
     """solve_tree from the same open start, with and without actuated targets and with a
-    mask of unknowns: the same iterations and the same solution to round-off."""
+    mask of unknowns: the same iterations and the same solution to round-off (1e-8)."""
     model = load_mechanism(ROOT / "models" / "loops" / f"{name}.urdf").model
     link = Linkage(model)
     home = link.assemble()
@@ -196,7 +196,11 @@ def test_solve_tree_compiled_equals_the_pinocchio_driver(name):
         a = solve.solve_tree(model, q0, compiled=False, **kwargs)
         b = solve.solve_tree(model, q0, compiled=True, **kwargs)
         assert a.converged == b.converged and a.iterations == b.iterations
-        assert np.abs(pin.difference(model.tree, a.q, b.q)).max() <= 1e-10
+        # Round-off differs between the two paths and grows along the iterations by the
+        # conditioning of the steps (1.3e-10 seen on the Cassie knee on one processor,
+        # under 1e-10 on another): 1e-8 rad holds on every processor and is still far
+        # below any difference of branch or of iteration count.
+        assert np.abs(pin.difference(model.tree, a.q, b.q)).max() <= 1e-8
         assert b.residual == pytest.approx(a.residual, abs=1e-12)
         if b.closure_norms is not None:
             assert np.allclose(b.closure_norms, model.closure_norms(model.closure_residual(b.q)),

@@ -137,3 +137,18 @@ def test_chromium_loads_the_scene_tree(page, ankle, tmp_path):
     for name in ("pkm", node_name(ankle.name), "links", "joints", "closures", "output", "idle",
                  "rod_1_tipCfoot_attach_1"):
         assert name in tree, f"{name!r} missing from the browser's scene tree"
+
+
+def test_a_coupling_draws_no_loop(tmp_path):
+    """Menagerie's Robotiq 2F-85: its two <connect> loops are drawn, its <joint>
+    equality (a coupling of two joint coordinates, no loop of bodies) is not."""
+    gripper = load_mechanism(Path(__file__).resolve().parent / "data" / "menagerie"
+                             / "robotiq_2f85" / "2f85.xml")
+    path = tmp_path / "gripper.html"
+    view(gripper, html=path)
+    objects = {c["path"] for c in page_commands(path.read_text(encoding="utf-8"))
+               if c["type"] == "set_object"}
+    root = f"/meshcat/pkm/{node_name(gripper.name)}/closures"
+    drawn = {p.removeprefix(root + "/").split("/")[0] for p in objects if p.startswith(root)}
+    assert drawn == {"connect0", "connect1"}
+    assert [c.kind for c in gripper.model.closures] == ["point", "point", "coupling"]

@@ -29,7 +29,14 @@ Conventions:
     first order);
   - ``"point"`` (3): the position of ``C_b``'s origin in ``C_a``, divided by ``L``;
   - ``"revolute"`` (5): the point rows, then the x and y components (in ``C_a``) of
-    ``C_b``'s z axis: the revolute axis is the z axis of both constraint frames.
+    ``C_b``'s z axis: the revolute axis is the z axis of both constraint frames;
+  - ``"coupling"`` (1): a linear coupling of two joint coordinates (an MJCF ``<joint>``
+    equality): ``(q_a − c₁ q_b − c₀) / u_a``, ``q_a`` the coordinate of ``frame_a``'s
+    parent joint, ``q_b`` that of ``frame_b``'s (0 when ``frame_b`` is on the universe:
+    ``q_a = c₀``), ``(c₀, c₁)`` = :attr:`Closure.coef`, ``u_a`` joint a's velocity unit
+    (``L`` for a prismatic joint, 1 for a revolute): its Jacobian row has ``1 / u_a`` in
+    ``q_a``'s column and ``−c₁ / u_a`` in ``q_b``'s. Both joints move along one
+    coordinate (revolute, prismatic); the placements are not used.
 
 * :meth:`ClosureModel.closure_jacobian` is ``d residual / dv`` (one column per velocity
   coordinate), built from Pinocchio's ``LOCAL`` frame Jacobians of ``frame_a`` and
@@ -62,7 +69,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import screws
-from ..errors import InputError, TreeFrameNotFound, TreeJointNotFound
+from ..errors import InputError, TreeFrameNotFound, TreeJointNotFound, _cut
 from ..tolerances import RANK_RTOL, SPARSE_ZERO_RTOL, ZERO_SCREW_RTOL
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -70,7 +77,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from ..mechanism import Mechanism
 
 #: Rows constrained by each closure kind.
-KINDS = {"weld": 6, "point": 3, "revolute": 5}
+KINDS = {"weld": 6, "point": 3, "revolute": 5, "coupling": 1}
+
+#: The closure kind that couples two joint coordinates (not two frames' placements).
+COUPLING = "coupling"
 
 #: Name of the platform's body frame and free-flyer joint in :func:`from_mechanism`.
 PLATFORM = "platform"
@@ -82,13 +92,18 @@ class Closure:
     """One loop closure between two frames of the tree.
 
     Attributes:
-        kind: ``"weld"`` (6 rows: same placement), ``"point"`` (3 rows: same point) or
-            ``"revolute"`` (5 rows: same point and same z axis).
-        frame_a: Frame of the tree carrying the first constraint frame.
-        frame_b: Frame of the tree carrying the second constraint frame.
-        placement_a: Constraint frame ``C_a`` in ``frame_a``.
-        placement_b: Constraint frame ``C_b`` in ``frame_b``.
+        kind: ``"weld"`` (6 rows: same placement), ``"point"`` (3 rows: same point),
+            ``"revolute"`` (5 rows: same point and same z axis) or ``"coupling"`` (1 row:
+            ``q_a = c₀ + c₁ q_b``, the coordinates of the two frames' parent joints).
+        frame_a: Frame of the tree carrying the first constraint frame (a coupling: a
+            frame of the coupled joint ``a``, e.g. its joint frame).
+        frame_b: Frame of the tree carrying the second constraint frame (a coupling: a
+            frame of joint ``b``; a frame of the universe for ``q_a = c₀``).
+        placement_a: Constraint frame ``C_a`` in ``frame_a`` (not used by a coupling).
+        placement_b: Constraint frame ``C_b`` in ``frame_b`` (not used by a coupling).
         name: Name of the closure (for messages).
+        coef: ``(c₀, c₁)`` of a coupling [c₀ in joint a's unit, rad or m; c₁ in joint a's
+            unit per joint b's]; ignored by the other kinds.
     """
 
     kind: str
@@ -97,11 +112,21 @@ class Closure:
     placement_a: pin.SE3 = field(default_factory=pin.SE3.Identity)
     placement_b: pin.SE3 = field(default_factory=pin.SE3.Identity)
     name: str = ""
+    coef: tuple[float, float] = (0.0, 1.0)
 
     def __post_init__(self) -> None:
         if self.kind not in KINDS:
             raise InputError(f"closure {self.name!r}: unknown kind {self.kind!r}; "
                              f"the kinds are {sorted(KINDS)}")
+        try:
+            coef = tuple(float(c) for c in self.coef)
+        except (TypeError, ValueError) as e:
+            raise InputError(f"closure {self.name!r}: coef must be two numbers (c0, c1), "
+                             f"got {self.coef!r}") from e
+        if len(coef) != 2 or not np.isfinite(coef).all():
+            raise InputError(f"closure {self.name!r}: coef must be two finite numbers "
+                             f"(c0, c1), got {self.coef!r}")
+        object.__setattr__(self, "coef", coef)
         for key in ("frame_a", "frame_b"):
             if not isinstance(getattr(self, key), str):
                 raise InputError(f"closure {self.name!r}: {key} must be a frame name (str)")
@@ -112,8 +137,14 @@ class Closure:
 
     @property
     def dim(self) -> int:
-        """Number of rows the closure constrains (6, 3 or 5)."""
+        """Number of rows the closure constrains (6, 3, 5 or 1)."""
         return KINDS[self.kind]
+
+    @property
+    def joins_frames(self) -> bool:
+        """Whether the closure holds two frames together (a loop of bodies): every kind
+        but a coupling of joint coordinates."""
+        return self.kind != COUPLING
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,6 +177,11 @@ class ClosureModel:
             rather than taken from a reader's fallback (a frame called ``effector``, the
             last body): :func:`pkm_pin.io.load_mechanism` chooses a designer's output
             (:mod:`pkm_pin.output_choice`) where it was not.
+        springs: Joints the file gives a spring and no actuator (an MJCF joint's
+            ``stiffness``: Cassie's shin and heel springs): they stay joints of the
+            analysis (their motions are idle), and the default output is chosen as if
+            they were held (:mod:`pkm_pin.output_choice`), so that it is the body the
+            motors move, not a link above the springs.
     """
 
     tree: pin.Model = field(repr=False)
@@ -159,6 +195,7 @@ class ClosureModel:
     actuator_matches: tuple = ()
     notes: tuple[str, ...] = ()
     output_named: bool = True
+    springs: tuple[str, ...] = ()
     _frame_ids: dict = field(init=False, repr=False)
     _units: np.ndarray = field(init=False, repr=False)
     _plan: _Plan = field(init=False, repr=False)
@@ -187,8 +224,10 @@ class ClosureModel:
                              f"{type(matches).__name__}") from e
         set_(self, "actuator_matches", matches)
         set_(self, "notes", tuple(str(n) for n in self.notes))
+        set_(self, "springs", _springs(tree, self.springs, self.actuated))
         set_(self, "_frame_ids", _frame_ids(tree, closures, self.output, self.name))
         _check_closures_join_two_bodies(tree, closures, self.name)
+        _check_couplings(tree, closures, self.name)
         _check_actuated(tree, self.actuated, self.name)
         set_(self, "length", _length(tree, closures, self.length))
         reference = pin.neutral(tree) if self.reference is None else screws.as_vector(
@@ -321,7 +360,7 @@ class ClosureModel:
         Jacobian, output placement)``, new arrays."""
         pin.computeJointJacobians(self.tree, data, q)
         pin.updateFramePlacements(self.tree, data)
-        return self._plan.evaluate(data, self)
+        return self._plan.evaluate(data, self, q)
 
 
 class _Plan:
@@ -357,6 +396,7 @@ class _Plan:
         self.starts = ends[:-1]
         self.n_rows = int(ends[-1])
         self.rows = {kind: _kind_rows(closures, ends, kind) for kind in KINDS}
+        self.couplings = _coupling_plan(tree, closures, model.velocity_units)
         self.all_points = C > 0 and all(c.kind == "point" for c in closures)
         self.placed = any(not c.placement_a.isIdentity() or not c.placement_b.isIdentity()
                           for c in closures)
@@ -400,13 +440,14 @@ class _Plan:
                                                                     pin.WORLD))
                          for f in self.frames])
 
-    def evaluate(self, data: pin.Data, model: ClosureModel) -> tuple:
-        """``(residual, closure Jacobian, output Jacobian, output placement)`` from a
-        ``data`` after ``computeJointJacobians`` and ``updateFramePlacements``."""
+    def evaluate(self, data: pin.Data, model: ClosureModel, q: np.ndarray) -> tuple:
+        """``(residual, closure Jacobian, output Jacobian, output placement)`` at ``q``
+        from a ``data`` after ``computeJointJacobians`` and ``updateFramePlacements``."""
         oMf = data.oMf
         H = np.array([oMf[f].homogeneous for f in self.frames])
         J = self.world_jacobians(data, model)
         residual, jacobian = self._closure_rows(H[:-1], J)
+        self._coupling_rows(q, residual, jacobian)
         oMo = pin.SE3(H[-1])
         Jo = J[-1]
         if self.point_output:  # the origin's velocity v_O + ω × p
@@ -430,6 +471,9 @@ class _Plan:
         if self.all_points:  # the common case, without index lists
             d = np.einsum("cij,cj->ci", Ra_T, pb - pa)
             return d.reshape(-1) / L, (Ra_T @ V).reshape(-1, self.nv) / L
+        index, rows = self.rows[COUPLING]
+        if index.size:  # filled by _coupling_rows
+            jacobian[rows[:, 0]] = 0.0
         for kind in ("point", "revolute"):
             index, rows = self.rows[kind]
             if index.size:
@@ -453,6 +497,40 @@ class _Plan:
             residual[rows[k]] = np.r_[log[:3], log[3:] / L]
             jacobian[rows[k]] = np.vstack([rates[:3], rates[3:] / L])
         return residual, jacobian
+
+
+    def _coupling_rows(self, q: np.ndarray, residual: np.ndarray, jacobian: np.ndarray
+                       ) -> None:
+        """The coupling rows (module docstring) into ``residual`` and ``jacobian``, in
+        place (their other entries of ``jacobian`` already zero)."""
+        plan = self.couplings
+        if plan is None:
+            return
+        rows, qa, qb, va, vb, c0, c1, inv_u = plan
+        residual[rows] = (q[qa] - c1 * np.where(qb >= 0, q[qb], 0.0) - c0) * inv_u
+        jacobian[rows, va] = inv_u
+        has_b = vb >= 0
+        jacobian[rows[has_b], vb[has_b]] -= c1[has_b] * inv_u[has_b]
+
+
+def _coupling_plan(tree: pin.Model, closures: tuple, units: np.ndarray) -> tuple | None:
+    """Index arrays of the coupling closures: ``(rows, q index of a, of b, v index of a,
+    of b, c0, c1, 1 / u_a)`` (b's indices −1 on the universe), or None without any."""
+    ends = np.cumsum([0] + [c.dim for c in closures])
+    picked = [(ends[i], c) for i, c in enumerate(closures) if c.kind == COUPLING]
+    if not picked:
+        return None
+    cols: list = [[] for _ in range(8)]
+    for row, c in picked:
+        ja, jb = (tree.frames[tree.getFrameId(f)].parentJoint for f in (c.frame_a, c.frame_b))
+        a = tree.joints[ja]
+        b = tree.joints[jb] if jb > 0 else None
+        for k, value in enumerate((row, a.idx_q, -1 if b is None else b.idx_q, a.idx_v,
+                                   -1 if b is None else b.idx_v, c.coef[0], c.coef[1],
+                                   1.0 / units[a.idx_v])):
+            cols[k].append(value)
+    return tuple(np.array(x, dtype=int) for x in cols[:5]) + tuple(
+        np.array(x, dtype=float) for x in cols[5:])
 
 
 #: Pinocchio's default "no limit" (the largest float) and anything beyond it.
@@ -767,6 +845,27 @@ def _check_closures_join_two_bodies(tree: pin.Model, closures: tuple, name: str)
                              "frames of two different bodies")
 
 
+def _check_couplings(tree: pin.Model, closures: tuple, name: str) -> None:
+    """Raise :class:`InputError` for a coupling whose joint ``a`` is the universe or a
+    joint of more than one coordinate (or of one coordinate stored as two, an unbounded
+    revolute), or whose joint ``b`` is such a joint."""
+    for c in closures:
+        if c.kind != COUPLING:
+            continue
+        for key, frame in (("frame_a", c.frame_a), ("frame_b", c.frame_b)):
+            j = tree.frames[tree.getFrameId(frame)].parentJoint
+            if j == 0 and key == "frame_b":
+                continue
+            joint = tree.joints[j]
+            if j == 0 or joint.nq != 1 or joint.nv != 1:
+                what = "the base" if j == 0 else (
+                    f"joint {tree.names[j]!r} ({joint.shortname().removeprefix('JointModel')}"
+                    f", {joint.nq} coordinates)")
+                raise InputError(f"coupling {c.name!r} of {name or 'the tree'}: {key} "
+                                 f"{frame!r} is on {what}; a coupling relates two joints "
+                                 "of one coordinate each (revolute or prismatic)")
+
+
 def duplicate_closures(closures) -> list[tuple[str, str]]:
     """Pairs ``(closure, earlier closure)`` that join the same two frames with the same
     kind and constraint frames (either way round): each one's rows repeat the other's
@@ -774,7 +873,8 @@ def duplicate_closures(closures) -> list[tuple[str, str]]:
     seen, out = {}, []
     for c in closures:
         ends = ((c.frame_a, _key(c.placement_a)), (c.frame_b, _key(c.placement_b)))
-        key = (c.kind, frozenset(ends))
+        key = (c.kind, frozenset(ends)) if c.kind != COUPLING else (
+            c.kind, ends, c.coef)
         if key in seen:
             out.append((c.name, seen[key]))
         else:
@@ -798,14 +898,36 @@ def _check_actuated(tree: pin.Model, actuated: tuple, name: str) -> None:
         raise InputError(f"an actuated joint is listed twice in {actuated}")
 
 
+def _springs(tree: pin.Model, springs, actuated: tuple) -> tuple[str, ...]:
+    """``springs`` checked: names of one-coordinate joints of ``tree`` that no actuator
+    drives."""
+    out = tuple(str(n) for n in springs)
+    for name in out:
+        if not tree.existJointName(name):
+            raise InputError(f"springs: no joint {_cut(name)} in the tree")
+        if tree.joints[tree.getJointId(name)].nv != 1 or name in actuated:
+            raise InputError(f"springs: joint {_cut(name)} must have one coordinate and "
+                             "no actuator")
+    return out
+
+
+def default_length(tree: pin.Model, closures: tuple) -> float:
+    """The default characteristic length [m] of a :class:`ClosureModel`: the offsets
+    between consecutive joints of the tree plus the closures' frame offsets (1.0 when
+    there are none). :class:`pkm_pin.linkage.Linkage` replaces it by the legs' length
+    (:func:`pkm_pin.model.structure.legs_length`) where a platform structure is
+    detected."""
+    L = sum(np.linalg.norm(tree.jointPlacements[j].translation)
+            for j in range(1, tree.njoints) if tree.parents[j] != 0)
+    L += sum(np.linalg.norm(p.translation) for c in closures
+             for p in (c.placement_a, c.placement_b))
+    return float(L) if L > 0 else 1.0
+
+
 def _length(tree: pin.Model, closures: tuple, length) -> float:
     """The characteristic length given, or the default of :class:`ClosureModel`."""
     if length is None:
-        L = sum(np.linalg.norm(tree.jointPlacements[j].translation)
-                for j in range(1, tree.njoints) if tree.parents[j] != 0)
-        L += sum(np.linalg.norm(p.translation) for c in closures
-                 for p in (c.placement_a, c.placement_b))
-        return float(L) if L > 0 else 1.0
+        return default_length(tree, closures)
     if isinstance(length, bool) or not isinstance(length, (int, float)) \
             or not (np.isfinite(length) and length > 0):
         raise InputError(f"length must be a positive number [m], got {length!r}")

@@ -11,19 +11,29 @@ closures, the actuators and the reference configuration from the file itself:
   ``C_a`` is ``body1`` at ``relpose * anchor`` when ``relpose`` (pos, quat w x y z) has a
   non-zero quaternion, else at the relative pose ``body1⁻¹ body2`` of the reference
   configuration times ``anchor``. Site form: the two sites' frames.
-* ``active="false"`` constraints are skipped; ``joint``, ``tendon``, ``flex`` and
-  ``distance`` equalities are not loop closures and are refused with an error.
-* Actuated joints: the ``joint`` (or ``jointinparent``) attribute of every ``<actuator>``
-  child, in file order (MuJoCo's ``ctrl`` order); an actuator on a tendon, site or body is
-  an error.
+* ``<equality><joint>``: a coupling closure (``kind="coupling"``, one row) when linear:
+  MuJoCo's ``q₁ − q₁₀ = c₀ + c₁ (q₂ − q₂₀)`` (``polycoef``, ``q₁₀``, ``q₂₀`` the
+  joints' ``qpos0``) is ``q₁ = (c₀ + q₁₀ − c₁ q₂₀) + c₁ q₂``, the closure's ``frame_a`` /
+  ``frame_b`` the two joints' frames (the universe's without ``joint2``: ``q₁ = c₀ +
+  q₁₀``); a non-zero ``c₂``, ``c₃`` or ``c₄`` is refused in a sentence naming the
+  equality.
+* ``active="false"`` equalities are skipped, each with a note (:attr:`ClosureModel.notes`);
+  ``tendon``, ``flex`` and ``distance`` equalities are refused with an error.
+* Actuated joints, one per ``<actuator>`` child in file order (MuJoCo's ``ctrl``
+  order): its ``joint`` (or ``jointinparent``); or, for ``tendon=`` on a fixed tendon,
+  the joint the tendon's length moves with on the file's linear joint couplings
+  (:func:`_tendon_joint`, with a note). A spatial tendon, a tendon over independent
+  joints, and ``site``/``body``/slider-crank transmissions are refused by name.
 * Reference: Pinocchio's ``referenceConfigurations["qpos0"]`` (the joints' ``ref``), else
-  the neutral configuration.
+  the neutral configuration; joint limits are MuJoCo's ``range`` of ``qpos``
+  (:func:`_limits_in_qpos`).
 * Output frame: ``output=`` if given, else the one the file names in
   ``<custom><text name="pkm_pin:output" data="FRAME"/>``, else a body named
   ``effector``, else the last body.
 * A free joint of a body directly under ``<worldbody>`` (a floating base) is removed:
   that body is the base, the mechanism is analysed relative to it, and the model says so
-  in its ``notes``.
+  in its ``notes``; its coordinates are removed from every ``<key>`` of the file's size
+  (:func:`_drop_from_keyframes`).
 * Frame names are made distinct (MuJoCo names bodies, joints and sites in separate name
   spaces; Pinocchio's frames share one): a body keeps its name, a joint or site frame of
   the same name gets the suffix ``_joint`` / ``_site`` (joint names are unchanged).
@@ -34,7 +44,9 @@ serial (or branching) chain.
 Pinocchio 4.1's parser is worked around where it is wrong: it keeps only the first body
 under ``<worldbody>`` (the others, and sites on the world, are dropped), so the children of
 ``<worldbody>`` are wrapped in one joint-less body (:data:`WORLD_BODY`, a frame fixed to
-the universe) in a temporary copy of the file; it gives every constraint an empty name (the
+the universe) in a temporary copy of the file; it takes no joint ``pos`` from a default
+class, so the copy has it written on the joint (:func:`_inline_default_joint_pos`); it
+gives every constraint an empty name (the
 ``name`` attribute is lost), so the constraints are read here from the XML and only the
 tree is taken from Pinocchio (``buildModelAndConstraintsFromMJCF`` gives the same
 frames and placements; the tests compare them).
@@ -86,8 +98,11 @@ _NOT_EXPANDED = {"attach": "attaches a sub-model", "replicate": "repeats its bod
                  "composite": "generates bodies", "flexcomp": "generates a flex",
                  "model": "declares a sub-model to attach"}
 
-#: Equality elements that are not loop closures.
-_NOT_CLOSURES = ("joint", "tendon", "flex", "flexvert", "distance")
+#: Equality elements that are not loop closures, and why each is refused.
+_NOT_CLOSURES = {"tendon": "couples tendon lengths, not joints nor bodies",
+                 "flex": "holds a deformable flex", "flexvert": "holds a deformable flex",
+                 "flexstrain": "holds a deformable flex",
+                 "distance": "is a geom distance (removed from MuJoCo in 2.2.2)"}
 
 
 def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureModel:
@@ -102,19 +117,26 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
     label = _clip(str(path))
     root, rewritten = _parse(path)
     held = _hold_free_roots(root)
-    tree = _build_tree(path, root, rewritten or bool(held))
+    placed = _inline_default_joint_pos(root)
+    tree = _build_tree(path, root, rewritten or bool(held) or placed)
     renamed = _distinct_frame_names(tree)
     reference = (np.array(tree.referenceConfigurations["qpos0"])
                  if "qpos0" in tree.referenceConfigurations else pin.neutral(tree))
-    closures = _closures(label, root, tree, reference, renamed)
-    actuated, matches = _actuated(label, root, tree)
+    _limits_in_qpos(tree, reference)
+    closures, notes = _closures(label, root, tree, reference, renamed)
+    actuated, matches, drive_notes = _actuated(label, root, tree, closures)
     named = output if output is not None else _named_output(root)
     out = named if named is not None else _output_frame(tree)
     notes = tuple(f"{body} has a free joint in the file: it is held as the base, the "
-                  "mechanism analysed relative to it" for body in held)
+                  "mechanism analysed relative to it" for body in held) + notes + drive_notes
+    springs = _springs(root, tree, actuated)
+    if springs:
+        notes += (f"{', '.join(springs)}: a spring (stiffness) and no actuator in the file: "
+                  "they move with every motor locked (idle motions), and the default output "
+                  "is chosen as if they were held",)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
                         reference=reference, actuator_matches=matches, notes=notes,
-                        output_named=named is not None)
+                        output_named=named is not None, springs=springs)
 
 
 # ------------------------------------------------------------------------------ tree
@@ -329,16 +351,119 @@ def _hold_free_roots(root: ET.Element) -> list[str]:
     directly under ``<worldbody>``, in place: a floating base (a humanoid's pelvis, a
     robot dropped on a floor) is held, and the closed loops are analysed relative to it.
     Returns the names of the bodies so held."""
-    held = []
+    held, removed, slots = [], [], _joint_slots(root)
     for world in root.findall("worldbody"):
         for body in world.findall("body"):
             free = [c for c in body if c.tag == "freejoint"
                     or (c.tag == "joint" and c.get("type") == "free")]
             for joint in free:
                 body.remove(joint)
+                removed.append(joint)
             if free:
                 held.append(body.get("name", "the root body"))
+    if held:
+        _drop_from_keyframes(root, slots, removed)
     return held
+
+
+#: Coordinates (qpos, qvel) of MuJoCo's joint types; ``hinge`` is the default type.
+_JOINT_SIZES = {"free": (7, 6), "ball": (4, 3), "slide": (1, 1), "hinge": (1, 1)}
+
+
+def _joint_slots(root: ET.Element) -> list:
+    """``[(element, nq, nv)]`` for every joint of the tree in MuJoCo's ``qpos`` order:
+    bodies depth first (through ``<frame>``), each body's joints in the file's order
+    before its children's."""
+    slots: list = []
+
+    def walk(el: ET.Element) -> None:
+        for child in el:
+            if child.tag == "freejoint":
+                slots.append((child, 7, 6))
+            elif child.tag == "joint":
+                slots.append((child, *_JOINT_SIZES.get(child.get("type", "hinge"), (1, 1))))
+        for child in el:
+            if child.tag in ("body", "frame"):
+                walk(child)
+
+    for world in root.findall("worldbody"):
+        walk(world)
+    return slots
+
+
+def _drop_from_keyframes(root: ET.Element, slots: list, removed: list) -> None:
+    """Remove the ``removed`` (held) free joints' entries from every ``<key>``'s ``qpos``
+    and ``qvel`` (a keyframe of the floating robot, e.g. Menagerie Cassie's ``home``; Pinocchio
+    refuses one whose size is not the model's), in place. ``slots``: :func:`_joint_slots`
+    before the free joints were removed. A key whose size is not the file's is left to
+    Pinocchio's own error."""
+    for attr, size in (("qpos", 1), ("qvel", 2)):
+        total = sum(s[size] for s in slots)
+        keep, start = [], 0
+        for el, *n in slots:  # n: (nq, nv)
+            if not any(el is r for r in removed):
+                keep.extend(range(start, start + n[size - 1]))
+            start += n[size - 1]
+        for keys in root.findall("keyframe"):
+            for key in keys.findall("key"):
+                values = (key.get(attr) or "").split()
+                if len(values) == total:
+                    key.set(attr, " ".join(values[i] for i in keep))
+
+
+def _inline_default_joint_pos(root: ET.Element, attribute: str = "pos") -> bool:
+    """Write on every ``<joint>`` without ``attribute`` (``pos``) the value its default
+    class gives, in place (MuJoCo's rules: the joint's ``class``, else the nearest
+    ``childclass`` of its bodies, else ``main``; a nested ``<default>`` inherits its
+    parent's). Pinocchio 4.1 takes a joint's type, axis, range and ref from its class but
+    not its position (Menagerie's Robotiq 2F-85 puts its fingers' follower joints there:
+    without it the joint axis passes through the loop's pin). Returns whether a joint
+    was changed."""
+    defaults: dict = {}
+
+    def walk(el: ET.Element, inherited: dict) -> None:
+        own = dict(inherited)
+        joint = el.find("joint")
+        if joint is not None and joint.get(attribute) is not None:
+            own[attribute] = joint.get(attribute)
+        defaults[el.get("class", "main")] = own
+        for child in el.findall("default"):
+            walk(child, own)
+
+    for top in root.findall("default"):
+        walk(top, {})
+    if not any(attribute in d for d in defaults.values()):
+        return False
+    changed = False
+    stack = [(body, "main") for body in root.findall("worldbody")]
+    while stack:
+        el, cls = stack.pop()
+        cls = el.get("childclass", cls)
+        for child in el:
+            if child.tag == "joint" and child.get(attribute) is None:
+                value = defaults.get(child.get("class", cls), {}).get(attribute)
+                if value is not None:
+                    child.set(attribute, value)
+                    changed = True
+            elif child.tag in ("body", "frame"):
+                stack.append((child, cls))
+    return changed
+
+
+def _springs(root: ET.Element, tree: pin.Model, actuated: tuple) -> tuple[str, ...]:
+    """The joints the file gives a spring (``stiffness`` > 0, its own or its class's)
+    and no actuator, in tree order (:attr:`ClosureModel.springs`)."""
+    _inline_default_joint_pos(root, "stiffness")
+    stiff = set()
+    for joint in root.iter("joint"):
+        try:
+            k = float(joint.get("stiffness", "0"))
+        except ValueError:
+            continue
+        if k > 0 and joint.get("name") and joint.get("name") not in actuated:
+            stiff.add(joint.get("name"))
+    return tuple(tree.names[j] for j in range(1, tree.njoints)
+                 if tree.names[j] in stiff and tree.joints[j].nv == 1)
 
 
 def _build_tree(path: Path, root: ET.Element, rewritten: bool = False) -> pin.Model:
@@ -397,6 +522,23 @@ def _distinct_frame_names(tree: pin.Model) -> dict:
     return renamed
 
 
+def _limits_in_qpos(tree: pin.Model, qpos0: np.ndarray) -> None:
+    """Shift the finite position limits of every one-coordinate joint by its ``qpos0``
+    (its ``ref``), in place. MuJoCo's ``range`` bounds ``qpos``; Pinocchio 4.1 places
+    the body so that its ``q`` is ``qpos`` (the body at its ``pos`` when ``q = ref``) but
+    stores ``range − ref`` as the limits."""
+    lower, upper = tree.lowerPositionLimit.copy(), tree.upperPositionLimit.copy()
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        i = joint.idx_q
+        if joint.nq != 1 or joint.nv != 1 or qpos0[i] == 0.0:
+            continue
+        for limits in (lower, upper):
+            if abs(limits[i]) < 1e300:  # Pinocchio's "no limit" is the largest float
+                limits[i] += qpos0[i]
+    tree.lowerPositionLimit, tree.upperPositionLimit = lower, upper
+
+
 def _pinocchio_model(filename: str, label: str) -> pin.Model:
     with _captured_stderr():
         try:
@@ -407,26 +549,91 @@ def _pinocchio_model(filename: str, label: str) -> pin.Model:
 
 # -------------------------------------------------------------------------- closures
 def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray,
-              renamed: dict) -> tuple:
-    """One :class:`Closure` per active ``connect`` / ``weld`` of ``<equality>``."""
+              renamed: dict) -> tuple[tuple, tuple[str, ...]]:
+    """One :class:`Closure` per active ``connect`` / ``weld`` / ``joint`` of
+    ``<equality>``, and a note per inactive one (``active="false"``: skipped)."""
     data = tree.createData()
     pin.framesForwardKinematics(tree, data, q)
-    out, counts = [], {}
+    out, notes, counts = [], [], {}
     for equality in root.findall("equality"):
         for el in equality:
             i = counts[el.tag] = counts.get(el.tag, -1) + 1
             where = f"equality/{el.tag}[{i}]" + (f" {_cut(el.get('name'))}" if el.get("name")
                                                  else "")
             if el.tag in _NOT_CLOSURES:
-                raise ClosureFileError(label, where, "is not a loop closure; pkm_pin reads "
-                                       "<connect> and <weld> equalities only: remove it")
-            if el.tag not in ("connect", "weld"):
+                raise ClosureFileError(label, where, f"{_NOT_CLOSURES[el.tag]}; pkm_pin reads "
+                                       "<connect>, <weld> and linear <joint> equalities: "
+                                       "remove it")
+            if el.tag not in ("connect", "weld", "joint"):
                 raise ClosureFileError(label, where, "unknown equality element")
             if el.get("active", "true") == "false":
+                notes.append(f"{where[len('equality/'):]} is inactive in the file "
+                             "(active=\"false\"): ignored")
                 continue
             name = el.get("name") or f"{el.tag}{i}"
-            out.append(_closure(label, where, el, name, tree, data, renamed))
-    return tuple(out)
+            if el.tag == "joint":
+                out.append(_coupling(label, where, el, name, tree, q))
+            else:
+                out.append(_closure(label, where, el, name, tree, data, renamed))
+    return tuple(out), tuple(notes)
+
+
+#: MuJoCo's default ``polycoef`` of a ``<joint>`` equality (``q1 = q2``).
+_POLYCOEF = (0.0, 1.0, 0.0, 0.0, 0.0)
+
+
+def _coupling(label: str, where: str, el: ET.Element, name: str, tree: pin.Model,
+              q: np.ndarray) -> Closure:
+    """The coupling closure of one ``<joint>`` equality. MuJoCo's meaning: ``y − y₀ =
+    c₀ + c₁ (x − x₀) + … + c₄ (x − x₀)⁴``, ``y`` joint1, ``x`` joint2, ``y₀``, ``x₀``
+    their ``qpos0`` (without joint2, ``y − y₀ = c₀``); linear (``c₂ = c₃ = c₄ = 0``),
+    it is ``y = (c₀ + y₀ − c₁ x₀) + c₁ x``."""
+    text = el.get("polycoef")
+    try:
+        given = [float(t) for t in text.split()] if text is not None else []
+    except ValueError as e:
+        raise ClosureFileError(label, f"{where} polycoef", f"must be numbers, got "
+                               f"{_cut(text)}") from e
+    if len(given) > 5 or not np.all(np.abs(given) <= MAX_COORDINATE):
+        raise ClosureFileError(label, f"{where} polycoef", f"must be at most 5 finite "
+                               f"numbers, got {_cut(text)}")
+    coef = np.array(given + list(_POLYCOEF[len(given):]))
+    j1 = _coupled_joint(label, f"{where} joint1", el.get("joint1"), tree)
+    j2 = _coupled_joint(label, f"{where} joint2", el.get("joint2"), tree) \
+        if el.get("joint2") is not None else 0
+    if j2 and np.any(coef[2:] != 0):
+        degree = int(np.flatnonzero(coef)[-1])
+        raise ClosureFileError(label, where, f"couples {_cut(tree.names[j1])} to "
+                               f"{_cut(tree.names[j2])} by a polynomial of degree {degree} "
+                               f"(polycoef {_cut(text)}); pkm_pin reads linear couplings "
+                               "only (c2 = c3 = c4 = 0): a gear ratio, not a cam")
+    y0 = q[tree.joints[j1].idx_q]
+    c1 = float(coef[1]) if j2 else 0.0
+    x0 = q[tree.joints[j2].idx_q] if j2 else 0.0
+    return Closure("coupling", _joint_frame(tree, j1), _joint_frame(tree, j2),
+                   name=name, coef=(float(coef[0] + y0 - c1 * x0), c1))
+
+
+def _coupled_joint(label: str, where: str, joint: str | None, tree: pin.Model) -> int:
+    """The tree's joint ``joint`` of a ``<joint>`` equality: one coordinate (hinge or
+    slide)."""
+    if joint is None:
+        raise ClosureFileError(label, where, "is missing")
+    single = [tree.names[j] for j in range(1, tree.njoints)
+              if tree.joints[j].nq == 1 and tree.joints[j].nv == 1]
+    if joint not in single:
+        raise ClosureFileError(label, where, f"{_cut(joint)} is not a hinge or slide joint "
+                               "of Pinocchio's model (a body with several joints is one "
+                               f"composite joint); such joints: {_listing(single)}")
+    return tree.getJointId(joint)
+
+
+def _joint_frame(tree: pin.Model, j: int) -> str:
+    """The name of joint ``j``'s frame (renamed or not; the universe's for 0)."""
+    if j == 0:
+        return tree.frames[0].name
+    return next(f.name for f in tree.frames
+                if f.parentJoint == j and f.type == pin.FrameType.JOINT)
 
 
 def _closure(label: str, where: str, el: ET.Element, name: str, tree: pin.Model,
@@ -488,19 +695,35 @@ def _floats(label: str, where: str, el: ET.Element, key: str, n: int,
 
 
 # ------------------------------------------------------------------ motors and output
-def _actuated(label: str, root: ET.Element, tree: pin.Model) -> tuple[tuple[str, ...], tuple]:
-    """The joints of the ``<actuator>`` elements, in file order, and each actuator's
-    (name, or its element, and joint)."""
+#: Actuator transmissions other than joints and tendons, refused by name.
+_TRANSMISSIONS = {"site": "a site (a force or moment at a point)",
+                  "body": "a body (adhesion)",
+                  "cranksite": "a slider-crank", "slidersite": "a slider-crank",
+                  "refsite": "a site"}
+
+
+def _actuated(label: str, root: ET.Element, tree: pin.Model, closures: tuple
+              ) -> tuple[tuple[str, ...], tuple, tuple[str, ...]]:
+    """The joints of the ``<actuator>`` elements, in file order, each actuator's (name,
+    or its element, and joint), and notes on actuators through tendons. A ``joint=``
+    (or ``jointinparent=``) actuator drives that joint; a ``tendon=`` actuator on a
+    fixed tendon drives the joint its length moves with (:func:`_tendon_joint`)."""
     movable = [tree.names[j] for j in range(1, tree.njoints) if tree.joints[j].nv > 0]
-    out, matches = [], []
+    tendons = _tendons(root)
+    out, matches, notes = [], [], []
     for actuators in root.findall("actuator"):
         for i, el in enumerate(actuators):
             where = f"actuator/{el.tag}[{i}]" + (f" {_cut(el.get('name'))}" if el.get("name")
                                                  else "")
             joint = el.get("joint", el.get("jointinparent"))
+            if joint is None and el.get("tendon") is not None:
+                joint, note = _tendon_joint(label, where, el.get("tendon"), tendons, tree,
+                                            closures)
+                notes.append(note)
             if joint is None:
-                raise ClosureFileError(label, where, "drives no joint (a tendon, site or body "
-                                       "actuator); pkm_pin needs joint actuators")
+                how = next((_TRANSMISSIONS[k] for k in _TRANSMISSIONS if el.get(k)), None)
+                raise ClosureFileError(label, where, f"drives {how or 'no joint'}; pkm_pin "
+                                       "reads actuators on joints and on fixed tendons")
             if joint not in movable:
                 raise ClosureFileError(label, where, f"joint {_cut(joint)} is not a joint of "
                                        f"Pinocchio's model (a body with several joints is "
@@ -508,7 +731,99 @@ def _actuated(label: str, root: ET.Element, tree: pin.Model) -> tuple[tuple[str,
             matches.append((el.get("name") or f"actuator/{el.tag}[{i}]", (joint,)))
             if joint not in out:
                 out.append(joint)
-    return tuple(out), tuple(matches)
+    return tuple(out), tuple(matches), tuple(notes)
+
+
+def _tendons(root: ET.Element) -> dict:
+    """``{name: ("fixed", ((joint, coef), ...)) or ("spatial", ())}`` of ``<tendon>``."""
+    out: dict = {}
+    for section in root.findall("tendon"):
+        for el in section:
+            if el.get("name") is None:
+                continue
+            joints = tuple((j.get("joint"), j.get("coef", "1")) for j in el.findall("joint"))
+            out[el.get("name")] = (el.tag, joints if el.tag == "fixed" else ())
+    return out
+
+
+def _tendon_joint(label: str, where: str, tendon: str, tendons: dict, tree: pin.Model,
+                  closures: tuple) -> tuple[str, str]:
+    """The joint an actuator on the fixed tendon ``tendon`` drives, and a note saying so.
+
+    The tendon's length is ``Σ cᵢ qᵢ``. One joint: that joint (the actuated coordinate
+    is the joint's; the tendon's length is ``c q``). Several: where the file's linear
+    joint couplings make every one of them move with one of them, ``q``, (``q̇ᵢ = rᵢ
+    q̇``), the length moves as ``(Σ cᵢ rᵢ) q̇`` and that joint, the first in the tendon
+    that works, is the actuated one; otherwise (independent joints: a differential) it is
+    refused, since pkm_pin's actuated coordinates are joints, one velocity each.
+    """
+    kind, joints = tendons.get(tendon, (None, ()))
+    if kind is None:
+        raise ClosureFileError(label, f"{where} tendon", f"{_cut(tendon)} is not a tendon "
+                               f"of the file; its tendons: {_listing(sorted(tendons))}")
+    if kind != "fixed":
+        raise ClosureFileError(label, where, f"drives the {kind} tendon {_cut(tendon)} (a "
+                               "cable routed through sites, its length a function of the "
+                               "bodies' poses); pkm_pin reads actuators on joints and on "
+                               "fixed tendons")
+    try:
+        terms = [(j, float(c)) for j, c in joints]
+    except ValueError as e:
+        raise ClosureFileError(label, f"tendon {_cut(tendon)}", "a coef is not a "
+                               "number") from e
+    terms = [(j, c) for j, c in terms if c != 0.0]
+    if not terms or any(j is None for j, _ in terms):
+        raise ClosureFileError(label, f"tendon {_cut(tendon)}", "has no joint with a "
+                               "non-zero coef (or a <joint> without joint=)")
+    length = " ".join(f"{'−' if c < 0 else '+'} {abs(c):g}·{j}" for j, c in terms
+                      ).removeprefix("+ ")
+    for joint, _ in terms:
+        rates = {joint: 1.0} if len(terms) == 1 else _coupled_rates(tree, closures, joint)
+        if all(j in rates for j, _ in terms):
+            k = sum(c * rates[j] for j, c in terms)
+            if abs(k) <= 1e-12 * max(abs(c) for _, c in terms):
+                raise ClosureFileError(label, where, f"drives fixed tendon {_cut(tendon)} "
+                                       f"whose length {_cut(length)[1:-1]} does not change "
+                                       "on the file's joint couplings: it moves nothing; "
+                                       "check the coefs' signs")
+            moves = "" if len(terms) == 1 else (
+                f"; on the joint couplings it moves as {k:g}·{joint}")
+            return joint, (f"{where[len('actuator/'):]} drives fixed tendon {tendon} "
+                           f"(length {length}{moves}): {joint} is its actuated joint")
+    raise ClosureFileError(label, where, f"drives fixed tendon {_cut(tendon)} (length "
+                           f"{_cut(length)[1:-1]}) over joints that no linear <joint> "
+                           "equality ties to one of them, a differential of several "
+                           "independent joints; pkm_pin's actuated coordinates are joints "
+                           "(one velocity each): actuate one joint, or couple them with "
+                           "<joint> equalities")
+
+
+def _coupled_rates(tree: pin.Model, closures: tuple, joint: str) -> dict:
+    """``{joint name: rᵢ}``: the joints the coupling closures tie to ``joint`` (itself
+    included, r = 1), with their rates per unit rate of ``joint`` (a graph walk over
+    the couplings, each ``q_a = c₀ + c₁ q_b`` both ways, ``c₁ ≠ 0`` to go from a to b)."""
+    if not tree.existJointName(joint):
+        return {}
+    edges: dict = {}
+    for c in closures:
+        if c.kind != "coupling":
+            continue
+        a, b = (tree.names[tree.frames[tree.getFrameId(f)].parentJoint]
+                for f in (c.frame_a, c.frame_b))
+        if b == tree.names[0]:
+            edges.setdefault(a, []).append((None, 0.0))
+            continue
+        edges.setdefault(b, []).append((a, c.coef[1]))  # q̇_a = c₁ q̇_b
+        if c.coef[1] != 0.0:
+            edges.setdefault(a, []).append((b, 1.0 / c.coef[1]))
+    rates, stack = {joint: 1.0}, [joint]
+    while stack:
+        j = stack.pop()
+        for other, r in edges.get(j, ()):
+            if other is not None and other not in rates:
+                rates[other] = rates[j] * r
+                stack.append(other)
+    return rates
 
 
 #: The ``<custom><text name=...>`` whose ``data`` names the output frame of an MJCF file.

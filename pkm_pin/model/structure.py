@@ -21,8 +21,9 @@ The rule (:func:`detect_platform`):
 * legs share no joint, and every movable joint of the tree is on a leg (or is the
   platform's free flyer): a joint on no leg, a closure between two legs or from the
   platform to itself (refused by the closure model), a joint of several coordinates on
-  a leg (a ball joint), or
-  mimicking joints leave the model to the general elimination, with the reason.
+  a leg (a ball joint), a coupling of two joints' coordinates (an MJCF ``<joint>``
+  equality: no leg holds it), or mimicking joints leave the model to the general
+  elimination, with the reason.
 
 The structure only names joints and frames: the legs' Pinocchio models are built from it
 by :meth:`pkm_pin.Mechanism.from_closure_model`.
@@ -33,11 +34,12 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 
+import numpy as np
 import pinocchio as pin
 
-from .closure_model import Closure, ClosureModel
+from .closure_model import COUPLING, Closure, ClosureModel
 
-__all__ = ["PlatformLeg", "PlatformStructure", "detect_platform"]
+__all__ = ["PlatformLeg", "PlatformStructure", "detect_platform", "legs_length"]
 
 
 @dataclass(frozen=True)
@@ -113,6 +115,10 @@ def detect_platform(model: ClosureModel) -> tuple[PlatformStructure | None, str]
                                 model.output, pin.SE3.Identity()))
         used |= set(chain)
     for closure in model.closures:
+        if closure.kind == COUPLING:
+            return None, (f"closure {closure.name!r} couples the coordinates of two joints "
+                          f"({closure.frame_a!r}, {closure.frame_b!r}; a joint equality), "
+                          "which no leg of a base–legs–platform machine holds")
         leg, reason = _closure_leg(tree, closure, platform, model.output)
         if reason:
             return None, reason
@@ -190,3 +196,32 @@ def _leg_name(tree: pin.Model, chain: tuple[int, ...], default: str) -> str:
     names = [tree.names[j] for j in chain]
     prefix = os.path.commonprefix(names).rstrip("_-/ .") if len(names) > 1 else ""
     return prefix if len(prefix) >= 2 else default
+
+
+def legs_length(model: ClosureModel, structure: PlatformStructure) -> float:
+    """The characteristic length [m] of the machine's legs: the mean over the legs of
+    :attr:`pkm_pin.leg.Leg.characteristic_length` of the legs that
+    :meth:`pkm_pin.Mechanism.from_closure_model` builds (the offsets between consecutive
+    joints from the second on, the offset of the closure's constraint frame from the
+    leg's last joint, half the range of each prismatic joint with finite limits; legs
+    with none are left out), read from the tree without building them. The same
+    machine written as TOML legs or as any tree plus closures gets the same length,
+    hence the same homogenised indices."""
+    tree = model.tree
+    lengths = []
+    for leg in structure.legs:
+        L = sum(float(np.linalg.norm(tree.jointPlacements[j].translation))
+                for j in leg.joints[1:])
+        if leg.kind != "tree":
+            frame = tree.frames[tree.getFrameId(leg.frame)]
+            L += float(np.linalg.norm((frame.placement * leg.placement).translation))
+        for j in leg.joints:
+            joint = tree.joints[j]
+            if joint.nq == joint.nv == 1 and "P" in joint.shortname():  # prismatic
+                lo = tree.lowerPositionLimit[joint.idx_q]
+                up = tree.upperPositionLimit[joint.idx_q]
+                if np.isfinite(lo) and np.isfinite(up):
+                    L += 0.5 * (abs(lo) + abs(up))
+        if L > 0:
+            lengths.append(L)
+    return float(np.mean(lengths)) if lengths else 1.0
