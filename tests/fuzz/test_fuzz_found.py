@@ -3,6 +3,7 @@ the exact input; each states what the CLI must now do."""
 
 from __future__ import annotations
 
+import json
 import shutil
 from pathlib import Path
 
@@ -138,3 +139,20 @@ def test_huge_base_position_is_refused_not_two_lines(tmp_path, capsys):
     assert main(["analyze", str(_found_toml(tmp_path, "toml_base_xyz_1e154.toml")), "--json"]) \
         == 2
     assert "(legs[0]).base.xyz: has 1.34078e+154, beyond ±1e+06" in one_error_line(capsys)
+
+
+def test_mjcf_with_one_joint_left_analyses(tmp_path, capsys):
+    """models/loops/four_bar.xml with the crank's and the rocker's joints and the
+    actuator dropped (found by the fuzz suite): a tree of one 1-DOF joint, whose
+    Jacobian Pinocchio's binding returns as a (6,) vector, raised IndexError in
+    velocity_units. Now it analyses: exit 0 and strict, finite JSON."""
+    path = tmp_path / "model.xml"
+    path.write_bytes((FOUND / "mjcf_one_joint_tree.xml").read_bytes())
+    assert main(["analyze", str(path), "--json"]) == 0
+    captured = capsys.readouterr()
+
+    def refuse(name):
+        raise ValueError(name)
+
+    data = json.loads(captured.out, parse_constant=refuse)
+    assert isinstance(data, dict) and data and not captured.err
