@@ -51,7 +51,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError, PkmError
+from .errors import InputError, PkmError, _clip
 from .solve import POSE_COORDINATES
 from .tolerances import CROSSCHECK_TOL
 
@@ -1369,6 +1369,17 @@ def resume_command(argv, error) -> str:
     return shlex.join(["pkm-pin", *out, "--resume", prefix or "PREFIX"])
 
 
+def _error_line(error: PkmError, args) -> str:
+    """The message of ``error`` on one line, prefixed with the mechanism file when it
+    does not name it (an analysis error such as "loop ... does not close" comes from a
+    file the user should see named, most of all when many files are analysed)."""
+    message = str(error)
+    spec = getattr(args, "mechanism", None)
+    if isinstance(spec, str) and _is_file(Path(spec)) and Path(spec).name not in message:
+        message = f"{_clip(spec)}: {message}"
+    return " ".join(message.split())  # every line break (also U+2028, U+0085) a space
+
+
 def main(argv=None) -> int:
     """Entry point of ``pkm-pin``; returns the exit status."""
     parser = build_parser()
@@ -1385,8 +1396,7 @@ def main(argv=None) -> int:
         print(interrupt_line(e, resume_command(args.argv, e)), file=sys.stderr)
         return e.exit_status
     except PkmError as e:
-        message = " ".join(str(e).split("\n"))
-        print(f"pkm-pin: error: {message}", file=sys.stderr)
+        print(f"pkm-pin: error: {_error_line(e, args)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("pkm-pin: interrupted", file=sys.stderr)

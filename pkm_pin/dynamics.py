@@ -83,7 +83,13 @@ from numba.extending import register_jitable
 from . import screws
 from .compiling import PLAIN_CALLS, prefer_compiled
 from .engine.linalg import JACOBI_TOL, jacobi, largest
-from .errors import InconsistentMotion, InputError, PkmError, SingularityError
+from .errors import (
+    InconsistentMotion,
+    InertiaError,
+    InputError,
+    PkmError,
+    SingularityError,
+)
 from .model.closure_model import KINDS, ClosureModel, TreeKinematics
 from .tolerances import (
     ASSEMBLY_CHECK_RTOL,
@@ -160,6 +166,7 @@ class _Work:
 
     def __init__(self, model: ClosureModel):
         tree = model.tree
+        self.inertias_checked = False
         self.tree = pin.Model(tree)
         self.data = self.tree.createData()
         self.C = C = len(model.closures)
@@ -211,15 +218,84 @@ class _Work:
 
 _LOCAL = threading.local()
 
+#: Relative tolerance of the inertia checks (of the sum of the principal moments): what
+#: an exporter's rounding of the moments can make of a thin rod or a flat plate.
+INERTIA_RTOL = 1e-6
 
-def _work(model: ClosureModel) -> _Work:
-    """This thread's working state for ``model`` (made once per thread and model)."""
+
+def body_names(model: ClosureModel) -> list[str]:
+    """Name of the body of each joint 1 … njoints − 1 of the tree: its first BODY frame
+    (the URDF link), else the joint's name."""
+    tree = model.tree
+    names = [""] * tree.njoints
+    for f in tree.frames:
+        if f.type == pin.FrameType.BODY and 0 < f.parentJoint and not names[f.parentJoint]:
+            names[f.parentJoint] = f.name
+    return [names[j] or tree.names[j] for j in range(1, tree.njoints)]
+
+
+def check_inertias(model: ClosureModel) -> None:
+    """Every body's mass and inertia are a rigid body's, where the dynamics reads them.
+
+    A body is massless (mass 0 and a zero inertia: a link the file gives no inertial
+    data) or has a finite mass > 0 [kg] and, about its centre of mass, a finite symmetric
+    inertia [kg m²] whose principal moments are ≥ 0 and obey the triangle inequality
+    ``I₁ + I₂ ≥ I₃`` (both to :data:`INERTIA_RTOL` of their sum). Zero moments stay
+    allowed: a point mass and a thin rod are the idealisations of closed-form models.
+
+    Raises:
+        InertiaError: naming the body and the value.
+    """
+    tree = model.tree
+    for j, body in zip(range(1, tree.njoints), body_names(model)):
+        inertia = tree.inertias[j]
+        m, Ic = float(inertia.mass), np.array(inertia.inertia)
+        if m == 0.0 and not Ic.any():
+            continue  # massless
+        if not (np.isfinite(m) and m > 0.0):
+            raise InertiaError(body, "mass", m, "must be finite and > 0" + (
+                " (a body with an inertia needs a mass)" if m == 0.0 else ""), f"{m:g} kg")
+        _check_rotational_inertia(body, Ic)
+
+
+def _matrix(Ic: np.ndarray) -> str:
+    """A 3 × 3 inertia on one line: ``[[…], […], […]] kg m²``."""
+    return str([[float(f"{x:.4g}") for x in row] for row in Ic]) + " kg m²"
+
+
+def _check_rotational_inertia(body: str, Ic: np.ndarray) -> None:
+    """The inertia about the centre of mass: finite, symmetric, moments ≥ 0 with the
+    triangle inequality (:func:`check_inertias`)."""
+    if not np.all(np.isfinite(Ic)):
+        raise InertiaError(body, "inertia", Ic, "must be finite", _matrix(Ic))
+    scale = max(float(np.abs(Ic).max()), np.finfo(float).tiny)
+    if np.abs(Ic - Ic.T).max() > INERTIA_RTOL * scale:
+        raise InertiaError(body, "inertia", Ic, "must be symmetric", _matrix(Ic))
+    moments = np.linalg.eigvalsh(Ic)  # ascending
+    shown = "with principal moments " + ", ".join(f"{x:.4g}" for x in moments) + " kg m²"
+    tol = INERTIA_RTOL * float(np.abs(moments).sum())
+    if moments[0] < -tol:
+        raise InertiaError(body, "inertia", Ic, "must be positive (semi)definite: a "
+                           "moment of inertia cannot be negative", shown)
+    if moments[0] + moments[1] < moments[2] - tol:
+        raise InertiaError(body, "inertia", Ic, "breaks the triangle inequality "
+                           "I1 + I2 >= I3 that every rigid body's principal moments obey",
+                           shown)
+
+
+def _work(model: ClosureModel, masses: bool = False) -> _Work:
+    """This thread's working state for ``model`` (made once per thread and model);
+    ``masses``: the caller reads the masses, checked first (:func:`check_inertias`, once
+    per thread and model)."""
     store = getattr(_LOCAL, "store", None)
     if store is None:
         store = _LOCAL.store = weakref.WeakKeyDictionary()
     work = store.get(model)
     if work is None:
         work = store[model] = _Work(model)
+    if masses and not work.inertias_checked:
+        check_inertias(model)
+        work.inertias_checked = True
     return work
 
 
@@ -463,7 +539,7 @@ def idle_acceleration(model: ClosureModel, q, v, a, *, gravity=GRAVITY,
     on dimensionless rows and coordinates, rank at :data:`RANK_RTOL`)."""
     q, v, a = _check_motion(model, q, v, a)
     g = screws.as_vector3(gravity, "gravity")
-    work = _work(model)
+    work = _work(model, masses=True)
     if idle is None:
         kin = TreeKinematics(model, q, work.data)
         Uv = model.velocity_units
@@ -541,6 +617,7 @@ def inverse_dynamics(model: ClosureModel, q, v, a, *, gravity=GRAVITY, wrench=No
     g = screws.as_vector3(gravity, "gravity")
     w = None if wrench is None else screws.as_vector(wrench, 6, "wrench",
                                                      "axis-first (f; m_O)")
+    _work(model, masses=True)  # the masses checked first (once per model and thread)
     kern = _compiled(model)
     if kern is not None:  # the compiled kernel on one sample; Python where it declines
         out = _run_kernel(model, kern, _work(model), q[None], v[None], a[None], g,
@@ -1134,7 +1211,7 @@ def inverse_dynamics_batch(model: ClosureModel, Q, V, A, *, gravity=GRAVITY, wre
     """
     Q, V, A, W = _batch_arrays(model, Q, V, A, wrenches)
     g = screws.as_vector3(gravity, "gravity")
-    work, N = _work(model), Q.shape[0]
+    work, N = _work(model, masses=True), Q.shape[0]
     na, nr = len(work.act_v), work.n_rows
     kern = _compiled(model, many=N >= PLAIN_CALLS)
     if kern is not None:

@@ -223,3 +223,26 @@ class InconsistentMotion(InputError):
 class SimulationError(PkmError):
     """A forward-dynamics simulation (:mod:`pkm_pin.simulation`) cannot continue: a
     non-finite acceleration, a singular constrained system."""
+
+
+class InertiaError(InputError):
+    """A body's mass or inertia cannot be a rigid body's: read where the dynamics uses
+    them (:mod:`pkm_pin.dynamics`).
+
+    Attributes:
+        body: The body (its URDF link / MJCF body, else its joint).
+        quantity: ``"mass"`` or ``"inertia"``.
+        value: The offending value: the mass [kg], or the inertia about the centre of
+            mass (3 × 3) [kg m²].
+        reason: What is wrong with it.
+    """
+
+    def __init__(self, body: str, quantity: str, value, reason: str, shown: str = ""):
+        self.body = body
+        self.quantity = quantity
+        self.value = value
+        self.reason = reason
+        super().__init__(
+            f"body {_cut(body)}: {quantity} {shown or value} {reason}; fix the body's inertial "
+            "data in the model file (URDF <inertial>, MJCF <inertial> or its geoms), or "
+            "give it mass 0 and no inertia to make it massless")

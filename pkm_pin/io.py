@@ -53,6 +53,7 @@ from .errors import (
 from .leg import Leg
 from .linkage import Linkage
 from .mechanism import Mechanism
+from .urdf import MAX_COORDINATE, LimitExceeded, read_bounded
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -65,6 +66,12 @@ __all__ = ["BACKENDS", "FORMATS", "load_mechanism"]
 # --------------------------------------------------------------------- TOML files
 _LEG_KEYS = {"name", "urdf", "tip", "actuated", "base", "anchor", "home_q"}
 _TOP_KEYS = {"name", "description", "legs", "home", "closure", "length_unit"}
+#: Largest mechanism file read [bytes], refused before it is read whole: the shipped
+#: ones are 1–4 kB (legs, paths, poses); like the closures file's limit
+#: (:data:`pkm_pin.model.extended_urdf.MAX_CLOSURES_BYTES`), it bounds the parse's time
+#: and memory.
+MAX_MECHANISM_BYTES = 1_000_000
+
 #: Values of the top-level ``closure`` key: a rigid platform, or a pin.
 _CLOSURES = ("weld", "spherical", "revolute")
 _POSE_KEYS = {"xyz", "rpy"}
@@ -216,8 +223,10 @@ def _load_toml(path: Path):
     """:func:`load_mechanism` for a TOML file."""
     label = str(path)
     try:
-        with path.open("rb") as f:
-            doc = tomllib.load(f)
+        doc = tomllib.loads(read_bounded(path, MAX_MECHANISM_BYTES, "mechanism file"))
+    except LimitExceeded as e:
+        raise MechanismFileError(label, "", f"{e.reason} (a mechanism file is a few kB)"
+                                 ) from e
     except (tomllib.TOMLDecodeError, RecursionError) as e:  # RecursionError: deep nesting
         raise MechanismFileError(label, "", f"not valid TOML: {e}") from e
     except (OSError, UnicodeDecodeError) as e:
@@ -328,6 +337,10 @@ def _numbers(value, n: int, label: str, where: str) -> np.ndarray:
     a = np.array(value, dtype=float)
     if not np.all(np.isfinite(a)):
         raise MechanismFileError(label, where, f"must be finite, got {value!r}")
+    if np.abs(a).max(initial=0.0) > MAX_COORDINATE:  # 1e154 overflowed the solvers' norms
+        big = a[np.argmax(np.abs(a))]
+        raise MechanismFileError(label, where, f"has {big:g}, beyond ±{MAX_COORDINATE:g} "
+                                 "(m or rad): a mechanism is not a thousand kilometres wide")
     return a
 
 

@@ -390,6 +390,7 @@ def simulate(model: ClosureModel, q0, v0=None, duration: float = 1.0, dt: float 
             wrong size, no mass on any body.
         SimulationError: a non-finite state.
     """
+    dynamics.check_inertias(model)  # the masses forward dynamics reads (InertiaError)
     q, v = _check_start(model, q0, v0)
     if not any(I.mass > 0 for I in model.tree.inertias):
         raise InputError(f"{model.name or 'the model'} has no mass on any body: its "

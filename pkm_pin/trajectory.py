@@ -64,6 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import dynamics, screws
+from .dynamics import body_names
 from .errors import (
     ForwardKinematicsError,
     InconsistentMotion,
@@ -487,19 +488,10 @@ def closure_model_of(mech) -> tuple[ClosureModel, np.ndarray]:
                      f"{type(mech).__name__}")
 
 
-def body_names(model: ClosureModel) -> list[str]:
-    """Name of the body of each joint 1 … njoints − 1 of the tree: its first BODY frame
-    (the URDF link), else the joint's name."""
-    tree = model.tree
-    names = [""] * tree.njoints
-    for f in tree.frames:
-        if f.type == pin.FrameType.BODY and 0 < f.parentJoint and not names[f.parentJoint]:
-            names[f.parentJoint] = f.name
-    return [names[j] or tree.names[j] for j in range(1, tree.njoints)]
-
-
 def massless_bodies(model: ClosureModel) -> list[str]:
-    """The bodies (:func:`body_names`) whose mass in the model is zero."""
+    """The bodies (:func:`~pkm_pin.dynamics.body_names`) whose mass in the model is
+    zero (the masses checked first: :func:`~pkm_pin.dynamics.check_inertias`)."""
+    dynamics.check_inertias(model)
     tree = model.tree
     return [n for j, n in zip(range(1, tree.njoints), body_names(model))
             if not tree.inertias[j].mass > 0]

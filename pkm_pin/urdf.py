@@ -333,6 +333,9 @@ def _check_joint(j: ET.Element, link_set: set, parent_of: dict, label: str) -> N
         _floats(origin.get("rpy"), 3, f"{where} origin rpy", label)
     if jtype in ("revolute", "continuous", "prismatic"):
         ax = j.find("axis")
+        if ax is not None and ax.get("xyz") is None:  # urdfdom reads it as a zero axis
+            raise UrdfError(label, f"{where} has an <axis> without xyz",
+                            'give the axis, e.g. <axis xyz="1 0 0"/>, or no <axis> for x')
         a = _floats(ax.get("xyz") if ax is not None else None, 3, f"{where} axis", label)
         if a is not None and np.linalg.norm(a) == 0:
             raise UrdfError(label, f"{where} has a zero axis", "give a non-zero axis xyz")

@@ -31,3 +31,14 @@ from hypothesis import settings as _settings  # noqa: E402
 
 _settings.register_profile("pkm_pin", derandomize=True, deadline=None)
 _settings.load_profile("pkm_pin")
+
+
+def pytest_addoption(parser):
+    """``--fuzz-examples N``: hypothesis examples per fuzz test of ``tests/fuzz`` (the
+    default keeps the whole fuzz run under a minute; a long run passes thousands);
+    ``--fuzz-seed S``: other examples than the fixed ones (rounds of a long run)."""
+    parser.addoption("--fuzz-examples", type=int, default=None,
+                     help="examples per reader in tests/fuzz (default: a small CI budget)")
+    parser.addoption("--fuzz-seed", type=int, default=None,
+                     help="draw the tests/fuzz examples from this seed (default: the fixed, "
+                          "derandomised examples): successive rounds of a long run differ")

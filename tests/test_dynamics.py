@@ -36,7 +36,9 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import re
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pinocchio as pin
@@ -46,7 +48,7 @@ from linkage_models import five_bar, five_bar_q, four_bar, four_bar_q, spherical
 import pkm_pin
 from pkm_pin import dynamics as dyn
 from pkm_pin.builders.loops import with_random_inertias
-from pkm_pin.errors import InconsistentMotion, InputError, SingularityError
+from pkm_pin.errors import InconsistentMotion, InertiaError, InputError, SingularityError
 from pkm_pin.linkage import Linkage
 from pkm_pin.model import configuration
 
@@ -307,6 +309,73 @@ def test_stewart_payload_equals_actuator_efforts():
     r = mech.inverse_dynamics(q, zero, zero, wrench=w)
     expected = mech.analyze(asm).actuator_efforts(-w)
     assert np.allclose(r.payload_efforts, expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
+
+
+def _five_bar_with_inertia(mass: float, lever, inertia) -> tuple:
+    """The revolute five-bar, massless but for body A2 given ``(mass, lever, inertia)``
+    (set on Pinocchio's Inertia without its checks), and a consistent motion."""
+    cm = five_bar("revolute")
+    tree = pin.Model(cm.tree)
+    for j in range(1, tree.njoints):
+        tree.inertias[j] = pin.Inertia.Zero()
+    body = pin.Inertia.Zero()
+    body.mass, body.lever, body.inertia = mass, np.asarray(lever, float), np.asarray(inertia)
+    tree.inertias[tree.getJointId("A2")] = body
+    cm = dataclasses.replace(cm, tree=tree)
+    q = five_bar_q([0.6, 1.3])
+    return cm, q, *dyn.motion_from_actuated(cm, q, np.array([0.3, -0.2]), np.array([1.0, 0.5]))
+
+
+@pytest.mark.parametrize("mass,inertia,quantity,shown,reason", [
+    (-1.0, np.eye(3), "mass", "-1 kg", "must be finite and > 0"),
+    (np.nan, np.eye(3), "mass", "nan kg", "must be finite and > 0"),
+    (np.inf, np.eye(3), "mass", "inf kg", "must be finite and > 0"),
+    (0.0, np.eye(3), "mass", "0 kg", "a body with an inertia needs a mass"),
+    (1.0, np.diag([1.0, 2.0, -0.5]), "inertia", "with principal moments -0.5, 1, 2 kg m²",
+     "cannot be negative"),
+    (1.0, np.diag([1.0, 1.0, 3.0]), "inertia", "with principal moments 1, 1, 3 kg m²",
+     "triangle inequality I1 + I2 >= I3"),
+])
+def test_non_physical_masses_and_inertias_are_named(mass, inertia, quantity, shown, reason):
+    """A negative, non-finite or zero mass (with an inertia), a non-finite inertia, a
+    negative principal moment and moments 1, 1, 3 (no rigid body has I₃ > I₁ + I₂) are
+    InertiaErrors naming the body (A_end, the body frame on joint A2) and the
+    value, raised where the dynamics reads them: no effort is computed from them."""
+    cm, q, v, a = _five_bar_with_inertia(mass, [0.5, 0.0, 0.0], inertia)
+    with pytest.raises(InertiaError) as info:
+        dyn.inverse_dynamics(cm, q, v, a)
+    message = str(info.value)
+    assert info.value.body == "A_end" and info.value.quantity == quantity
+    assert message.startswith(f"body 'A_end': {quantity} {shown} ") and reason in message
+    assert isinstance(info.value, InputError) and "\n" not in message
+
+
+@pytest.mark.parametrize("inertia,shown,reason", [
+    (np.diag([1.0, 1.0, np.inf]), "[[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, inf]] kg m²",
+     "must be finite"),
+    (np.array([[1.0, 0.5, 0], [0, 1, 0], [0, 0, 1]]),
+     "[[1.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] kg m²", "must be symmetric"),
+])
+def test_inertias_pinocchio_cannot_hold_are_named(inertia, shown, reason):
+    """A non-finite or non-symmetric inertia (which Pinocchio's own setter refuses, so a
+    stand-in tree carries it) is an InertiaError naming the body and the matrix."""
+    body = SimpleNamespace(mass=1.0, inertia=inertia)
+    tree = SimpleNamespace(njoints=2, inertias=[None, body], names=["universe", "j1"],
+                           frames=[])
+    with pytest.raises(InertiaError, match=re.escape(f"body 'j1': inertia {shown} {reason}")):
+        dyn.check_inertias(SimpleNamespace(tree=tree))
+
+
+def test_rigid_body_inertias_pass_the_checks():
+    """The limits of the physical: a point mass (zero inertia), a thin rod (moments
+    0, 1, 1: the triangle inequality with equality), a rotated full inertia, and a
+    massless body, all give finite efforts; moments 1, 1, 2 + 1e-9 (rounding) too."""
+    R = pin.rpy.rpyToMatrix(0.3, -0.7, 1.1)
+    for mass, inertia in [(1.7, np.zeros((3, 3))), (1.0, np.diag([0.0, 1.0, 1.0])),
+                          (2.0, R @ np.diag([0.2, 0.3, 0.4]) @ R.T),
+                          (1.0, np.diag([1.0, 1.0, 2.0 + 1e-9])), (0.0, np.zeros((3, 3)))]:
+        cm, q, v, a = _five_bar_with_inertia(mass, [0.5, 0.0, 0.0], inertia)
+        assert np.all(np.isfinite(dyn.inverse_dynamics(cm, q, v, a).efforts))
 
 
 @pytest.mark.parametrize("kind", ["point", "revolute"])

@@ -14,7 +14,8 @@ import pytest
 from helpers import one_error_line
 
 from pkm_pin.cli import main
-from pkm_pin.errors import ClosureFileError, UrdfError
+from pkm_pin.errors import ClosureFileError, MechanismFileError, UrdfError
+from pkm_pin.io import load_mechanism
 from pkm_pin.model import read_extended_urdf, read_mjcf
 from pkm_pin.urdf import read
 
@@ -422,3 +423,35 @@ def test_include_depth_is_limited(tmp_path):
     (tmp_path / "f12.xml").write_text("<mujoco/>")
     message, _, _ = refused(lambda: read_mjcf(tmp_path / "f0.xml"))
     assert "includes nested more than 8 deep" in message
+
+
+# ------------------------------------------------------------------ mechanism files
+def test_two_megabyte_mechanism_file_is_refused_by_its_size(tmp_path, capsys):
+    """A mechanism TOML of 2 MB (a shipped file padded with a comment) is refused by its
+    size before it is parsed: one line naming the file and the limit, exit 2, fast."""
+    path = tmp_path / "big.toml"
+    text = (ROOT / "models" / "mechanisms" / "rpr3.toml").read_text()
+    path.write_text(text.replace('"../urdf/', f'"{ROOT / "models" / "urdf"}/')
+                    + "#" + "x" * 2_000_000 + "\n")
+    message, seconds, peak = refused(lambda: load_mechanism(path), MechanismFileError)
+    assert "the mechanism file is 2.0 MB, more than the 1 MB pkm_pin reads" in message
+    assert seconds < 5 and peak < 500
+    assert main(["analyze", str(path)]) == 2
+    assert str(path) in one_error_line(capsys)
+    path.write_text(text.replace('"../urdf/', f'"{ROOT / "models" / "urdf"}/'))
+    assert load_mechanism(path).name == "3-RPR (seed 000)"  # the file unpadded loads
+
+
+def test_impossible_inertia_in_a_urdf_is_one_cli_line(tmp_path, capsys):
+    """A five-bar whose link distal1 has principal moments 1, 1, 3 (no rigid body: I₃ >
+    I₁ + I₂): ``pkm-pin dynamics`` exits 2 with one line naming the body and the
+    moments (the URDF reader accepts the numbers: each is finite and ≥ 0)."""
+    urdf = five_bar(tmp_path, FIVE_BAR_YAML)
+    urdf.write_text(urdf.read_text().replace(
+        '<link name="distal1"/>',
+        '<link name="distal1"><inertial><mass value="0.5"/><inertia ixx="1" ixy="0" '
+        'ixz="0" iyy="1" iyz="0" izz="3"/></inertial></link>'))
+    assert main(["dynamics", str(urdf), "--samples", "5"]) == 2
+    line = one_error_line(capsys)
+    assert "body 'distal1': inertia with principal moments 1, 1, 3 kg m²" in line
+    assert "triangle inequality" in line

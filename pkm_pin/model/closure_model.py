@@ -806,7 +806,9 @@ def velocity_units(tree: pin.Model, length: float) -> np.ndarray:
         if joint.nv == 0 or joint.shortname() == "JointModelMimic":
             continue
         cols = slice(joint.idx_v, joint.idx_v + joint.nv)
-        S = screws.from_pinocchio(pin.getJointJacobian(tree, data, j, pin.LOCAL)[:, cols])
+        # (6, nv) even for nv = 1, which Pinocchio's binding returns as a (6,) vector
+        J = np.reshape(pin.getJointJacobian(tree, data, j, pin.LOCAL), (6, tree.nv))
+        S = screws.from_pinocchio(J[:, cols])
         size = np.linalg.norm(S, axis=0)
         units[cols] = np.where(np.linalg.norm(S[:3], axis=0) <= ZERO_SCREW_RTOL * size,
                                length, 1.0)

@@ -86,6 +86,11 @@ MAX_INCLUDE_DEPTH = 8
 #: on every element: positions, orientations, axes, joint ranges and references.
 _NUMERIC = ("pos", "quat", "axisangle", "euler", "xyaxes", "zaxis", "axis", "range", "ref",
             "anchor", "relpose", "fromto")
+#: How many numbers each of them holds (MuJoCo's XML reference): Pinocchio 4.1 reads an
+#: empty or short list as uninitialised memory (``pos=""`` gave positions of 1e300 and
+#: an SVD that did not converge; found by the fuzz suite), so the count is checked too.
+_COUNTS = {"pos": 3, "quat": 4, "axisangle": 4, "euler": 3, "xyaxes": 6, "zaxis": 3,
+           "axis": 3, "range": 2, "ref": 1, "anchor": 3, "relpose": 7, "fromto": 6}
 
 #: MJCF elements that make bodies Pinocchio 4.1's parser ignores (the model would lose
 #: them without a word): refused by name.
@@ -310,6 +315,7 @@ def _check_numbers(label: str, root: ET.Element) -> None:
     axes and quaternions of non-zero length; joint ranges with lower ≤ upper. The error
     names the element, the attribute and the value."""
     counts: dict = {}
+    equalities = {el for equality in root.iter("equality") for el in equality}
     for el in root.iter():
         i = counts[el.tag] = counts.get(el.tag, -1) + 1
         keys = [k for k in _NUMERIC if k in el.attrib]
@@ -323,17 +329,19 @@ def _check_numbers(label: str, root: ET.Element) -> None:
             except ValueError as e:
                 raise ClosureFileError(label, f"{where} {key}", f"must be numbers, got "
                                        f"{_cut(text)}") from e
-            if values.size and not np.all(np.abs(values) <= MAX_COORDINATE):
+            if values.size != _COUNTS[key] and el not in equalities:  # (_closures: those)
+                raise ClosureFileError(label, f"{where} {key}", f"must be {_COUNTS[key]} finite "
+                                       f"numbers, got {_cut(text)}")
+            if not np.all(np.abs(values) <= MAX_COORDINATE):
                 bad = values[~(np.abs(values) <= MAX_COORDINATE)][0]
                 raise ClosureFileError(label, f"{where} {key}", f"has {bad:g}; numbers must "
                                        f"be finite and within ±{MAX_COORDINATE:g} (m, rad or "
                                        "degrees)")
             if key == "quat" or (key == "axis" and el.tag == "joint"):
-                if values.size and not np.any(values):
+                if not np.any(values):
                     raise ClosureFileError(label, f"{where} {key}", f"has zero length "
                                            f"({_cut(text)}); give a non-zero {key}")
-            if key == "range" and el.tag == "joint" and values.size == 2 \
-                    and values[0] > values[1]:
+            if key == "range" and el.tag == "joint" and values[0] > values[1]:
                 raise ClosureFileError(label, f"{where} range", f"has lower {values[0]:g} > "
                                        f"upper {values[1]:g}")
 
