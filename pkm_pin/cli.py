@@ -915,20 +915,7 @@ def cmd_dynamics(args) -> int:
         motion = tr.read_csv(args.trajectory, model.actuated)
     st = tr.study(mech, motion, samples=args.samples, payload=args.payload,
                   duration=tr.DEFAULT_DURATION if args.duration is None else args.duration)
-    files = []
-    if prefix is not None:
-        from .plots import trajectory_plots
-
-        files.append(_save_npz(prefix, dict(
-            t=st.t, q=st.q, v=st.v, a=st.a, efforts=st.efforts, q_actuated=st.q_actuated,
-            speeds=st.speeds, accelerations=st.accelerations, powers=st.powers,
-            payload_efforts=st.payload_efforts, actuated=np.array(st.actuated),
-            units=np.array(st.units), gravity=st.gravity)))
-        try:
-            files += trajectory_plots(st, prefix, title=mech.name)
-        except OSError as e:
-            raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
-    summary = st.summary()
+    files = [] if prefix is None else _study_files(mech, st, prefix)
     replayed = _replay(mech, st) if args.simulate else None
     if args.json:
         print(_json({"mechanism": mech.name, "actuated": list(st.actuated),
@@ -937,9 +924,30 @@ def cmd_dynamics(args) -> int:
                      "duration": float(st.t[-1] - st.t[0]), "gravity": st.gravity.tolist(),
                      "payload": None if st.payload is None else st.payload.tolist(),
                      "notes": list(st.notes), "massless_bodies": list(st.massless_bodies),
-                     "actuators": summary, "timing": st.timing,
+                     "actuators": st.summary(), "timing": st.timing,
                      "files": [str(f) for f in files]}))
         return 0
+    _print_study(mech, st, replayed, files)
+    return 0
+
+
+def _study_files(mech, st, prefix: Path) -> list:
+    """``dynamics --out PREFIX``: PREFIX.npz (the study's arrays) and its PNG plots."""
+    from .plots import trajectory_plots
+
+    files = [_save_npz(prefix, dict(
+        t=st.t, q=st.q, v=st.v, a=st.a, efforts=st.efforts, q_actuated=st.q_actuated,
+        speeds=st.speeds, accelerations=st.accelerations, powers=st.powers,
+        payload_efforts=st.payload_efforts, actuated=np.array(st.actuated),
+        units=np.array(st.units), gravity=st.gravity))]
+    try:
+        return files + trajectory_plots(st, prefix, title=mech.name)
+    except OSError as e:
+        raise InputError(f"cannot write under {prefix}: {e.strerror or e}") from e
+
+
+def _print_study(mech, st, replayed: dict | None, files: list) -> None:
+    """The text report of ``dynamics``: the motion, one line per actuator, the replay."""
     print(f"mechanism  {mech.name}")
     print(f"motion     {st.motion}")
     g = ", ".join(f"{x:g}" for x in st.gravity)
@@ -958,7 +966,7 @@ def cmd_dynamics(args) -> int:
     width = max(8, *(len(n) for n in st.actuated))
     print(f"{'actuator':<{width}}  {'peak effort':>13}  {'rms effort':>13}  "
           f"{'peak speed':>15}  {'peak power':>12}  {'∫|P|dt':>11}  {'∫P dt':>11}")
-    for name, s in summary.items():
+    for name, s in st.summary().items():
         print(f"{name:<{width}}  {s['peak_effort']:>9.4g} {s['effort_unit']:<3}  "
               f"{s['rms_effort']:>9.4g} {s['effort_unit']:<3}  "
               f"{s['peak_speed']:>9.4g} {s['speed_unit']:<5}  {s['peak_power']:>10.4g} W  "
@@ -976,7 +984,6 @@ def cmd_dynamics(args) -> int:
           "inverse dynamics")
     for path in files:
         print(f"wrote      {path}")
-    return 0
 
 
 def _replay(mech, st) -> dict:

@@ -101,10 +101,14 @@ def run_case(fork_server, reader: str, case: tuple[dict, str]) -> None:
                              f"{outcome.stderr[-3000:]}")
 
 
+#: What a reader's tally may hold once its cases passed: counts of the two good outcomes.
+GOOD = {"cases", "seconds", "slowest", "ok", "refused"}
+
+
 def _fuzz(fork_server, tally, examples: int, fuzz_seed: int | None, reader: str,
-          strategy) -> None:
+          strategy) -> int:
     """``examples`` cases of ``strategy``: hypothesis's fixed ones, or drawn from
-    ``fuzz_seed``."""
+    ``fuzz_seed``; returns how many ran."""
     @settings(max_examples=examples, deadline=None, derandomize=fuzz_seed is None,
               database=None, suppress_health_check=list(HealthCheck))
     @given(case=strategy)
@@ -113,19 +117,22 @@ def _fuzz(fork_server, tally, examples: int, fuzz_seed: int | None, reader: str,
 
     before = tally[reader]["cases"]
     (check if fuzz_seed is None else seed(fuzz_seed)(check))()
-    assert tally[reader]["cases"] - before >= min(examples, 1)
+    return tally[reader]["cases"] - before
 
 
 def test_extended_urdf_mutations(fork_server, tally, fuzz_examples, fuzz_seed):
     """Gepetto folders and shipped loop models: URDF and YAML mutated."""
-    _fuzz(fork_server, tally, fuzz_examples, fuzz_seed, "Extended URDF", extended_urdf_case())
+    ran = _fuzz(fork_server, tally, fuzz_examples, fuzz_seed, "Extended URDF", extended_urdf_case())
+    assert ran >= min(fuzz_examples, 1) and set(tally["Extended URDF"]) <= GOOD
 
 
 def test_mjcf_mutations(fork_server, tally, fuzz_examples, fuzz_seed):
     """Pinocchio's Cassie MJCF and the shipped MJCF loop models mutated."""
-    _fuzz(fork_server, tally, fuzz_examples, fuzz_seed, "MJCF", mjcf_case())
+    ran = _fuzz(fork_server, tally, fuzz_examples, fuzz_seed, "MJCF", mjcf_case())
+    assert ran >= min(fuzz_examples, 1) and set(tally["MJCF"]) <= GOOD
 
 
 def test_toml_mutations(fork_server, tally, fuzz_examples, fuzz_seed):
     """Shipped mechanism files (and sometimes the leg URDF they name) mutated."""
-    _fuzz(fork_server, tally, fuzz_examples, fuzz_seed, "TOML", toml_case())
+    ran = _fuzz(fork_server, tally, fuzz_examples, fuzz_seed, "TOML", toml_case())
+    assert ran >= min(fuzz_examples, 1) and set(tally["TOML"]) <= GOOD
