@@ -139,10 +139,21 @@ def spans_equal(A, B, length: float = 1.0, tol: float = 1e-9,
 
 
 # ------------------------------------------------------------------------ CLI
+#: The notice numba's first compilation prints on stderr (pkm_pin.compiling): on a fresh
+#: machine it may precede an error line, whichever test runs first.
+COMPILE_NOTICE = ("pkm_pin: compiling ", "pkm_pin: compiled in ")
+
+
+def stderr_lines(err: str) -> list[str]:
+    """The lines of a command's stderr, less numba's compile notices."""
+    return [line for line in err.strip().splitlines() if not line.startswith(COMPILE_NOTICE)]
+
+
 def one_error_line(capsys) -> str:
-    """The stderr of the last command, checked to be one 'pkm-pin: error:' line."""
+    """The stderr of the last command, checked to be one 'pkm-pin: error:' line (a
+    compile notice of a first run aside)."""
     err = capsys.readouterr().err
-    lines = err.strip().splitlines()
+    lines = stderr_lines(err)
     assert len(lines) == 1, err
     assert lines[0].startswith("pkm-pin: error:")
     return lines[0]
