@@ -53,6 +53,16 @@ def four_bar_angles(theta2: float, lengths=None) -> tuple[float, float, float]:
     return theta3, theta4, mu
 
 
+def four_bar_dead_centre() -> tuple[float, np.ndarray]:
+    """The crank angle θ2 of the extended dead centre (crank and coupler collinear:
+    |O_A D| = a + b, |O_B D| = c) and the tree configuration there."""
+    d, s = GROUND, CRANK + COUPLER
+    x = (s * s - ROCKER ** 2 + d * d) / (2 * d)
+    D = np.array([x, np.sqrt(s * s - x * x)])
+    theta2 = float(np.arctan2(D[1], D[0]))
+    return theta2, np.array([theta2, 0.0, np.arctan2(D[1], D[0] - d)])
+
+
 def four_bar_q(theta2: float) -> np.ndarray:
     """Tree configuration (crank, coupler relative, rocker) of :func:`four_bar_angles`."""
     t3, t4, _ = four_bar_angles(theta2)

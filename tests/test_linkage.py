@@ -18,7 +18,6 @@ import numpy as np
 import pinocchio as pin
 import pytest
 from linkage_models import (
-    COUPLER,
     CRANK,
     GROUND,
     ROCKER,
@@ -26,6 +25,7 @@ from linkage_models import (
     five_bar_q,
     four_bar,
     four_bar_angles,
+    four_bar_dead_centre,
     four_bar_q,
     spherical_rod,
 )
@@ -101,11 +101,7 @@ def test_four_bar_dead_centres_are_type_I_and_rocker_drive_type_II():
     from it, and so does the inverse index (crank driven) and the forward index (rocker
     driven); 1e-8 rad off it both read as class I / class II and the unbounded maps
     raise. Nothing is asserted at the exact dead centre, where rounding decides."""
-    d, s = GROUND, CRANK + COUPLER  # |O_A D| = a + b, |O_B D| = c
-    x = (s * s - ROCKER ** 2 + d * d) / (2 * d)
-    D = np.array([x, np.sqrt(s * s - x * x)])
-    theta2 = np.arctan2(D[1], D[0])
-    dead = np.array([theta2, 0.0, np.arctan2(D[1], D[0] - d)])
+    theta2, dead = four_bar_dead_centre()
     link = Linkage(four_bar())
     driven = Linkage(four_bar(actuated=("rocker",), output="crank_body"))
     assert np.abs(link.model.closure_residual(dead)).max() < 1e-12

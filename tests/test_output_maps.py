@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from linkage_models import COUPLER, CRANK, GROUND, ROCKER, four_bar
+from linkage_models import four_bar, four_bar_dead_centre
 
 import pkm_pin
 from pkm_pin import screws
@@ -95,11 +95,7 @@ def test_singular_directions_of_a_linkage_off_its_dead_centre():
     II) the efforts and ellipsoids refuse, the uncontrolled twist is the crank's own
     rotation and the couple about the crank's pivot is not resisted; driven from the
     crank (class I) the lost actuated rate is the crank's."""
-    d, s = GROUND, CRANK + COUPLER
-    x = (s * s - ROCKER ** 2 + d * d) / (2 * d)
-    D = np.array([x, np.sqrt(s * s - x * x)])
-    theta2 = np.arctan2(D[1], D[0])
-    dead = np.array([theta2, 0.0, np.arctan2(D[1], D[0] - d)])
+    theta2, dead = four_bar_dead_centre()
     crank_driven = Linkage(four_bar())
     rocker_driven = Linkage(four_bar(actuated=("rocker",), output="crank_body"))
     a = crank_driven.forward_kinematics([theta2 - 1e-8], dead + [0, 0.01, 0], starts=0)
