@@ -48,6 +48,16 @@ def _finite_float(text: str) -> float:
     return value
 
 
+#: numba's notice of a first compilation (pkm_pin.compiling): information, not an error
+#: line; a child compiles what the server's warm-up did not reach.
+COMPILE_NOTICE = ("pkm_pin: compiling ", "pkm_pin: compiled in ")
+
+
+def _stderr(text: str) -> str:
+    """``text`` less numba's compile notices."""
+    return "\n".join(line for line in text.splitlines() if not line.startswith(COMPILE_NOTICE))
+
+
 def classify(outcome, names: list[str]) -> str:
     """``"ok"``, ``"refused"``, or the kind of failure of one case."""
     if outcome.hung:
@@ -63,9 +73,9 @@ def classify(outcome, names: list[str]) -> str:
             json.loads(outcome.stdout, parse_constant=_refuse_constant, parse_float=_finite_float)
         except ValueError:
             return "non-strict JSON"
-        return "ok" if not outcome.stderr.strip() else "stderr on success"
+        return "ok" if not _stderr(outcome.stderr).strip() else "stderr on success"
     if outcome.status == 2:
-        lines = outcome.stderr.strip().splitlines()
+        lines = _stderr(outcome.stderr).strip().splitlines()
         if len(lines) != 1 or not lines[0].startswith("pkm-pin: error: "):
             return "not one error line"
         return "refused" if any(n in lines[0] for n in names) else "file not named"
