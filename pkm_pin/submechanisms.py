@@ -20,14 +20,15 @@ the root carrying everything) makes one group.
 
 **A sub-mechanism** (:func:`submechanisms`) is a :class:`~pkm_pin.linkage.Linkage` over a
 :class:`~pkm_pin.model.ClosureModel` whose tree is the whole tree with every joint outside
-the group locked at the assembled configuration (``pinocchio.buildReducedModel``: the
-locked bodies become frames of the universe), with the group's closures and actuated
-joints (in the whole's actuated order), the whole's name with ``[k]`` appended, its own
-characteristic length (the default of the reduced tree) and the assembled configuration
-as reference. Its output: the whole's output when it was named (by the caller or the
-file) and lies in the group; else the body the group exists to move
-(:func:`pkm_pin.output_choice.designer_output`, whose candidates are the group's bodies:
-the locked ones hang on the universe), e.g. the right foot for the right leg.
+the group locked at the assembled configuration (:func:`_reduced`, as
+``pinocchio.buildReducedModel`` would: the locked bodies become frames of the universe),
+with the group's closures and actuated joints (in the whole's actuated order), the whole's
+name with ``[k]`` appended, its own characteristic length (the default of the reduced
+tree) and the assembled configuration as reference. Its output: the whole's output when it
+was named (by the caller or the file) and lies in the group; else the body the group
+exists to move (:func:`pkm_pin.output_choice.designer_output`, whose candidates are the
+group's bodies: the locked ones hang on the universe), e.g. the right foot for the right
+leg.
 
 A model with one group is its own only sub-mechanism (``[link]``).
 """
