@@ -435,10 +435,10 @@ class _Plan:
     def world_jacobians(self, data: pin.Data, model: ClosureModel) -> np.ndarray:
         """(2C + 1) × 6 × nv axis-first world Jacobians ``(ω; v_O)`` of the frames."""
         if not self.mimic:
-            return screws.from_pinocchio(data.J)[None] * self.support[:, None, :]
-        return np.array([screws.from_pinocchio(pin.getFrameJacobian(model.tree, data, f,
-                                                                    pin.WORLD))
-                         for f in self.frames])
+            return screws.from_pinocchio(_six_by(data.J, self.nv))[None] \
+                * self.support[:, None, :]
+        return np.array([screws.from_pinocchio(_six_by(pin.getFrameJacobian(
+            model.tree, data, f, pin.WORLD), self.nv)) for f in self.frames])
 
     def evaluate(self, data: pin.Data, model: ClosureModel, q: np.ndarray) -> tuple:
         """``(residual, closure Jacobian, output Jacobian, output placement)`` at ``q``
@@ -609,7 +609,7 @@ class TreeKinematics:
     @cached_property
     def joint_twists(self) -> np.ndarray:
         if not self._mimic:  # data.J: every coordinate's world twist
-            return screws.from_pinocchio(self._data.J).T.copy()
+            return screws.from_pinocchio(_six_by(self._data.J, self._tree.nv)).T.copy()
         twists = np.zeros((self._tree.nv, 6))
         for j, J in enumerate(self.body_jacobians):
             joint = self._tree.joints[j]
@@ -622,7 +622,8 @@ class TreeKinematics:
     def body_jacobians(self) -> tuple:
         tree, data = self._tree, self._data
         return (np.zeros((6, tree.nv)),) + tuple(
-            screws.from_pinocchio(pin.getJointJacobian(tree, data, j, pin.WORLD))
+            screws.from_pinocchio(_six_by(pin.getJointJacobian(tree, data, j, pin.WORLD),
+                                          tree.nv))
             for j in range(1, tree.njoints))
 
     @cached_property
@@ -911,6 +912,12 @@ def _springs(tree: pin.Model, springs, actuated: tuple) -> tuple[str, ...]:
             raise InputError(f"springs: joint {_cut(name)} must have one coordinate and "
                              "no actuator")
     return out
+
+
+def _six_by(J, nv: int) -> np.ndarray:
+    """A Jacobian read from Pinocchio as (6, nv): its bindings return a one-column matrix
+    as a vector (a tree with one velocity coordinate)."""
+    return np.reshape(J, (6, nv))
 
 
 def default_length(tree: pin.Model, closures: tuple) -> float:

@@ -158,3 +158,21 @@ def test_mjcf_with_one_joint_left_analyses(tmp_path, capsys):
 
     data = json.loads(captured.out, parse_constant=refuse)
     assert isinstance(data, dict) and data and not captured.err
+
+
+def test_mjcf_with_one_actuated_joint_samples_its_nearby_configurations(tmp_path, capsys):
+    """models/loops/four_bar.xml with the coupler's body renamed to an unknown tag and the
+    rocker's joint dropped (found on the final code by the long run): one 1-DOF joint
+    and an actuator, so the mobility samples nearby configurations through the Pinocchio
+    path, where the binding's (6,) Jacobian broke the null space's matmul (ValueError).
+    Every Jacobian read from Pinocchio is now (6, nv): exit 0, strict JSON, DOF 1."""
+    path = tmp_path / "model.xml"
+    path.write_bytes((FOUND / "mjcf_one_joint_nearby_samples.xml").read_bytes())
+    assert main(["analyze", str(path), "--json"]) == 0
+    captured = capsys.readouterr()
+
+    def refuse(name):
+        raise ValueError(name)
+
+    data = json.loads(captured.out, parse_constant=refuse)
+    assert data["dof"] == 1 and data["actuated"] == ["crank_joint"]
