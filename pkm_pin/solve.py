@@ -862,7 +862,7 @@ def _pose_error(model, oMo: pin.SE3, Jo: np.ndarray, target: pin.SE3):
     return e, H
 
 
-def _tree_step(model, q, e, H, free, r, lo, up):
+def tree_step(model, q, e, H, free, r, lo, up):
     """One damped Newton step on the free coordinates (``None``: all; columns scaled by
     the velocity units), at most :data:`TREE_MAX_STEP`; returns ``(q_new, dimensionless
     step²)``."""
@@ -922,7 +922,7 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
         stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
         if stop or (free is not None and not free.any()):
             break
-        q_new, step = _tree_step(model, q, ev.e, ev.H, free, r, lo, up)
+        q_new, step = tree_step(model, q, ev.e, ev.H, free, r, lo, up)
         if not np.all(np.isfinite(q_new)):
             break
         it += 1

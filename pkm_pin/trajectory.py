@@ -73,7 +73,6 @@ from .errors import (
     SingularityError,
 )
 from .model.closure_model import ClosureModel
-from .newton import TREE_MAX_STEP, lm_damping
 from .solve import (
     POSE_COORDINATES,
     coordinate_scales,
@@ -82,6 +81,7 @@ from .solve import (
     solve_tree,
     solve_tree_starts,
     tree_limits,
+    tree_step,
 )
 from .tolerances import CLOSURE_TOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
 
@@ -431,7 +431,7 @@ class _OutputDriver:
         :data:`~pkm_pin.newton.TREE_MAX_STEP`, dimensionless) on the closure rows and
         the coordinate rows (angles wrapped) from ``guess``: ``(q, residual)``."""
         model, rows, s = self.model, self.rows, self.oc.scales[self.rows]
-        U, q = model.velocity_units, guess.copy()
+        q = guess.copy()
         lo, up = tree_limits(model)
         for _ in range(100):
             c, K = self.oc.rates(q)
@@ -439,14 +439,8 @@ class _OutputDriver:
             r = float(np.abs(e).max(initial=0.0))
             if r <= tol:
                 break
-            H = np.vstack([model.closure_jacobian(q), K[rows] / s[:, None]]) * U
-            N = H.T @ H
-            N.flat[::N.shape[0] + 1] += lm_damping(r)
-            dx = -np.linalg.solve(N, H.T @ e)
-            big = np.abs(dx).max(initial=0.0)
-            if big > TREE_MAX_STEP:
-                dx *= TREE_MAX_STEP / big
-            q = np.clip(pin.integrate(model.tree, q, U * dx), lo, up)
+            H = np.vstack([model.closure_jacobian(q), K[rows] / s[:, None]])
+            q, _ = tree_step(model, q, e, H, None, r, lo, up)
         return q, r
 
     def system(self, q) -> "_ActuatedSystem":

@@ -715,7 +715,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     """:func:`pkm_pin.solve.solve_tree` without pose rows, compiled: damped Newton on the
     closure rows (and the actuated rows when ``has_targets``) from ``q`` (solved in
     place), the unknowns the velocity coordinates where ``free`` is true. The same
-    steps as the Pinocchio driver (:func:`~pkm_pin.solve._tree_step`): dimensionless
+    steps as the Pinocchio driver (:func:`~pkm_pin.solve.tree_step`): dimensionless
     columns, :func:`lm_damping`, ``L D Lᵀ`` of the normal equations, the step shortened
     to :data:`~pkm_pin.newton.TREE_MAX_STEP`, projected onto the limits; stops on
     :func:`stop_rule`, a non-finite step or a stalled one. ``info`` receives ``(r,

@@ -808,7 +808,7 @@ def velocity_units(tree: pin.Model, length: float) -> np.ndarray:
             continue
         cols = slice(joint.idx_v, joint.idx_v + joint.nv)
         # (6, nv) even for nv = 1, which Pinocchio's binding returns as a (6,) vector
-        J = np.reshape(pin.getJointJacobian(tree, data, j, pin.LOCAL), (6, tree.nv))
+        J = _six_by(pin.getJointJacobian(tree, data, j, pin.LOCAL), tree.nv)
         S = screws.from_pinocchio(J[:, cols])
         size = np.linalg.norm(S, axis=0)
         units[cols] = np.where(np.linalg.norm(S[:3], axis=0) <= ZERO_SCREW_RTOL * size,

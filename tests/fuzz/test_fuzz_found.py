@@ -56,6 +56,14 @@ def test_a_line_separator_in_a_file_name_stays_on_one_line(tmp_path, capsys):
 FOUND = Path(__file__).resolve().parent / "found"
 
 
+def _strict_json(text: str):
+    """``text`` parsed as strict JSON: NaN and Infinity refused."""
+    def refuse(name):
+        raise ValueError(f"non-strict JSON constant {name}")
+
+    return json.loads(text, parse_constant=refuse)
+
+
 def test_mjcf_empty_pos_is_refused_not_an_svd_traceback(tmp_path, capsys):
     """models/loops/four_bar.xml with ``<compiler>`` dropped and the rocker's ``pos=""``
     (found by the fuzz suite): Pinocchio 4.1 read the empty position as uninitialised
@@ -152,11 +160,7 @@ def test_mjcf_with_one_joint_left_analyses(tmp_path, capsys):
     path.write_bytes((FOUND / "mjcf_one_joint_tree.xml").read_bytes())
     assert main(["analyze", str(path), "--json"]) == 0
     captured = capsys.readouterr()
-
-    def refuse(name):
-        raise ValueError(name)
-
-    data = json.loads(captured.out, parse_constant=refuse)
+    data = _strict_json(captured.out)
     assert isinstance(data, dict) and data and not captured.err
 
 
@@ -170,9 +174,5 @@ def test_mjcf_with_one_actuated_joint_samples_its_nearby_configurations(tmp_path
     path.write_bytes((FOUND / "mjcf_one_joint_nearby_samples.xml").read_bytes())
     assert main(["analyze", str(path), "--json"]) == 0
     captured = capsys.readouterr()
-
-    def refuse(name):
-        raise ValueError(name)
-
-    data = json.loads(captured.out, parse_constant=refuse)
+    data = _strict_json(captured.out)
     assert data["dof"] == 1 and data["actuated"] == ["crank_joint"]
