@@ -21,7 +21,10 @@ and returns a :class:`Diagnosis`:
   orientations (nearly) close but the points stay apart" (a length, a closure frame, or
   a closure kind stricter than the joint it stands for) when a weld or revolute closure
   is open and every open loop's angle is below :data:`ANGLE_CLOSED`; else the closure
-  frames, kinds and joint axes to check.
+  frames, kinds and joint axes to check;
+* the reader's **notes** (:attr:`ClosureModel.notes`), last: how the file was read
+  where that may be why it does not close (a closure pair the closures file leaves
+  out, a revolute named like a spherical joint).
 """
 
 from __future__ import annotations
@@ -98,12 +101,15 @@ class LimitHit:
 @dataclass(frozen=True)
 class Diagnosis:
     """Open loops (worst first), joints at a limit, whether lifting those limits closes
-    the loops, and a hint (see the module docstring)."""
+    the loops, a hint (see the module docstring) and the reader's notes on how it read
+    the file (:attr:`ClosureModel.notes`: a closure pair the file leaves out, a joint
+    named like a spherical joint that stays revolute)."""
 
     gaps: tuple[Gap, ...]
     at_limits: tuple[LimitHit, ...]
     closes_without_limits: bool
     hint: str
+    notes: tuple[str, ...] = ()
 
     def words(self) -> str:
         """One line: the open loops (the :data:`MESSAGE_LOOPS` worst), the joints at a
@@ -117,6 +123,8 @@ class Diagnosis:
             parts.append("at a limit: " + ", ".join(h.words() for h in self.at_limits))
         if self.hint:
             parts.append(f"hint: {self.hint}")
+        if self.notes:
+            parts.append("reader notes: " + "; ".join(self.notes))
         return "; ".join(parts)
 
 
@@ -220,4 +228,5 @@ def diagnose(model, q, *, tol: float = CLOSURE_TOL, lift_limits: bool = True,
         hits.append(LimitHit(tree.names[j], side, value, (float(lo[i]), float(up[i])),
                              needed))
     closes = sol is not None
-    return Diagnosis(gaps, tuple(hits), closes, _hint(gaps, closes))
+    return Diagnosis(gaps, tuple(hits), closes, _hint(gaps, closes),
+                     tuple(getattr(model, "notes", ())))

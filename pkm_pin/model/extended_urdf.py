@@ -60,6 +60,7 @@ tree that no closure uses; ``output_point`` applies to whichever frame that is.
 from __future__ import annotations
 
 import os
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -103,6 +104,12 @@ MAX_YAML_NODES = 100_000
 
 _REVOLUTE = {"X": pin.JointModelRX, "Y": pin.JointModelRY, "Z": pin.JointModelRZ}
 
+#: Gepetto's ``generateYAML`` (``name_spherical``): the joints whose name contains this
+#: are to be spherical joints, and it writes them into ``joint_name`` as ``SPHERICAL``.
+SPHERICAL_NAME = "spherical"
+#: A revolute named like a spherical joint, misspellings included (``sherical_4bar``).
+_SPHERICAL_LIKE = re.compile(r"sp?herical", re.IGNORECASE)
+
 
 @dataclass(frozen=True)
 class ClosureSpec:
@@ -117,6 +124,9 @@ class ClosureSpec:
         joint_type: What replaces each (``"SPHERICAL"``, ``"UJOINT_XY"``, ``"FIXED"`` …).
         output: The output frame, or None.
         output_point: Whether the output is the output frame's origin as a point.
+        joint_name_given: Whether the file has a ``joint_name`` list (``[]`` included);
+            without one, the revolutes named ``*spherical*`` are spherical joints
+            (:data:`SPHERICAL_NAME`).
     """
 
     path: str
@@ -127,6 +137,7 @@ class ClosureSpec:
     joint_type: tuple[str, ...] = ()
     output: str | None = None
     output_point: bool = False
+    joint_name_given: bool = False
 
 
 # --------------------------------------------------------------------------- entry point
@@ -149,13 +160,14 @@ def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.Pat
     urdf = Path(urdf_path)
     path = Path(closures_path) if closures_path is not None else find_closures_file(urdf)
     spec = read_closures_file(path)
-    tree = _build_tree(urdf, spec, free_flyer)
+    tree, notes = _build_tree(urdf, spec, free_flyer)
     closures = _closures(tree, spec)
     out = output if output is not None else _output_frame(tree, spec)
     actuated, matches = _actuated(tree, spec)
     return ClosureModel(tree, closures, actuated, out, name=tree.name,
                         output_point=spec.output_point, actuator_matches=matches,
-                        output_named=output is not None or spec.output is not None)
+                        output_named=output is not None or spec.output is not None,
+                        notes=notes + _unused_pair_notes(tree, spec))
 
 
 def find_closures_file(urdf_path: str | os.PathLike) -> Path:
@@ -223,7 +235,7 @@ def read_closures_file(path: str | os.PathLike) -> ClosureSpec:
         raise ClosureFileError(label, "output_point", f"must be true or false, got "
                                f"{_cut(point)}")
     return ClosureSpec(label, loops, types, _names(content, "name_mot", label), names, kinds,
-                       output, point)
+                       output, point, content.get("joint_name") is not None)
 
 
 def _parse(text: str, label: str, toml: bool):
@@ -362,8 +374,11 @@ def _ujoint_axes(kind: str) -> str | None:
 
 
 # -------------------------------------------------------------------------------- tree
-def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool) -> pin.Model:
-    """Pinocchio's tree of the URDF (mimic ignored), joints replaced as ``spec`` says."""
+def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool
+                ) -> tuple[pin.Model, tuple[str, ...]]:
+    """Pinocchio's tree of the URDF (mimic ignored), joints replaced as ``spec`` says (or,
+    without a ``joint_name`` list, the revolutes named ``*spherical*``), and the reader's
+    notes about those joints."""
     try:
         src = read(urdf)
     except UrdfError as e:
@@ -381,9 +396,37 @@ def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool) -> pin.Model:
         if name not in movable:
             raise ClosureFileError(spec.path, f"joint_name[{i}]", f"{_cut(name)} is not a movable "
                                    f"joint of {src.label}; its joints: {_listing(movable)}")
-    if spec.joint_name:
-        model = _replace_joints(model, dict(zip(spec.joint_name, spec.joint_type)))
-    return model
+    kinds, notes = _joint_kinds(model, spec)
+    if kinds:
+        model = _replace_joints(model, kinds)
+    return model, notes
+
+
+def _joint_kinds(model: pin.Model, spec: ClosureSpec) -> tuple[dict, tuple[str, ...]]:
+    """The joints to replace (``joint_name``/``joint_type``; without a ``joint_name`` list,
+    each revolute whose name contains :data:`SPHERICAL_NAME` becomes ``SPHERICAL``, the
+    convention of Gepetto's ``generateYAML``) and a note for each rule applied or doubt."""
+    kinds = dict(zip(spec.joint_name, spec.joint_type))
+    revolutes = [model.names[j] for j in range(1, model.njoints)
+                 if model.joints[j].nv == 1 and model.joints[j].shortname().startswith(
+                     ("JointModelR", "JointModelRevolute"))]
+    notes = []
+    if not spec.joint_name_given:
+        named = [n for n in revolutes if SPHERICAL_NAME in n]
+        kinds.update({n: "SPHERICAL" for n in named})
+        if named:
+            notes.append(f"{len(named)} revolute joints named '*{SPHERICAL_NAME}*' "
+                         f"({_listing(named)}) are read as spherical joints: the closures "
+                         "file has no joint_name list, and Gepetto's generateYAML lists such "
+                         "joints there as SPHERICAL (give joint_name: [] to keep them "
+                         "revolute)")
+    doubtful = [n for n in revolutes if n not in kinds and _SPHERICAL_LIKE.search(n)]
+    if doubtful:
+        notes.append(f"revolute joint{'s' if len(doubtful) > 1 else ''} "
+                     f"{_listing(doubtful)} named like a spherical joint stay"
+                     f"{'' if len(doubtful) > 1 else 's'} revolute; if the machine has a ball "
+                     "joint there, list it in joint_name with joint_type SPHERICAL")
+    return kinds, tuple(notes)
 
 
 def _replace_joints(model: pin.Model, kinds: dict) -> pin.Model:
@@ -433,6 +476,39 @@ def _closures(tree: pin.Model, spec: ClosureSpec) -> tuple[Closure, ...]:
                                        f"is not in the URDF; its frames: {_listing(frames)}")
     return tuple(Closure(CLOSURE_TYPES[t], a, b, name=f"{a}C{b}")
                  for (a, b), t in zip(spec.closed_loop, spec.types))
+
+
+def _unused_pair_notes(tree: pin.Model, spec: ClosureSpec) -> tuple[str, ...]:
+    """A note naming the frame pairs of the URDF numbered like the file's closure pairs
+    (``closedloop1_A``/``closedloop1_B`` beside ``closedloop0_A``/``closedloop0_B``)
+    that ``closed_loop`` leaves out: Gepetto's ``generateYAML`` drops loop N whenever
+    another loop's number starts with N's digits (``closedloop1`` also matches
+    ``closedloop10``), so its YAML can miss loops the machine has."""
+    names = {f.name for f in tree.frames}
+    used = {n for pair in spec.closed_loop for n in pair}
+    unused = []
+    for a, b in spec.closed_loop:
+        ma, mb = _NUMBERED.fullmatch(a), _NUMBERED.fullmatch(b)
+        if not (ma and mb and ma[2] == mb[2]):
+            continue
+        pattern = re.compile(re.escape(ma[1]) + r"(\d+)" + re.escape(ma[3]))
+        for name in sorted(names):
+            m = pattern.fullmatch(name)
+            other = m and mb[1] + m[1] + mb[3]
+            if other and other in names and not {name, other} & used \
+                    and {name, other} not in [set(u) for u in unused]:
+                unused.append(tuple(sorted((name, other))))
+    if not unused:
+        return ()
+    shown = ", ".join(f"{a}/{b}" for a, b in unused[:6])
+    return (f"the URDF has closure frames named like the file's pairs that closed_loop "
+            f"leaves out ({shown}{' …' if len(unused) > 6 else ''}): Gepetto's generateYAML "
+            "drops loop N when another loop's number starts with N; add the pair if the "
+            "machine closes that loop",)
+
+
+#: A frame name with a number: (text before, the first number, text after).
+_NUMBERED = re.compile(r"(\D*)(\d+)(.*)")
 
 
 def _actuated(tree: pin.Model, spec: ClosureSpec) -> tuple[tuple[str, ...], tuple]:
