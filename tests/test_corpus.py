@@ -30,6 +30,11 @@ NO_ASSEMBLY = "does not assemble from its reference: {}"
 TWO_LEGS = ("two legs of six motors: one output frame moves with one leg's six motors, "
             "not with the other's, so inverse = 0 (type I) by construction; it needs "
             "several outputs")
+#: The same for kangaroo_like_2legs, whose linear actuators' short strokes move the foot
+#: far: forward is small (3.7e-3) without any singularity (each leg alone: class none).
+TWO_LEGS_PISTONS = TWO_LEGS + "; forward is small (short piston strokes), not zero"
+#: pkm_pin's corrected closures file for kangaroo_like (tests/data/corrected/README.md).
+KANGAROO_CORRECTED = DATA / "corrected" / "kangaroo_like.yaml"
 
 
 @dataclass(frozen=True)
@@ -78,10 +83,11 @@ CORPUS = [
          "3T3R", "I", singular_why=TWO_LEGS),
     Case("gepetto/kangaroo_like/robot.urdf", None, None, None, None, "hip_center",
          no_assembly="its welds' orientations close, eight loops' points stay apart, "
-         "'closedloop7_BCclosedloop7_A' by 81 mm (lengths disagree with 6d closures)"),
-    Case("gepetto/kangaroo_like_2legs/robot.urdf", None, None, None, None, "part_7_6",
-         no_assembly="all 24 loops stay open, 'closedloop23_A_3DCclosedloop23_B_3D' by "
-         "45 mm (it assembles only with its spherical_* revolutes read as spherical)"),
+         "'closedloop7_BCclosedloop7_A' by 81 mm: every loop typed 6d (generateYAML's "
+         "default), the pair closedloop1 dropped, 'sherical_4bar' a revolute; with the "
+         "two-leg export's kinds it assembles (tests/data/corrected)"),
+    Case("gepetto/kangaroo_like_2legs/robot.urdf", 40, 28, 0, 12, "foot", ("foot_2",),
+         "3T3R", "I", singular_why=TWO_LEGS_PISTONS),
     Case("gepetto/true_talos_2_legs/talos_full_v2.urdf", None, None, None, None, "imu_link",
          no_assembly="both ankle loops close only with leg_*_shin_joint at -0.867 rad, "
          "outside the file's range [0, 2.618]"),
@@ -153,6 +159,36 @@ def test_a_file_that_does_not_assemble_keeps_the_readers_output(case):
     assert link.output == case.output == read_extended_urdf(DATA / case.path).output
 
 
+def test_kangaroo_like_notes_what_its_closures_file_misses():
+    """The reader's notes on kangaroo_like (the message of its failed assembly ends with
+    them): the pair closedloop1 the YAML leaves out, the revolute 'sherical_4bar'."""
+    link, error = _loaded("gepetto/kangaroo_like/robot.urdf")
+    notes = link.model.notes
+    assert len(notes) == 2 and "'sherical_4bar'" in notes[0]
+    assert "(closedloop1_A/closedloop1_B)" in notes[1]
+    assert str(error).endswith("reader notes: " + "; ".join(notes))
+
+
+def test_kangaroo_like_with_the_two_leg_exports_closure_kinds_is_one_of_its_legs():
+    """kangaroo_like with pkm_pin's corrected closures file (the kinds its authors gave
+    the same loops in kangaroo_like_2legs, the dropped pair closedloop1, 'sherical_4bar'
+    spherical) assembles: 65 velocity coordinates (sherical_4bar's 3), 45 closure rows (nine
+    points, three welds), all independent: isostatic (Grübler 20), 6 independent motors, 14 idle spins (rods and piston halves with a ball joint
+    at each end); its foot fits, 3T3R, regular. Each leg of kangaroo_like_2legs, a
+    separate export of the same design, gives the same numbers
+    (tests/test_submechanisms.py), so the geometry is consistent and the published
+    file's kinds are what keeps it open."""
+    link = pkm_pin.load_mechanism(DATA / "gepetto/kangaroo_like/robot.urdf",
+                                  closures=KANGAROO_CORRECTED)
+    a = link.home_assembly
+    mob = link.mobility(a.q)
+    assert (mob.dof, mob.idle_dof, mob.redundant_constraints, mob.grubler,
+            len(mob.independent_actuators)) == (20, 14, 0, 20, 6)
+    assert link.output == "foot" and link.model.notes == ()
+    an = link.analyze(a)
+    assert an.motion_type == "3T3R" and an.singularity == "none"
+
+
 @pytest.mark.parametrize("case", [pytest.param(c, id=c.id, marks=_marks(c, regular=True))
                                   for c in GEPETTO])
 def test_default_output_of_a_gepetto_model_is_regular_at_home(case):
@@ -172,6 +208,8 @@ def test_the_singular_defaults_read_as_the_table_says(case):
     assert an.singularity == case.singularity
     if case.singular_why == TWO_LEGS:
         assert an.indices["inverse"] == 0.0 and an.indices["forward"] > 0.3
+    if case.singular_why == TWO_LEGS_PISTONS:
+        assert an.indices["inverse"] == 0.0 and 1e-3 < an.indices["forward"] < 1e-2
 
 
 @pytest.mark.parametrize("path,rod,cls", [

@@ -136,6 +136,33 @@ def test_joint_replacements(tmp_path):
     assert model.nv == 4 and model.tree.existFrame("closedloop1_B")
 
 
+def test_revolutes_named_spherical_follow_generate_yaml_without_joint_name(tmp_path):
+    """Without a joint_name list a revolute whose name contains 'spherical' is a spherical
+    joint (Gepetto's generateYAML writes such joints into joint_name as SPHERICAL), with
+    a note; 'joint_name: []' keeps it revolute, without that note; a revolute named like
+    a spherical joint otherwise ('sherical') stays revolute, with a note."""
+    text = (LOOPS / "five_bar.urdf").read_text()
+    assert text.count('"free2"') == 1 and text.count('"free1"') == 1
+    text = text.replace('"free2"', '"spherical_free2"').replace('"free1"', '"sherical_1"')
+    urdf = write(tmp_path / "five_bar.urdf", text)
+    write(tmp_path / "five_bar.yaml", FIVE_BAR_YAML)
+    model = read_extended_urdf(urdf)
+    tree = model.tree
+    assert tree.joints[tree.getJointId("spherical_free2")].nq == 4
+    assert tree.joints[tree.getJointId("sherical_1")].nq == 1
+    assert len(model.notes) == 2
+    assert model.notes[0].startswith("the revolutes named '*spherical*' (1: "
+                                     "'spherical_free2') are read as spherical joints")
+    assert model.notes[1].startswith("revolute joint 'sherical_1' named like a spherical "
+                                     "joint stays revolute")
+    write(tmp_path / "five_bar.yaml", FIVE_BAR_YAML + "joint_name: []\njoint_type: []\n")
+    model = read_extended_urdf(urdf)
+    assert model.tree.joints[model.tree.getJointId("spherical_free2")].nq == 1
+    (note,) = model.notes
+    assert note.startswith("revolute joints 'sherical_1', 'spherical_free2' named like a "
+                           "spherical joint stay revolute")
+
+
 def test_ankle_model_uses_ujoint_and_spherical():
     """models/loops/ankle: the foot on ankle_X then ankle_Y, both rods on ball joints."""
     model = read_extended_urdf(LOOPS / "ankle.urdf")

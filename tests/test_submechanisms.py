@@ -122,6 +122,27 @@ def test_the_other_two_legged_files_split_into_regular_legs(name, dof, idle):
     assert 2 * dof == link.mobility(a.q).dof
 
 
+def test_kangaroo_like_2legs_splits_into_two_legs_like_kangaroo_like():
+    """kangaroo_like_2legs (its 26 revolutes named '*spherical*' read as spherical
+    joints, generateYAML's convention): each leg has its six linear actuators (the left
+    leg's first in the file), its own foot, 20 DOF of which 14 idle spins (rods and
+    piston halves with a ball joint at each end), isostatic (Grübler 20), 3T3R, regular;
+    the same numbers as the one-leg export kangaroo_like with its corrected closures file
+    (tests/test_corpus.py); 20 + 20 = the whole's 40. Its forward index is small (the
+    pistons' short strokes move the foot far), not zero."""
+    link, a, subs = _legs("kangaroo_like_2legs")
+    got = []
+    for sub in subs:
+        an = sub.analyze(sub.home_assembly)
+        got.append((sub.output, sub.actuated[0], an.dof, an.idle_dof,
+                    len(an.mobility.independent_actuators), sub.grubler,
+                    an.redundant_constraints, an.motion_type, an.singularity))
+        assert 5e-3 < an.indices["forward"] < 2e-2 and an.indices["inverse"] > 0.9
+    assert got == [("foot", "motor_hip_xy_1_left", 20, 14, 6, 20, 0, "3T3R", "none"),
+                   ("foot_2", "motor_hipz", 20, 14, 6, 20, 0, "3T3R", "none")]
+    assert link.mobility(a.q).dof == 40
+
+
 def test_a_single_loop_is_its_own_only_submechanism():
     """The four-bar: one group (its loop and its motor), submechanisms() is [link]."""
     link = pkm_pin.load_mechanism(FOUR_BAR)

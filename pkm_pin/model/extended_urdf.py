@@ -415,8 +415,8 @@ def _joint_kinds(model: pin.Model, spec: ClosureSpec) -> tuple[dict, tuple[str, 
         named = [n for n in revolutes if SPHERICAL_NAME in n]
         kinds.update({n: "SPHERICAL" for n in named})
         if named:
-            notes.append(f"{len(named)} revolute joints named '*{SPHERICAL_NAME}*' "
-                         f"({_listing(named)}) are read as spherical joints: the closures "
+            notes.append(f"the revolutes named '*{SPHERICAL_NAME}*' ({len(named)}: "
+                         f"{_listing(named)}) are read as spherical joints: the closures "
                          "file has no joint_name list, and Gepetto's generateYAML lists such "
                          "joints there as SPHERICAL (give joint_name: [] to keep them "
                          "revolute)")
