@@ -7,15 +7,17 @@ from __future__ import annotations
 
 import re
 import shutil
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
+import numpy as np
+import pinocchio as pin
 import pytest
 
 import pkm_pin
 from pkm_pin.cli import main
-from pkm_pin.linkage import LoopClosureError
+from pkm_pin.linkage import Linkage, LoopClosureError
 from pkm_pin.model import read_extended_urdf
 from pkm_pin.output_choice import choose_output, name_score, rank_outputs
 
@@ -70,7 +72,9 @@ CORPUS = [
     Case("gepetto/disney_like/robot.urdf", 9, 3, 0, 6, "foot", (), "3T3R", "III",
          singular_why="one idle motion (free_universal4 and the ankle's three revolutes "
          "ankle_universal_2_rev0-2, free_hip_x at 1.5e-3) moves the foot (homogenised "
-         "singular value 5.2e-4), so no body fits and the foot reads forward = inverse = 0"),
+         "singular value 5.2e-4), so no body fits and the foot reads forward = inverse = 0: "
+         "free_universal4's axis passes 0.295 mm beside the centre of the ball joint "
+         "ankle_universal_2, whose fourth rotation it would otherwise only repeat"),
     Case("gepetto/battobot_6d/robot.urdf", 12, 0, 0, 12, "foot_right", ("foot_left",),
          "3T3R", "I", singular_why=TWO_LEGS),
     Case("gepetto/digit_like_2legs/robot.urdf", 12, 0, 0, 12, "foot", ("foot_left",),
@@ -172,12 +176,12 @@ def test_kangaroo_like_notes_what_its_closures_file_misses():
 def test_kangaroo_like_with_the_two_leg_exports_closure_kinds_is_one_of_its_legs():
     """kangaroo_like with pkm_pin's corrected closures file (the kinds its authors gave
     the same loops in kangaroo_like_2legs, the dropped pair closedloop1, 'sherical_4bar'
-    spherical) assembles: 65 velocity coordinates (sherical_4bar's 3), 45 closure rows (nine
-    points, three welds), all independent: isostatic (Grübler 20), 6 independent motors, 14 idle spins (rods and piston halves with a ball joint
-    at each end); its foot fits, 3T3R, regular. Each leg of kangaroo_like_2legs, a
-    separate export of the same design, gives the same numbers
-    (tests/test_submechanisms.py), so the geometry is consistent and the published
-    file's kinds are what keeps it open."""
+    spherical) assembles: 65 velocity coordinates (sherical_4bar's 3), 45 closure rows
+    (nine points, three welds), all independent: isostatic (Grübler 20), 6 independent
+    motors, 14 idle spins (rods and piston halves with a ball joint at each end); its
+    foot fits, 3T3R, regular. Each leg of kangaroo_like_2legs, a separate export of the
+    same design, gives the same numbers (tests/test_submechanisms.py), so the geometry is
+    consistent and the published file's kinds are what keeps it open."""
     link = pkm_pin.load_mechanism(DATA / "gepetto/kangaroo_like/robot.urdf",
                                   closures=KANGAROO_CORRECTED)
     a = link.home_assembly
@@ -210,6 +214,41 @@ def test_the_singular_defaults_read_as_the_table_says(case):
         assert an.indices["inverse"] == 0.0 and an.indices["forward"] > 0.3
     if case.singular_why == TWO_LEGS_PISTONS:
         assert an.indices["inverse"] == 0.0 and 1e-3 < an.indices["forward"] < 1e-2
+
+
+def test_disney_likes_class_iii_is_free_universal4_beside_the_ball_joint():
+    """disney_like's second leg half (free_hip_x, motors 2 and 4) holds the ankle through
+    the ball joint ankle_universal_2 (three revolutes meeting at one point) followed by
+    the revolute free_universal4, whose axis the file places 0.295 mm from the ball's
+    centre (its origin (0.295, 0, -0.295) mm in universal_2's frame): concurrent, that
+    revolute would only repeat a rotation of the ball (an idle spin of the cross); 0.3 mm
+    aside it gives the ankle a lever that moves the foot with every motor locked, class
+    III. The same model with that origin on the axis through the centre (a 0.3 mm change)
+    keeps DOF 9, idle 3, and its foot fits and reads class none (forward 0.077, inverse
+    0.042): the singularity is the file's offset, not a misreading (the 6d weld joins the
+    two halves shin_mirror1 and shin_mirror2 of one shin; no gimbal lock at home)."""
+    link, a = _home("gepetto/disney_like/robot.urdf")
+    tree = link.model.tree
+    data = tree.createData()
+    pin.forwardKinematics(tree, data, a.q)
+    centre = data.oMi[tree.getJointId("ankle_universal_2_rev0")].translation
+    for k in (1, 2):
+        assert np.allclose(data.oMi[tree.getJointId(f"ankle_universal_2_rev{k}")].translation,
+                           centre, atol=1e-12)
+    j = tree.getJointId("free_universal4")
+    r = centre - data.oMi[j].translation
+    axis = data.oMi[j].rotation[:, 2]
+    assert np.linalg.norm(r - (r @ axis) * axis) == pytest.approx(2.9538e-4, rel=1e-3)
+    moved = pin.Model(tree)
+    placement = moved.jointPlacements[j].copy()
+    placement.translation = np.zeros(3)
+    moved.jointPlacements[j] = placement
+    fixed = Linkage(replace(link.model, tree=moved, output="foot"))
+    b = fixed.assemble()
+    mob, an = fixed.mobility(b.q), fixed.analyze(b)
+    assert (mob.dof, mob.idle_dof, mob.redundant_constraints) == (9, 3, 0)
+    assert an.singularity == "none" and choose_output(fixed.model, b.q).fits
+    assert an.indices["forward"] > 0.05 and an.indices["inverse"] > 0.03
 
 
 @pytest.mark.parametrize("path,rod,cls", [

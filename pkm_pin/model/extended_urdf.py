@@ -24,6 +24,16 @@ following the toolbox's loader (``completeRobotLoader`` in
   two distinct axes are accepted, e.g. ``UJOINT_ZY``); ``FIXED`` locks the joint at
   ``q = 0`` (its frames stay). Children of a replaced universal joint hang on its second
   revolute (the toolbox loses them).
+* A file **without a** ``joint_name`` **list** (the key absent or null) follows the
+  convention of the toolbox's ``generateYAML``, which writes every joint whose name
+  contains ``spherical`` into ``joint_name`` as ``SPHERICAL``: such revolutes are read as
+  spherical joints, with a note (:attr:`ClosureModel.notes`); ``joint_name: []`` keeps
+  them revolute. (The toolbox's loader converts only what ``joint_name`` lists; Gepetto's
+  ``kangaroo_like_2legs`` names 26 ball joints so and assembles only so.) A revolute
+  still named like a spherical joint (``sherical_4bar``) and a frame pair of the URDF
+  numbered like the file's closure pairs that ``closed_loop`` leaves out (``generateYAML``
+  drops loop N when another loop's number starts with N's digits) get a note too; the
+  message of a failed assembly ends with the notes.
 * Each ``closed_loop`` pair ``[A, B]`` closes frame ``A`` (joint, link or fixed-joint frame:
   Pinocchio's first frame of that name) on frame ``B`` at their own placements: ``3d``/``3D``
   a point closure, ``6d``/``6D`` a weld; the closure is named ``A + "C" + B``.
@@ -42,7 +52,9 @@ Deliberate differences: a closure type other than 3d/6d, lists of different leng
 frame, joint or motor name that matches nothing are errors (the toolbox falls back to 6D,
 truncates, or fails later); keys other than those listed here are errors (typos); the
 toolbox's ``simplifyModel`` (three massless revolutes with concurrent axes merged into a
-spherical joint) is not applied: the tree keeps the URDF's joints.
+spherical joint) is not applied: the tree keeps the URDF's joints (the same motions);
+the URDF's joint limits are kept (the toolbox rebuilds every joint with
+``Model.addJoint`` without limits, so its models have none).
 
 Two keys of our own (the toolbox ignores extra keys, so such files still load there):
 ``output``, the output frame, and ``output_point`` (``true``/``false``, default
