@@ -23,7 +23,7 @@ Both are reported and held at zero; only the rest is fitted.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -56,7 +56,7 @@ class CalibrationResult:
         residual_after: The same after calibration [m].
         iterations: Gauss–Newton iterations.
         converged: Whether the last step was below ``tol``.
-        mechanism: The calibrated mechanism (``perturb(mech, errors)``).
+        mechanism: The calibrated mechanism (``geometry.perturb(mech, errors)``).
     """
 
     parameters: list[str]
@@ -105,21 +105,45 @@ def _jacobian_rows(sens_matrix: np.ndarray, pose: pin.SE3, measured, L: float) -
     return J[3:] if isinstance(measured, np.ndarray) else J
 
 
-def _solve_all(mech, samples, guesses):
+def _legs_solve(mech, q_actuated, guess):
+    """Forward kinematics of a platform mechanism warm-started from the assembly
+    ``guess`` of another (the nominal or an earlier iterate) mechanism."""
+    start = None if guess is None else Assembly(mech, guess.pose, [q.copy() for q in guess.leg_q])
+    return forward_kinematics(mech, q_actuated, start)
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """How :func:`calibrate` reads a mechanism's geometry: four functions of the
+    mechanism. ``select(mech, parameters)``: the parameter names (unknown ones refused);
+    ``solve(mech, q_actuated, guess)``: the assembly at actuated values (``.pose``: the
+    output's world placement), warm-started from ``guess`` (an assembly of the nominal
+    or of an earlier iterate, or ``None``); ``sensitivity(mech, assembly, names)``: a
+    :class:`~pkm_pin.sensitivity.Sensitivity`; ``perturb(mech, errors)``: the mechanism
+    with finite errors added. :data:`LEGS` reads a platform mechanism leg by leg; a
+    linkage gives its tree's (:meth:`pkm_pin.linkage.Linkage.calibrate`)."""
+
+    select: Callable
+    solve: Callable
+    sensitivity: Callable
+    perturb: Callable
+
+
+#: A base–legs–platform mechanism's geometry: :mod:`pkm_pin.sensitivity`'s parameters.
+LEGS = Geometry(select_parameters, _legs_solve, sensitivity, perturb)
+
+
+def _solve_all(geometry: Geometry, mech, samples, guesses):
     """Forward kinematics at every sample, warm-started from ``guesses``."""
-    out = []
-    for (qa, _), g in zip(samples, guesses):
-        start = None if g is None else Assembly(mech, g.pose, [q.copy() for q in g.leg_q])
-        out.append(forward_kinematics(mech, qa, start))
-    return out
+    return [geometry.solve(mech, qa, g) for (qa, _), g in zip(samples, guesses)]
 
 
-def _stack(mech, samples, assemblies, names, L):
+def _stack(geometry: Geometry, mech, samples, assemblies, names, L):
     r, J = [], []
     for (qa, meas), a in zip(samples, assemblies):
         r.append(_residual(a.pose, meas, L))
         if names is not None:
-            s = sensitivity(mech, a, names)
+            s = geometry.sensitivity(mech, a, names)
             J.append(_jacobian_rows(s.matrix, a.pose, meas, L))
     return np.concatenate(r), (np.vstack(J) if names is not None else None)
 
@@ -156,6 +180,7 @@ def calibrate(
     max_iter: int = 20,
     tol: float = CALIBRATION_STEP_TOL,
     ident_tol: float = IDENTIFIABILITY_TOL,
+    geometry: Geometry = LEGS,
 ) -> CalibrationResult:
     """Identify the errors of ``parameters`` from measured platform poses.
 
@@ -168,6 +193,7 @@ def calibrate(
         tol: Stop when the step, each parameter divided by its column scale, is below
             ``tol`` relative to the characteristic length.
         ident_tol: Pivot threshold of the identifiability test.
+        geometry: How the parameters are read (:class:`Geometry`; default :data:`LEGS`).
 
     Returns:
         A :class:`CalibrationResult`.
@@ -176,12 +202,13 @@ def calibrate(
         InputError: malformed samples or unknown parameter names.
         ForwardKinematicsError: the model cannot reach a sample's actuated coordinates.
     """
-    names = select_parameters(mech, parameters)
+    names = geometry.select(mech, parameters)
     samples = _samples(mech, samples)
     L = mech.characteristic_length
-    assemblies = _solve_all(mech, samples, [None] * len(samples))
-    r0, J0 = _stack(mech, samples, assemblies, names, L)
-    incompatible = sorted({n for a in assemblies for n in sensitivity(mech, a, names).incompatible},
+    assemblies = _solve_all(geometry, mech, samples, [None] * len(samples))
+    r0, J0 = _stack(geometry, mech, samples, assemblies, names, L)
+    incompatible = sorted({n for a in assemblies
+                           for n in geometry.sensitivity(mech, a, names).incompatible},
                           key=names.index)
     cand = [k for k, n in enumerate(names) if n not in incompatible]
     keep = identifiable(J0[:, cand], ident_tol)
@@ -199,9 +226,9 @@ def calibrate(
         dx_s, *_ = np.linalg.lstsq(J / col, r, rcond=None)
         dx = dx_s / col
         x = x + dx
-        current = perturb(mech, dict(zip(fitted, x)))
-        assemblies = _solve_all(current, samples, assemblies)
-        r, J = _stack(current, samples, assemblies, fitted, L)
+        current = geometry.perturb(mech, dict(zip(fitted, x)))
+        assemblies = _solve_all(geometry, current, samples, assemblies)
+        r, J = _stack(geometry, current, samples, assemblies, fitted, L)
         if np.linalg.norm(dx_s) <= tol * L:
             converged = True
             break
@@ -225,4 +252,4 @@ def calibrate(
     )
 
 
-__all__ = ["CalibrationResult", "IDENT_TOL", "calibrate", "identifiable"]
+__all__ = ["CalibrationResult", "Geometry", "IDENT_TOL", "LEGS", "calibrate", "identifiable"]

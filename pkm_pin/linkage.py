@@ -168,6 +168,12 @@ class LinkageAssembly:
     q_actuated: np.ndarray
     output_pose: pin.SE3 = field(repr=False)
 
+    @property
+    def pose(self) -> pin.SE3:
+        """The output frame's world placement (:attr:`output_pose`; the name a platform
+        mechanism's :class:`~pkm_pin.assembly.Assembly` gives it)."""
+        return self.output_pose
+
 
 @dataclass(frozen=True)
 class Mobility:
@@ -346,27 +352,59 @@ class Linkage:
         return mech.assemble(kin.output_placement, guess=guess)
 
     def sensitivity(self, q=None, parameters=None):
-        """Sensitivity of the output pose to geometric errors (joint origins and axes,
-        bases, anchors: :func:`pkm_pin.sensitivity.sensitivity`) at ``q`` (default
-        home), read leg by leg through :attr:`legs_mechanism`.
+        """Sensitivity of the output pose to geometric errors at ``q`` (a
+        :class:`LinkageAssembly` or the tree's configuration; default home), actuated
+        joints held: a :class:`~pkm_pin.sensitivity.Sensitivity`.
+
+        A base–legs–platform machine is read leg by leg through :attr:`legs_mechanism`
+        (:func:`pkm_pin.sensitivity.sensitivity`: the legs' joint origins and axes, bases,
+        anchors); any other linkage through its closure Jacobian
+        (:func:`pkm_pin.tree_sensitivity.sensitivity`: the tree's joint origins and
+        axes, the closures' frames), whose parameters
+        (:func:`pkm_pin.tree_sensitivity.parameter_names`) any linkage also answers
+        through :meth:`tree_sensitivity`.
 
         Raises:
-            InputError: not a base–legs–platform machine (the reason).
+            InputError: unknown parameter names.
+            SingularityError: the output error is undetermined (type II singularity).
         """
+        if self.platform_structure[0] is None:
+            return self.tree_sensitivity(q, parameters)
         mech = self._legs("sensitivity to geometric errors")
         return mech.sensitivity(self.legs_assembly(q), parameters)
 
+    def tree_sensitivity(self, q=None, parameters=None):
+        """Sensitivity of the output to the geometric errors of the tree and closures
+        (:func:`pkm_pin.tree_sensitivity.sensitivity`) at ``q`` (a
+        :class:`LinkageAssembly` or the tree's configuration; default home)."""
+        from .tree_sensitivity import sensitivity
+
+        if q is None:
+            q = self.home_assembly
+        assembly = q if isinstance(q, LinkageAssembly) else self._at(self._guess_q(q))
+        return sensitivity(self._model, assembly.q, parameters, assembly=assembly)
+
     def calibrate(self, samples, parameters, **options):
         """Identify geometric errors from measured output poses or positions after known
-        actuations (:func:`pkm_pin.calibration.calibrate`), read leg by leg through
-        :attr:`legs_mechanism`: ``samples`` are pairs ``(q_actuated, measured)`` with
-        the actuated values in :attr:`actuated` order, ``parameters`` the legs'
-        parameter names (:meth:`sensitivity`'s).
+        actuations (:func:`pkm_pin.calibration.calibrate`): ``samples`` are pairs
+        ``(q_actuated, measured)`` with the actuated values in :attr:`actuated` order,
+        ``parameters`` the names :meth:`sensitivity` uses: a base–legs–platform machine's
+        legs' (read leg by leg through :attr:`legs_mechanism`), any other linkage's
+        tree's (:mod:`pkm_pin.tree_sensitivity`; the calibrated result's ``mechanism``
+        is then a :class:`Linkage` of the corrected model)."""
+        if self.platform_structure[0] is not None:
+            return self._legs("calibration").calibrate(samples, parameters, **options)
+        from .calibration import Geometry, calibrate
+        from .tree_sensitivity import perturb, select_parameters
 
-        Raises:
-            InputError: not a base–legs–platform machine (the reason).
-        """
-        return self._legs("calibration").calibrate(samples, parameters, **options)
+        home = self.home_assembly
+        geometry = Geometry(
+            select=lambda link, names: select_parameters(link.model, names),
+            solve=lambda link, qa, guess: link.forward_kinematics(
+                qa, guess=(home if guess is None else guess).q),
+            sensitivity=lambda link, a, names: link.tree_sensitivity(a, names),
+            perturb=lambda link, errors: Linkage(perturb(link.model, errors)))
+        return calibrate(self, samples, parameters, geometry=geometry, **options)
 
     def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0
                                ) -> list[LinkageAssembly]:
@@ -509,8 +547,12 @@ class Linkage:
         if not isinstance(error, LoopClosureError) or error.q is None:
             raise InputError("reached() takes a LoopClosureError that carries the best "
                              "configuration reached (its q)")
+        return self._at(self._model.check_q(error.q))
+
+    def _at(self, q: np.ndarray) -> LinkageAssembly:
+        """The configuration ``q`` as a :class:`LinkageAssembly` (its ``residual``: the
+        largest closure residual there; no solve)."""
         model = self._model
-        q = model.check_q(error.q)
         kin = model.kinematics(q)
         norms = model.closure_norms(kin.residual)
         return LinkageAssembly(q.copy(), float(norms.max(initial=0.0)), 0,

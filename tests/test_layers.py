@@ -47,8 +47,8 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
     5: ("position problems and studies built on the solver and the analysis (trajectory: "
         "the efforts along a motion, on the closed-loop dynamics; simulation: its forward "
         "dynamics; dynamic_indices: actuator-space and output inertias, gravity maps)",
-        ("position", "modes", "sweep", "workspace", "sensitivity", "calibration",
-         "trajectory", "simulation", "dynamic_indices")),
+        ("position", "modes", "sweep", "workspace", "sensitivity", "tree_sensitivity",
+         "calibration", "trajectory", "simulation", "dynamic_indices")),
     6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
         "io reads every file format into one of them",
         ("mechanism", "linkage", "io")),

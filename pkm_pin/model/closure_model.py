@@ -339,6 +339,35 @@ class ClosureModel:
         q = self.check_q(q)
         return TreeKinematics(self, q, self.tree.createData())
 
+    def frame_id(self, name: str) -> int:
+        """Index in :attr:`tree` of a frame the closures or the output name (resolved once,
+        when the model was made: a name an MJCF body shares with a joint names one frame
+        here)."""
+        try:
+            return self._frame_ids[name]
+        except KeyError:
+            raise TreeFrameNotFound(str(name), list(self._frame_ids), "the frames the "
+                                    "closures and the output name") from None
+
+    def closure_rates(self, kin: TreeKinematics, motions: np.ndarray) -> np.ndarray:
+        """The closure rows' rates (:meth:`closure_residual` rows × n) when the closures'
+        frames move by the world twists ``motions`` (2C × 6 × n, axis-first ``(ω; v_O)``:
+        each closure's ``frame_a``, then each closure's ``frame_b``) at the configuration
+        of ``kin``: closure-Jacobian columns of motions that are not joints' (a geometric
+        error's virtual twist). Coupling rows, which no frame motion changes, are 0."""
+        motions = np.asarray(motions, dtype=float)
+        n = motions.shape[-1]
+        if motions.shape != (2 * len(self.closures), 6, n):
+            raise InputError(f"motions must be (2C, 6, n) = ({2 * len(self.closures)}, 6, n), "
+                             f"got {motions.shape}")
+        plan = self._plan
+        H = np.array([kin.frame_placements[f].homogeneous for f in plan.frames[:-1]])
+        J = np.concatenate([motions, np.zeros((1, 6, n))])
+        rates = plan._closure_rows(H.reshape(-1, 4, 4), J)[1]
+        if plan.couplings is not None:
+            rates[plan.couplings[0]] = 0.0
+        return rates
+
     def closure_slices(self) -> tuple[slice, ...]:
         """Rows of each closure in :meth:`closure_residual` (closure order)."""
         return self._plan.slices
@@ -455,12 +484,14 @@ class _Plan:
         return residual, jacobian, Jo, oMo
 
     def _closure_rows(self, H: np.ndarray, J: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residual and Jacobian rows of every closure (module docstring), vectorised:
+        """Residual and Jacobian rows of every closure (module docstring), vectorised
+        (``J``: the frames' world Jacobians, (2C + 1) × 6 × n: the joints' columns, or
+        any other motions of the frames, e.g. a geometric error's virtual twists):
         ``M = C_a⁻¹ C_b``, the relative motion's velocity at ``C_b``'s origin ``p_b``,
         ``V = v_O + ω × p_b`` (world axes), in ``C_a`` axes for point and revolute rows,
         in ``C_b`` axes (the body twist) for a weld's ``Jlog6``."""
-        C, L = self.C, self.length
-        residual, jacobian = np.empty(self.n_rows), np.empty((self.n_rows, self.nv))
+        C, L, n = self.C, self.length, J.shape[-1]
+        residual, jacobian = np.empty(self.n_rows), np.empty((self.n_rows, n))
         if C == 0:
             return residual, jacobian
         Cw = H @ self.placements if self.placed else H
@@ -470,7 +501,7 @@ class _Plan:
         V = J[C:2 * C, 3:] - J[:C, 3:] - _skew(pb) @ W  # v_O + ω × p_b
         if self.all_points:  # the common case, without index lists
             d = np.einsum("cij,cj->ci", Ra_T, pb - pa)
-            return d.reshape(-1) / L, (Ra_T @ V).reshape(-1, self.nv) / L
+            return d.reshape(-1) / L, (Ra_T @ V).reshape(-1, n) / L
         index, rows = self.rows[COUPLING]
         if index.size:  # filled by _coupling_rows
             jacobian[rows[:, 0]] = 0.0
