@@ -759,7 +759,7 @@ def _structure_leg(model, leg, q: np.ndarray, data, home: pin.SE3):
     anchor = home.actInv(data.oMf[tree.getFrameId(leg.platform_frame)]
                          * leg.platform_placement)
     if leg.kind == "tree":  # the tip at the platform joint's origin, as a TOML leg's
-        output = chain.frames[chain.getFrameId(leg.frame)]
+        output = chain.frames[chain.getFrameId(leg.frame, pin.FrameType.BODY)]
         tip = _unique(chain, f"{leg.name}_tip")
         chain.addBodyFrame(tip, output.parentJoint, pin.SE3.Identity(), output.parentFrame)
         anchor = output.placement.inverse()
@@ -805,13 +805,14 @@ def _closure_tip(chain: pin.Model, leg, data, anchor: pin.SE3, home: pin.SE3,
     revolute closure, three revolutes for a point) at its leg-side constraint frame, and
     the tip frame; returns the tip frame's name. The joints' frame is turned so that the
     tip coincides with the platform's constraint frame at zero angles (home)."""
-    frame = chain.frames[chain.getFrameId(leg.frame)]
+    # BODY: the leg's frame as added by _chain_of (an MJCF joint may share its name)
+    frame = chain.frames[chain.getFrameId(leg.frame, pin.FrameType.BODY)]
     parent, at = frame.parentJoint, frame.placement * leg.placement
     C_leg = data.oMf[tree.getFrameId(leg.frame)] * leg.placement
     C_platform = home * anchor
     turn = pin.SE3(C_leg.rotation.T @ C_platform.rotation, np.zeros(3))
     axes = {"weld": (), "revolute": _SPHERICAL[2:], "point": _SPHERICAL}[leg.kind]
-    previous = chain.getFrameId(leg.frame)
+    previous = chain.getFrameId(leg.frame, pin.FrameType.BODY)
     joint_placement = at * turn if axes else at
     for axis, joint_model in axes:
         parent = chain.addJoint(parent, joint_model(), joint_placement,

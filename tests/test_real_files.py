@@ -50,6 +50,12 @@ def test_mjcf_names_shared_by_bodies_joints_and_sites(tmp_path, sites):
     assert link.analyze(a).dof == ref.analyze(b).dof == 1
     np.testing.assert_allclose(link.analyze(a).forward_velocity([1.0]),
                                ref.analyze(b).forward_velocity([1.0]), atol=1e-10)
+    # the per-leg reading too (its legs' chains used to clash: "Several frames match")
+    legs = pkm_pin.load_mechanism(_clashing_four_bar(tmp_path, sites), backend="legs")
+    ref_legs = pkm_pin.load_mechanism(LOOPS / "four_bar.xml", backend="legs")
+    np.testing.assert_allclose(legs.home_analysis.forward_velocity([1.0]),
+                               ref_legs.home_analysis.forward_velocity([1.0]), atol=1e-10)
+    np.testing.assert_allclose(legs.home_analysis.A, ref_legs.home_analysis.A, atol=1e-10)
 
 
 @pytest.mark.parametrize("name,words", [
