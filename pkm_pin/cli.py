@@ -412,6 +412,63 @@ def _fk_linkage(args, link) -> int:
     return 0
 
 
+def cmd_sensitivity(args) -> int:
+    """Output error per unit geometric error (joint origins and axes, bases, anchors or
+    closure frames), at home or after forward kinematics (``--q``), largest first."""
+    mech = _load(args)
+    where = mech.home_assembly
+    if args.q is not None:
+        where = mech.forward_kinematics(mech.check_actuated(args.q, "--q"), guess=where)
+    if args.top < 1:
+        raise InputError(f"--top must be at least 1, got {args.top}")
+    sens = mech.sensitivity(where, args.parameters)
+    data = sensitivity_data(sens, mech.characteristic_length)
+    data["mechanism"] = mech.name
+    if args.json:
+        print(_json(data))
+        return 0
+    print(sensitivity_text(data, args.top))
+    return 0
+
+
+def sensitivity_data(sens, length: float) -> dict:
+    """Plain data of a :class:`~pkm_pin.sensitivity.Sensitivity`: the output origin
+    ``point``, the characteristic ``length``, and per parameter (largest effect first:
+    ``|δp| + L |δθ|`` per unit error) its ``twist`` at the output origin ``(δθ; δp)`` per
+    unit error, ``position_gain`` ``|δp|`` and ``rotation_gain`` ``|δθ|`` and whether the
+    rigid mechanism can absorb it (``compatible``)."""
+    M = sens.point_matrix()
+    gains = tuple(np.where(g > 1e-12 * g.max(initial=0.0), g, 0.0)  # round-off shown as 0
+                  for g in (np.linalg.norm(M[3:], axis=0), np.linalg.norm(M[:3], axis=0)))
+    order = np.argsort(-(gains[0] + length * gains[1]), kind="stable")
+    bad = set(sens.incompatible)
+    return {"point": sens.assembly.pose.translation.tolist(), "length": float(length),
+            "parameters": [{"name": sens.parameters[k], "twist": M[:, k].tolist(),
+                            "position_gain": float(gains[0][k]),
+                            "rotation_gain": float(gains[1][k]),
+                            "compatible": sens.parameters[k] not in bad} for k in order]}
+
+
+def sensitivity_text(data: dict, top: int) -> str:
+    """The text of :func:`sensitivity_data`: the ``top`` largest effects, then the
+    parameters the mechanism cannot absorb."""
+    rows = [r for r in data["parameters"] if r["compatible"]]
+    bad = [r["name"] for r in data["parameters"] if not r["compatible"]]
+    width = max([len(r["name"]) for r in rows[:top]] + [9])
+    lines = [f"mechanism  {data['mechanism']}",
+             f"output     at {_fmt(data['point'])}; per unit error of each parameter (m or "
+             "rad), actuated joints held",
+             f"{'parameter':<{width}}  {'|δp| [m/unit]':>14}  {'|δθ| [rad/unit]':>15}"]
+    lines += [f"{r['name']:<{width}}  {r['position_gain']:>14.4g}  {r['rotation_gain']:>15.4g}"
+              for r in rows[:top]]
+    if len(rows) > top:
+        lines.append(f"... {len(rows) - top} more (--top N, --json)")
+    if bad:
+        lines.append(f"cannot absorb {len(bad)} (an error opens a loop of the rigid "
+                     f"mechanism): {', '.join(bad[:8])}" + (" ..." if len(bad) > 8 else ""))
+    return "\n".join(lines)
+
+
 def _no_all(args) -> None:
     if args.all:
         raise InputError("--all (every assembly mode) is for platform mechanisms; for a "
@@ -1233,6 +1290,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON")
     _linkage_options(p)
     p.set_defaults(func=cmd_ik)
+
+    p = sub.add_parser("sensitivity", help="output error per unit geometric error",
+                       description="How far the output moves, actuated joints held, per unit "
+                       "error of each geometric parameter (joint origins and axes, leg bases "
+                       "and anchors, closure frames), largest first; the errors the rigid "
+                       "mechanism cannot absorb are listed apart.")
+    p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
+    p.add_argument("--parameters", nargs="+", metavar="NAME",
+                   help="names, a joint's or leg's name, or globs ('*/origin.z'); default all")
+    p.add_argument("--top", type=int, default=15, help="rows printed (15)")
+    p.add_argument("--json", action="store_true", help="print one JSON object (every parameter)")
+    _linkage_options(p, q=True)
+    p.set_defaults(func=cmd_sensitivity)
 
     p = sub.add_parser("map", help="singularity and conditioning maps of a workspace slice",
                        description="Sweep two pose coordinates (--axes, or --plane), the "

@@ -235,3 +235,45 @@ def test_calibration_of_a_multi_loop_leg_recovers_injected_errors():
         assert abs(result.errors[name] - error) < 1e-9, name
     assert result.residual_before > 1e-4 and result.residual_after < 1e-10
     assert isinstance(result.mechanism, Linkage)
+
+
+def test_cli_sensitivity_of_any_file(capsys):
+    """``pkm-pin sensitivity``: strict JSON with every parameter, largest effect first,
+    each twist the API's at the output origin; the text names what cannot be absorbed;
+    a TOML machine and ``--q`` go through the same command; bad options are one line."""
+    import json
+
+    from pkm_pin.cli import main
+
+    path = str(LOOPS / "cassie_knee.urdf")
+    assert main(["sensitivity", path, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    sens = _load("cassie_knee.urdf").sensitivity()
+    assert len(data["parameters"]) == len(sens.parameters)
+    M = sens.point_matrix()
+    L = data["length"]
+    effects = [r["position_gain"] + L * r["rotation_gain"] for r in data["parameters"]]
+    assert effects == sorted(effects, reverse=True)
+    for row in data["parameters"][:10]:
+        np.testing.assert_allclose(row["twist"], M[:, sens.parameters.index(row["name"])],
+                                   atol=1e-12)
+    assert {r["name"] for r in data["parameters"] if not r["compatible"]} == \
+        set(sens.incompatible)
+    assert main(["sensitivity", path, "--top", "3"]) == 0
+    text = capsys.readouterr().out
+    assert "knee/origin.z" in text and f"cannot absorb {len(sens.incompatible)}" in text
+    assert main(["sensitivity", "stewart", "--q", *["1.0"] * 5]) == 2
+    assert "--q" in capsys.readouterr().err
+    toml = pkm_pin.load_mechanism(ROOT / "models" / "mechanisms" / "stewart.toml")
+    qa = toml.home_assembly.q_actuated + 0.01
+    assert main(["sensitivity", "stewart", "--json", "--q", *map(str, qa)]) == 0
+    moved = json.loads(capsys.readouterr().out)
+    np.testing.assert_allclose(moved["point"], toml.forward_kinematics(qa).pose.translation,
+                               atol=1e-9)
+    assert main(["sensitivity", "stewart", "--top", "2", "--parameters", "1/U1"]) == 0
+    assert "1/U1/origin" in capsys.readouterr().out
+    assert main(["sensitivity", path, "--parameters", "nope"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'nope' names no geometric parameter" in err[0]
+    assert main(["sensitivity", path, "--top", "0"]) == 2
+    assert "--top must be at least 1" in capsys.readouterr().err
