@@ -133,18 +133,17 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
         InputError: ``spec`` is neither a file nor a shipped model.
     """
     from .builders import MECHANISMS
-    from .io import load_mechanism
-    from .linkage import Linkage
+    from .io import general_reading, load_mechanism, other_output
 
     options = {"closures": closures, "output": output, "point": point}
-    given = [f"--{k}" if k != "point" else ("--point" if v else "--body")
-             for k, v in options.items() if v is not None]
     if spec is None or (spec in MECHANISMS and not _is_file(Path(spec))):
-        if given:
-            raise InputError(f"{', '.join(given)}: for a linkage file (.urdf, .xml, pinned "
-                             ".toml); a shipped platform mechanism's output is its platform")
+        if closures is not None:
+            raise InputError("--closures: for a .urdf file; a shipped mechanism holds its "
+                             "own closures")
         mech = MECHANISMS["rpr3" if spec is None else spec]().build()
-        return mech if backend != "general" else Linkage(mech.closure_model)
+        if output is not None or point is not None:
+            return other_output(mech, output, point)
+        return mech if backend != "general" else general_reading(mech)
     path = Path(spec)
     if _is_file(path) or spec.endswith(LINKAGE_SUFFIXES + (".toml",)) or "/" in spec \
             or "\\" in spec:

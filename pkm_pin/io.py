@@ -33,6 +33,7 @@ starts); ``load_mechanism`` then returns a :class:`~pkm_pin.linkage.Linkage`.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import sys
 from pathlib import Path
@@ -140,15 +141,37 @@ def _load_file(path: Path, label: str, closures, output, point):
                                  "a TOML mechanism file holds its own closures")
     mech = _load_toml(path)
     if isinstance(mech, Mechanism):
-        if output is not None or point is not None:
-            raise MechanismFileError(label, "", "output=/point= choose the output of a "
-                                     "linkage (.urdf, .xml, pinned legs); the output of "
-                                     "legs fixed to a platform is the platform")
-        return mech
+        return mech if output is None and point is None else \
+            other_output(mech, output, point, label)
     try:
         return type(mech)(mech.model, output=output, point=point)
     except InputError as e:
         raise MechanismFileError(label, "output", str(e)) from e
+
+
+def general_reading(mech: Mechanism, output: str | None = None,
+                    point: bool | None = None) -> Linkage:
+    """The general elimination (:class:`~pkm_pin.linkage.Linkage`) of a platform
+    mechanism's legs-and-platform tree (:attr:`~Mechanism.closure_model`), assembled from
+    its home (the tree's reference is :meth:`Mechanism.tree_configuration` at home, so its
+    ``home_assembly`` is the mechanism's), with another output frame or a point if
+    asked."""
+    model = dataclasses.replace(mech.closure_model, reference=mech.tree_configuration())
+    return Linkage(model, output=output, point=point)
+
+
+def other_output(mech: Mechanism, output: str | None, point: bool | None,
+                 label: str = "") -> Linkage:
+    """A platform mechanism read with another output (a frame of its
+    :attr:`~Mechanism.closure_model`'s tree: ``"<leg>/<link>"``, ``"platform"``) or its
+    platform's origin as a point: :func:`general_reading`, which analyses any frame as a
+    body or a point."""
+    try:
+        return general_reading(mech, output, point)
+    except InputError as e:
+        raise MechanismFileError(label or mech.name, "output", f"{e} (a platform mechanism "
+                                 "is read with another output through its legs-and-"
+                                 "platform tree)") from e
 
 
 #: The formats :func:`load_mechanism` reads, in words (for messages).
@@ -206,7 +229,7 @@ def _with_backend(mech, backend: str | None, label: str):
     if backend is None or (backend == "legs") == isinstance(mech, Mechanism):
         return mech
     if backend == "general":
-        return Linkage(mech.closure_model)
+        return general_reading(mech)
     try:
         return Mechanism.from_closure_model(
             mech.model, mech.assemble().q,

@@ -240,12 +240,29 @@ def test_unknown_output_frame_is_one_line(capsys):
     assert "'nope'" in one_error_line(capsys)
 
 
-def test_linkage_options_on_a_platform_mechanism_are_refused(capsys):
-    """--output / --point on a platform mechanism: one error line."""
-    assert main(["analyze", "rpr3", "--point"]) == 2
-    assert "--point" in one_error_line(capsys)
+def test_another_output_of_a_platform_mechanism(capsys):
+    """--output / --point on a platform mechanism (shipped name or TOML file) read it
+    through the general elimination of its legs-and-platform tree, assembled at its home:
+    the Delta's platform origin as a point moves as the platform does (3T, same velocity
+    map); a leg's link as the output; an unknown frame is one error line naming the
+    frames."""
+    toml = load_mechanism(MODELS / "mechanisms" / "delta.toml")
+    report = _json(capsys, ["analyze", "delta", "--point", "--json"])
+    assert report["output_is_point"] and report["motion_type"] == "3T"
+    np.testing.assert_allclose(report["pose"]["xyz"], toml.home.translation, atol=1e-12)
+    point = load_mechanism(MODELS / "mechanisms" / "delta.toml", point=True)
+    np.testing.assert_allclose(point.home_assembly.q, toml.tree_configuration(), atol=1e-12)
+    for k in range(3):
+        rate = np.eye(3)[k]
+        np.testing.assert_allclose(point.home_analysis.forward_velocity(rate),
+                                   toml.home_analysis.forward_velocity(rate), atol=1e-9)
+    link = _json(capsys, ["analyze", "rpr3", "--output", "A/A1_link", "--json"])
+    assert link["output"] == "A/A1_link" and link["dof"] == 3
     assert main(["analyze", str(MODELS / "mechanisms" / "rpr3.toml"), "--output", "x"]) == 2
-    assert "output" in one_error_line(capsys)
+    line = one_error_line(capsys)
+    assert "output" in line and "'x'" in line and "A/A1_link" in line
+    assert main(["analyze", "rpr3", "--closures", "c.yaml"]) == 2
+    assert "--closures" in one_error_line(capsys)
 
 
 def test_point_and_body_are_exclusive(capsys):
