@@ -354,7 +354,7 @@ def test_legs_length_is_the_built_legs_length(name):
 def test_calibration_through_the_general_backend(stewart):
     """Errors injected into two legs of the Stewart read from its Extended URDF come back
     to 1e-9 from exact poses, through Linkage.calibrate (leg by leg); a multi-loop leg
-    refuses calibration with a sentence saying why."""
+    refuses the legs' parameter names, naming its own."""
     from pkm_pin.sensitivity import perturb
 
     _, link, _, _ = stewart
