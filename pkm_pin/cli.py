@@ -601,9 +601,15 @@ def _map_axes_names(args) -> tuple[str, str]:
 def cmd_map(args) -> int:
     """Sweep a workspace slice over two pose coordinates (partial poses completed on the
     mechanism's motion); write PREFIX.npz and the two PNG maps."""
+    from .io import general_reading
     from .plots import save_maps
 
     mech = _load(args)
+    if not _is_linkage(mech) and args.actuated is not None:
+        if args.axes is not None or args.at is not None or args.plane is not None:
+            raise InputError("--actuated maps over actuated coordinates; --axes/--plane/--at "
+                             "over pose coordinates: give one or the other")
+        mech = general_reading(mech)  # over actuated coordinates: its legs-and-platform tree
     if _is_linkage(mech):
         if args.axes is not None or args.at is not None:
             raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
@@ -1325,7 +1331,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="as --at (x y z roll pitch yaw; default home; "
                    "for a linkage: the other actuated joints, default their reference values)")
     p.add_argument("--actuated", nargs="+", metavar="NAME",
-                   help="linkage: the one or two varied actuated joints (default the first two)")
+                   help="map over these one or two actuated joints (a linkage's default: its "
+                   "first two; a platform mechanism is then read through its legs-and-platform "
+                   "tree)")
     p.add_argument("--out", metavar="PREFIX", help="output prefix (default map_NAME_PLANE); "
                    "the results so far are kept in PREFIX.partial.npz while it runs")
     p.add_argument("--resume", metavar="PREFIX",

@@ -15,6 +15,7 @@ from helpers import one_error_line
 from pkm_pin import load_mechanism
 from pkm_pin.builders.loops import four_bar_home
 from pkm_pin.cli import main
+from pkm_pin.io import general_reading
 
 MODELS = Path(__file__).resolve().parents[1] / "models"
 FOUR_BAR = MODELS / "loops" / "four_bar.urdf"
@@ -294,6 +295,32 @@ def test_map_of_two_actuated_coordinates(tmp_path, capsys):
         assert data["inverse"][j, i] == pytest.approx(an.indices["inverse"], rel=1e-9)
         assert str(data["singularity"][j, i]) == an.singularity
     assert (tmp_path / "m_singularity.png").is_file() and (tmp_path / "m_indices.png").is_file()
+
+
+def test_map_of_a_platform_mechanism_over_actuated_coordinates(tmp_path, capsys):
+    """map --actuated on the Delta (TOML legs) maps over two of its motors, the third at
+    home (it used to be ignored silently): at each assembled grid point the motors hold
+    the grid values and the platform pose and type II index are the TOML's forward
+    kinematics and analysis; --actuated with --axes is refused."""
+    prefix = tmp_path / "d"
+    assert main(["map", "delta", "--actuated", "1/R1", "2/R1", "--range", "-0.6", "-0.4",
+                 "-0.6", "-0.4", "--n", "3", "--out", str(prefix)]) == 0
+    assert "9 points (snake order)" in capsys.readouterr().out
+    data = np.load(tmp_path / "d.npz")
+    assert data["converged"].all()
+    toml = load_mechanism(MODELS / "mechanisms" / "delta.toml")
+    home = toml.home_assembly.q_actuated
+    for j, i in [(0, 0), (2, 1), (1, 2)]:
+        qa = np.array([data["u"][i], data["v"][j], home[2]])
+        assert data["q_actuated"][j, i] == pytest.approx(qa, abs=1e-9)
+        an = toml.analyze(toml.forward_kinematics(qa))
+        assert data["q"][j, i][-7:-4] == pytest.approx(an.assembly.pose.translation, abs=1e-9)
+        assert str(data["singularity"][j, i]) == an.singularity
+        general = general_reading(toml).analyze(data["q"][j, i])
+        assert data["forward"][j, i] == pytest.approx(general.indices["forward"], rel=1e-9)
+        assert general.indices["type_II"] == pytest.approx(an.indices["type_II"], rel=1e-9)
+    assert main(["map", "delta", "--actuated", "1/R1", "--axes", "x", "y"]) == 2
+    assert "one or the other" in one_error_line(capsys)
 
 
 def test_map_of_one_actuated_coordinate(tmp_path, capsys):
