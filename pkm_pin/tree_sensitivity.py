@@ -82,8 +82,14 @@ _AXES = {"JointModelRX": (0, True), "JointModelRY": (1, True), "JointModelRZ": (
          "JointModelPrismaticUnaligned": (None, False)}
 
 
-def _closure_name(model: ClosureModel, k: int) -> str:
-    return model.closures[k].name or f"closure {k}"
+def _closure_names(model: ClosureModel) -> list[str]:
+    """Each closure's name in parameter names: its own, ``closure K`` when it has none,
+    ``NAME#K`` when another closure before it has the same."""
+    out = []
+    for k, c in enumerate(model.closures):
+        name = c.name or f"closure {k}"
+        out.append(f"{name}#{k}" if name in out else name)
+    return out
 
 
 def _joint_axis(joint) -> np.ndarray | None:
@@ -110,11 +116,11 @@ def parameter_names(model: ClosureModel) -> list[str]:
         axis = _joint_axis(joint)
         if axis is not None:
             names += [f"{name}/axis.{c}" for c in _axis_components(axis)]
-    for k, c in enumerate(model.closures):
+    for c, name in zip(model.closures, _closure_names(model)):
         if c.kind == "coupling":
             continue
         comps = PLACEMENT_COMPONENTS[:3] if c.kind == "point" else PLACEMENT_COMPONENTS
-        names += [f"{_closure_name(model, k)}/{end}.{x}" for end in "ab" for x in comps]
+        names += [f"{name}/{end}.{x}" for end in "ab" for x in comps]
     return names
 
 
@@ -148,8 +154,7 @@ def _split(model: ClosureModel, name: str) -> tuple:
     what, _, comp = tail.partition(".")
     if what in ("origin", "axis"):
         return what, model.tree.getJointId(head), comp
-    names = [_closure_name(model, k) for k in range(len(model.closures))]
-    return what, names.index(head), comp
+    return what, _closure_names(model).index(head), comp
 
 
 def _closure_frame(model: ClosureModel, k: int, end: str) -> tuple[int, pin.SE3]:

@@ -277,3 +277,20 @@ def test_cli_sensitivity_of_any_file(capsys):
     assert len(err) == 1 and "'nope' names no geometric parameter" in err[0]
     assert main(["sensitivity", path, "--top", "0"]) == 2
     assert "--top must be at least 1" in capsys.readouterr().err
+
+
+def test_closures_sharing_a_name_get_distinct_parameters():
+    """Two closures of one name (files do that): the second's parameters carry its index,
+    and perturbing it moves that closure only."""
+    from dataclasses import replace
+
+    link = _load("five_bar.xml")
+    model = link.model
+    twin = replace(model, closures=model.closures + (replace(model.closures[0]),))
+    names = parameter_names(twin)
+    first = model.closures[0].name or "closure 0"
+    k = len(model.closures)
+    assert f"{first}/a.x" in names and f"{first}#{k}/a.x" in names
+    moved = perturb(twin, {f"{first}#{k}/a.x": 1e-3})
+    assert moved.closures[0].placement_a == twin.closures[0].placement_a
+    assert not moved.closures[k].placement_a.isApprox(twin.closures[k].placement_a)
