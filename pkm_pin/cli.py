@@ -363,14 +363,50 @@ def _check_linkage(path: Path, link) -> int:
                         "(redundant actuation)")
     if an.mobility.singular:
         warnings.append(an.mobility.singular_words)
-    if an.singularity != "none":
+    subs = link.submechanisms(asm.q)
+    if len(subs) > 1:
+        warnings += _check_submechanisms(link, an, subs)
+    elif an.singularity != "none":
         warnings.append(f"the reference assembly is a type {an.singularity} singularity "
-                        "(indices " + ", ".join(f"{k} {v:.2g}" for k, v in an.indices.items())
-                        + ")")
+                        f"({_indices_words(an.indices)})")
     for w in warnings:
         print(f"warn  {w}")
     print(f"{path}: " + (f"{len(warnings)} warning(s)" if warnings else "fine"))
     return 1 if warnings else 0
+
+
+def _indices_words(indices: dict) -> str:
+    """``indices type_I 0, type_II undefined, …`` (undefined: not finite)."""
+    return "indices " + ", ".join(
+        f"{k} {f'{v:.2g}' if np.isfinite(v) else 'undefined'}" for k, v in indices.items())
+
+
+def _check_submechanisms(link, an, subs) -> list[str]:
+    """``check`` of a linkage with several independent sub-mechanisms (a biped's legs):
+    one line each (joints, actuators, output, DOF, idle DOF, motion, singularity), the
+    whole's one-output singularity class as information (another sub-mechanism's
+    actuators do not move that output: type I by construction), and the warnings of
+    each sub-mechanism (DOF 0, a singular reference assembly with its own output)."""
+    print(f"info  {len(subs)} independent sub-mechanisms (no movable joint shared), each "
+          "checked with its own output; 'fk --sub K' drives one alone")
+    warnings = []
+    for k, sub in enumerate(subs):
+        a = sub.analyze(sub.home_assembly)
+        print(f"ok    sub-mechanism [{k}] {sub.name}: {sub.model.tree.njoints - 1} joints, "
+              f"{len(sub.actuated)} actuated ({', '.join(sub.actuated) or 'none'}), output "
+              f"{sub.output!r}: DOF {a.dof}, idle DOF {a.idle_dof}, output motion "
+              f"{a.motion_type}, singularity {a.singularity}")
+        if a.dof == 0:
+            warnings.append(f"sub-mechanism {sub.name} cannot move here (DOF 0)")
+        if a.singularity != "none":
+            warnings.append(f"sub-mechanism {sub.name}: the reference assembly is a type "
+                            f"{a.singularity} singularity of its output {sub.output!r} "
+                            f"({_indices_words(a.indices)})")
+    if an.singularity != "none":
+        print(f"info  the whole read with the one output {link.output!r} is type "
+              f"{an.singularity} ({_indices_words(an.indices)}): the other sub-mechanisms' "
+              "actuators do not move it; each sub-mechanism is judged with its own output")
+    return warnings
 
 
 def cmd_fk(args) -> int:
@@ -378,6 +414,9 @@ def cmd_fk(args) -> int:
     mech = _load(args)
     if _is_linkage(mech):
         return _fk_linkage(args, mech)
+    if args.sub is not None:
+        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for "
+                         f"a platform mechanism; give all {mech.n_actuated} actuated values")
     q = mech.check_actuated(args.q)
     if args.all:
         found = mech.forward_kinematics_all(q, starts=args.starts, seed=args.seed)
@@ -402,14 +441,60 @@ def cmd_fk(args) -> int:
 
 def _fk_linkage(args, link) -> int:
     """``fk`` of a linkage: every joint and the output pose (the branch nearest the
-    reference assembly, as ``ik`` and ``analyze --q``)."""
-    from .report_linkage import assembly_data, fk_text
+    reference assembly, as ``ik`` and ``analyze --q``); with several independent
+    sub-mechanisms (a biped's legs) each one's output pose too, and ``--sub K``: the
+    values are sub-mechanism K's alone (:func:`_fk_sub`)."""
+    from .report_linkage import assembly_data, fk_submechanisms_data, fk_text
 
     _no_all(args)
-    q = link.check_actuated(args.q)
-    data = assembly_data(link, link.forward_kinematics(q, guess=link.assemble()))
+    subs = link.submechanisms()
+    if args.sub is not None:
+        assembly = _fk_sub(link, subs, args.sub, args.q)
+    else:
+        if len(args.q) != len(link.actuated) and len(subs) > 1:
+            raise InputError(f"{len(args.q)} actuated values given, {len(link.actuated)} "
+                             f"expected ({', '.join(link.actuated)}); for one independent "
+                             "sub-mechanism alone give --sub K and its values: "
+                             + _subs_words(subs))
+        q = link.check_actuated(args.q)
+        assembly = link.forward_kinematics(q, guess=link.assemble())
+    data = assembly_data(link, assembly)
+    data["submechanisms"] = fk_submechanisms_data(link, subs, assembly)
     print(_json(data) if args.json else fk_text(data))
     return 0
+
+
+def _subs_words(subs) -> str:
+    """``0: name (n values: a, b, …); 1: …`` for an error message."""
+    return "; ".join(f"{k}: {s.name} ({len(s.actuated)} values: {', '.join(s.actuated)})"
+                     for k, s in enumerate(subs))
+
+
+def _fk_sub(link, subs, k: int, values):
+    """The whole linkage assembled with sub-mechanism ``k``'s actuated joints at
+    ``values`` and every other actuated joint at the reference assembly: the
+    sub-mechanism's forward kinematics from its reference, put in the whole tree
+    (:func:`pkm_pin.submechanisms.embed`), then the whole's (its targets met there
+    already: it checks the closure of every loop)."""
+    from .submechanisms import embed
+
+    if len(subs) <= 1:
+        raise InputError(f"--sub {k}: {link.name!r} is one mechanism (no independent "
+                         "sub-mechanisms); give its actuated values without --sub")
+    if not 0 <= k < len(subs):
+        raise InputError(f"--sub {k}: {link.name!r} has {len(subs)} independent "
+                         f"sub-mechanisms, numbered 0 to {len(subs) - 1}: "
+                         + _subs_words(subs))
+    sub = subs[k]
+    if len(values) != len(sub.actuated):
+        raise InputError(f"--sub {k}: {len(values)} actuated values given, "
+                         f"{len(sub.actuated)} expected ({', '.join(sub.actuated)})")
+    one = sub.forward_kinematics(sub.check_actuated(values, "Q"), guess=sub.home_assembly)
+    home = link.home_assembly
+    q = embed(link, sub, one.q, home.q)
+    targets = dict(zip(link.actuated, home.q_actuated))
+    targets.update(zip(sub.actuated, one.q_actuated))
+    return link.forward_kinematics([targets[n] for n in link.actuated], guess=q)
 
 
 def _no_all(args) -> None:
@@ -866,6 +951,9 @@ def cmd_view(args) -> int:
         print(f"opened     {mech.name} in the browser")
     if scene.animated:
         print("animated   the uncontrolled motion of this singular pose")
+    for k, (sub, a) in enumerate(getattr(scene, "submechanisms", ())):
+        print(f"sub [{k}]    {sub.name}: output {sub.output}, DOF {a.dof}, idle DOF "
+              f"{a.idle_dof}, output motion {a.motion_type}, singularity {a.singularity}")
     for motion in getattr(scene, "idle_motions", ()):
         print(f"idle       {motion}")
     if getattr(scene, "error", None) is not None:
@@ -1220,6 +1308,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--starts", type=int, default=32, help="start assemblies of --all (32)")
     p.add_argument("--seed", type=int, default=0, help="random seed of --all (0)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--sub", type=int, metavar="K",
+                   help="linkage with independent sub-mechanisms (a biped's legs, listed "
+                   "by 'analyze' and 'check'): Q are the actuated values of sub-mechanism "
+                   "K alone, the others held at the reference assembly")
     _linkage_options(p)
     p.set_defaults(func=cmd_fk)
 
