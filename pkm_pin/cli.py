@@ -331,6 +331,7 @@ def _check_linkage(path: Path, link) -> int:
     """``check`` of a linkage: loads, assembles from the reference configuration (the
     loop that does not close and its residual otherwise), mobility and singularity."""
     from .linkage import LoopClosureError
+    from .model.closure_model import duplicate_closures
 
     model = link.model
     closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or (
@@ -363,6 +364,8 @@ def _check_linkage(path: Path, link) -> int:
                         "(redundant actuation)")
     if an.mobility.singular:
         warnings.append(an.mobility.singular_words)
+    warnings += [f"closure {a!r} repeats {b!r}: its rows are redundant (remove one)"
+                 for a, b in duplicate_closures(model.closures)]
     subs = link.submechanisms(asm.q)
     if len(subs) > 1:
         warnings += _check_submechanisms(link, an, subs)
@@ -1302,8 +1305,9 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Platform pose for the actuated coordinates (continuation "
                        "from home); with --all every assembly mode found.")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
-    p.add_argument("q", nargs="+", type=float, metavar="Q",
-                   help="actuated coordinates [m or rad], in the order of 'analyze'")
+    p.add_argument("q", nargs="*", type=float, metavar="Q",
+                   help="actuated coordinates [m or rad], in the order of 'analyze' (none "
+                   "for a linkage without actuators: its assembly from the reference)")
     p.add_argument("--all", action="store_true", help="every assembly mode found")
     p.add_argument("--starts", type=int, default=32, help="start assemblies of --all (32)")
     p.add_argument("--seed", type=int, default=0, help="random seed of --all (0)")

@@ -367,7 +367,7 @@ def fk_text(r: dict) -> str:
     for several independent sub-mechanisms, the ``submechanisms`` of
     :func:`fk_submechanisms_data`: each one's actuated values and output pose)."""
     out = [f"mechanism  {r['mechanism']}",
-           f"actuated   {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
+           f"actuated   {_actuated_words(r)}",
            f"output     {r['output']}{' (point)' if r['output_is_point'] else ''}: "
            f"xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
     subs = r.get("submechanisms") or []
@@ -376,12 +376,18 @@ def fk_text(r: dict) -> str:
                    "(fk --sub K Q…: the actuated values of sub-mechanism K alone, the "
                    "others held at the reference assembly):")
         for k, s in enumerate(subs):
-            out += [f"    [{k}] {s['name']}: {', '.join(s['actuated'])} = "
-                    f"{_list(s['q_actuated'])}",
+            out += [f"    [{k}] {s['name']}: {_actuated_words(s)}",
                     f"        output {s['output']}: xyz {_list(s['pose']['xyz'])}  "
                     f"rpy {_list(s['pose']['rpy'])}"]
     out.append("joints (q):")
     return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"])
+
+
+def _actuated_words(r: dict) -> str:
+    """``a, b = [values]``, or that there is no actuator."""
+    if not r["actuated"]:
+        return "none (no actuator: the assembly from the reference configuration)"
+    return f"{', '.join(r['actuated'])} = {_list(r['q_actuated'])}"
 
 
 def fk_submechanisms_data(link, subs, assembly) -> list:

@@ -5,12 +5,15 @@ mechanism exists to move (pkm_pin.output_choice)."""
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import pkm_pin
@@ -321,3 +324,45 @@ def test_springs_are_read_and_held_when_the_output_is_chosen():
     assert (foot.motion_dim, foot.idle_dim) == (5, 2)
     with pytest.raises(pkm_pin.InputError, match="springs: joint 'left-knee' must have"):
         dataclasses.replace(link.model, springs=("left-knee",))
+
+
+def _strict(text: str) -> dict:
+    def refuse(c):
+        raise ValueError(f"non-strict JSON constant {c}")
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.mark.parametrize("case", [c for c in CORPUS if not c.no_assembly], ids=lambda c: c.id)
+def test_every_command_answers_on_the_file_without_a_numpy_warning(case, capsys, tmp_path):
+    """Issue 25, "What it must show": analyze --json (strict JSON, no failed section,
+    the table's DOF), analyze as text (the summary, DOF to class, before the tables; no
+    nan/inf), check (exit 0 or 1, no nan), fk of the reference actuated values (its
+    values kept to 1e-9, every loop closed to 1e-9, the output where analyze put it, 1e-9
+    m) and view --html (the page written, titled with the file's name), every warning an
+    error (no numpy warning reaches the terminal)."""
+    link, _ = _home(case.path)
+    path = str(DATA / case.path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["analyze", path, "--json"]) == 0
+        data = _strict(capsys.readouterr().out)
+        assert data["dof"] == case.dof and data["failed_sections"] == {}
+        assert main(["analyze", path]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        heads = [next(i for i, x in enumerate(lines) if x.startswith(h))
+                 for h in ("DOF ", "idle motions ", "joints (q):", "A (actuation")]
+        assert heads == sorted(heads) and heads[0] < 12
+        assert not re.search(r"\b(nan|inf|NaN|Infinity)\b", "\n".join(lines))
+        assert main(["check", path]) in (0, 1)
+        assert not re.search(r"\b(nan|inf)\b", capsys.readouterr().out)
+        assert main(["fk", path, *map(repr, data["q_actuated"]), "--json"]) == 0
+        fk = _strict(capsys.readouterr().out)
+        q = np.array(fk["q"])
+        assert np.allclose(link.model.actuated_values(q), data["q_actuated"], atol=1e-9)
+        assert np.abs(link.model.closure_residual(q)).max() < 1e-9
+        assert np.allclose(fk["pose"]["xyz"], data["pose"]["xyz"], atol=1e-9)
+        page = tmp_path / "page.html"
+        assert main(["view", path, "--html", str(page)]) == 0
+        capsys.readouterr()
+    text = page.read_text()
+    assert f"<title>pkm_pin: {link.name}" in text and len(text) > 10_000

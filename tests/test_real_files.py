@@ -231,3 +231,37 @@ def test_a_keyframe_of_a_floating_robot_loses_its_free_joints_coordinates(tmp_pa
     home = link.model.tree.referenceConfigurations["home"]
     np.testing.assert_array_equal(home, [0.1, 0.2, 0.3])
     assert link.model.tree.nq == 3
+
+
+def test_check_names_a_duplicate_closure_and_refuses_a_self_closure(tmp_path, capsys):
+    """Through the files: a closures file that closes the four-bar's loop twice (the
+    second the other way round) checks with a warning naming both closures (exit 1),
+    the DOF still 1 and 3 more redundant rows than the single loop's; a closure of a
+    frame onto itself, in a closures file or an MJCF <connect>, is one error line
+    (exit 2)."""
+    import shutil
+
+    from pkm_pin.cli import main
+
+    shutil.copy(LOOPS / "four_bar.urdf", tmp_path / "four_bar.urdf")
+    yaml = tmp_path / "four_bar.yaml"
+    yaml.write_text("closed_loop: [['coupler_tip', 'rocker_tip'], ['rocker_tip', "
+                    "'coupler_tip']]\ntype: ['3d', '3d']\nname_mot: ['crank_joint']\n")
+    assert main(["check", str(tmp_path / "four_bar.urdf")]) == 1
+    out = capsys.readouterr().out
+    assert ("warn  closure 'rocker_tipCcoupler_tip' repeats 'coupler_tipCrocker_tip': its "
+            "rows are redundant") in out
+    assert "DOF 1, idle DOF 0" in out and "redundant closure equations 4" in out
+    assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0
+    assert "redundant closure equations 1" in capsys.readouterr().out
+    yaml.write_text("closed_loop: [['coupler_tip', 'coupler_tip']]\ntype: ['3d']\n"
+                    "name_mot: ['crank_joint']\n")
+    assert main(["check", str(tmp_path / "four_bar.urdf")]) == 2
+    err = capsys.readouterr().err
+    assert "joins frame 'coupler_tip' to itself" in err and len(err.splitlines()) == 1
+    xml = tmp_path / "self.xml"
+    xml.write_text((LOOPS / "four_bar.xml").read_text().replace('body2="rocker"',
+                                                                 'body2="coupler"'))
+    assert main(["analyze", str(xml)]) == 2
+    err = capsys.readouterr().err
+    assert "closure 'coupler_rocker'" in err and "to itself" in err
