@@ -265,3 +265,26 @@ def test_check_names_a_duplicate_closure_and_refuses_a_self_closure(tmp_path, ca
     assert main(["analyze", str(xml)]) == 2
     err = capsys.readouterr().err
     assert "closure 'coupler_rocker'" in err and "to itself" in err
+
+
+def test_platform_text_report_gives_its_summary_before_the_tables():
+    """The platform report (a 3-RPR at a type II pose): DOF, Grübler count, class II,
+    the uncontrolled twist and the indices (type_II below 1e-12) come before the twist,
+    wrench and A/B tables; a non-finite index reads 'undefined', never nan or inf."""
+    import math
+
+    from pkm_pin import report
+    from pkm_pin.builders import MECHANISMS, rpr3_type2_pose
+
+    an = MECHANISMS["rpr3"]().build().analyze(rpr3_type2_pose())
+    data = report.report_data(an)
+    lines = report.text(data).splitlines()
+    order = [next(i for i, x in enumerate(lines) if x.startswith(h)) for h in (
+        "DOF ", "Grübler count ", "singularity        II", "uncontrolled twist rotation",
+        "indices ", "platform twists", "A (actuation", "B:")]
+    assert order == sorted(order) and order[4] == 6  # after mechanism and pose
+    assert data["indices"]["type_II"] < 1e-12
+    data["indices"] = {"type_I": math.inf, "type_II": math.nan, "condition_A": None}
+    (line,) = [x for x in report.text(data).splitlines() if x.startswith("indices")]
+    assert line.split(None, 1)[1] == ("type_I = undefined, type_II = undefined, "
+                                      "condition_A = undefined")
