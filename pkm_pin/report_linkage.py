@@ -326,11 +326,21 @@ def _matches_words(matches: dict) -> str:
 
 
 def linkage_markdown(r: dict) -> str:
-    """Markdown report of a linkage from :func:`linkage_report_data`."""
+    """Markdown report of a linkage from :func:`linkage_report_data`: the summary
+    (output, DOF, idle DOF, motion, class, the independent sub-mechanisms, duplicate
+    closures, failed optional sections) before the joint table and the matrices."""
     how = "its origin, as a point" if r["output_is_point"] else "as a body"
-    lines = [f"# {r['mechanism']}", "", "## Configuration", "",
-             f"Output frame `{r['output']}` ({how}) at xyz {_vec(r['pose']['xyz'])} m, "
-             f"rpy {_vec(r['pose']['rpy'])} rad.", "", "| joint | q |", "|---|---|"]
+    lines = [f"# {r['mechanism']}", "", "## Summary", "",
+             f"- output frame `{r['output']}` ({how}) at xyz {_vec(r['pose']['xyz'])} m, "
+             f"rpy {_vec(r['pose']['rpy'])} rad",
+             f"- DOF **{r['dof']}**, idle DOF {r['idle_dof']}, output motion "
+             f"{r['motion_type']}, singularity **{r['singularity']}**"]
+    lines += [f"- duplicate closure `{a}` repeats `{b}`: its rows are redundant"
+              for a, b in r.get("duplicate_closures", [])]
+    lines += [f"- {name}: not computed ({why})"
+              for name, why in r.get("failed_sections", {}).items()]
+    lines += _submechanisms_markdown(r.get("submechanisms") or [])
+    lines += ["", "## Configuration", "", "| joint | q |", "|---|---|"]
     lines += [f"| {n} | {_vec(v)} |" for n, v in r["joints"].items()]
     lines += ["", "## Mobility", "",
               f"- degree of freedom: **{r['dof']}**, output motion {r['motion_type']}",
@@ -360,6 +370,21 @@ def linkage_markdown(r: dict) -> str:
     if r["plots"]:
         lines += ["", "## Plots", ""] + [f"![{Path(p).stem}]({p})" for p in r["plots"]]
     return "\n".join(lines) + "\n"
+
+
+def _submechanisms_markdown(subs: list) -> list[str]:
+    """A table of the independent sub-mechanisms (:func:`submechanisms_data`), none for
+    one mechanism."""
+    if not subs:
+        return []
+    out = ["", f"{len(subs)} independent sub-mechanisms (no movable joint shared), each "
+           "analysed with the others held and its own output:", "",
+           "| sub-mechanism | actuators | output | DOF | idle DOF | motion | singularity |",
+           "|---|---|---|---|---|---|---|"]
+    out += [f"| {s['name']} | {', '.join(s['actuated']) or 'none'} | {s['output']} | "
+            f"{s['dof']} | {s['idle_dof']} | {s['motion_type']} | {s['singularity']} |"
+            for s in subs]
+    return out
 
 
 def fk_text(r: dict) -> str:

@@ -306,3 +306,22 @@ def test_view_titles_colours_and_wrenches_per_leg():
             assert np.linalg.norm(tail - nearest) < 1e-9, name
     assert len({p.rsplit("/", 1)[0] for p in colours
                 if "/wrenches/actuation/" in p}) == 12
+
+
+def test_markdown_gives_the_summary_and_each_leg_before_the_joint_table(tmp_path, capsys):
+    """analyze --markdown of battobot: the summary (DOF 12, class I) and a table row per
+    leg (its six actuators, its foot, DOF 6, idle 0, 3T3R, none) come before the
+    48-row joint table."""
+    md = tmp_path / "b.md"
+    assert main(["analyze", str(DATA / "battobot_6d/robot.urdf"), "--markdown", str(md)]) == 0
+    capsys.readouterr()
+    lines = md.read_text().splitlines()
+    summary, table = lines.index("## Summary"), lines.index("## Configuration")
+    assert summary < table
+    assert "- DOF **12**, idle DOF 0, output motion 3T3R, singularity **I**" in lines[:table]
+    rows = [x for x in lines[:table] if x.startswith("| onshape[")]
+    assert rows == [
+        "| onshape[0] | hipz_left, hipx_left, hipy_left, motor_ankle1_left, motor_ankle2_left, "
+        "motor_knee_left | foot_right | 6 | 0 | 3T3R | none |",
+        "| onshape[1] | hipz_right, hipx_right, hipy_right, motor_ankle1_right, "
+        "motor_ankle2_right, motor_knee_right | foot_left | 6 | 0 | 3T3R | none |"]
