@@ -947,7 +947,8 @@ def cmd_view(args) -> int:
         else:
             where = pose
     scene = view(mech, where, html=args.html, open=args.html is None or args.open,
-                 show_screws=not args.no_screws, show_wrenches=not args.no_wrenches)
+                 show_screws=not args.no_screws, show_wrenches=not args.no_wrenches,
+                 source=args.mechanism)
     if args.html is not None:
         print(f"wrote      {args.html}")
     else:

@@ -426,8 +426,11 @@ class Scene:
         root: Path of the mechanism's subtree, relative to the visualizer
             (``"pkm/<mechanism>"``).
         animated: Whether the scene holds the singularity animation.
-        title_lines: The page's title: the name, then the pose, then DOF, motion type
-            and singularity class (from :attr:`analysis`).
+        title_lines: The page's title: the name (and :attr:`source` in brackets), then
+            the pose, then DOF, motion type and singularity class (from
+            :attr:`analysis`).
+        source: The file (or shipped model) the mechanism was read from, when the
+            caller gave it (``pkm-pin view``: a Gepetto file's robot is "onshape").
         legend: One :class:`LegendEntry` per kind of object drawn.
         camera: ``{"target": …, "position": …, "box": (lo, hi)}``, the default camera
             in the mechanism's world frame: it looks at the centre of the bounding box
@@ -438,6 +441,7 @@ class Scene:
     title_lines: tuple[str, ...] = ()
     legend: tuple[LegendEntry, ...] = ()
     camera: dict | None = None
+    source: str | None = None
 
     def __init__(self, visualizer, recorder: SceneRecorder, analysis, root: str):
         self.visualizer = visualizer
@@ -708,7 +712,11 @@ class _Painter:
     def finish(self) -> None:
         """The scene's title and legend, from what was drawn; for a live viewer, the
         legend card (:func:`draw_legend_card`)."""
-        self.scene.title_lines = self.title_lines()
+        lines = self.title_lines()
+        source = self.scene.source
+        if source and source != lines[0]:
+            lines = (f"{lines[0]} ({source})", *lines[1:])
+        self.scene.title_lines = lines
         self.scene.legend = self.legend()
         if self.scene.recorder.forward is not None:
             draw_legend_card(self.vis, self.scene.title_lines, self.scene.legend, self.radius)

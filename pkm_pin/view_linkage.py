@@ -171,7 +171,7 @@ def _assembly(link: Linkage, where) -> LinkageAssembly | LoopClosureError:
 def view_linkage(link: Linkage, where=None, *, visualizer=None,
                  open: bool = False,  # noqa: A002 - the name meshcat and Pinocchio use
                  html: str | os.PathLike | None = None, show_screws: bool = True,
-                 show_wrenches: bool = True) -> LinkageScene:
+                 show_wrenches: bool = True, source: str | None = None) -> LinkageScene:
     """Draw a linkage in a meshcat scene (see the module docstring).
 
     Args:
@@ -184,6 +184,8 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         visualizer, open, html: As :func:`pkm_pin.view.view`.
         show_screws: Draw the joint screw axes.
         show_wrenches: Draw the actuation and constraint wrenches on the output.
+        source: The file the linkage was read from, named in the title
+            (:attr:`~pkm_pin.scene.Scene.source`).
 
     Raises:
         InputError: ``link`` is not a linkage or the pose is malformed.
@@ -205,6 +207,7 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         vis.path = visualizer.path
     scene = LinkageScene(vis, recorder, link, assembly, analysis, f"pkm/{node_name(link.name)}",
                          error)
+    scene.source = source
     if error is None:
         scene.submechanisms = _submechanisms(link, assembly)
     painter = _LinkagePainter(scene)

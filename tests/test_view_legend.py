@@ -395,3 +395,20 @@ def test_second_view_into_a_live_viewer_keeps_its_camera(rps3, stewart, tmp_path
     offset = second.camera["position"] - second.camera["target"]
     np.testing.assert_allclose(state["position"], [offset[0], offset[2], -offset[1]], rtol=1e-6)
     assert state["fov"] == CAMERA_FOV and state["card"]
+
+
+def test_cli_view_titles_the_page_with_the_file_read(tmp_path, capsys):
+    """pkm-pin view of a Gepetto file (its robot is named 'onshape', like every Onshape
+    export): the page's title names the file after the robot, then the output, 12 DOF, 6
+    idle, 3T3R and class; view() without a source keeps the bare name."""
+    from pkm_pin.cli import main
+
+    path = CORPUS / "gepetto" / "wl16_like" / "robot.urdf"
+    page = tmp_path / "wl16.html"
+    assert main(["view", str(path), "--html", str(page)]) == 0
+    capsys.readouterr()
+    title = re.search(r"<title>([^<]*)</title>", page.read_text()).group(1)
+    assert title.startswith(f"pkm_pin: onshape ({path}) — output frame foot at xyz")
+    assert title.endswith("12 DOF, 6 idle, output motion 3T3R, singularity: none")
+    assert f'<div class="pkm-name">onshape ({html.escape(str(path))})</div>' in page.read_text()
+    assert view(load_mechanism(path), show_wrenches=False).title_lines[0] == "onshape"
