@@ -332,6 +332,8 @@ def _check_linkage(path: Path, link) -> int:
     loop that does not close and its residual otherwise), mobility and singularity."""
     from .linkage import LoopClosureError
     from .model.closure_model import duplicate_closures
+    from .report import optional
+    from .submechanisms import analysed
 
     model = link.model
     closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or (
@@ -366,9 +368,11 @@ def _check_linkage(path: Path, link) -> int:
         warnings.append(an.mobility.singular_words)
     warnings += [f"closure {a!r} repeats {b!r}: its rows are redundant (remove one)"
                  for a, b in duplicate_closures(model.closures)]
-    subs = link.submechanisms(asm.q)
-    if len(subs) > 1:
-        warnings += _check_submechanisms(link, an, subs)
+    failed: dict = {}
+    parts = optional("submechanisms", lambda: analysed(link, asm.q), failed)
+    warnings += [f"sub-mechanisms not computed ({why})" for why in failed.values()]
+    if parts:
+        warnings += _check_submechanisms(link, an, parts)
     elif an.singularity != "none":
         warnings.append(f"the reference assembly is a type {an.singularity} singularity "
                         f"({_indices_words(an.indices)})")
@@ -384,17 +388,16 @@ def _indices_words(indices: dict) -> str:
         f"{k} {f'{v:.2g}' if np.isfinite(v) else 'undefined'}" for k, v in indices.items())
 
 
-def _check_submechanisms(link, an, subs) -> list[str]:
+def _check_submechanisms(link, an, parts) -> list[str]:
     """``check`` of a linkage with several independent sub-mechanisms (a biped's legs):
     one line each (joints, actuators, output, DOF, idle DOF, motion, singularity), the
     whole's one-output singularity class as information (another sub-mechanism's
     actuators do not move that output: type I by construction), and the warnings of
     each sub-mechanism (DOF 0, a singular reference assembly with its own output)."""
-    print(f"info  {len(subs)} independent sub-mechanisms (no movable joint shared), each "
+    print(f"info  {len(parts)} independent sub-mechanisms (no movable joint shared), each "
           "checked with its own output; 'fk --sub K' drives one alone")
     warnings = []
-    for k, sub in enumerate(subs):
-        a = sub.analyze(sub.home_assembly)
+    for k, (sub, a) in enumerate(parts):
         print(f"ok    sub-mechanism [{k}] {sub.name}: {sub.model.tree.njoints - 1} joints, "
               f"{len(sub.actuated)} actuated ({', '.join(sub.actuated) or 'none'}), output "
               f"{sub.output!r}: DOF {a.dof}, idle DOF {a.idle_dof}, output motion "
@@ -407,8 +410,9 @@ def _check_submechanisms(link, an, subs) -> list[str]:
                             f"({_indices_words(a.indices)})")
     if an.singularity != "none":
         print(f"info  the whole read with the one output {link.output!r} is type "
-              f"{an.singularity} ({_indices_words(an.indices)}): the other sub-mechanisms' "
-              "actuators do not move it; each sub-mechanism is judged with its own output")
+              f"{an.singularity} ({_indices_words(an.indices)}), a class of one output "
+              "that the other sub-mechanisms do not move; each sub-mechanism is judged "
+              "with its own output")
     return warnings
 
 
@@ -447,13 +451,19 @@ def _fk_linkage(args, link) -> int:
     reference assembly, as ``ik`` and ``analyze --q``); with several independent
     sub-mechanisms (a biped's legs) each one's output pose too, and ``--sub K``: the
     values are sub-mechanism K's alone (:func:`_fk_sub`)."""
+    from .report import optional
     from .report_linkage import assembly_data, fk_submechanisms_data, fk_text
 
     _no_all(args)
-    subs = link.submechanisms()
+    failed: dict = {}
+    subs = optional("submechanisms", link.submechanisms, failed)
     if args.sub is not None:
+        if subs is None:
+            raise InputError(f"--sub {args.sub}: the sub-mechanisms of {link.name!r} could "
+                             f"not be computed ({failed['submechanisms']})")
         assembly = _fk_sub(link, subs, args.sub, args.q)
     else:
+        subs = subs or [link]
         if len(args.q) != len(link.actuated) and len(subs) > 1:
             raise InputError(f"{len(args.q)} actuated values given, {len(link.actuated)} "
                              f"expected ({', '.join(link.actuated)}); for one independent "
@@ -462,7 +472,9 @@ def _fk_linkage(args, link) -> int:
         q = link.check_actuated(args.q)
         assembly = link.forward_kinematics(q, guess=link.assemble())
     data = assembly_data(link, assembly)
-    data["submechanisms"] = fk_submechanisms_data(link, subs, assembly)
+    data["submechanisms"] = optional(
+        "submechanisms", lambda: fk_submechanisms_data(link, subs, assembly), failed)
+    data["failed_sections"] = failed
     print(_json(data) if args.json else fk_text(data))
     return 0
 
@@ -955,6 +967,8 @@ def cmd_view(args) -> int:
         print(f"opened     {mech.name} in the browser")
     if scene.animated:
         print("animated   the uncontrolled motion of this singular pose")
+    for name, why in getattr(scene, "failed_sections", {}).items():
+        print(f"{name:<10} not computed ({why}); the whole is drawn")
     for k, (sub, a) in enumerate(getattr(scene, "submechanisms", ())):
         print(f"sub [{k}]    {sub.name}: output {sub.output}, DOF {a.dof}, idle DOF "
               f"{a.idle_dof}, output motion {a.motion_type}, singularity {a.singularity}")
@@ -1484,11 +1498,26 @@ def _error_line(error: PkmError, args) -> str:
     return " ".join(message.split())  # every line break (also U+2028, U+0085) a space
 
 
+def _fk_values_after_options(extras: list) -> tuple[list, list]:
+    """``fk``'s Q (which may be empty: a linkage without actuators) given after an option
+    (``fk FILE --sub 1 Q…``): argparse has matched the empty Q before the option, so the
+    values come back unrecognized; ``(values, [])``, or ``([], extras)`` when one is not
+    a number."""
+    try:
+        return [float(x) for x in extras], []
+    except ValueError:
+        return [], extras
+
+
 def main(argv=None) -> int:
     """Entry point of ``pkm-pin``; returns the exit status."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extras = parser.parse_known_args(argv)
+        if extras and args.command == "fk" and not args.q:
+            args.q, extras = _fk_values_after_options(extras)
+        if extras:
+            parser.error(f"unrecognized arguments: {' '.join(extras)}")
     except SystemExit as e:  # --help (0) or a usage error (2), already printed
         return int(e.code or 0)
     args.argv = list(sys.argv[1:] if argv is None else argv)

@@ -405,7 +405,8 @@ def fk_text(r: dict) -> str:
                     f"        output {s['output']}: xyz {_list(s['pose']['xyz'])}  "
                     f"rpy {_list(s['pose']['rpy'])}"]
     out.append("joints (q):")
-    return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"])
+    return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"]
+                     + failed_lines(r))
 
 
 def _actuated_words(r: dict) -> str:

@@ -180,3 +180,13 @@ def embed(link, sub, q_sub: np.ndarray, q: np.ndarray) -> np.ndarray:
         src = reduced.joints[j]
         out[dst.idx_q:dst.idx_q + dst.nq] = q_sub[src.idx_q:src.idx_q + src.nq]
     return out
+
+
+def analysed(link, q) -> tuple:
+    """``(sub-mechanism, its analysis at its reference assembly)`` of each independent
+    sub-mechanism of ``link`` at the assembled ``q`` (:func:`submechanisms`); ``()`` for
+    one mechanism."""
+    subs = link.submechanisms(q)
+    if len(subs) <= 1:
+        return ()
+    return tuple((sub, sub.analyze(sub.home_assembly)) for sub in subs)

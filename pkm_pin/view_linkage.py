@@ -72,7 +72,7 @@ from . import screws
 from .errors import InputError
 from .linkage import Linkage, LinkageAssembly, LoopClosureError, _body_points
 from .model.closure_model import NullSpace
-from .report import readable_basis
+from .report import optional, readable_basis
 from .scene import (
     ACTUATED_SCREW_COLOUR,
     ACTUATION_WRENCH_COLOUR,
@@ -91,6 +91,7 @@ from .scene import (
     node_name,
     pose_words,
 )
+from .submechanisms import analysed, groups
 from .tolerances import RANK_RTOL
 
 CLOSURE_COLOUR = 0xE7298A
@@ -120,6 +121,8 @@ class LinkageScene(Scene):
         submechanisms: For a linkage of several independent sub-mechanisms (a biped's
             legs: :meth:`Linkage.submechanisms`), ``(sub-mechanism, its analysis)`` of
             each, drawn each with its own output and wrenches; ``()`` otherwise.
+        failed_sections: ``{"submechanisms": "Type: message"}`` when they could not
+            be computed (:func:`pkm_pin.report.optional`: the whole is drawn).
         visualizer, recorder, root, animated: As :class:`pkm_pin.view.Scene`
             (``animated`` is False: nothing is animated).
     """
@@ -138,6 +141,7 @@ class LinkageScene(Scene):
         self.error = error
         self.gaps = () if error is None or error.diagnosis is None else error.diagnosis.gaps
         self.submechanisms = ()
+        self.failed_sections = {}
 
 
 def idle_velocities(link: Linkage, q) -> np.ndarray:
@@ -209,7 +213,8 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
                          error)
     scene.source = source
     if error is None:
-        scene.submechanisms = _submechanisms(link, assembly)
+        scene.submechanisms = optional("submechanisms", lambda: analysed(link, assembly.q),
+                                       scene.failed_sections) or ()
     painter = _LinkagePainter(scene)
     painter.tree()
     painter.closures()
@@ -229,15 +234,6 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
     if open:
         scene.open()
     return scene
-
-
-def _submechanisms(link: Linkage, assembly: LinkageAssembly) -> tuple:
-    """``(sub-mechanism, its analysis)`` of each independent sub-mechanism at the
-    assembly, ``()`` for one mechanism."""
-    subs = link.submechanisms(assembly.q)
-    if len(subs) <= 1:
-        return ()
-    return tuple((sub, sub.analyze(sub.home_assembly)) for sub in subs)
 
 
 class _LinkagePainter(_Painter):
@@ -264,8 +260,6 @@ class _LinkagePainter(_Painter):
         self.centre_at = None
         self.group_of = {}
         if scene.submechanisms:
-            from .submechanisms import groups
-
             self.group_of = {j: k for k, g in enumerate(groups(self.model)) for j in g}
 
     def centre(self) -> np.ndarray:

@@ -272,7 +272,8 @@ def test_view_titles_colours_and_wrenches_per_leg():
     """view of battobot: a title line per leg (its foot, 6 DOF, 3T3R, class none), a
     legend entry per leg in the colour of its bars, both feet drawn, and the twelve
     actuation wrenches, each leg's from its own analysis: each arrow starts on its
-    wrench's axis at the point nearest its own foot (1e-9 m)."""
+    wrench's axis at the point nearest its own foot (1e-9 m), or, for an axis metres
+    away, is centred on its own foot along the moment about it (1e-9)."""
     from test_view import page_commands
 
     from pkm_pin.scene import LEG_COLOURS
@@ -297,13 +298,23 @@ def test_view_titles_colours_and_wrenches_per_leg():
              if c["type"] == "set_transform"}
     tree = link.model.tree
     kin = link.model.kinematics(a.q)
+    couples = 0
     for sub, an in scene.submechanisms:
         foot = kin.frame_placements[tree.getFrameId(sub.output)].translation
         for name, w in zip(sub.actuated, an.A):
             point, u = screws.axis(w, length=link.model.length)
-            tail = moves[f"{root}/wrenches/actuation/{name}"][:3, 3]
+            M = moves[f"{root}/wrenches/actuation/{name}"]
+            if f"{root}/wrenches/actuation/{name}/tail" in moves:  # axis metres away
+                m = w[3:] - np.cross(foot, w[:3])
+                u = M[:3, 1]
+                assert np.allclose(u, m / np.linalg.norm(m), atol=1e-9), name
+                back = foot - M[:3, 3]  # from its tail to its foot: along u
+                assert np.linalg.norm(np.cross(back, u)) < 1e-9 and back @ u > 0, name
+                couples += 1
+                continue
             nearest = point + ((foot - point) @ u) * u
-            assert np.linalg.norm(tail - nearest) < 1e-9, name
+            assert np.linalg.norm(M[:3, 3] - nearest) < 1e-9, name
+    assert 0 < couples < 12
     assert len({p.rsplit("/", 1)[0] for p in colours
                 if "/wrenches/actuation/" in p}) == 12
 
@@ -325,3 +336,33 @@ def test_markdown_gives_the_summary_and_each_leg_before_the_joint_table(tmp_path
         "motor_knee_left | foot_right | 6 | 0 | 3T3R | none |",
         "| onshape[1] | hipz_right, hipx_right, hipy_right, motor_ankle1_right, "
         "motor_ankle2_right, motor_knee_right | foot_left | 6 | 0 | 3T3R | none |"]
+
+
+def test_a_failing_split_costs_only_the_per_leg_part(monkeypatch, capsys, tmp_path):
+    """When the split into legs fails (an error the split raises, here an IndexError
+    planted in it), check, fk and view still answer for the whole, each naming the
+    section not computed with its error: check warns (exit 1) and keeps the whole's
+    class; fk prints the foot pose of the whole's assembly (its JSON records the
+    failure); view draws the whole; fk --sub says in one line why it cannot."""
+    import pkm_pin.submechanisms as sm
+
+    def broken(link, q=None):
+        raise IndexError("index 7 is out of bounds for axis 0 with size 7")
+
+    link, a, _ = _legs("digit_like_2legs")
+    monkeypatch.setattr(sm, "submechanisms", broken)
+    assert main(["check", DIGIT2]) == 1
+    out = capsys.readouterr().out
+    assert "warn  sub-mechanisms not computed (IndexError: index 7 is out of bounds" in out
+    assert "warn  the reference assembly is a type I singularity" in out
+    assert main(["fk", DIGIT2, *map(str, a.q_actuated.tolist()), "--json"]) == 0
+    got = _strict(capsys.readouterr().out)
+    assert got["submechanisms"] == [] and got["failed_sections"]["submechanisms"].startswith(
+        "IndexError")
+    assert np.allclose(got["pose"]["xyz"], a.output_pose.translation, atol=1e-9)
+    assert main(["fk", DIGIT2, "--sub", "0", *map(str, a.q_actuated[:6].tolist())]) == 2
+    assert "the sub-mechanisms of 'onshape' could not be computed (IndexError" in (
+        capsys.readouterr().err)
+    assert main(["view", DIGIT2, "--html", str(tmp_path / "d.html")]) == 0
+    out = capsys.readouterr().out
+    assert "submechanisms not computed (IndexError" in out and "sub [0]" not in out
