@@ -349,6 +349,9 @@ def _check_linkage(path: Path, link) -> int:
         raise InputError(f"{path}: {e}") from e
     print(f"ok    assembles from the reference configuration (closure residual "
           f"{asm.residual:.2g}); output at {_pose_text(asm.output_pose)}")
+    for note in model.notes:
+        print(f"info  {note}")
+    _check_output_choice(link, asm)
     an = link.analyze(asm)
     print(f"ok    mobility: DOF {an.dof}, idle DOF {an.idle_dof}, Grübler count "
           f"{link.grubler}, redundant closure equations {an.redundant_constraints}, "
@@ -380,6 +383,20 @@ def _check_linkage(path: Path, link) -> int:
         print(f"warn  {w}")
     print(f"{path}: " + (f"{len(warnings)} warning(s)" if warnings else "fine"))
     return 1 if warnings else 0
+
+
+def _check_output_choice(link, asm) -> None:
+    """``check``'s line on an output the file did not name: chosen by the default rule
+    (:mod:`pkm_pin.output_choice`), with the others that fit as well and how to pick one."""
+    from .report_linkage import output_hint
+
+    if link.model.output_named:
+        return
+    likely, _ = output_hint(link.model, asm.q)
+    others = [f for f in likely if f != link.output]
+    print(f"info  output {link.output!r}: not named in the file, chosen by the default rule "
+          "(the body the mechanism exists to move)"
+          + (f"; as likely: {', '.join(others)} (--output FRAME)" if others else ""))
 
 
 def _indices_words(indices: dict) -> str:

@@ -366,3 +366,18 @@ def test_every_command_answers_on_the_file_without_a_numpy_warning(case, capsys,
         capsys.readouterr()
     text = page.read_text()
     assert f"<title>pkm_pin: {link.name}" in text and len(text) > 10_000
+
+
+def test_check_says_the_base_and_how_the_output_was_chosen(capsys):
+    """check of Menagerie's Cassie: the free pelvis held as the base is said, and that the
+    left foot was chosen by the default rule, naming the frames that fit as well (its
+    ties in CORPUS) and --output; a file that names its output gets no such line."""
+    case = next(c for c in CORPUS if c.path.endswith("cassie.xml"))
+    assert main(["check", str(DATA / case.path)]) == 1
+    out = capsys.readouterr().out
+    assert "info  cassie-pelvis has a free joint in the file: it is held as the base" in out
+    assert (f"info  output 'left-foot': not named in the file, chosen by the default rule "
+            f"(the body the mechanism exists to move); as likely: {', '.join(case.ties)} "
+            "(--output FRAME)") in out
+    assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0
+    assert "chosen by the default rule" not in capsys.readouterr().out
