@@ -126,7 +126,8 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
     (readable bases about the output origin, with ``words``), ``A``, ``B``,
     ``singularity``, ``constraint_singular`` (``None``: not decided), ``indices``
-    (``None`` where undefined), ``submechanisms`` (:func:`submechanisms_data`: ``[]``
+    (``None`` where undefined), ``indices_undefined`` (:func:`undefined_indices`: why
+    each ``None`` index is not defined), ``submechanisms`` (:func:`submechanisms_data`: ``[]``
     for a single mechanism, ``None`` when it failed), and, as in the platform report,
     ``uncontrolled_twist``, ``crosscheck``, ``crosscheck_max_error`` (``None``: no
     hand-written formulas) and ``plots``.
@@ -163,6 +164,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "singularity": an.singularity,
         "constraint_singular": an.constraint_singular,
         "indices": {k: finite_or_none(v) for k, v in an.indices.items()},
+        "indices_undefined": undefined_indices(link, an),
         "transmission": optional("transmission", lambda: _transmission(link, assembly),
                                  failed),
         "submechanisms": optional("submechanisms",
@@ -174,6 +176,29 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "failed_sections": failed,
     })
     return data
+
+
+def undefined_indices(link, an) -> dict:
+    """``{index: why it is not defined}`` for each index of the analysis ``an`` that is
+    not finite (``null`` in the JSON, ``undefined`` in the text): no actuator; actuators
+    whose wrench on the output is zero (rows of ``A`` that cannot be made unit: a type I
+    singularity, e.g. the other leg's motors of a biped read with one foot); else ``A Δ``
+    singular (an infinite condition number)."""
+    bad = {k: float(v) for k, v in an.indices.items() if not np.isfinite(v)}
+    if not bad:
+        return {}
+    A = np.asarray(an.A, dtype=float).reshape(-1, 6)
+    zero = [n for n, row in zip(link.actuated, A) if not np.any(np.abs(row) > 1e-12)]
+    if not link.actuated:
+        why = "no actuator: A has no row"
+    elif zero:
+        why = (f"{len(zero)} actuator{'s' * (len(zero) != 1)} ({', '.join(zero[:6])}"
+               f"{', …' if len(zero) > 6 else ''}) exert no wrench on the output: zero rows "
+               "of A (a type I singularity), which cannot be scaled to unit length")
+    else:
+        why = "A Δ is singular here"
+    return {k: f"{'infinite' if np.isinf(v) else 'not a number'}: {why}"
+            for k, v in bad.items()}
 
 
 def submechanisms_data(link, assembly) -> list:
@@ -297,6 +322,7 @@ def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()
     out += [f"    {_row(row)}" for row in r["A"]]
     out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
     out += [f"singularity        {r['singularity']}", f"indices            {idx}"]
+    out += [f"    {k} undefined ({why})" for k, why in r.get("indices_undefined", {}).items()]
     tr = r.get("transmission")
     if tr is not None:
         out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}: {tr['words']}"]

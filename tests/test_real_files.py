@@ -288,3 +288,29 @@ def test_platform_text_report_gives_its_summary_before_the_tables():
     (line,) = [x for x in report.text(data).splitlines() if x.startswith("indices")]
     assert line.split(None, 1)[1] == ("type_I = undefined, type_II = undefined, "
                                       "condition_A = undefined")
+
+
+@pytest.mark.parametrize("path,undefined,words", [
+    ("gepetto/battobot_6d/robot.urdf", {"type_II", "condition_A"},
+     "6 actuators (hipz_right, hipx_right, hipy_right, motor_ankle1_right, "
+     "motor_ankle2_right, motor_knee_right) exert no wrench on the output: zero rows of A"),
+    ("pinocchio/closed_chain.xml", {"type_I", "condition_A"}, "no actuator: A has no row"),
+    ("gepetto/5bar_linkage_iso3d/robot.urdf", set(), ""),
+])
+def test_every_null_index_of_the_json_says_why(capsys, path, undefined, words):
+    """analyze --json: each index that is null has its reason under indices_undefined
+    (the other leg's motors of a biped read with one foot; no motor at all), and only
+    those; a regular five-bar has none; the text prints each reason under the indices."""
+    import json
+
+    from pkm_pin.cli import main
+
+    spec = str(Path(__file__).resolve().parent / "data" / path)
+    assert main(["analyze", spec, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    nulls = {k for k, v in data["indices"].items() if v is None}
+    assert nulls == set(data["indices_undefined"]) == undefined
+    assert all(words in why for why in data["indices_undefined"].values())
+    assert main(["analyze", spec]) == 0
+    text = capsys.readouterr().out
+    assert all(f"    {k} undefined (" in text for k in undefined)
