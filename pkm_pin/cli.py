@@ -985,7 +985,7 @@ def cmd_view(args) -> int:
     if scene.animated:
         print("animated   the uncontrolled motion of this singular pose")
     for name, why in getattr(scene, "failed_sections", {}).items():
-        print(f"{name:<10} not computed ({why}); the whole is drawn")
+        print(f"failed     {name}: {why}; the rest is drawn")
     for k, (sub, a) in enumerate(getattr(scene, "submechanisms", ())):
         print(f"sub [{k}]    {sub.name}: output {sub.output}, DOF {a.dof}, idle DOF "
               f"{a.idle_dof}, output motion {a.motion_type}, singularity {a.singularity}")

@@ -121,8 +121,10 @@ class LinkageScene(Scene):
         submechanisms: For a linkage of several independent sub-mechanisms (a biped's
             legs: :meth:`Linkage.submechanisms`), ``(sub-mechanism, its analysis)`` of
             each, drawn each with its own output and wrenches; ``()`` otherwise.
-        failed_sections: ``{"submechanisms": "Type: message"}`` when they could not
-            be computed (:func:`pkm_pin.report.optional`: the whole is drawn).
+        failed_sections: ``{section: "Type: message"}`` for each optional part that
+            failed (:func:`pkm_pin.report.optional`): ``"submechanisms"`` (the whole is
+            drawn as one), ``"idle axes"``, ``"gaps"``, ``"screw axes"``, ``"wrenches"``
+            (that layer is left out, the rest drawn).
         visualizer, recorder, root, animated: As :class:`pkm_pin.view.Scene`
             (``animated`` is False: nothing is animated).
     """
@@ -219,14 +221,15 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
     painter.tree()
     painter.closures()
     painter.output()
+    failed = scene.failed_sections  # an optional layer that fails costs that layer
     if error is None:
-        painter.idle()
+        optional("idle axes", painter.idle, failed)
     else:
-        painter.gaps()
+        optional("gaps", painter.gaps, failed)
     if show_screws and error is None:
-        painter.screws()
+        optional("screw axes", painter.screws, failed)
     if show_wrenches and error is None:
-        painter.wrenches()
+        optional("wrenches", painter.wrenches, failed)
     painter.settings()
     painter.finish()
     if html is not None:

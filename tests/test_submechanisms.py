@@ -365,4 +365,4 @@ def test_a_failing_split_costs_only_the_per_leg_part(monkeypatch, capsys, tmp_pa
         capsys.readouterr().err)
     assert main(["view", DIGIT2, "--html", str(tmp_path / "d.html")]) == 0
     out = capsys.readouterr().out
-    assert "submechanisms not computed (IndexError" in out and "sub [0]" not in out
+    assert "failed     submechanisms: IndexError: index 7" in out and "sub [0]" not in out
