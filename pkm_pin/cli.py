@@ -496,6 +496,18 @@ def _fk_linkage(args, link) -> int:
     return 0
 
 
+def _pick_sub(link, subs, k: int):
+    """Sub-mechanism ``k`` of ``subs`` (``link``'s), or the error of ``--sub K``."""
+    if len(subs) <= 1:
+        raise InputError(f"--sub {k}: {link.name!r} is one mechanism (no independent "
+                         "sub-mechanisms); leave --sub out")
+    if not 0 <= k < len(subs):
+        raise InputError(f"--sub {k}: {link.name!r} has {len(subs)} independent "
+                         f"sub-mechanisms, numbered 0 to {len(subs) - 1}: "
+                         + _subs_words(subs))
+    return subs[k]
+
+
 def _subs_words(subs) -> str:
     """``0: name (n values: a, b, …); 1: …`` for an error message."""
     return "; ".join(f"{k}: {s.name} ({len(s.actuated)} values: {', '.join(s.actuated)})"
@@ -510,14 +522,7 @@ def _fk_sub(link, subs, k: int, values):
     already: it checks the closure of every loop)."""
     from .submechanisms import embed
 
-    if len(subs) <= 1:
-        raise InputError(f"--sub {k}: {link.name!r} is one mechanism (no independent "
-                         "sub-mechanisms); give its actuated values without --sub")
-    if not 0 <= k < len(subs):
-        raise InputError(f"--sub {k}: {link.name!r} has {len(subs)} independent "
-                         f"sub-mechanisms, numbered 0 to {len(subs) - 1}: "
-                         + _subs_words(subs))
-    sub = subs[k]
+    sub = _pick_sub(link, subs, k)
     if len(values) != len(sub.actuated):
         raise InputError(f"--sub {k}: {len(values)} actuated values given, "
                          f"{len(sub.actuated)} expected ({', '.join(sub.actuated)})")
@@ -669,7 +674,19 @@ def cmd_map(args) -> int:
         if args.axes is not None or args.at is not None:
             raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
                              "over actuated coordinates (--actuated NAME [NAME], --fixed)")
+        subs = mech.submechanisms()
+        if args.sub is not None:
+            return _map_linkage(args, _pick_sub(mech, subs, args.sub))
+        if len(subs) > 1:
+            words = "; ".join(f"{k}: {s.name}, output {s.output}" for k, s in enumerate(subs))
+            print(f"note       {len(subs)} independent sub-mechanisms ({words}): "
+                  f"the classes below are those of the one output {mech.output!r}, which "
+                  "the others' motors do not move (type I); --sub K maps one with its own "
+                  "output")
         return _map_linkage(args, mech)
+    if args.sub is not None:
+        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for a "
+                         "platform mechanism")
     axes = _map_axes_names(args)
     tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
     prefix = _map_prefix(args, tag)
@@ -1385,6 +1402,10 @@ def build_parser() -> argparse.ArgumentParser:
                    "for a linkage: the other actuated joints, default their reference values)")
     p.add_argument("--actuated", nargs="+", metavar="NAME",
                    help="linkage: the one or two varied actuated joints (default the first two)")
+    p.add_argument("--sub", type=int, metavar="K",
+                   help="linkage with independent sub-mechanisms (a biped's legs, listed by "
+                   "'check'): map sub-mechanism K alone, with its own output, the others "
+                   "held at the reference assembly")
     p.add_argument("--out", metavar="PREFIX", help="output prefix (default map_NAME_PLANE); "
                    "the results so far are kept in PREFIX.partial.npz while it runs")
     p.add_argument("--resume", metavar="PREFIX",

@@ -366,3 +366,35 @@ def test_a_failing_split_costs_only_the_per_leg_part(monkeypatch, capsys, tmp_pa
     assert main(["view", DIGIT2, "--html", str(tmp_path / "d.html")]) == 0
     out = capsys.readouterr().out
     assert "failed     submechanisms: IndexError: index 7" in out and "sub [0]" not in out
+
+
+def test_map_of_one_leg_reads_its_own_foot(tmp_path, capsys):
+    """map --sub 1 of digit_like_2legs over the left hip pitch and knee (3 × 3): every
+    point assembles and is regular for the left foot (the whole map reads type I at
+    each, with a note naming both legs and --sub); each foot pose of the map is the one
+    the whole model's fk gives with those two motors set (1e-8 m)."""
+    link, a, _ = _legs("digit_like_2legs")
+    args = ["--n", "3", "--quiet", "--actuated", "motor_hip_y_left", "motor_knee_left",
+            "--range", "-0.3", "-0.1", "-0.05", "0.1"]
+    assert main(["map", DIGIT2, "--sub", "1", "--out", str(tmp_path / "left"), *args]) == 0
+    capsys.readouterr()
+    data = np.load(tmp_path / "left.npz")
+    assert str(data["output"]) == "foot_left" and data["converged"].all()
+    assert (data["singularity"] == "none").all()
+    foot = link.model.tree.getFrameId("foot_left")
+    for i, j in ((0, 0), (2, 1), (1, 2)):
+        qa = a.q_actuated.copy()
+        qa[6:] = data["q_actuated"][i, j]
+        whole = link.forward_kinematics(qa, guess=a)
+        M = link.model.kinematics(whole.q).frame_placements[foot].homogeneous
+        assert np.allclose(data["output_poses"][i, j], M, atol=1e-8)
+    right = ["--actuated", "motor_hip_y", "motor_knee", "--range", "-0.1", "0.1", "-0.1",
+             "0.1"]
+    assert main(["map", DIGIT2, "--out", str(tmp_path / "whole"), "--n", "3", "--quiet",
+                 *right]) == 0
+    out = capsys.readouterr().out
+    assert ("note       2 independent sub-mechanisms (0: onshape[0], output foot; 1: "
+            "onshape[1], output foot_left)") in out and "--sub K maps one" in out
+    assert "class I 9, class II 0, class III 0" in out
+    assert main(["map", str(FOUR_BAR), "--sub", "0", "--out", str(tmp_path / "f")]) == 2
+    assert "one mechanism" in capsys.readouterr().err
