@@ -473,14 +473,10 @@ def _fk_linkage(args, link) -> int:
 
     _no_all(args)
     failed: dict = {}
-    subs = optional("submechanisms", link.submechanisms, failed)
+    subs = _submechanisms_or_why(link, args.sub, failed)
     if args.sub is not None:
-        if subs is None:
-            raise InputError(f"--sub {args.sub}: the sub-mechanisms of {link.name!r} could "
-                             f"not be computed ({failed['submechanisms']})")
         assembly = _fk_sub(link, subs, args.sub, args.q)
     else:
-        subs = subs or [link]
         if len(args.q) != len(link.actuated) and len(subs) > 1:
             raise InputError(f"{len(args.q)} actuated values given, {len(link.actuated)} "
                              f"expected ({', '.join(link.actuated)}); for one independent "
@@ -494,6 +490,20 @@ def _fk_linkage(args, link) -> int:
     data["failed_sections"] = failed
     print(_json(data) if args.json else fk_text(data))
     return 0
+
+
+def _submechanisms_or_why(link, k: int | None, failed: dict | None = None) -> list:
+    """:meth:`Linkage.submechanisms` as an optional section
+    (:func:`pkm_pin.report.optional`: ``[link]`` with the error in ``failed`` when the
+    split fails), or, for ``--sub K`` (``k`` given), the error in one line."""
+    from .report import optional
+
+    failed = {} if failed is None else failed
+    subs = optional("submechanisms", link.submechanisms, failed)
+    if subs is None and k is not None:
+        raise InputError(f"--sub {k}: the sub-mechanisms of {link.name!r} could not be "
+                         f"computed ({failed['submechanisms']})")
+    return [link] if subs is None else subs
 
 
 def _pick_sub(link, subs, k: int):
@@ -674,7 +684,7 @@ def cmd_map(args) -> int:
         if args.axes is not None or args.at is not None:
             raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
                              "over actuated coordinates (--actuated NAME [NAME], --fixed)")
-        subs = mech.submechanisms()
+        subs = _submechanisms_or_why(mech, args.sub)
         if args.sub is not None:
             return _map_linkage(args, _pick_sub(mech, subs, args.sub))
         if len(subs) > 1:
