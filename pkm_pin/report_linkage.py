@@ -115,7 +115,10 @@ def assembly_data(link, assembly) -> dict:
 def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Path] = ()) -> dict:
     """Plain-data summary (JSON-ready) of a linkage at an assembly.
 
-    Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``structure``
+    Keys: those of :func:`assembly_data`, then ``description`` (``""``),
+    ``output_named`` (the output was named by the file or the caller, not chosen by the
+    default rule), ``output_likely`` (the frames that fit the rule best, the chosen one
+    among them: :func:`output_hint`), ``structure``
     (:func:`structure_data`), ``duplicate_closures``, ``dof``,
     ``idle_dof``, ``idle_motions`` (sentences), ``singular`` (a rank below the generic
     one: :attr:`~pkm_pin.linkage.Mobility.singular`, ``None``: not decided),
@@ -141,6 +144,9 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     failed: dict = {}
     data.update({
         "description": "",
+        "output_named": bool(link.model.output_named),
+        "output_likely": optional("output_likely",
+                                  lambda: output_hint(link.model, assembly.q)[0], failed),
         "structure": structure_data(link),
         "duplicate_closures": [list(pair) for pair in duplicate_closures(link.model.closures)],
         "dof": an.dof,

@@ -381,3 +381,19 @@ def test_check_says_the_base_and_how_the_output_was_chosen(capsys):
             "(--output FRAME)") in out
     assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0
     assert "chosen by the default rule" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("case", [c for c in CORPUS if not c.no_assembly and c.ties],
+                         ids=lambda c: c.id)
+def test_analyze_json_says_how_the_output_was_chosen_and_what_fits_as_well(case, capsys):
+    """analyze --json of a file that names no output: output_named false and
+    output_likely the default output then its ties (CORPUS), as the text hint lists
+    them; --output names it: output_named true."""
+    path = str(DATA / case.path)
+    assert main(["analyze", path, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["output_named"] is False
+    assert data["output_likely"] == [case.output, *case.ties]
+    assert main(["analyze", path, "--json", "--output", case.ties[0]]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["output_named"] is True and data["output"] == case.ties[0]
