@@ -314,3 +314,28 @@ def test_every_null_index_of_the_json_says_why(capsys, path, undefined, words):
     assert main(["analyze", spec]) == 0
     text = capsys.readouterr().out
     assert all(f"    {k} undefined (" in text for k in undefined)
+
+
+@pytest.mark.parametrize("path", ["gepetto/cassie_like/robot.urdf",
+                                  "gepetto/digit_like/robot.urdf",
+                                  "gepetto/talos_like/robot.urdf",
+                                  "gepetto/wl16_like/robot.urdf"])
+def test_iti_of_a_regular_leg_is_zero_only_where_its_actuator_moves_nothing(path):
+    """Legs whose knee and ankle pitch joints are held by rods (their foot's support
+    chain has four parallel revolutes): at the regular home assembly (every B_ii > 0)
+    every ITI and every OTI is positive, the analysis' own actuation wrench standing in
+    where the chain reading gives none. Cassie-like's thigh and knee read 0.795 and
+    0.954 and the leg transmits well (LTI 0.78 ≥ 0.7); before, cassie_like and
+    digit_like read 'LTI = 0' (ITI 0 at a regular pose)."""
+    from pkm_pin.transmission import GOOD_LTI
+
+    link = pkm_pin.load_mechanism(Path(__file__).resolve().parent / "data" / path)
+    a = link.home_assembly
+    an = link.analyze(a)
+    assert an.singularity == "none"
+    tr = link.transmission(a, analysis=an)
+    assert np.all(tr.iti > 1e-3) and np.all(tr.oti > 1e-3)
+    assert np.all(np.abs(np.diag(an.B)) > 1e-3)
+    if path.startswith("gepetto/cassie_like"):
+        assert tr.iti[2:4] == pytest.approx([0.795, 0.954], abs=1e-3)
+        assert tr.lti == pytest.approx(0.783, abs=1e-3) and tr.lti >= GOOD_LTI
