@@ -330,6 +330,9 @@ def _check_linkage(path: Path, link) -> int:
     """``check`` of a linkage: loads, assembles from the reference configuration (the
     loop that does not close and its residual otherwise), mobility and singularity."""
     from .linkage import LoopClosureError
+    from .model.closure_model import duplicate_closures
+    from .report import optional
+    from .submechanisms import analysed
 
     model = link.model
     closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or (
@@ -345,6 +348,9 @@ def _check_linkage(path: Path, link) -> int:
         raise InputError(f"{path}: {e}") from e
     print(f"ok    assembles from the reference configuration (closure residual "
           f"{asm.residual:.2g}); output at {_pose_text(asm.output_pose)}")
+    for note in model.notes:
+        print(f"info  {note}")
+    _check_output_choice(link, asm)
     an = link.analyze(asm)
     print(f"ok    mobility: DOF {an.dof}, idle DOF {an.idle_dof}, Grübler count "
           f"{link.grubler}, redundant closure equations {an.redundant_constraints}, "
@@ -362,14 +368,68 @@ def _check_linkage(path: Path, link) -> int:
                         "(redundant actuation)")
     if an.mobility.singular:
         warnings.append(an.mobility.singular_words)
-    if an.singularity != "none":
+    warnings += [f"closure {a!r} repeats {b!r}: its rows are redundant (remove one)"
+                 for a, b in duplicate_closures(model.closures)]
+    failed: dict = {}
+    parts = optional("submechanisms", lambda: analysed(link, asm.q), failed)
+    warnings += [f"sub-mechanisms not computed ({why})" for why in failed.values()]
+    if parts:
+        warnings += _check_submechanisms(link, an, parts)
+    elif an.singularity != "none":
         warnings.append(f"the reference assembly is a type {an.singularity} singularity "
-                        "(indices " + ", ".join(f"{k} {v:.2g}" for k, v in an.indices.items())
-                        + ")")
+                        f"({_indices_words(an.indices)})")
     for w in warnings:
         print(f"warn  {w}")
     print(f"{path}: " + (f"{len(warnings)} warning(s)" if warnings else "fine"))
     return 1 if warnings else 0
+
+
+def _check_output_choice(link, asm) -> None:
+    """``check``'s line on an output the file did not name: chosen by the default rule
+    (:mod:`pkm_pin.output_choice`), with the others that fit as well and how to pick one."""
+    from .report_linkage import output_hint
+
+    if link.model.output_named:
+        return
+    likely, _ = output_hint(link.model, asm.q)
+    others = [f for f in likely if f != link.output]
+    print(f"info  output {link.output!r}: not named in the file, chosen by the default rule "
+          "(the body the mechanism exists to move)"
+          + (f"; as likely: {', '.join(others)} (--output FRAME)" if others else ""))
+
+
+def _indices_words(indices: dict) -> str:
+    """``indices type_I 0, type_II undefined, …`` (undefined: not finite)."""
+    return "indices " + ", ".join(
+        f"{k} {f'{v:.2g}' if np.isfinite(v) else 'undefined'}" for k, v in indices.items())
+
+
+def _check_submechanisms(link, an, parts) -> list[str]:
+    """``check`` of a linkage with several independent sub-mechanisms (a biped's legs):
+    one line each (joints, actuators, output, DOF, idle DOF, motion, singularity), the
+    whole's one-output singularity class as information (another sub-mechanism's
+    actuators do not move that output: type I by construction), and the warnings of
+    each sub-mechanism (DOF 0, a singular reference assembly with its own output)."""
+    print(f"info  {len(parts)} independent sub-mechanisms (no movable joint shared), each "
+          "checked with its own output; 'fk --sub K' drives one alone")
+    warnings = []
+    for k, (sub, a) in enumerate(parts):
+        print(f"ok    sub-mechanism [{k}] {sub.name}: {sub.model.tree.njoints - 1} joints, "
+              f"{len(sub.actuated)} actuated ({', '.join(sub.actuated) or 'none'}), output "
+              f"{sub.output!r}: DOF {a.dof}, idle DOF {a.idle_dof}, output motion "
+              f"{a.motion_type}, singularity {a.singularity}")
+        if a.dof == 0:
+            warnings.append(f"sub-mechanism {sub.name} cannot move here (DOF 0)")
+        if a.singularity != "none":
+            warnings.append(f"sub-mechanism {sub.name}: the reference assembly is a type "
+                            f"{a.singularity} singularity of its output {sub.output!r} "
+                            f"({_indices_words(a.indices)})")
+    if an.singularity != "none":
+        print(f"info  the whole read with the one output {link.output!r} is type "
+              f"{an.singularity} ({_indices_words(an.indices)}), a class of one output "
+              "that the other sub-mechanisms do not move; each sub-mechanism is judged "
+              "with its own output")
+    return warnings
 
 
 def cmd_fk(args) -> int:
@@ -377,6 +437,9 @@ def cmd_fk(args) -> int:
     mech = _load(args)
     if _is_linkage(mech):
         return _fk_linkage(args, mech)
+    if args.sub is not None:
+        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for "
+                         f"a platform mechanism; give all {mech.n_actuated} actuated values")
     q = mech.check_actuated(args.q)
     if args.all:
         found = mech.forward_kinematics_all(q, starts=args.starts, seed=args.seed)
@@ -401,12 +464,29 @@ def cmd_fk(args) -> int:
 
 def _fk_linkage(args, link) -> int:
     """``fk`` of a linkage: every joint and the output pose (the branch nearest the
-    reference assembly, as ``ik`` and ``analyze --q``)."""
-    from .report_linkage import assembly_data, fk_text
+    reference assembly, as ``ik`` and ``analyze --q``); with several independent
+    sub-mechanisms (a biped's legs) each one's output pose too, and ``--sub K``: the
+    values are sub-mechanism K's alone (:func:`_fk_sub`)."""
+    from .report import optional
+    from .report_linkage import assembly_data, fk_submechanisms_data, fk_text
 
     _no_all(args)
-    q = link.check_actuated(args.q)
-    data = assembly_data(link, link.forward_kinematics(q, guess=link.assemble()))
+    failed: dict = {}
+    subs = _submechanisms_or_why(link, args.sub, failed)
+    if args.sub is not None:
+        assembly = _fk_sub(link, subs, args.sub, args.q)
+    else:
+        if len(args.q) != len(link.actuated) and len(subs) > 1:
+            raise InputError(f"{len(args.q)} actuated values given, {len(link.actuated)} "
+                             f"expected ({', '.join(link.actuated)}); for one independent "
+                             "sub-mechanism alone give --sub K and its values: "
+                             + _subs_words(subs))
+        q = link.check_actuated(args.q)
+        assembly = link.forward_kinematics(q, guess=link.assemble())
+    data = assembly_data(link, assembly)
+    data["submechanisms"] = optional(
+        "submechanisms", lambda: fk_submechanisms_data(link, subs, assembly), failed)
+    data["failed_sections"] = failed
     print(_json(data) if args.json else fk_text(data))
     return 0
 
@@ -466,6 +546,58 @@ def sensitivity_text(data: dict, top: int) -> str:
         lines.append(f"cannot absorb {len(bad)} (an error opens a loop of the rigid "
                      f"mechanism): {', '.join(bad[:8])}" + (" ..." if len(bad) > 8 else ""))
     return "\n".join(lines)
+
+
+def _submechanisms_or_why(link, k: int | None, failed: dict | None = None) -> list:
+    """:meth:`Linkage.submechanisms` as an optional section
+    (:func:`pkm_pin.report.optional`: ``[link]`` with the error in ``failed`` when the
+    split fails), or, for ``--sub K`` (``k`` given), the error in one line."""
+    from .report import optional
+
+    failed = {} if failed is None else failed
+    subs = optional("submechanisms", link.submechanisms, failed)
+    if subs is None and k is not None:
+        raise InputError(f"--sub {k}: the sub-mechanisms of {link.name!r} could not be "
+                         f"computed ({failed['submechanisms']})")
+    return [link] if subs is None else subs
+
+
+def _pick_sub(link, subs, k: int):
+    """Sub-mechanism ``k`` of ``subs`` (``link``'s), or the error of ``--sub K``."""
+    if len(subs) <= 1:
+        raise InputError(f"--sub {k}: {link.name!r} is one mechanism (no independent "
+                         "sub-mechanisms); leave --sub out")
+    if not 0 <= k < len(subs):
+        raise InputError(f"--sub {k}: {link.name!r} has {len(subs)} independent "
+                         f"sub-mechanisms, numbered 0 to {len(subs) - 1}: "
+                         + _subs_words(subs))
+    return subs[k]
+
+
+def _subs_words(subs) -> str:
+    """``0: name (n values: a, b, …); 1: …`` for an error message."""
+    return "; ".join(f"{k}: {s.name} ({len(s.actuated)} values: {', '.join(s.actuated)})"
+                     for k, s in enumerate(subs))
+
+
+def _fk_sub(link, subs, k: int, values):
+    """The whole linkage assembled with sub-mechanism ``k``'s actuated joints at
+    ``values`` and every other actuated joint at the reference assembly: the
+    sub-mechanism's forward kinematics from its reference, put in the whole tree
+    (:func:`pkm_pin.submechanisms.embed`), then the whole's (its targets met there
+    already: it checks the closure of every loop)."""
+    from .submechanisms import embed
+
+    sub = _pick_sub(link, subs, k)
+    if len(values) != len(sub.actuated):
+        raise InputError(f"--sub {k}: {len(values)} actuated values given, "
+                         f"{len(sub.actuated)} expected ({', '.join(sub.actuated)})")
+    one = sub.forward_kinematics(sub.check_actuated(values, "Q"), guess=sub.home_assembly)
+    home = link.home_assembly
+    q = embed(link, sub, one.q, home.q)
+    targets = dict(zip(link.actuated, home.q_actuated))
+    targets.update(zip(sub.actuated, one.q_actuated))
+    return link.forward_kinematics([targets[n] for n in link.actuated], guess=q)
 
 
 def _no_all(args) -> None:
@@ -614,7 +746,19 @@ def cmd_map(args) -> int:
         if args.axes is not None or args.at is not None:
             raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
                              "over actuated coordinates (--actuated NAME [NAME], --fixed)")
+        subs = _submechanisms_or_why(mech, args.sub)
+        if args.sub is not None:
+            return _map_linkage(args, _pick_sub(mech, subs, args.sub))
+        if len(subs) > 1:
+            words = "; ".join(f"{k}: {s.name}, output {s.output}" for k, s in enumerate(subs))
+            print(f"note       {len(subs)} independent sub-mechanisms ({words}): "
+                  f"the classes below are those of the one output {mech.output!r}, which "
+                  "the others' motors do not move (type I); --sub K maps one with its own "
+                  "output")
         return _map_linkage(args, mech)
+    if args.sub is not None:
+        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for a "
+                         "platform mechanism")
     axes = _map_axes_names(args)
     tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
     prefix = _map_prefix(args, tag)
@@ -921,13 +1065,19 @@ def cmd_view(args) -> int:
         else:
             where = pose
     scene = view(mech, where, html=args.html, open=args.html is None or args.open,
-                 show_screws=not args.no_screws, show_wrenches=not args.no_wrenches)
+                 show_screws=not args.no_screws, show_wrenches=not args.no_wrenches,
+                 source=args.mechanism)
     if args.html is not None:
         print(f"wrote      {args.html}")
     else:
         print(f"opened     {mech.name} in the browser")
     if scene.animated:
         print("animated   the uncontrolled motion of this singular pose")
+    for name, why in getattr(scene, "failed_sections", {}).items():
+        print(f"failed     {name}: {why}; the rest is drawn")
+    for k, (sub, a) in enumerate(getattr(scene, "submechanisms", ())):
+        print(f"sub [{k}]    {sub.name}: output {sub.output}, DOF {a.dof}, idle DOF "
+              f"{a.idle_dof}, output motion {a.motion_type}, singularity {a.singularity}")
     for motion in getattr(scene, "idle_motions", ()):
         print(f"idle       {motion}")
     if getattr(scene, "error", None) is not None:
@@ -1276,12 +1426,17 @@ def build_parser() -> argparse.ArgumentParser:
                        description="Platform pose for the actuated coordinates (continuation "
                        "from home); with --all every assembly mode found.")
     p.add_argument("mechanism", metavar="MECHANISM", help=_MECH_HELP)
-    p.add_argument("q", nargs="+", type=float, metavar="Q",
-                   help="actuated coordinates [m or rad], in the order of 'analyze'")
+    p.add_argument("q", nargs="*", type=float, metavar="Q",
+                   help="actuated coordinates [m or rad], in the order of 'analyze' (none "
+                   "for a linkage without actuators: its assembly from the reference)")
     p.add_argument("--all", action="store_true", help="every assembly mode found")
     p.add_argument("--starts", type=int, default=32, help="start assemblies of --all (32)")
     p.add_argument("--seed", type=int, default=0, help="random seed of --all (0)")
     p.add_argument("--json", action="store_true", help="print JSON")
+    p.add_argument("--sub", type=int, metavar="K",
+                   help="linkage with independent sub-mechanisms (a biped's legs, listed "
+                   "by 'analyze' and 'check'): Q are the actuated values of sub-mechanism "
+                   "K alone, the others held at the reference assembly")
     _linkage_options(p)
     p.set_defaults(func=cmd_fk)
 
@@ -1334,6 +1489,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="map over these one or two actuated joints (a linkage's default: its "
                    "first two; a platform mechanism is then read through its legs-and-platform "
                    "tree)")
+    p.add_argument("--sub", type=int, metavar="K",
+                   help="linkage with independent sub-mechanisms (a biped's legs, listed by "
+                   "'check'): map sub-mechanism K alone, with its own output, the others "
+                   "held at the reference assembly")
     p.add_argument("--out", metavar="PREFIX", help="output prefix (default map_NAME_PLANE); "
                    "the results so far are kept in PREFIX.partial.npz while it runs")
     p.add_argument("--resume", metavar="PREFIX",
@@ -1464,11 +1623,26 @@ def _error_line(error: PkmError, args) -> str:
     return " ".join(message.split())  # every line break (also U+2028, U+0085) a space
 
 
+def _fk_values_after_options(extras: list) -> tuple[list, list]:
+    """``fk``'s Q (which may be empty: a linkage without actuators) given after an option
+    (``fk FILE --sub 1 Q…``): argparse has matched the empty Q before the option, so the
+    values come back unrecognized; ``(values, [])``, or ``([], extras)`` when one is not
+    a number."""
+    try:
+        return [float(x) for x in extras], []
+    except ValueError:
+        return [], extras
+
+
 def main(argv=None) -> int:
     """Entry point of ``pkm-pin``; returns the exit status."""
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extras = parser.parse_known_args(argv)
+        if extras and args.command == "fk" and not args.q:
+            args.q, extras = _fk_values_after_options(extras)
+        if extras:
+            parser.error(f"unrecognized arguments: {' '.join(extras)}")
     except SystemExit as e:  # --help (0) or a usage error (2), already printed
         return int(e.code or 0)
     args.argv = list(sys.argv[1:] if argv is None else argv)

@@ -767,6 +767,7 @@ class Linkage:
         W = np.array([_transmission_wrench(model, kin, j, self._loops[k], out_joint,
                                            an.reference_point) for k, j in enumerate(ids)]
                      ).reshape(-1, 6)
+        W = _or_actuation_wrenches(W, an.A, model.length)
         p_in = np.array([_input_point(tree, J, W[k], j, an.reference_point)
                          for k, j in enumerate(ids)]).reshape(-1, 3)
         p_out = np.array([an.reference_point if model.output_point else
@@ -1317,6 +1318,25 @@ def _transmission_wrench(model: ClosureModel, kin: TreeKinematics, j: int, loops
     f, m = zeta[:3], zeta[3:]
     s = np.linalg.norm(f) if np.linalg.norm(f) * L > rtol * np.linalg.norm(m) else np.linalg.norm(m)
     return zeta / s
+
+
+def _or_actuation_wrenches(W: np.ndarray, A: np.ndarray, L: float,
+                           rtol: float = RANK_RTOL) -> np.ndarray:
+    """The transmission wrenches ``W`` (rows, world origin), each zero row (its side's
+    reading attributes no wrench to the actuator: its twist depends on the side's
+    passive freedoms, which other loops hold, e.g. a leg's knee and ankle pitch joints
+    driven through rods) replaced by the actuator's row of the analysis' ``A`` (the
+    wrench it transmits to the output with every other actuator locked), scaled as
+    :func:`_transmission_wrench` scales (a unit force, or a unit couple); a zero row of
+    ``A`` stays zero. So ITI is 0 only where ``B_ii = A_i ∘ $_i`` is: at a type I
+    singularity."""
+    W = np.array(W, dtype=float)
+    for k, (w, a) in enumerate(zip(W, np.asarray(A, dtype=float).reshape(-1, 6))):
+        if np.any(w) or not np.any(a):
+            continue
+        f, m = np.linalg.norm(a[:3]), np.linalg.norm(a[3:])
+        W[k] = a / (f if f * L > rtol * m else m)
+    return W
 
 
 def _reciprocal_homogenised(T: np.ndarray, p: np.ndarray, L: float, rtol: float

@@ -391,13 +391,22 @@ def _matrix_table(M, rows: Sequence[str], columns: Sequence[str]) -> list[str]:
 
 # --------------------------------------------------------------------------- text
 def text(r: dict) -> str:
-    """Plain-text report (the output of ``pkm-pin analyze``) from :func:`report_data`."""
+    """Plain-text report (the output of ``pkm-pin analyze``) from :func:`report_data`:
+    the summary (DOF and motion type, Grübler count, singularity class, uncontrolled
+    twist, indices; a non-finite index ``undefined``) before the tables."""
     out = [f"mechanism          {r['mechanism']}",
            f"pose               xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
            f"DOF                {r['dof']}  ({r['motion_type']})",
            f"Grübler count      {r['grubler']}  (redundant constraints: "
            f"{r['redundant_constraints']})",
-           "platform twists (ω; v_O):"]
+           f"singularity        {r['singularity']}"
+           + ("  (constraint singular)" if r["constraint_singular"] else "")]
+    if r["uncontrolled_twist"]:
+        out += [f"uncontrolled twist {r['uncontrolled_twist']}"]
+    out += ["indices            " + ", ".join(
+        f"{k} = {v:.6g}" if v is not None and np.isfinite(v) else f"{k} = undefined"
+        for k, v in r["indices"].items()),
+        "platform twists (ω; v_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]]
     out += ["constraint wrenches (f; m_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["constraint_basis"]] or ["    none"]
@@ -405,11 +414,6 @@ def text(r: dict) -> str:
             "A (actuation wrenches (f; m_O), A Δ t = B q̇_a):"]
     out += [f"    {_row(row)}" for row in r["A"]]
     out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
-    out += [f"singularity        {r['singularity']}"
-            + ("  (constraint singular)" if r["constraint_singular"] else "")]
-    if r["uncontrolled_twist"]:
-        out += [f"uncontrolled twist {r['uncontrolled_twist']}"]
-    out += ["indices            " + ", ".join(f"{k} = {v:.6g}" for k, v in r["indices"].items())]
     tr = r.get("transmission")
     if tr is not None:
         out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}, "

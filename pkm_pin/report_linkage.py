@@ -115,7 +115,10 @@ def assembly_data(link, assembly) -> dict:
 def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Path] = ()) -> dict:
     """Plain-data summary (JSON-ready) of a linkage at an assembly.
 
-    Keys: those of :func:`assembly_data`, then ``description`` (``""``), ``structure``
+    Keys: those of :func:`assembly_data`, then ``description`` (``""``),
+    ``output_named`` (the output was named by the file or the caller, not chosen by the
+    default rule), ``output_likely`` (the frames that fit the rule best, the chosen one
+    among them: :func:`output_hint`), ``structure``
     (:func:`structure_data`), ``duplicate_closures``, ``dof``,
     ``idle_dof``, ``idle_motions`` (sentences), ``singular`` (a rank below the generic
     one: :attr:`~pkm_pin.linkage.Mobility.singular`, ``None``: not decided),
@@ -126,7 +129,8 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     analysis basis of the output twists), ``motion_basis`` and ``constraint_basis``
     (readable bases about the output origin, with ``words``), ``A``, ``B``,
     ``singularity``, ``constraint_singular`` (``None``: not decided), ``indices``
-    (``None`` where undefined), ``submechanisms`` (:func:`submechanisms_data`: ``[]``
+    (``None`` where undefined), ``indices_undefined`` (:func:`undefined_indices`: why
+    each ``None`` index is not defined), ``submechanisms`` (:func:`submechanisms_data`: ``[]``
     for a single mechanism, ``None`` when it failed), and, as in the platform report,
     ``uncontrolled_twist``, ``crosscheck``, ``crosscheck_max_error`` (``None``: no
     hand-written formulas) and ``plots``.
@@ -140,6 +144,9 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
     failed: dict = {}
     data.update({
         "description": "",
+        "output_named": bool(link.model.output_named),
+        "output_likely": optional("output_likely",
+                                  lambda: output_hint(link.model, assembly.q)[0], failed),
         "structure": structure_data(link),
         "duplicate_closures": [list(pair) for pair in duplicate_closures(link.model.closures)],
         "dof": an.dof,
@@ -163,6 +170,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "singularity": an.singularity,
         "constraint_singular": an.constraint_singular,
         "indices": {k: finite_or_none(v) for k, v in an.indices.items()},
+        "indices_undefined": undefined_indices(link, an),
         "transmission": optional("transmission", lambda: _transmission(link, assembly),
                                  failed),
         "submechanisms": optional("submechanisms",
@@ -174,6 +182,29 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "failed_sections": failed,
     })
     return data
+
+
+def undefined_indices(link, an) -> dict:
+    """``{index: why it is not defined}`` for each index of the analysis ``an`` that is
+    not finite (``null`` in the JSON, ``undefined`` in the text): no actuator; actuators
+    whose wrench on the output is zero (rows of ``A`` that cannot be made unit: a type I
+    singularity, e.g. the other leg's motors of a biped read with one foot); else ``A Δ``
+    singular (an infinite condition number)."""
+    bad = {k: float(v) for k, v in an.indices.items() if not np.isfinite(v)}
+    if not bad:
+        return {}
+    A = np.asarray(an.A, dtype=float).reshape(-1, 6)
+    zero = [n for n, row in zip(link.actuated, A) if not np.any(np.abs(row) > 1e-12)]
+    if not link.actuated:
+        why = "no actuator: A has no row"
+    elif zero:
+        why = (f"{len(zero)} actuator{'s' * (len(zero) != 1)} ({', '.join(zero[:6])}"
+               f"{', …' if len(zero) > 6 else ''}) exert no wrench on the output: zero rows "
+               "of A (a type I singularity), which cannot be scaled to unit length")
+    else:
+        why = "A Δ is singular here"
+    return {k: f"{'infinite' if np.isinf(v) else 'not a number'}: {why}"
+            for k, v in bad.items()}
 
 
 def submechanisms_data(link, assembly) -> list:
@@ -297,6 +328,7 @@ def linkage_text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()
     out += [f"    {_row(row)}" for row in r["A"]]
     out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
     out += [f"singularity        {r['singularity']}", f"indices            {idx}"]
+    out += [f"    {k} undefined ({why})" for k, why in r.get("indices_undefined", {}).items()]
     tr = r.get("transmission")
     if tr is not None:
         out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}: {tr['words']}"]
@@ -326,11 +358,21 @@ def _matches_words(matches: dict) -> str:
 
 
 def linkage_markdown(r: dict) -> str:
-    """Markdown report of a linkage from :func:`linkage_report_data`."""
+    """Markdown report of a linkage from :func:`linkage_report_data`: the summary
+    (output, DOF, idle DOF, motion, class, the independent sub-mechanisms, duplicate
+    closures, failed optional sections) before the joint table and the matrices."""
     how = "its origin, as a point" if r["output_is_point"] else "as a body"
-    lines = [f"# {r['mechanism']}", "", "## Configuration", "",
-             f"Output frame `{r['output']}` ({how}) at xyz {_vec(r['pose']['xyz'])} m, "
-             f"rpy {_vec(r['pose']['rpy'])} rad.", "", "| joint | q |", "|---|---|"]
+    lines = [f"# {r['mechanism']}", "", "## Summary", "",
+             f"- output frame `{r['output']}` ({how}) at xyz {_vec(r['pose']['xyz'])} m, "
+             f"rpy {_vec(r['pose']['rpy'])} rad",
+             f"- DOF **{r['dof']}**, idle DOF {r['idle_dof']}, output motion "
+             f"{r['motion_type']}, singularity **{r['singularity']}**"]
+    lines += [f"- duplicate closure `{a}` repeats `{b}`: its rows are redundant"
+              for a, b in r.get("duplicate_closures", [])]
+    lines += [f"- {name}: not computed ({why})"
+              for name, why in r.get("failed_sections", {}).items()]
+    lines += _submechanisms_markdown(r.get("submechanisms") or [])
+    lines += ["", "## Configuration", "", "| joint | q |", "|---|---|"]
     lines += [f"| {n} | {_vec(v)} |" for n, v in r["joints"].items()]
     lines += ["", "## Mobility", "",
               f"- degree of freedom: **{r['dof']}**, output motion {r['motion_type']}",
@@ -362,14 +404,67 @@ def linkage_markdown(r: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _submechanisms_markdown(subs: list) -> list[str]:
+    """A table of the independent sub-mechanisms (:func:`submechanisms_data`), none for
+    one mechanism."""
+    if not subs:
+        return []
+    out = ["", f"{len(subs)} independent sub-mechanisms (no movable joint shared), each "
+           "analysed with the others held and its own output:", "",
+           "| sub-mechanism | actuators | output | DOF | idle DOF | motion | singularity |",
+           "|---|---|---|---|---|---|---|"]
+    out += [f"| {s['name']} | {', '.join(s['actuated']) or 'none'} | {s['output']} | "
+            f"{s['dof']} | {s['idle_dof']} | {s['motion_type']} | {s['singularity']} |"
+            for s in subs]
+    return out
+
+
 def fk_text(r: dict) -> str:
-    """Text of ``pkm-pin fk`` / ``ik`` for a linkage from :func:`assembly_data`."""
+    """Text of ``pkm-pin fk`` / ``ik`` for a linkage from :func:`assembly_data` (and,
+    for several independent sub-mechanisms, the ``submechanisms`` of
+    :func:`fk_submechanisms_data`: each one's actuated values and output pose)."""
     out = [f"mechanism  {r['mechanism']}",
-           f"actuated   {', '.join(r['actuated'])} = {_list(r['q_actuated'])}",
+           f"actuated   {_actuated_words(r)}",
            f"output     {r['output']}{' (point)' if r['output_is_point'] else ''}: "
-           f"xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
-           "joints (q):"]
-    return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"])
+           f"xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
+    subs = r.get("submechanisms") or []
+    if subs:
+        out.append(f"sub-mechanisms  {len(subs)} independent, each with its own output "
+                   "(fk --sub K Q…: the actuated values of sub-mechanism K alone, the "
+                   "others held at the reference assembly):")
+        for k, s in enumerate(subs):
+            out += [f"    [{k}] {s['name']}: {_actuated_words(s)}",
+                    f"        output {s['output']}: xyz {_list(s['pose']['xyz'])}  "
+                    f"rpy {_list(s['pose']['rpy'])}"]
+    out.append("joints (q):")
+    return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"]
+                     + failed_lines(r))
+
+
+def _actuated_words(r: dict) -> str:
+    """``a, b = [values]``, or that there is no actuator."""
+    if not r["actuated"]:
+        return "none (no actuator: the assembly from the reference configuration)"
+    return f"{', '.join(r['actuated'])} = {_list(r['q_actuated'])}"
+
+
+def fk_submechanisms_data(link, subs, assembly) -> list:
+    """For ``fk`` of a linkage with several independent sub-mechanisms ``subs``
+    (:meth:`Linkage.submechanisms`), at the whole linkage's ``assembly``: each one's
+    ``{"name", "actuated", "q_actuated", "output", "pose"}`` (its actuated values and its
+    output frame's pose, read in the whole tree); ``[]`` for one mechanism."""
+    if len(subs) <= 1:
+        return []
+    model = link.model
+    kin = model.kinematics(assembly.q)
+    values = dict(zip(link.actuated, assembly.q_actuated))
+    out = []
+    for sub in subs:
+        M = kin.frame_placements[model.tree.getFrameId(sub.output)]
+        out.append({"name": sub.name, "actuated": list(sub.actuated),
+                    "q_actuated": [float(values[n]) for n in sub.actuated],
+                    "output": sub.output, "pose": pose_dict(M)})
+    return out
 
 
 # ------------------------------------------------------------------------- maps

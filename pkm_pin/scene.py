@@ -52,9 +52,10 @@ LEGEND_TEXT = {
     "idle": ("idle axis", "idle motion: moves with every actuator locked"),
     "actuated_axis": ("actuated joint axis", "screw axis"),
     "passive_axis": ("passive joint axis", "screw axis"),
-    "actuation_wrench": ("actuation wrench", "axis of an actuator's wrench on the output"),
+    "actuation_wrench": ("actuation wrench", "axis of an actuator's wrench on the output; "
+                         "double head: a couple (or an axis far beyond the drawing)"),
     "constraint_wrench": ("constraint wrench", "axis of a wrench the constraints exert; "
-                          "double head: a couple"),
+                          "double head: a couple (or an axis far beyond the drawing)"),
 }
 
 #: The singularity classes in words, for the title.
@@ -68,6 +69,9 @@ _SIZE = {
 }
 #: Animation: frames per cycle, frames per second, and the largest displacement along
 #: the unit-homogenised uncontrolled twist ([rad], or characteristic lengths).
+#: A wrench axis farther than this many drawing lengths from the arrows' centre is drawn
+#: as a couple (:meth:`_Painter.arrow`).
+FAR_AXIS = 3.0
 ANIMATION_FRAMES = 48
 ANIMATION_FPS = 24
 ANIMATION_AMPLITUDE = 0.12
@@ -422,8 +426,11 @@ class Scene:
         root: Path of the mechanism's subtree, relative to the visualizer
             (``"pkm/<mechanism>"``).
         animated: Whether the scene holds the singularity animation.
-        title_lines: The page's title: the name, then the pose, then DOF, motion type
-            and singularity class (from :attr:`analysis`).
+        title_lines: The page's title: the name (and :attr:`source` in brackets), then
+            the pose, then DOF, motion type and singularity class (from
+            :attr:`analysis`).
+        source: The file (or shipped model) the mechanism was read from, when the
+            caller gave it (``pkm-pin view``: a Gepetto file's robot is "onshape").
         legend: One :class:`LegendEntry` per kind of object drawn.
         camera: ``{"target": …, "position": …, "box": (lo, hi)}``, the default camera
             in the mechanism's world frame: it looks at the centre of the bounding box
@@ -434,6 +441,7 @@ class Scene:
     title_lines: tuple[str, ...] = ()
     legend: tuple[LegendEntry, ...] = ()
     camera: dict | None = None
+    source: str | None = None
 
     def __init__(self, visualizer, recorder: SceneRecorder, analysis, root: str):
         self.visualizer = visualizer
@@ -704,7 +712,11 @@ class _Painter:
     def finish(self) -> None:
         """The scene's title and legend, from what was drawn; for a live viewer, the
         legend card (:func:`draw_legend_card`)."""
-        self.scene.title_lines = self.title_lines()
+        lines = self.title_lines()
+        source = self.scene.source
+        if source and source != lines[0]:
+            lines = (f"{lines[0]} ({source})", *lines[1:])
+        self.scene.title_lines = lines
         self.scene.legend = self.legend()
         if self.scene.recorder.forward is not None:
             draw_legend_card(self.vis, self.scene.title_lines, self.scene.legend, self.radius)
@@ -880,7 +892,11 @@ class _Painter:
 
     def arrow(self, name: str, wrench: np.ndarray, colour: int, kind: str) -> None:
         """An arrow along a wrench's axis (a double arrow for a couple), noted in the
-        legend as ``kind``."""
+        legend as ``kind``. A wrench whose axis passes farther than
+        :data:`FAR_AXIS` drawing lengths from :meth:`centre` (a near-couple: a 2R ankle's
+        actuation wrenches pass metres away) is drawn as the couple it is at this scale,
+        a double arrow along its moment about the centre, so that the camera, which
+        frames what is drawn, still frames the mechanism."""
         if not np.any(wrench):
             return
         self.note(kind, colour)
@@ -888,10 +904,12 @@ class _Painter:
         point, u = screws.axis(wrench, length=self.L)
         couple = np.isinf(screws.pitch(wrench, length=self.L))
         length, head = self.size("arrow"), self.size("head")
+        tail = None if couple else point + ((c - point) @ u) * u
+        if tail is not None and np.linalg.norm(tail - c) > FAR_AXIS * self.L:
+            moment = wrench[3:] - np.cross(c, wrench[:3])  # about the centre
+            couple, u = True, moment / np.linalg.norm(moment)
         if couple:
             tail = c - 0.5 * length * u
-        else:
-            tail = point + ((c - point) @ u) * u
         self.drawn_points.append(np.array([tail, tail + length * u]))
         path = f"{self.root}/wrenches/{name}"
         T = np.eye(4)

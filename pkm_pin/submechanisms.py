@@ -165,3 +165,28 @@ def _first_body(tree: pin.Model) -> str:
     """The first body frame on a movable joint of ``tree`` (a provisional output)."""
     return next(f.name for f in tree.frames
                 if f.type == pin.FrameType.BODY and f.parentJoint > 0)
+
+
+def embed(link, sub, q_sub: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The whole tree's configuration ``q`` with the joints of the sub-mechanism ``sub``
+    (of ``link``: :func:`submechanisms`) set from ``q_sub`` (``sub``'s tree
+    configuration), by joint name: the inverse of the restriction that gives a
+    sub-mechanism its reference."""
+    tree, reduced = link.model.tree, sub.model.tree
+    out = link.model.check_q(q).copy()
+    q_sub = sub.model.check_q(q_sub)
+    for j in range(1, reduced.njoints):
+        dst = tree.joints[tree.getJointId(reduced.names[j])]
+        src = reduced.joints[j]
+        out[dst.idx_q:dst.idx_q + dst.nq] = q_sub[src.idx_q:src.idx_q + src.nq]
+    return out
+
+
+def analysed(link, q) -> tuple:
+    """``(sub-mechanism, its analysis at its reference assembly)`` of each independent
+    sub-mechanism of ``link`` at the assembled ``q`` (:func:`submechanisms`); ``()`` for
+    one mechanism."""
+    subs = link.submechanisms(q)
+    if len(subs) <= 1:
+        return ()
+    return tuple((sub, sub.analyze(sub.home_assembly)) for sub in subs)

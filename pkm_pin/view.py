@@ -129,6 +129,7 @@ def view(
     show_screws: bool = True,
     show_wrenches: bool = True,
     animate_singular: bool = True,
+    source: str | None = None,
 ) -> Scene:
     """Draw a mechanism at a pose or assembly in a meshcat scene (see the module doc).
 
@@ -146,6 +147,8 @@ def view(
         show_wrenches: Draw the actuation and constraint wrenches.
         animate_singular: At a type II/III singularity, animate the platform along the
             uncontrolled twist.
+        source: The file (or shipped model name) the mechanism was read from: named
+            in the title after the mechanism's name (:attr:`Scene.source`).
 
     Raises:
         InputError: ``mech`` is not a mechanism or the pose is malformed.
@@ -157,7 +160,8 @@ def view(
         from .view_linkage import view_linkage
 
         return view_linkage(mech, pose_or_assembly, visualizer=visualizer, open=open,
-                            html=html, show_screws=show_screws, show_wrenches=show_wrenches)
+                            html=html, show_screws=show_screws, show_wrenches=show_wrenches,
+                            source=source)
     if not isinstance(mech, Mechanism):
         raise InputError(f"view() takes a pkm_pin.Mechanism or a Linkage, got "
                          f"{type(mech).__name__}")
@@ -177,6 +181,7 @@ def view(
     if visualizer is not None:
         vis.path = visualizer.path
     scene = Scene(vis, recorder, analysis, f"pkm/{node_name(mech.name)}")
+    scene.source = source
     painter = _Painter(scene)
     painter.legs()
     painter.platform()

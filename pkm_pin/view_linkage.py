@@ -22,6 +22,14 @@ scene and page machinery of :mod:`pkm_pin.scene`:
   output (``show_wrenches``), as :func:`pkm_pin.view.view` draws them; for a point
   output only the forces among the constraint wrenches.
 
+A linkage of several **independent sub-mechanisms** (:mod:`pkm_pin.submechanisms`: a
+biped's legs, which share no movable joint) is drawn as such: its bars coloured one colour
+per sub-mechanism (a legend entry each naming its output, DOF, motion type and class),
+each sub-mechanism's output frame drawn, and its actuation and constraint wrenches taken
+from its own analysis (with its own output) at its own output; the title gives one line
+per sub-mechanism instead of the whole's one-output reading (type I by construction: one
+leg's motors do not move the other foot).
+
 Title, legend, camera and grid as :func:`pkm_pin.view.view` has them; the title names
 the output frame (or point) and its pose, the DOF, the idle DOF, the output's motion type
 and the singularity class.
@@ -64,7 +72,7 @@ from . import screws
 from .errors import InputError
 from .linkage import Linkage, LinkageAssembly, LoopClosureError, _body_points
 from .model.closure_model import NullSpace
-from .report import readable_basis
+from .report import optional, readable_basis
 from .scene import (
     ACTUATED_SCREW_COLOUR,
     ACTUATION_WRENCH_COLOUR,
@@ -83,6 +91,7 @@ from .scene import (
     node_name,
     pose_words,
 )
+from .submechanisms import analysed, groups
 from .tolerances import RANK_RTOL
 
 CLOSURE_COLOUR = 0xE7298A
@@ -109,6 +118,13 @@ class LinkageScene(Scene):
         error: The :class:`~pkm_pin.linkage.LoopClosureError` of an open drawing, else
             None.
         gaps: The open loops drawn (:class:`~pkm_pin.closure_gaps.Gap`, worst first).
+        submechanisms: For a linkage of several independent sub-mechanisms (a biped's
+            legs: :meth:`Linkage.submechanisms`), ``(sub-mechanism, its analysis)`` of
+            each, drawn each with its own output and wrenches; ``()`` otherwise.
+        failed_sections: ``{section: "Type: message"}`` for each optional part that
+            failed (:func:`pkm_pin.report.optional`): ``"submechanisms"`` (the whole is
+            drawn as one), ``"idle axes"``, ``"gaps"``, ``"screw axes"``, ``"wrenches"``
+            (that layer is left out, the rest drawn).
         visualizer, recorder, root, animated: As :class:`pkm_pin.view.Scene`
             (``animated`` is False: nothing is animated).
     """
@@ -126,6 +142,8 @@ class LinkageScene(Scene):
         self.animated = False
         self.error = error
         self.gaps = () if error is None or error.diagnosis is None else error.diagnosis.gaps
+        self.submechanisms = ()
+        self.failed_sections = {}
 
 
 def idle_velocities(link: Linkage, q) -> np.ndarray:
@@ -159,7 +177,7 @@ def _assembly(link: Linkage, where) -> LinkageAssembly | LoopClosureError:
 def view_linkage(link: Linkage, where=None, *, visualizer=None,
                  open: bool = False,  # noqa: A002 - the name meshcat and Pinocchio use
                  html: str | os.PathLike | None = None, show_screws: bool = True,
-                 show_wrenches: bool = True) -> LinkageScene:
+                 show_wrenches: bool = True, source: str | None = None) -> LinkageScene:
     """Draw a linkage in a meshcat scene (see the module docstring).
 
     Args:
@@ -172,6 +190,8 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         visualizer, open, html: As :func:`pkm_pin.view.view`.
         show_screws: Draw the joint screw axes.
         show_wrenches: Draw the actuation and constraint wrenches on the output.
+        source: The file the linkage was read from, named in the title
+            (:attr:`~pkm_pin.scene.Scene.source`).
 
     Raises:
         InputError: ``link`` is not a linkage or the pose is malformed.
@@ -193,18 +213,23 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         vis.path = visualizer.path
     scene = LinkageScene(vis, recorder, link, assembly, analysis, f"pkm/{node_name(link.name)}",
                          error)
+    scene.source = source
+    if error is None:
+        scene.submechanisms = optional("submechanisms", lambda: analysed(link, assembly.q),
+                                       scene.failed_sections) or ()
     painter = _LinkagePainter(scene)
     painter.tree()
     painter.closures()
     painter.output()
+    failed = scene.failed_sections  # an optional layer that fails costs that layer
     if error is None:
-        painter.idle()
+        optional("idle axes", painter.idle, failed)
     else:
-        painter.gaps()
+        optional("gaps", painter.gaps, failed)
     if show_screws and error is None:
-        painter.screws()
+        optional("screw axes", painter.screws, failed)
     if show_wrenches and error is None:
-        painter.wrenches()
+        optional("wrenches", painter.wrenches, failed)
     painter.settings()
     painter.finish()
     if html is not None:
@@ -235,9 +260,16 @@ class _LinkagePainter(_Painter):
         self.L = max(0.5 * float(np.linalg.norm(P.max(axis=0) - P.min(axis=0))),
                      DRAWING_LENGTH_FLOOR * float(self.model.length))
         self.radius = self.L
+        self.centre_at = None
+        self.group_of = {}
+        if scene.submechanisms:
+            self.group_of = {j: k for k, g in enumerate(groups(self.model)) for j in g}
 
     def centre(self) -> np.ndarray:
-        """Wrench arrows start nearest to the output frame's origin."""
+        """Wrench arrows start nearest to the output frame's origin (a sub-mechanism's
+        output while its wrenches are drawn)."""
+        if self.centre_at is not None:
+            return self.centre_at
         return self.kin.output_placement.translation
 
     # ------------------------------------------------------------------ geometry
@@ -270,9 +302,12 @@ class _LinkagePainter(_Painter):
         return np.vstack(pts + [p for _, p, _ in self.carried_frames()])
 
     def colour(self, j: int) -> int:
-        """Colour of joint ``j``'s branch (grey for the universe)."""
+        """Colour of joint ``j``'s branch, or of its sub-mechanism when there are
+        several (grey for the universe)."""
         if j == 0:
             return GROUND_COLOUR
+        if j in self.group_of:
+            return LEG_COLOURS[self.group_of[j] % len(LEG_COLOURS)]
         roots = [k for k in range(1, self.tree_.njoints) if self.tree_.parents[k] == 0]
         return LEG_COLOURS[roots.index(list(self.tree_.supports[j])[1]) % len(LEG_COLOURS)]
 
@@ -294,6 +329,8 @@ class _LinkagePainter(_Painter):
         singularity class."""
         if self.scene.error is not None:
             return self.open_title_lines()
+        if self.scene.submechanisms:
+            return self.submechanism_title_lines()
         a = self.scene.analysis
         M = self.kin.output_placement
         what = "point" if self.model.output_point else "frame"
@@ -303,6 +340,22 @@ class _LinkagePainter(_Painter):
                 f"{pose_words(M, self.L, point=self.model.output_point)}",
                 f"{a.dof} DOF{idle}, output motion {a.motion_type}, singularity: "
                 f"{SINGULARITY_WORDS.get(a.singularity, a.singularity)}")
+
+    def submechanism_title_lines(self) -> tuple[str, ...]:
+        """Name and how many sub-mechanisms; per sub-mechanism its output and pose, DOF,
+        idle DOF, output motion type and singularity class (with its own output)."""
+        subs = self.scene.submechanisms
+        lines = [self.mech.name,
+                 f"{len(subs)} independent sub-mechanisms (no movable joint shared), each "
+                 "with its own output"]
+        for k, (sub, a) in enumerate(subs):
+            M = self.kin.frame_placements[self.tree_.getFrameId(sub.output)]
+            idle = f", {a.idle_dof} idle" if a.idle_dof else ""
+            lines.append(f"[{k}] {sub.name}: output {sub.output} at "
+                         f"{pose_words(M, self.L, point=sub.model.output_point)}; {a.dof} DOF"
+                         f"{idle}, output motion {a.motion_type}, singularity: "
+                         f"{SINGULARITY_WORDS.get(a.singularity, a.singularity)}")
+        return tuple(lines)
 
     def open_title_lines(self) -> tuple[str, ...]:
         """Name; that it does not assemble and how many loops stay open; the worst."""
@@ -317,6 +370,16 @@ class _LinkagePainter(_Painter):
     def legend(self) -> tuple:
         """The legend of :meth:`_Painter.legend`, then one entry per open loop."""
         out = list(super().legend())
+        if self.scene.submechanisms:
+            out = [LegendEntry(e.kind, e.label, "one colour per independent sub-mechanism",
+                               e.colours) if e.kind == "links" else e for e in out]
+            at = next((i for i, e in enumerate(out) if e.kind == "links"), len(out))
+            out[at + 1:at + 1] = [
+                LegendEntry(f"sub:{sub.name}", f"[{k}] {sub.name}",
+                            f"output {sub.output}: {a.dof} DOF, {a.motion_type}, singularity "
+                            f"{SINGULARITY_WORDS.get(a.singularity, a.singularity)}",
+                            (LEG_COLOURS[k % len(LEG_COLOURS)],))
+                for k, (sub, a) in enumerate(self.scene.submechanisms)]
         for k, g in enumerate(self.scene.gaps):
             angle = "" if g.kind == "point" else f", {np.degrees(g.angle):.3g}°"
             out.append(LegendEntry(f"gap:{g.name}", f"gap of {g.name}",
@@ -417,14 +480,22 @@ class _LinkagePainter(_Painter):
 
     # --------------------------------------------------------------------- output
     def output(self) -> None:
-        """A ball at the output frame's origin; its axes for a body."""
-        M = self.kin.output_placement
-        path = f"{self.root}/output"
+        """A ball at the output frame's origin; its axes for a body; the same for each
+        sub-mechanism's output other than the whole's (``output/<k>/…``)."""
+        self.output_frame(self.kin.output_placement, f"{self.root}/output",
+                          self.model.output_point)
+        for k, (sub, _) in enumerate(self.scene.submechanisms):
+            if sub.output != self.mech.output:
+                M = self.kin.frame_placements[self.tree_.getFrameId(sub.output)]
+                self.output_frame(M, f"{self.root}/output/{k}", sub.model.output_point)
+
+    def output_frame(self, M: pin.SE3, path: str, point: bool) -> None:
+        """One output frame at ``M`` under ``path``: a ball, and its axes for a body."""
         self.note("output", PLATFORM_COLOUR)
         self.vis[f"{path}/ball"].set_object(self.g.Sphere(1.4 * self.size("anchor")),
                                             self.material(PLATFORM_COLOUR))
         self.vis[f"{path}/ball"].set_transform(_translation(M.translation))
-        if self.model.output_point:
+        if point:
             return
         for axis, colour, label in zip(M.rotation.T, OUTPUT_AXIS_COLOURS, "xyz"):
             self.bar(f"{path}/{label}", M.translation,
@@ -482,13 +553,24 @@ class _LinkagePainter(_Painter):
 
     def wrenches(self) -> None:
         """Actuation wrenches (rows of ``A``) and the constraint wrenches on the output
-        (a readable basis; forces only for a point output)."""
-        analysis = self.scene.analysis
-        for name, w in zip(self.mech.actuated, analysis.A):
+        (a readable basis; forces only for a point output); for several sub-mechanisms,
+        each one's on its own output (``constraint/<k>.<i>``)."""
+        if not self.scene.submechanisms:
+            self.output_wrenches(self.mech, self.scene.analysis, "")
+            return
+        for k, (sub, a) in enumerate(self.scene.submechanisms):
+            self.centre_at = self.kin.frame_placements[
+                self.tree_.getFrameId(sub.output)].translation
+            self.output_wrenches(sub, a, f"{k}.")
+        self.centre_at = None
+
+    def output_wrenches(self, link: Linkage, analysis, tag: str) -> None:
+        """The wrenches of one (sub-)mechanism's analysis on its output."""
+        for name, w in zip(link.actuated, analysis.A):
             self.arrow(f"actuation/{node_name(name.replace('/', '.'))}", w,
                        ACTUATION_WRENCH_COLOUR, "actuation_wrench")
         basis = readable_basis(analysis.constraint_wrenches, self.centre(), self.model.length)
         for k, b in enumerate(basis):
-            if not (self.model.output_point and b.kind == "couple"):
-                self.arrow(f"constraint/{k}", b.screw, CONSTRAINT_WRENCH_COLOUR,
+            if not (link.model.output_point and b.kind == "couple"):
+                self.arrow(f"constraint/{tag}{k}", b.screw, CONSTRAINT_WRENCH_COLOUR,
                            "constraint_wrench")

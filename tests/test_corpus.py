@@ -5,8 +5,10 @@ mechanism exists to move (pkm_pin.output_choice)."""
 
 from __future__ import annotations
 
+import json
 import re
 import shutil
+import warnings
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -398,3 +400,76 @@ def test_springs_are_read_and_held_when_the_output_is_chosen():
     assert (foot.motion_dim, foot.idle_dim) == (5, 2)
     with pytest.raises(pkm_pin.InputError, match="springs: joint 'left-knee' must have"):
         dataclasses.replace(link.model, springs=("left-knee",))
+
+
+def _strict(text: str) -> dict:
+    def refuse(c):
+        raise ValueError(f"non-strict JSON constant {c}")
+    return json.loads(text, parse_constant=refuse)
+
+
+@pytest.mark.parametrize("case", [c for c in CORPUS if not c.no_assembly], ids=lambda c: c.id)
+def test_every_command_answers_on_the_file_without_a_numpy_warning(case, capsys, tmp_path):
+    """Issue 25, "What it must show": analyze --json (strict JSON, no failed section,
+    the table's DOF), analyze as text (the summary, DOF to class, before the tables; no
+    nan/inf), check (exit 0 or 1, no nan), fk of the reference actuated values (its
+    values kept to 1e-9, every loop closed to 1e-9, the output where analyze put it, 1e-9
+    m) and view --html (the page written, titled with the file's name), every warning an
+    error (no numpy warning reaches the terminal)."""
+    link, _ = _home(case.path)
+    path = str(DATA / case.path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["analyze", path, "--json"]) == 0
+        data = _strict(capsys.readouterr().out)
+        assert data["dof"] == case.dof and data["failed_sections"] == {}
+        assert main(["analyze", path]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        heads = [next(i for i, x in enumerate(lines) if x.startswith(h))
+                 for h in ("DOF ", "idle motions ", "joints (q):", "A (actuation")]
+        assert heads == sorted(heads) and heads[0] < 12
+        assert not re.search(r"\b(nan|inf|NaN|Infinity)\b", "\n".join(lines))
+        assert main(["check", path]) in (0, 1)
+        assert not re.search(r"\b(nan|inf)\b", capsys.readouterr().out)
+        assert main(["fk", path, *map(repr, data["q_actuated"]), "--json"]) == 0
+        fk = _strict(capsys.readouterr().out)
+        q = np.array(fk["q"])
+        assert np.allclose(link.model.actuated_values(q), data["q_actuated"], atol=1e-9)
+        assert np.abs(link.model.closure_residual(q)).max() < 1e-9
+        assert np.allclose(fk["pose"]["xyz"], data["pose"]["xyz"], atol=1e-9)
+        page = tmp_path / "page.html"
+        assert main(["view", path, "--html", str(page)]) == 0
+        capsys.readouterr()
+    text = page.read_text()
+    assert f"<title>pkm_pin: {link.name}" in text and len(text) > 10_000
+
+
+def test_check_says_the_base_and_how_the_output_was_chosen(capsys):
+    """check of Menagerie's Cassie: the free pelvis held as the base is said, and that the
+    left foot was chosen by the default rule, naming the frames that fit as well (its
+    ties in CORPUS) and --output; a file that names its output gets no such line."""
+    case = next(c for c in CORPUS if c.path.endswith("cassie.xml"))
+    assert main(["check", str(DATA / case.path)]) == 1
+    out = capsys.readouterr().out
+    assert "info  cassie-pelvis has a free joint in the file: it is held as the base" in out
+    assert (f"info  output 'left-foot': not named in the file, chosen by the default rule "
+            f"(the body the mechanism exists to move); as likely: {', '.join(case.ties)} "
+            "(--output FRAME)") in out
+    assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0
+    assert "chosen by the default rule" not in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("case", [c for c in CORPUS if not c.no_assembly and c.ties],
+                         ids=lambda c: c.id)
+def test_analyze_json_says_how_the_output_was_chosen_and_what_fits_as_well(case, capsys):
+    """analyze --json of a file that names no output: output_named false and
+    output_likely the default output then its ties (CORPUS), as the text hint lists
+    them; --output names it: output_named true."""
+    path = str(DATA / case.path)
+    assert main(["analyze", path, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["output_named"] is False
+    assert data["output_likely"] == [case.output, *case.ties]
+    assert main(["analyze", path, "--json", "--output", case.ties[0]]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["output_named"] is True and data["output"] == case.ties[0]

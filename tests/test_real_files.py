@@ -237,3 +237,111 @@ def test_a_keyframe_of_a_floating_robot_loses_its_free_joints_coordinates(tmp_pa
     home = link.model.tree.referenceConfigurations["home"]
     np.testing.assert_array_equal(home, [0.1, 0.2, 0.3])
     assert link.model.tree.nq == 3
+
+
+def test_check_names_a_duplicate_closure_and_refuses_a_self_closure(tmp_path, capsys):
+    """Through the files: a closures file that closes the four-bar's loop twice (the
+    second the other way round) checks with a warning naming both closures (exit 1),
+    the DOF still 1 and 3 more redundant rows than the single loop's; a closure of a
+    frame onto itself, in a closures file or an MJCF <connect>, is one error line
+    (exit 2)."""
+    import shutil
+
+    from pkm_pin.cli import main
+
+    shutil.copy(LOOPS / "four_bar.urdf", tmp_path / "four_bar.urdf")
+    yaml = tmp_path / "four_bar.yaml"
+    yaml.write_text("closed_loop: [['coupler_tip', 'rocker_tip'], ['rocker_tip', "
+                    "'coupler_tip']]\ntype: ['3d', '3d']\nname_mot: ['crank_joint']\n")
+    assert main(["check", str(tmp_path / "four_bar.urdf")]) == 1
+    out = capsys.readouterr().out
+    assert ("warn  closure 'rocker_tipCcoupler_tip' repeats 'coupler_tipCrocker_tip': its "
+            "rows are redundant") in out
+    assert "DOF 1, idle DOF 0" in out and "redundant closure equations 4" in out
+    assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0
+    assert "redundant closure equations 1" in capsys.readouterr().out
+    yaml.write_text("closed_loop: [['coupler_tip', 'coupler_tip']]\ntype: ['3d']\n"
+                    "name_mot: ['crank_joint']\n")
+    assert main(["check", str(tmp_path / "four_bar.urdf")]) == 2
+    err = capsys.readouterr().err
+    assert "joins frame 'coupler_tip' to itself" in err and len(err.splitlines()) == 1
+    xml = tmp_path / "self.xml"
+    xml.write_text((LOOPS / "four_bar.xml").read_text().replace('body2="rocker"',
+                                                                 'body2="coupler"'))
+    assert main(["analyze", str(xml)]) == 2
+    err = capsys.readouterr().err
+    assert "closure 'coupler_rocker'" in err and "to itself" in err
+
+
+def test_platform_text_report_gives_its_summary_before_the_tables():
+    """The platform report (a 3-RPR at a type II pose): DOF, Grübler count, class II,
+    the uncontrolled twist and the indices (type_II below 1e-12) come before the twist,
+    wrench and A/B tables; a non-finite index reads 'undefined', never nan or inf."""
+    import math
+
+    from pkm_pin import report
+    from pkm_pin.builders import MECHANISMS, rpr3_type2_pose
+
+    an = MECHANISMS["rpr3"]().build().analyze(rpr3_type2_pose())
+    data = report.report_data(an)
+    lines = report.text(data).splitlines()
+    order = [next(i for i, x in enumerate(lines) if x.startswith(h)) for h in (
+        "DOF ", "Grübler count ", "singularity        II", "uncontrolled twist rotation",
+        "indices ", "platform twists", "A (actuation", "B:")]
+    assert order == sorted(order) and order[4] == 6  # after mechanism and pose
+    assert data["indices"]["type_II"] < 1e-12
+    data["indices"] = {"type_I": math.inf, "type_II": math.nan, "condition_A": None}
+    (line,) = [x for x in report.text(data).splitlines() if x.startswith("indices")]
+    assert line.split(None, 1)[1] == ("type_I = undefined, type_II = undefined, "
+                                      "condition_A = undefined")
+
+
+@pytest.mark.parametrize("path,undefined,words", [
+    ("gepetto/battobot_6d/robot.urdf", {"type_II", "condition_A"},
+     "6 actuators (hipz_right, hipx_right, hipy_right, motor_ankle1_right, "
+     "motor_ankle2_right, motor_knee_right) exert no wrench on the output: zero rows of A"),
+    ("pinocchio/closed_chain.xml", {"type_I", "condition_A"}, "no actuator: A has no row"),
+    ("gepetto/5bar_linkage_iso3d/robot.urdf", set(), ""),
+])
+def test_every_null_index_of_the_json_says_why(capsys, path, undefined, words):
+    """analyze --json: each index that is null has its reason under indices_undefined
+    (the other leg's motors of a biped read with one foot; no motor at all), and only
+    those; a regular five-bar has none; the text prints each reason under the indices."""
+    import json
+
+    from pkm_pin.cli import main
+
+    spec = str(Path(__file__).resolve().parent / "data" / path)
+    assert main(["analyze", spec, "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    nulls = {k for k, v in data["indices"].items() if v is None}
+    assert nulls == set(data["indices_undefined"]) == undefined
+    assert all(words in why for why in data["indices_undefined"].values())
+    assert main(["analyze", spec]) == 0
+    text = capsys.readouterr().out
+    assert all(f"    {k} undefined (" in text for k in undefined)
+
+
+@pytest.mark.parametrize("path", ["gepetto/cassie_like/robot.urdf",
+                                  "gepetto/digit_like/robot.urdf",
+                                  "gepetto/talos_like/robot.urdf",
+                                  "gepetto/wl16_like/robot.urdf"])
+def test_iti_of_a_regular_leg_is_zero_only_where_its_actuator_moves_nothing(path):
+    """Legs whose knee and ankle pitch joints are held by rods (their foot's support
+    chain has four parallel revolutes): at the regular home assembly (every B_ii > 0)
+    every ITI and every OTI is positive, the analysis' own actuation wrench standing in
+    where the chain reading gives none. Cassie-like's thigh and knee read 0.795 and
+    0.954 and the leg transmits well (LTI 0.78 ≥ 0.7); before, cassie_like and
+    digit_like read 'LTI = 0' (ITI 0 at a regular pose)."""
+    from pkm_pin.transmission import GOOD_LTI
+
+    link = pkm_pin.load_mechanism(Path(__file__).resolve().parent / "data" / path)
+    a = link.home_assembly
+    an = link.analyze(a)
+    assert an.singularity == "none"
+    tr = link.transmission(a, analysis=an)
+    assert np.all(tr.iti > 1e-3) and np.all(tr.oti > 1e-3)
+    assert np.all(np.abs(np.diag(an.B)) > 1e-3)
+    if path.startswith("gepetto/cassie_like"):
+        assert tr.iti[2:4] == pytest.approx([0.795, 0.954], abs=1e-3)
+        assert tr.lti == pytest.approx(0.783, abs=1e-3) and tr.lti >= GOOD_LTI

@@ -250,6 +250,39 @@ def test_camera_and_grid_of_a_hanging_linkage():
     assert 0.5 * np.linalg.norm(hi - lo) < width < 6.0 * np.linalg.norm(hi - lo)
 
 
+CORPUS = Path(__file__).resolve().parent / "data"
+
+
+@pytest.mark.parametrize("path", ["ankles/g1_ankle/g1_ankle.xml",
+                                  "gepetto/battobot_6d/robot.urdf",
+                                  "menagerie/agility_cassie/cassie.xml"])
+def test_wrenches_whose_axis_lies_metres_away_leave_the_camera_on_the_mechanism(path):
+    """Published files whose actuation wrenches are near-couples (the G1's 2R ankle:
+    axes 14 m away from a 25 cm ankle; battobot's and Cassie's legs: 26 m): the box the
+    camera frames with the wrenches drawn is at most 25 % larger than without them, and
+    each wrench drawn as a couple points along its moment about the output (1e-9)."""
+    link = load_mechanism(CORPUS / path)
+    bare, full = view(link, show_wrenches=False), view(link)
+    size = [np.ptp(np.array(s.camera["box"]), axis=0).max() for s in (bare, full)]
+    assert size[1] <= 1.25 * size[0]
+    moves = {c["path"]: np.array(c["matrix"], dtype=float).reshape(4, 4).T
+             for c in page_commands(full.to_html()) if c["type"] == "set_transform"}
+    root = f"/meshcat/{full.root}/wrenches/actuation"
+    subs = full.submechanisms or ((link, full.analysis),)
+    kin = link.model.kinematics(full.assembly.q)
+    couples = 0
+    for sub, an in subs:
+        c = kin.frame_placements[link.model.tree.getFrameId(sub.output)].translation
+        for name, w in zip(sub.actuated, an.A):
+            if f"{root}/{name}/tail" not in moves:
+                continue
+            couples += 1
+            m = w[3:] - np.cross(c, w[:3])
+            u = moves[f"{root}/{name}"][:3, 1]  # the arrow's y axis
+            assert np.allclose(u, m / np.linalg.norm(m), atol=1e-9), name
+    assert couples >= 1
+
+
 def test_grid_cell_is_a_round_fraction_of_the_drawing():
     """grid_cell: 1, 2 or 5 times a power of ten, 1/40 to 1/16 of the extent, scaling
     with it."""
@@ -362,3 +395,20 @@ def test_second_view_into_a_live_viewer_keeps_its_camera(rps3, stewart, tmp_path
     offset = second.camera["position"] - second.camera["target"]
     np.testing.assert_allclose(state["position"], [offset[0], offset[2], -offset[1]], rtol=1e-6)
     assert state["fov"] == CAMERA_FOV and state["card"]
+
+
+def test_cli_view_titles_the_page_with_the_file_read(tmp_path, capsys):
+    """pkm-pin view of a Gepetto file (its robot is named 'onshape', like every Onshape
+    export): the page's title names the file after the robot, then the output, 12 DOF, 6
+    idle, 3T3R and class; view() without a source keeps the bare name."""
+    from pkm_pin.cli import main
+
+    path = CORPUS / "gepetto" / "wl16_like" / "robot.urdf"
+    page = tmp_path / "wl16.html"
+    assert main(["view", str(path), "--html", str(page)]) == 0
+    capsys.readouterr()
+    title = re.search(r"<title>([^<]*)</title>", page.read_text()).group(1)
+    assert title.startswith(f"pkm_pin: onshape ({path}) — output frame foot at xyz")
+    assert title.endswith("12 DOF, 6 idle, output motion 3T3R, singularity: none")
+    assert f'<div class="pkm-name">onshape ({html.escape(str(path))})</div>' in page.read_text()
+    assert view(load_mechanism(path), show_wrenches=False).title_lines[0] == "onshape"

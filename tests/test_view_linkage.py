@@ -152,3 +152,26 @@ def test_a_coupling_draws_no_loop(tmp_path):
     drawn = {p.removeprefix(root + "/").split("/")[0] for p in objects if p.startswith(root)}
     assert drawn == {"connect0", "connect1"}
     assert [c.kind for c in gripper.model.closures] == ["point", "point", "coupling"]
+
+
+def test_a_failing_layer_leaves_the_rest_of_the_drawing(monkeypatch, tmp_path, capsys):
+    """A drawing layer that fails (the wrenches, here an IndexError planted in them) is
+    named with its error and left out: the tree, the closures, the output and the idle
+    axes are drawn, the page written, exit 0."""
+    from pkm_pin.cli import main
+    from pkm_pin.view_linkage import _LinkagePainter
+
+    def broken(self):
+        raise IndexError("index 0 is out of bounds for axis 0 with size 0")
+
+    monkeypatch.setattr(_LinkagePainter, "wrenches", broken)
+    ankle = ANKLE
+    scene = view_linkage(load_mechanism(ankle))
+    assert scene.failed_sections == {
+        "wrenches": "IndexError: index 0 is out of bounds for axis 0 with size 0"}
+    kinds = {e.kind for e in scene.legend}
+    assert {"closure", "idle", "output"} <= kinds and "actuation_wrench" not in kinds
+    page = tmp_path / "ankle.html"
+    assert main(["view", str(ankle), "--html", str(page)]) == 0
+    out = capsys.readouterr().out
+    assert "failed     wrenches: IndexError: index 0" in out and page.stat().st_size > 10_000
