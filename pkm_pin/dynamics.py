@@ -57,11 +57,18 @@ the body twist of ``C_b`` relative to ``C_a``): the neglected ``(d/dt Jlog6) ν`
 Compiled path: where :mod:`pkm_pin.tree_kernel` represents the tree, one numba kernel
 (:func:`inverse_dynamics_kernel`) does a sample's whole work — closure rows, the bodies'
 world velocities and accelerations, ``rnea`` in world axes, the closures' second
-derivative, the checks, the balance by a warm-started Jacobi SVD with iterative
-refinement, the type II test — for one call (:func:`inverse_dynamics`) or N samples
-(:func:`inverse_dynamics_batch`); a sample it declines goes through the Python path
-below, which raises the error with its message or returns (docs/dynamics.md, "The
-compiled path").
+derivative, the checks, the balance, the type II test — for one call
+(:func:`inverse_dynamics`) or N samples (:func:`inverse_dynamics_batch`); a sample it
+declines goes through the Python path below, which raises the error with its message or
+returns (docs/dynamics.md, "The compiled path"). The balance (:func:`_balance`): where
+``A`` has full row rank, the ``L D Lᵀ`` of ``A Aᵀ`` gives the minimum-norm solution and
+the condition from the extreme eigenvalues of ``A Aᵀ``, each certified to
+:data:`EIG_RTOL` (power and inverse iterations warm-started from the previous samples,
+Temple's bound or a shifted ``L D Lᵀ`` as certificate), with a condition certified far
+below the type II threshold; elsewhere (the first sample of a call, idle motions,
+rank-deficient or ill-conditioned ``A``) a warm-started Jacobi SVD with iterative
+refinement and the type II test on its vectors. :func:`motion_kernel` is
+:func:`motion_from_actuated` compiled the same way (:func:`actuated_motion`).
 
 Gravity is set per call on a private copy of the tree kept per thread (Pinocchio reads
 the gravity from the ``Model``, not the ``Data``): the shared model is never modified
@@ -1431,7 +1438,8 @@ def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row
     ``has_w``) on the tree kernel ``k`` (``body``, ``armature``: the tree's inertias,
     :class:`_Work`; gravity ``g``): per sample ``rnea`` into ``T``, the efforts then
     closure forces ``X`` (physical), the payload's part ``XW``, ``J a + J̇ v`` (``RDD``)
-    and ``J̇ v`` (``DRIFT``), ``INFO`` = (status, balance residual, condition, rank);
+    and ``J̇ v`` (``DRIFT``), ``INFO`` = (status, balance residual, condition, rank,
+    1 where the balance took the Jacobi SVD, 0 the LDLᵀ route of :func:`_balance`);
     status :data:`_TO_PYTHON` where a check does not pass. ``cons``: the assembly,
     rank, closeness and balance tolerances, the consistency tolerance and ``|g| / L``.
     Makes the work arrays, then :func:`_samples` runs the samples."""
@@ -1470,6 +1478,7 @@ def _samples(k, ws, s, Q, V_, A, body, armature, g, W, has_w, point, row_units, 
         for r in range(na + nr):
             unit = k.units[k.act_v[r]] if r < na else row_units[r - na]
             X[i, r], XW[i, r] = s.y[r] / unit, s.yw[r] / unit
+        info[4] = svd
         if svd and _type_two(s.V, s.sv, cons[2] * smax, s.Jo, k.units, ws.F, 2 * C,
                              k.length, cons[2], s.s6):
             continue
@@ -1598,7 +1607,7 @@ def _run_kernel(model: ClosureModel, kern, work: _Work, Q, V, A, g, W, tol) -> t
                      EFFORT_BALANCE_RTOL, min(float(tol), 1e300),
                      float(np.linalg.norm(g)) / model.length])
     X, XW = np.zeros((N, na + nr)), np.zeros((N, na + nr))
-    RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
+    RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 5))
     inverse_dynamics_kernel(kern, Q, V, A, work.body, work.armature, g, W, has_w,
                             bool(model.output_point), work.row_units, cons, T, X, XW, RDD,
                             DRIFT, INFO)
@@ -1667,7 +1676,7 @@ def inverse_dynamics_batch(model: ClosureModel, Q, V, A, *, gravity=GRAVITY, wre
         T, X, XW, RDD, DRIFT, INFO = _run_kernel(model, kern, work, Q, V, A, g, W, tol)
     else:
         T, X, XW = np.zeros((N, model.nv)), np.zeros((N, na + nr)), np.zeros((N, na + nr))
-        RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
+        RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 5))
         INFO[:, 0] = _TO_PYTHON
     for i in np.flatnonzero(INFO[:, 0] != _OK):
         try:
@@ -1681,7 +1690,7 @@ def inverse_dynamics_batch(model: ClosureModel, Q, V, A, *, gravity=GRAVITY, wre
         X[i] = np.r_[r.efforts, r.closure_forces]
         XW[i] = np.r_[r.payload_efforts, r.payload_closure_forces]
         T[i], RDD[i], DRIFT[i] = r.tree_efforts, r.acceleration_residual, r.drift
-        INFO[i, 1:] = r.balance_residual, r.condition, na + nr - r.redundant_rows
+        INFO[i, 1:4] = r.balance_residual, r.condition, na + nr - r.redundant_rows
     return InverseDynamicsBatch(
         efforts=X[:, :na], actuated=tuple(model.actuated), closure_forces=X[:, na:],
         redundant_rows=(na + nr - INFO[:, 3]).astype(int), payload_efforts=XW[:, :na],
