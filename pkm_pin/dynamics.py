@@ -1418,6 +1418,7 @@ class _Scratch(NamedTuple):
 
 @register_jitable
 def _scratch(k) -> _Scratch:
+    """:class:`_Scratch` for the tree kernel ``k`` (no warm vectors yet)."""
     nv, nr, C = k.nv, k.rows[-1], k.ckind.shape[0]
     nj, m = k.parent.shape[0], k.act_v.shape[0] + k.rows[-1]
     return _Scratch(
