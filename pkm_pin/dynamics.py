@@ -99,7 +99,7 @@ from .errors import (
     SingularityError,
 )
 from .model.closure_model import KINDS, ClosureModel, TreeKinematics
-from .newton import ldl, ldl_solve
+from .newton import ldl_solve
 from .tolerances import (
     ASSEMBLY_CHECK_RTOL,
     CLOSENESS_SINGULAR_TOL,
@@ -1040,14 +1040,29 @@ def _gram(act, Hu, G) -> tuple:
 
 @register_jitable
 def _shifted_ldl(G, sign, shift, L, inv) -> bool:
-    """``L D Lᵀ`` of ``sign G − shift I`` (:func:`pkm_pin.newton.ldl`, in ``L``'s lower
-    triangle, ``inv = 1 / D``): whether that matrix is positive definite (Sylvester)."""
+    """``L D Lᵀ`` of ``sign G − shift I`` (``G`` symmetric, both triangles) in ``L``'s
+    lower triangle as :func:`pkm_pin.newton.ldl` writes it (unit factor below the
+    diagonal, ``D`` on it; :func:`~pkm_pin.newton.ldl_solve` reads it), the products
+    ``L D`` of each row in the upper triangle (work: half the multiplications), ``inv =
+    1 / D``. Returns whether that matrix is positive definite (Sylvester)."""
     n = G.shape[0]
-    for i in range(n):
-        for j in range(i + 1):
-            L[i, j] = sign * G[i, j]
-        L[i, i] -= shift
-    return ldl(L, n, inv)
+    for j in range(n):
+        d = sign * G[j, j] - shift
+        for k in range(j):
+            w = L[j, k] * L[k, k]
+            L[k, j] = w
+            d -= w * L[j, k]
+        if not 0.0 < d < np.inf:
+            return False
+        L[j, j] = d
+        f = 1.0 / d
+        inv[j] = f
+        for i in range(j + 1, n):
+            t = sign * G[i, j]
+            for k in range(j):
+                t -= L[i, k] * L[k, j]
+            L[i, j] = t * f
+    return True
 
 
 @register_jitable
@@ -1094,7 +1109,7 @@ def _min_norm(act, Hu, L, inv, rhs, x, r, z) -> float:
 EIG_STEPS = 40
 #: Relative width of the interval in which :func:`_largest_eigenvalue` and
 #: :func:`_smallest_eigenvalue` certify the extreme eigenvalues of ``A Aᵀ``.
-EIG_RTOL = 1e-10
+EIG_RTOL = 3e-10
 #: Relative error of the balance's condition the Cholesky route must certify (else the
 #: Jacobi SVD): the certified intervals plus the round-off of ``A Aᵀ`` (:func:`_balance`).
 CONDITION_RTOL = 1e-9
@@ -1168,19 +1183,27 @@ def _below(G, fro, rho, eps2, top, L, inv) -> bool:
 @register_jitable
 def _smallest_eigenvalue(G, LG, invG, u, z, L, inv, delta, plan) -> float:
     """``λ_min(G)`` by inverse iteration with ``G``'s factors (``LG``, ``invG``) from the
-    unit ``u`` (warm start, updated): ``ρ = 1 / ‖G⁻¹ u‖ ≥ λ_min`` falls to it, and from
-    step ``plan[1]`` each step tries the certificate ``λ_min > (1 − delta) ρ``: ``G −
-    (1 − delta) ρ I`` is positive definite. Returns ``ρ``, or −1."""
+    unit ``u`` (warm start, updated), and from step ``plan[1]`` the Rayleigh quotient
+    ``ρ = uᵀ G u ≥ λ_min`` of the new vector (whose error is that of the input times
+    ``(λ_min / λ₂)²``) with the certificate ``λ_min > (1 − delta) ρ``: ``G − (1 − delta)
+    ρ I`` positive definite. Returns ``ρ``, or −1."""
     n = G.shape[0]
     for step in range(1, EIG_STEPS + 1):
         ldl_solve(LG, n, invG, u, z)
         nz = _norm(z)
         if not 0.0 < nz < np.inf:
             return -1.0
-        rho = 1.0 / nz
         for i in range(n):
-            u[i] = z[i] * rho
-        if step >= plan[1] and _shifted_ldl(G, 1.0, (1.0 - delta) * rho, L, inv):
+            u[i] = z[i] / nz
+        if step < plan[1]:
+            continue
+        rho = 0.0
+        for i in range(n):
+            t = 0.0
+            for j in range(n):
+                t += G[i, j] * u[j]
+            rho += u[i] * t
+        if rho > 0.0 and _shifted_ldl(G, 1.0, (1.0 - delta) * rho, L, inv):
             _certified(step, plan, 1)
             return rho
     return -1.0
