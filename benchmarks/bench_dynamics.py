@@ -21,11 +21,14 @@ sample, best of ``repeat`` runs:
 
 Prints the times, the ratio inverse_dynamics / hand-written (issue 26's target: ≤ 1),
 the ratio single calls / batch (target: ≥ 10) and the largest differences of the
-efforts.
+efforts; then ``trajectory.study``'s velocity / acceleration step per sample before
+(numpy) and now (compiled), and a whole study of the leg per sample
+(:func:`motion_step`).
 """
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 import numpy as np
@@ -43,8 +46,9 @@ GRAVITY = np.array([0.0, 0.0, -9.81])
 with_inertias = with_random_inertias  # seeded random inertias on every body
 
 
-def samples(n: int, size: float = 0.2):
-    """The model and n consistent samples ``(q, v, a)`` along sines of the motors."""
+def samples(n: int, size: float = 0.2, rates: list | None = None):
+    """The model and n consistent samples ``(q, v, a)`` along sines of the motors
+    (``rates``: receives each sample's actuated ``(q̇_a, q̈_a)``)."""
     link = load_mechanism(CASSIE)
     cm = with_inertias(link.model)
     home = link.home_assembly
@@ -54,9 +58,11 @@ def samples(n: int, size: float = 0.2):
     for s in t:
         qa = home.q_actuated + size * np.sin(w * s)
         q = link.forward_kinematics(qa, prev).q
-        v, a = dyn.motion_from_actuated(cm, q, size * w * np.cos(w * s),
-                                        -size * w ** 2 * np.sin(w * s))
+        qd, qdd = size * w * np.cos(w * s), -size * w ** 2 * np.sin(w * s)
+        v, a = dyn.motion_from_actuated(cm, q, qd, qdd)
         out.append((q, v, a))
+        if rates is not None:
+            rates.append((qd, qdd))
         prev = q
     return cm, out
 
@@ -91,8 +97,38 @@ class HandWritten:
         return np.linalg.lstsq(N.T @ self.S.T, N.T @ tau, rcond=None)[0]
 
 
+def motion_step(cm, data, rates, repeat: int, n_study: int = 1000) -> dict:
+    """Per sample [µs], the velocity / acceleration step of ``trajectory.study``: before
+    (numpy ``motion_from_actuated`` and the SVD of ``[J; S]`` that looks for idle
+    motions) and now (``actuated_motion``: the compiled kernel, which certifies there is
+    none); and a whole study of the leg (default motion, ``n_study`` samples) per
+    sample."""
+    from pkm_pin import trajectory
+
+    def before():
+        for (q, _, _), (qd, qdd) in zip(data, rates):
+            dyn._motion_python(cm, q, qd, qdd)
+            trajectory._ActuatedSystem(cm, q)
+
+    def now():
+        for (q, _, _), (qd, qdd) in zip(data, rates):
+            dyn.actuated_motion(cm, q, qd, qdd)
+
+    now()
+    best = best_of_each({"before": before, "now": now}, repeat)
+    us = {k: x / len(data) * 1e6 for k, x in best.items()}
+    q0 = data[0][0]
+    trajectory.study(cm, samples=20, q0=q0)
+    t = time.perf_counter()
+    st = trajectory.study(cm, samples=n_study, q0=q0)
+    us["study"] = (time.perf_counter() - t) / n_study * 1e6
+    us.update({f"study {k}": x * 1e6 for k, x in st.timing.items() if k != "total"})
+    return us
+
+
 def main(n: int = 1000, single: int = 200, repeat: int = 7) -> dict:
-    cm, data = samples(n)
+    rates: list = []
+    cm, data = samples(n, rates=rates)
     Q, V, A = (np.array([d[k] for d in data]) for k in range(3))
     hand = HandWritten(cm)
     batch = dyn.inverse_dynamics_batch(cm, Q, V, A, gravity=GRAVITY)  # compiles once
@@ -136,7 +172,15 @@ def main(n: int = 1000, single: int = 200, repeat: int = 7) -> dict:
     print(f"  ratio Python path / batch               {us['python'] / us['batch']:8.2f}")
     print(f"  largest relative difference of the efforts: single vs hand-written {diff:.1e}, "
           f"batch vs Python path {diff_batch:.1e}")
-    return {**us, "diff": diff, "diff_batch": diff_batch}
+    step = motion_step(cm, data[:single], rates[:single], max(1, repeat // 2), n)
+    print("trajectory.study of the leg, per sample:")
+    print(f"  velocity / acceleration step: before {step['before']:8.1f} us (numpy), now "
+          f"{step['now']:8.1f} us (compiled kernel), ratio {step['before'] / step['now']:.1f}")
+    print(f"  a whole study ({n} samples)         {step['study']:8.1f} us: forward "
+          f"kinematics {step['study kinematics']:.1f}, motion {step['study motion']:.1f}, "
+          f"dynamics {step['study dynamics']:.1f}")
+    return {**us, "diff": diff, "diff_batch": diff_batch,
+            **{f"motion {k}": x for k, x in step.items()}}
 
 
 if __name__ == "__main__":

@@ -57,11 +57,18 @@ the body twist of ``C_b`` relative to ``C_a``): the neglected ``(d/dt Jlog6) ν`
 Compiled path: where :mod:`pkm_pin.tree_kernel` represents the tree, one numba kernel
 (:func:`inverse_dynamics_kernel`) does a sample's whole work — closure rows, the bodies'
 world velocities and accelerations, ``rnea`` in world axes, the closures' second
-derivative, the checks, the balance by a warm-started Jacobi SVD with iterative
-refinement, the type II test — for one call (:func:`inverse_dynamics`) or N samples
-(:func:`inverse_dynamics_batch`); a sample it declines goes through the Python path
-below, which raises the error with its message or returns (docs/dynamics.md, "The
-compiled path").
+derivative, the checks, the balance, the type II test — for one call
+(:func:`inverse_dynamics`) or N samples (:func:`inverse_dynamics_batch`); a sample it
+declines goes through the Python path below, which raises the error with its message or
+returns (docs/dynamics.md, "The compiled path"). The balance (:func:`_balance`): where
+``A`` has full row rank, the ``L D Lᵀ`` of ``A Aᵀ`` gives the minimum-norm solution and
+the condition from the extreme eigenvalues of ``A Aᵀ``, each certified to
+:data:`EIG_RTOL` (power and inverse iterations warm-started from the previous samples,
+Temple's bound or a shifted ``L D Lᵀ`` as certificate), with a condition certified far
+below the type II threshold; elsewhere (the first sample of a call, idle motions,
+rank-deficient or ill-conditioned ``A``) a warm-started Jacobi SVD with iterative
+refinement and the type II test on its vectors. :func:`motion_kernel` is
+:func:`motion_from_actuated` compiled the same way (:func:`actuated_motion`).
 
 Gravity is set per call on a private copy of the tree kept per thread (Pinocchio reads
 the gravity from the ``Model``, not the ``Data``): the shared model is never modified
@@ -74,6 +81,7 @@ import math
 import threading
 import weakref
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -91,6 +99,7 @@ from .errors import (
     SingularityError,
 )
 from .model.closure_model import KINDS, ClosureModel, TreeKinematics
+from .newton import ldl_solve
 from .tolerances import (
     ASSEMBLY_CHECK_RTOL,
     CLOSENESS_SINGULAR_TOL,
@@ -488,10 +497,34 @@ def motion_from_actuated(model: ClosureModel, q, qd_actuated, qdd_actuated
         InconsistentMotion: actuated rates the closures do not allow (more actuators
             than degrees of freedom, or a type I singularity).
     """
+    v, a, _ = actuated_motion(model, q, qd_actuated, qdd_actuated)
+    return v, a
+
+
+def actuated_motion(model: ClosureModel, q, qd_actuated, qdd_actuated
+                    ) -> tuple[np.ndarray, np.ndarray, bool]:
+    """:func:`motion_from_actuated` and whether the compiled kernel
+    (:func:`motion_kernel`) gave it, which certifies that ``[J; S]`` has full column
+    rank: no idle motion (the caller can skip looking for one). Same errors."""
     q = model.check_q(q)
     n = len(model.actuated)
     qd = screws.as_vector(qd_actuated, n, "qd_actuated", ", ".join(model.actuated))
     qdd = screws.as_vector(qdd_actuated, n, "qdd_actuated", ", ".join(model.actuated))
+    kern = _compiled(model, kernel=motion_kernel)
+    if kern is not None:
+        work = _work(model)
+        v, a, info = np.empty(model.nv), np.empty(model.nv), np.zeros(1)
+        cons = np.array([ASSEMBLY_CHECK_RTOL, MOTION_CERTIFY_RTOL, MOTION_CONSISTENCY_RTOL])
+        motion_kernel(kern, q, qd, qdd, work.row_units, cons, v, a, info)
+        if info[0] == _OK:
+            return v, a, True
+    v, a = _motion_python(model, q, qd, qdd)
+    return v, a, False
+
+
+def _motion_python(model: ClosureModel, q, qd, qdd) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`motion_from_actuated` by Pinocchio passes and numpy (checked arguments)."""
+    n = len(model.actuated)
     work = _work(model)
     kin = TreeKinematics(model, q, work.data)
     _check_closed(model, kin.residual)
@@ -815,10 +848,13 @@ def _end_world(F, e, j, Vb, Ab):
 
 
 @register_jitable
-def _weld_rows(Mh, nud, r0, out, lg, Jl, w3, A3, Cm):
-    """``Jlog6(M) ν̇`` into a weld's rows ``(θ; ρ)`` (Pinocchio's ``(v; ω)`` Jlog6)."""
-    R = Mh[:, :3].copy()
-    p = Mh[:, 3].copy()
+def _weld_rows(Mh, nud, r0, out, lg, Jl, w3, A3, Cm, R, p):
+    """``Jlog6(M) ν̇`` into a weld's rows ``(θ; ρ)`` (Pinocchio's ``(v; ω)`` Jlog6;
+    ``R`` (3 × 3), ``p`` (3): work)."""
+    for a in range(3):
+        p[a] = Mh[a, 3]
+        for b in range(3):
+            R[a, b] = Mh[a, b]
     log6_jlog6(R, p, lg, Jl, w3, A3, Cm)
     for a in range(3):
         ang, lin = 0.0, 0.0
@@ -845,7 +881,7 @@ def _second_derivative_world(k, ws, Vb, Ab, H, a, row_units, rdd, nud, Mh, lg, J
         eb = _end_world(ws.F, C + c, k.fjoint[C + c], Vb, Ab)
         _closure_dd(ea, eb, k.ckind[c], k.rows[c], rdd, nud, Mh)
         if k.ckind[c] == 2:
-            _weld_rows(Mh, nud, k.rows[c], rdd, lg, Jl, ws.w, A3, ws.Cm)
+            _weld_rows(Mh, nud, k.rows[c], rdd, lg, Jl, ws.w, A3, ws.Cm, ws.Rrel, ws.prel)
 
 
 @register_jitable
@@ -865,28 +901,22 @@ def _output_columns(k, ws, point, Jo):
 
 
 @register_jitable
-def _drift(H, a, rdd, row_units, out):
-    """``J̇ v = (J a + J̇ v) − s ∘ (J_c a)`` (physical rows)."""
-    for r in range(H.shape[0]):
-        s = 0.0
-        for c in range(H.shape[1]):
-            s += H[r, c] * a[c]
-        out[r] = rdd[r] - row_units[r] * s
-
-
-@register_jitable
-def _consistent(H, U, rows, v, a, rdd, gscale, tol):
+def _consistent(H, U, rows, v, a, rdd, gscale, tol, drift, Hu):
     """The checks of :func:`_check_rows` with ``‖J_c U‖₂`` bounded below by its
-    Frobenius norm over √min(m, n) (stricter: a sample at the limit goes to Python)."""
+    Frobenius norm over √min(m, n) (stricter: a sample at the limit goes to Python);
+    on the way ``J̇ v = (J a + J̇ v) − s ∘ (J_c a)`` into ``drift`` (physical rows) and
+    the dimensionless ``Hu = J_c U`` (the balance's)."""
     m, n = H.shape
     fro, jv, nv_, na_, r2, d2 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for i in range(m):
         s, sa = 0.0, 0.0
         for c in range(n):
             x = H[i, c] * U[c]
+            Hu[i, c] = x
             fro += x * x
             s += H[i, c] * v[c]
             sa += H[i, c] * a[c]
+        drift[i] = rdd[i] - rows[i] * sa
         jv += s * s
         r = rdd[i] / rows[i]
         r2 += r * r
@@ -903,13 +933,12 @@ def _consistent(H, U, rows, v, a, rdd, gscale, tol):
 
 
 @register_jitable
-def _type_two(V, sv, small, Jo, U, F, o, length, close):
+def _type_two(V, sv, small, Jo, U, F, o, length, close, t):
     """Whether a left singular vector of the balance matrix (column ``j`` of ``V``)
     whose singular value is below ``small`` moves the output (homogenised about its
     origin, > ``close``)."""
     nv = V.shape[0]
     px, py, pz = F[o, 0, 3], F[o, 1, 3], F[o, 2, 3]
-    t = np.zeros(6)
     for j in range(nv):
         if sv[j] >= small:
             continue
@@ -973,7 +1002,302 @@ def _residual(At, y, b, r) -> float:
 
 
 @register_jitable
-def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
+def _norm(x) -> float:
+    """``‖x‖₂`` of a vector (no allocation)."""
+    s = 0.0
+    for i in range(x.shape[0]):
+        s += x[i] * x[i]
+    return math.sqrt(s)
+
+
+@register_jitable
+def _gram(act, Hu, G) -> tuple:
+    """``G = A Aᵀ = S Sᵀ + Huᵀ Hu`` (nv × nv, both triangles) of the balance matrix ``A
+    = [Sᵀ, −Huᵀ]`` (``Hu = J_c U``, the dimensionless closure rows), summed row by row
+    (a closure's row is zero outside its loop's joints). Returns ``(max |A|, ‖G‖_F²)``."""
+    nr, nv = Hu.shape
+    for c in range(nv):
+        for d in range(nv):
+            G[c, d] = 0.0
+    for i in range(act.shape[0]):
+        G[act[i], act[i]] += 1.0
+    amax = 1.0 if act.shape[0] else 0.0
+    for i in range(nr):
+        for c in range(nv):
+            h = Hu[i, c]
+            if h != 0.0:
+                amax = max(amax, abs(h))
+                for d in range(c + 1):
+                    G[c, d] += h * Hu[i, d]
+    fro = 0.0
+    for c in range(nv):
+        fro += G[c, c] * G[c, c]
+        for d in range(c):
+            G[d, c] = G[c, d]
+            fro += 2.0 * G[c, d] * G[c, d]
+    return amax, fro
+
+
+@register_jitable
+def _shifted_ldl(G, sign, shift, L, inv) -> bool:
+    """``L D Lᵀ`` of ``sign G − shift I`` (``G`` symmetric, both triangles) in ``L``'s
+    lower triangle as :func:`pkm_pin.newton.ldl` writes it (unit factor below the
+    diagonal, ``D`` on it; :func:`~pkm_pin.newton.ldl_solve` reads it), the products
+    ``L D`` of each row in the upper triangle (work: half the multiplications), ``inv =
+    1 / D``. Returns whether that matrix is positive definite (Sylvester)."""
+    n = G.shape[0]
+    for j in range(n):
+        d = sign * G[j, j] - shift
+        for k in range(j):
+            w = L[j, k] * L[k, k]
+            L[k, j] = w
+            d -= w * L[j, k]
+        if not 0.0 < d < np.inf:
+            return False
+        L[j, j] = d
+        f = 1.0 / d
+        inv[j] = f
+        for i in range(j + 1, n):
+            t = sign * G[i, j]
+            for k in range(j):
+                t -= L[i, k] * L[k, j]
+            L[i, j] = t * f
+    return True
+
+
+@register_jitable
+def _times_transpose(act, Hu, z, x):
+    """``x = Aᵀ z`` (``A = [Sᵀ, −Huᵀ]``)."""
+    na, nr, nv = act.shape[0], Hu.shape[0], Hu.shape[1]
+    for i in range(na):
+        x[i] = z[act[i]]
+    for i in range(nr):
+        s = 0.0
+        for c in range(nv):
+            s -= Hu[i, c] * z[c]
+        x[na + i] = s
+
+
+@register_jitable
+def _residual_of(act, Hu, x, rhs, r) -> float:
+    """``r = rhs − A x`` (``A = [Sᵀ, −Huᵀ]``); returns ``‖r‖``."""
+    na, nr, nv = act.shape[0], Hu.shape[0], Hu.shape[1]
+    for c in range(nv):
+        s = rhs[c]
+        for i in range(nr):
+            s += Hu[i, c] * x[na + i]
+        r[c] = s
+    for i in range(na):
+        r[act[i]] -= x[i]
+    return _norm(r)
+
+
+@register_jitable
+def _min_norm(act, Hu, L, inv, rhs, x, r, z) -> float:
+    """The minimum-norm solution ``x = Aᵀ G⁻¹ rhs`` of ``A x = rhs`` (``A`` of full row
+    rank, ``G = A Aᵀ`` factored in ``L``, ``inv``; ``x`` in the row space of ``A``).
+    Its relative error is ``~eps κ(G)``, ``κ(G) = κ(A)²``, which :func:`_balance_cholesky`
+    bounds (below 1e-11: no refinement step). Returns ``‖rhs − A x‖`` (``r`` the
+    residual)."""
+    ldl_solve(L, L.shape[0], inv, rhs, z)
+    _times_transpose(act, Hu, z, x)
+    return _residual_of(act, Hu, x, rhs, r)
+
+
+#: Power and inverse iterations of :func:`_largest_eigenvalue`,
+#: :func:`_smallest_eigenvalue` before they give up (the Jacobi SVD then).
+EIG_STEPS = 40
+#: Relative width of the interval in which :func:`_largest_eigenvalue` and
+#: :func:`_smallest_eigenvalue` certify the extreme eigenvalues of ``A Aᵀ``.
+EIG_RTOL = 3e-10
+#: Relative error of the balance's condition the Cholesky route must certify (else the
+#: Jacobi SVD): the certified intervals plus the round-off of ``A Aᵀ`` (:func:`_balance`).
+CONDITION_RTOL = 1e-9
+#: Samples whose certificate came at the first try before :func:`_certified` tries one
+#: iteration fewer.
+EIG_PATIENCE = 16
+
+
+@register_jitable
+def _certified(step, plan, which):
+    """Book-keeping of an iteration certified at ``step``: ``plan[which]`` is the step
+    of the first certificate attempt (the previous sample's need), ``plan[2 + which]``
+    counts the samples certified at that first try; after :data:`EIG_PATIENCE` of them
+    the next sample tries one step earlier."""
+    if step > plan[which]:
+        plan[which], plan[2 + which] = step, 0
+        return
+    plan[2 + which] += 1
+    if plan[2 + which] >= EIG_PATIENCE and plan[which] > 1:
+        plan[which], plan[2 + which] = plan[which] - 1, 0
+
+
+@register_jitable
+def _largest_eigenvalue(G, fro, u, z, L, inv, delta, plan) -> float:
+    """``λ_max(G)`` of the symmetric positive definite ``G`` (``fro = ‖G‖_F²``) by power
+    iteration from the unit ``u`` (a warm start, updated): the Rayleigh quotient ``ρ =
+    uᵀ G u ≤ λ_max`` rises to it, and from step ``plan[0]`` (:func:`_certified`) each
+    step tries to certify ``λ_max < (1 + delta) ρ`` (:func:`_below`). Returns ``ρ``, or
+    −1 when no certificate came within :data:`EIG_STEPS`."""
+    n = G.shape[0]
+    for step in range(1, EIG_STEPS + 1):
+        for i in range(n):
+            z[i] = 0.0
+        for j in range(n):  # z = G u by rows of the symmetric G
+            t = u[j]
+            for i in range(n):
+                z[i] += G[j, i] * t
+        rho, nz = 0.0, 0.0
+        for i in range(n):
+            rho += u[i] * z[i]
+            nz += z[i] * z[i]
+        if not 0.0 < nz < np.inf:
+            return -1.0
+        eps2 = 0.0
+        for i in range(n):
+            eps2 += (z[i] - rho * u[i]) ** 2
+        f = 1.0 / math.sqrt(nz)
+        for i in range(n):
+            u[i] = z[i] * f
+        if step >= plan[0] and _below(G, fro, rho, eps2, (1.0 + delta) * rho, L, inv):
+            _certified(step, plan, 0)
+            return rho
+    return -1.0
+
+
+@register_jitable
+def _below(G, fro, rho, eps2, top, L, inv) -> bool:
+    """Whether ``λ_max(G) < top`` is certain, from a Rayleigh quotient ``ρ`` with its
+    residual ``ε² = ‖G u − ρ u‖²``: Temple's inequality ``λ_max ≤ ρ + ε² / (ρ − β)``
+    where ``β ≥ λ₂`` (the second largest; ``λ₂² ≤ ‖G‖_F² − λ_max² ≤ ‖G‖_F² − ρ²``) is
+    below ``ρ`` (plus the round-off of ``ρ`` and ``ε``); else ``top I − G`` positive
+    definite (:func:`_shifted_ldl`)."""
+    n = G.shape[0]
+    off = 8.0 * n * 2.2e-16 * math.sqrt(fro)  # the round-off of ρ, ε² and β
+    gap = rho - math.sqrt(max(fro - rho * rho, 0.0)) - off
+    if gap > 0.0 and rho + eps2 / gap + off < top:
+        return True
+    return _shifted_ldl(G, -1.0, -top, L, inv)
+
+
+@register_jitable
+def _smallest_eigenvalue(G, LG, invG, u, z, L, inv, delta, plan) -> float:
+    """``λ_min(G)`` by inverse iteration with ``G``'s factors (``LG``, ``invG``) from the
+    unit ``u`` (warm start, updated), and from step ``plan[1]`` the Rayleigh quotient
+    ``ρ = uᵀ G u ≥ λ_min`` of the new vector (whose error is that of the input times
+    ``(λ_min / λ₂)²``) with the certificate ``λ_min > (1 − delta) ρ``: ``G − (1 − delta)
+    ρ I`` positive definite. Returns ``ρ``, or −1."""
+    n = G.shape[0]
+    for step in range(1, EIG_STEPS + 1):
+        ldl_solve(LG, n, invG, u, z)
+        nz = _norm(z)
+        if not 0.0 < nz < np.inf:
+            return -1.0
+        for i in range(n):
+            u[i] = z[i] / nz
+        if step < plan[1]:
+            continue
+        rho = 0.0
+        for i in range(n):
+            t = 0.0
+            for j in range(n):
+                t += G[i, j] * u[j]
+            rho += u[i] * t
+        if rho > 0.0 and _shifted_ldl(G, 1.0, (1.0 - delta) * rho, L, inv):
+            _certified(step, plan, 1)
+            return rho
+    return -1.0
+
+
+#: :func:`_extrapolate` predicts where the last step of the vector is below this.
+EXTRAPOLATE_BELOW = 0.1
+
+
+@register_jitable
+def _extrapolate(u, prev, w):
+    """The warm start of an eigenvector along a path of samples: ``u`` (the last
+    sample's vector) ← ``2 u − prev`` (``prev``: the one before), normalised, where the
+    step ``|u − prev|`` is below :data:`EXTRAPOLATE_BELOW` (an error ``O(h²)`` rather
+    than ``O(h)``); then ``prev`` ← the last vector (``w``: work)."""
+    n = u.shape[0]
+    d2 = 0.0
+    for i in range(n):
+        w[i] = u[i]
+        d2 += (u[i] - prev[i]) ** 2
+    if d2 < EXTRAPOLATE_BELOW ** 2:
+        for i in range(n):
+            u[i] = 2.0 * u[i] - prev[i]
+        f = 1.0 / _norm(u)
+        for i in range(n):
+            u[i] *= f
+    for i in range(n):
+        prev[i] = w[i]
+
+
+@register_jitable
+def _balance_cholesky(act, s, has_w):
+    """The balance by the Cholesky (``L D Lᵀ``) factors of ``G = A Aᵀ`` where ``A`` has
+    full row rank with a certified condition: the minimum-norm solutions of ``b`` and
+    ``bw`` (:func:`_min_norm`), ``σ_max² = λ_max(G)`` and ``σ_min² = λ_min(G)`` certified
+    (:func:`_largest_eigenvalue`, :func:`_smallest_eigenvalue`, warm-started with the
+    previous samples' vectors, :func:`_extrapolate`). Returns ``(ok, σ_max, σ_min,
+    relative residual)``; not ok: a factorisation fails, an iteration gives up, or the
+    round-off of ``G`` (``(n_rows + 4) nv eps κ(G)``, ``κ(G) = κ(A)²``) with the
+    certified widths exceeds :data:`CONDITION_RTOL`."""
+    nv, nr = s.G.shape[0], s.H.shape[0]
+    amax, fro = _gram(act, s.Hu, s.G)
+    if not _shifted_ldl(s.G, 1.0, 0.0, s.LG, s.invG):
+        return False, 0.0, 0.0, 0.0
+    _extrapolate(s.umax, s.pmax, s.z)
+    _extrapolate(s.umin, s.pmin, s.z)
+    lmax = _largest_eigenvalue(s.G, fro, s.umax, s.z, s.L, s.inv, EIG_RTOL, s.plan)
+    if lmax < 0.0:
+        return False, 0.0, 0.0, 0.0
+    lmin = _smallest_eigenvalue(s.G, s.LG, s.invG, s.umin, s.z, s.L, s.inv, EIG_RTOL,
+                                s.plan)
+    if lmin <= 0.0 or 2.0 * EIG_RTOL + (nr + 4) * nv * 2.2e-16 * lmax / lmin > \
+            2.0 * CONDITION_RTOL:
+        return False, 0.0, 0.0, 0.0
+    res = _min_norm(act, s.Hu, s.LG, s.invG, s.b, s.y, s.rv, s.z)
+    if has_w:
+        _min_norm(act, s.Hu, s.LG, s.invG, s.bw, s.yw, s.rv, s.z)
+    else:
+        s.yw[:] = 0.0
+    scale = max(_norm(s.b), amax * _norm(s.y), 1e-300)
+    return True, math.sqrt(lmax), math.sqrt(lmin), res / scale
+
+
+@register_jitable
+def _balance(k, s, cons, has_w):
+    """The balance ``A x = b`` (and ``bw``) of one sample: by :func:`_balance_cholesky`
+    once a previous sample of the batch has given warm vectors and ``A`` can have full
+    row rank, else (or where it declines) by :func:`_balance_svd`, whose basis then
+    gives the warm vectors. Returns ``(rank, σ_max, σ_min kept, relative residual,
+    svd)``: ``svd`` whether ``s.V``, ``s.sv`` hold this sample's SVD (the type II test
+    reads it; the Cholesky route certifies ``σ_min / σ_max`` far above
+    :data:`CLOSENESS_SINGULAR_TOL`)."""
+    nv, na, nr = s.G.shape[0], k.act_v.shape[0], s.H.shape[0]
+    if s.warm[0] and na + nr >= nv:
+        ok, smax, smin, res = _balance_cholesky(k.act_v, s, has_w)
+        if ok:
+            return nv, smax, smin, res, False
+    rank, smax, smin, res = _balance_svd(k, s.H, s.At, s.Wj, s.V, s.sv, s.b, s.bw, s.y,
+                                         s.yw, s.rv, cons, has_w)
+    hi, lo = 0, 0
+    for j in range(nv):
+        if s.sv[j] > s.sv[hi]:
+            hi = j
+        if s.sv[j] < s.sv[lo]:
+            lo = j
+    for i in range(nv):
+        s.umax[i], s.umin[i] = s.V[i, hi], s.V[i, lo]
+        s.pmax[i], s.pmin[i] = s.V[i, hi], s.V[i, lo]
+    s.warm[0] = 1
+    return rank, smax, smin, res, True
+
+
+@register_jitable
+def _balance_svd(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
     """The balance ``A x = b``, ``A = [Sᵀ, −(J_c U)ᵀ]`` (nv × (na + nr)), by the
     one-sided Jacobi SVD of ``Aᵀ = W Vᵀ`` (:func:`pkm_pin.engine.linalg.jacobi`; ``V``:
     the previous sample's basis, a warm start): ``A = V Σ (W Σ⁻¹)ᵀ``, the truncated
@@ -982,7 +1306,7 @@ def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
     cosines below :data:`~pkm_pin.engine.linalg.JACOBI_TOL` and leave the null columns
     at ~1e-12, which a condition of 10³ would carry into the solution;
     ``yw`` the same of ``bw``. Returns ``(rank, σ_max, σ_min kept, relative
-    residual)``."""
+    residual)``. The general route (:func:`_balance`): any rank."""
     U, act = k.units, k.act_v
     nv, nr, na = H.shape[1], H.shape[0], act.shape[0]
     At[:, :] = 0.0
@@ -1013,7 +1337,7 @@ def _balance(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
     for i in range(At.shape[0]):
         for c in range(nv):
             amax = max(amax, abs(At[i, c]))
-    scale = max(np.linalg.norm(b), amax * np.linalg.norm(y), 1e-300)
+    scale = max(_norm(b), amax * _norm(y), 1e-300)
     return rank, smax, smin, res / scale
 
 
@@ -1074,6 +1398,63 @@ def _rnea_world(k, oMi, S, Vb, Ab, a, body, armature, g, Fb, tau):
                 + armature[col] * a[col]
 
 
+class _Scratch(NamedTuple):
+    """Work arrays of :func:`_samples` (made by :func:`_scratch` once per kernel call)."""
+
+    e: np.ndarray  # (nr,) closure rows …
+    H: np.ndarray  # (nr, nv) … and their Jacobian (dimensionless)
+    norms: np.ndarray  # (C,)
+    oMo: np.ndarray  # (4, 4)
+    Vb: np.ndarray  # (nj, 6) bodies' world twists …
+    Ab: np.ndarray  # (nj, 6) … and spatial accelerations
+    Fb: np.ndarray  # (nj, 6) rnea's forces
+    s6: np.ndarray  # (6,)
+    nud: np.ndarray  # (6,)
+    Mh: np.ndarray  # (3, 4)
+    lg: np.ndarray  # (6,)
+    Jl: np.ndarray  # (6, 6)
+    A3: np.ndarray  # (3, 3)
+    Jo: np.ndarray  # (6, nv) output Jacobian
+    b: np.ndarray  # (nv,) right sides
+    bw: np.ndarray  # (nv,)
+    y: np.ndarray  # (m,) solutions (m = na + nr)
+    yw: np.ndarray  # (m,)
+    rv: np.ndarray  # (nv,)
+    At: np.ndarray  # (m, nv) Jacobi SVD: Aᵀ …
+    Wj: np.ndarray  # (m, nv) … A V …
+    V: np.ndarray  # (nv, nv) … its basis (warm start) …
+    sv: np.ndarray  # (nv,) … and singular values
+    Hu: np.ndarray  # (nr, nv) Cholesky route: J_c U …
+    G: np.ndarray  # (nv, nv) … A Aᵀ …
+    LG: np.ndarray  # (nv, nv) … its factors …
+    invG: np.ndarray  # (nv,)
+    L: np.ndarray  # (nv, nv) … a certificate's factors …
+    inv: np.ndarray  # (nv,)
+    z: np.ndarray  # (nv,)
+    umax: np.ndarray  # (nv,) … and the warm eigenvectors
+    umin: np.ndarray  # (nv,)
+    pmax: np.ndarray  # (nv,) … the ones before (:func:`_extrapolate`)
+    pmin: np.ndarray  # (nv,)
+    warm: np.ndarray  # (1,) whether umax, umin hold a previous sample's vectors
+    plan: np.ndarray  # (4,) the iterations' first certificate steps (:func:`_certified`)
+
+
+@register_jitable
+def _scratch(k) -> _Scratch:
+    """:class:`_Scratch` for the tree kernel ``k`` (no warm vectors yet)."""
+    nv, nr, C = k.nv, k.rows[-1], k.ckind.shape[0]
+    nj, m = k.parent.shape[0], k.act_v.shape[0] + k.rows[-1]
+    return _Scratch(
+        np.empty(nr), np.empty((nr, nv)), np.empty(C), np.empty((4, 4)), np.empty((nj, 6)),
+        np.empty((nj, 6)), np.empty((nj, 6)), np.empty(6), np.zeros(6), np.zeros((3, 4)),
+        np.empty(6), np.empty((6, 6)), np.empty((3, 3)), np.empty((6, nv)), np.empty(nv),
+        np.empty(nv), np.empty(m), np.empty(m), np.empty(nv), np.empty((m, nv)),
+        np.empty((m, nv)), np.eye(nv), np.empty(nv), np.empty((nr, nv)), np.empty((nv, nv)),
+        np.empty((nv, nv)), np.empty(nv), np.empty((nv, nv)), np.empty(nv), np.empty(nv),
+        np.empty(nv), np.empty(nv), np.empty(nv), np.empty(nv), np.zeros(1, np.int64),
+        np.array([2, 2, 0, 0]))
+
+
 @njit(cache=True, nogil=True)
 def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row_units, cons,
                             T, X, XW, RDD, DRIFT, INFO):
@@ -1081,48 +1462,148 @@ def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row
     ``has_w``) on the tree kernel ``k`` (``body``, ``armature``: the tree's inertias,
     :class:`_Work`; gravity ``g``): per sample ``rnea`` into ``T``, the efforts then
     closure forces ``X`` (physical), the payload's part ``XW``, ``J a + J̇ v`` (``RDD``)
-    and ``J̇ v`` (``DRIFT``), ``INFO`` = (status, balance residual, condition, rank);
+    and ``J̇ v`` (``DRIFT``), ``INFO`` = (status, balance residual, condition, rank,
+    1 where the balance took the Jacobi SVD, 0 the LDLᵀ route of :func:`_balance`);
     status :data:`_TO_PYTHON` where a check does not pass. ``cons``: the assembly,
-    rank, closeness and balance tolerances, the consistency tolerance and ``|g| / L``."""
-    ws = workspace(k)
-    nv, nr, C = k.nv, k.rows[-1], k.ckind.shape[0]
-    nj, na = k.parent.shape[0], k.act_v.shape[0]
-    e, H = np.empty(nr), np.empty((nr, nv))
-    norms, oMo = np.empty(C), np.empty((4, 4))
-    Vb, Ab, sv6 = np.empty((nj, 6)), np.empty((nj, 6)), np.empty(6)
-    nud, Mh = np.zeros(6), np.zeros((3, 4))
-    lg, Jl, A3 = np.empty(6), np.empty((6, 6)), np.empty((3, 3))
-    Jo, At, Wj = np.empty((6, nv)), np.empty((na + nr, nv)), np.empty((na + nr, nv))
-    V, sv, b, bw = np.eye(nv), np.empty(nv), np.empty(nv), np.empty(nv)
-    y, yw, rv = np.empty(na + nr), np.empty(na + nr), np.empty(nv)
-    Fb = np.empty((nj, 6))
+    rank, closeness and balance tolerances, the consistency tolerance and ``|g| / L``.
+    Makes the work arrays, then :func:`_samples` runs the samples."""
+    _samples(k, workspace(k), _scratch(k), Q, V_, A, body, armature, g, W, has_w, point,
+             row_units, cons, T, X, XW, RDD, DRIFT, INFO)
+
+
+# numba counts references to every array a compiled function passes to another one (two
+# atomic operations per array and call: ~15 ns): the tree kernel, the workspace and the
+# work arrays are ~70 arrays, passed to a dozen functions per sample, which cost more
+# than the arithmetic. The sample loop allocates nothing and is compiled without
+# reference counting (numba's ``_nrt`` option; its caller keeps the arrays alive).
+@njit(cache=True, nogil=True, _nrt=False)
+def _samples(k, ws, s, Q, V_, A, body, armature, g, W, has_w, point, row_units, cons, T, X,
+             XW, RDD, DRIFT, INFO):
+    """The loop of :func:`inverse_dynamics_kernel` (``ws``: the tree kernel's
+    :func:`~pkm_pin.tree_kernel.workspace`, ``s``: :func:`_scratch`)."""
+    nr, C, na = k.rows[-1], k.ckind.shape[0], k.act_v.shape[0]
     for i in range(Q.shape[0]):
         info = INFO[i]
         info[0] = _TO_PYTHON
-        closure_rows(k, Q[i], ws, e, H, norms, oMo)
-        if np.linalg.norm(e) > cons[0]:
+        closure_rows(k, Q[i], ws, s.e, s.H, s.norms, s.oMo)
+        if _norm(s.e) > cons[0]:
             continue
-        _body_motions(k, ws.S, V_[i], A[i], Vb, Ab, sv6)
-        _rnea_world(k, ws.oMi, ws.S, Vb, Ab, A[i], body, armature, g, Fb, T[i])
-        _second_derivative_world(k, ws, Vb, Ab, H, A[i], row_units, RDD[i], nud, Mh, lg,
-                                 Jl, A3)
-        _drift(H, A[i], RDD[i], row_units, DRIFT[i])
-        if not _consistent(H, k.units, row_units, V_[i], A[i], RDD[i], cons[5], cons[4]):
+        _body_motions(k, ws.S, V_[i], A[i], s.Vb, s.Ab, s.s6)
+        _rnea_world(k, ws.oMi, ws.S, s.Vb, s.Ab, A[i], body, armature, g, s.Fb, T[i])
+        _second_derivative_world(k, ws, s.Vb, s.Ab, s.H, A[i], row_units, RDD[i], s.nud,
+                                 s.Mh, s.lg, s.Jl, s.A3)
+        if not _consistent(s.H, k.units, row_units, V_[i], A[i], RDD[i], cons[5], cons[4],
+                           DRIFT[i], s.Hu):
             continue
-        _output_columns(k, ws, point, Jo)
-        _right_side(k, Jo, T[i], W[i], has_w, point, b, bw)
-        rank, smax, smin, info[1] = _balance(k, H, At, Wj, V, sv, b, bw, y, yw, rv, cons, has_w)
+        _output_columns(k, ws, point, s.Jo)
+        _right_side(k, s.Jo, T[i], W[i], has_w, point, s.b, s.bw)
+        rank, smax, smin, info[1], svd = _balance(k, s, cons, has_w)
         info[2], info[3] = smax / smin if rank else np.inf, rank
         for r in range(na + nr):
             unit = k.units[k.act_v[r]] if r < na else row_units[r - na]
-            X[i, r], XW[i, r] = y[r] / unit, yw[r] / unit
-        if _type_two(V, sv, cons[2] * smax, Jo, k.units, ws.F, 2 * C, k.length, cons[2]):
+            X[i, r], XW[i, r] = s.y[r] / unit, s.yw[r] / unit
+        info[4] = svd
+        if svd and _type_two(s.V, s.sv, cons[2] * smax, s.Jo, k.units, ws.F, 2 * C,
+                             k.length, cons[2], s.s6):
             continue
         if info[1] <= cons[3]:
             info[0] = _OK
 
 
-def _compiled(model: ClosureModel, many: bool = False):
+#: :func:`motion_kernel` solves ``M = [J; S]`` (dimensionless) where ``MᵀM −
+#: MOTION_CERTIFY_RTOL ‖MᵀM‖_F I`` is positive definite: a condition below 1e5, far from
+#: the type II threshold (:data:`CLOSENESS_SINGULAR_TOL`), and full column rank (no idle
+#: motion); other samples go to the Python path, which decides.
+MOTION_CERTIFY_RTOL = 1e-10
+
+
+@njit(cache=True, nogil=True)
+def motion_kernel(k, q, qd, qdd, row_units, cons, v, a, info):
+    """:func:`motion_from_actuated` at one sample on the tree kernel ``k``: ``v``, ``a``
+    and ``info[0]`` = :data:`_OK`, or :data:`_TO_PYTHON` where a check does not pass
+    (``cons``: the assembly tolerance, :data:`MOTION_CERTIFY_RTOL`, the consistency
+    tolerance). Makes the work arrays, then :func:`_motion_sample`."""
+    _motion_sample(k, workspace(k), _scratch(k), q, qd, qdd, row_units, cons, v, a, info)
+
+
+@njit(cache=True, nogil=True, _nrt=False)
+def _motion_sample(k, ws, s, q, qd, qdd, row_units, cons, v, a, info):
+    """The work of :func:`motion_kernel` (no allocation: see :func:`_samples`). With
+    ``M = [J_c U; S]`` (dimensionless) of full column rank, certified by ``MᵀM = G``
+    (:func:`_gram`, the balance's ``A Aᵀ``) minus ``cons[1] ‖G‖_F I`` being positive
+    definite, ``v`` and ``a`` are the unique solutions of ``M x = rhs``
+    (:func:`_full_rank_solve`); ``J̇ v`` from the bodies' motions at ``a = 0``."""
+    info[0] = _TO_PYTHON
+    nv, nr, na = k.nv, k.rows[-1], k.act_v.shape[0]
+    closure_rows(k, q, ws, s.e, s.H, s.norms, s.oMo)
+    if _norm(s.e) > cons[0]:
+        return
+    U = k.units
+    for i in range(nr):
+        for c in range(nv):
+            s.Hu[i, c] = s.H[i, c] * U[c]
+    _, fro = _gram(k.act_v, s.Hu, s.G)
+    if not (_shifted_ldl(s.G, 1.0, cons[1] * math.sqrt(fro), s.L, s.inv)
+            and _shifted_ldl(s.G, 1.0, 0.0, s.LG, s.invG)):
+        return
+    rhs = s.y  # (nr + na): closure rows, then actuated rows
+    for r in range(nr):
+        rhs[r] = 0.0
+    for r in range(na):
+        rhs[nr + r] = qd[r] / U[k.act_v[r]]
+    if not _full_rank_solve(k.act_v, s.Hu, s.LG, s.invG, rhs, s.yw, s.z, s.rv, cons[2]):
+        return
+    for c in range(nv):
+        v[c] = U[c] * s.rv[c]
+        s.b[c] = 0.0
+    _body_motions(k, ws.S, v, s.b, s.Vb, s.Ab, s.s6)
+    _second_derivative_world(k, ws, s.Vb, s.Ab, s.H, s.b, row_units, s.e, s.nud, s.Mh,
+                             s.lg, s.Jl, s.A3)  # J̇ v (physical) into e
+    for r in range(nr):
+        rhs[r] = -s.e[r] / row_units[r]
+    for r in range(na):
+        rhs[nr + r] = qdd[r] / U[k.act_v[r]]
+    if not _full_rank_solve(k.act_v, s.Hu, s.LG, s.invG, rhs, s.yw, s.z, s.rv, cons[2]):
+        return
+    for c in range(nv):
+        a[c] = U[c] * s.rv[c]
+    info[0] = _OK
+
+
+@register_jitable
+def _full_rank_solve(act, Hu, LG, invG, rhs, r, z, x, tol) -> bool:
+    """``x`` (nv) with ``M x = rhs``, ``M = [Hu; S]`` of full column rank, ``MᵀM`` factored
+    in ``LG``, ``invG``: the normal equations and one step of iterative refinement
+    (their ``eps κ(M)²`` down to ``eps κ(M)``); ``r``: the residual (nr + na), ``z``:
+    work (nv). False where ``‖M x − rhs‖`` exceeds ``tol ‖rhs‖`` (rates the closures do
+    not allow: the Python path raises)."""
+    nr, nv, na = Hu.shape[0], Hu.shape[1], act.shape[0]
+    for c in range(nv):
+        x[c] = 0.0
+    for r_ in range(nr + na):
+        r[r_] = rhs[r_]
+    for _ in range(2):  # x += (MᵀM)⁻¹ Mᵀ r, r = rhs − M x
+        for c in range(nv):
+            z[c] = 0.0
+        for i in range(nr):
+            for c in range(nv):
+                z[c] += Hu[i, c] * r[i]
+        for i in range(na):
+            z[act[i]] += r[nr + i]
+        ldl_solve(LG, nv, invG, z, z)
+        for c in range(nv):
+            x[c] += z[c]
+        for i in range(nr):
+            t = rhs[i]
+            for c in range(nv):
+                t -= Hu[i, c] * x[c]
+            r[i] = t
+        for i in range(na):
+            r[nr + i] = rhs[nr + i] - x[act[i]]
+    return _norm(r) <= tol * max(_norm(rhs), 1e-300)
+
+
+def _compiled(model: ClosureModel, many: bool = False, kernel=None):
     """The tree kernel of ``model`` when the compiled path applies (joints
     :mod:`pkm_pin.tree_kernel` represents, the kernel ready, asked for often enough
     (:func:`~pkm_pin.compiling.prefer_compiled`) or ``many`` samples at once), else
@@ -1132,7 +1613,8 @@ def _compiled(model: ClosureModel, many: bool = False):
     if not tree_kernel.ENABLED:
         return None
     kern = tree_kernel.tree_kernel(model)
-    if kern is None or not (prefer_compiled(inverse_dynamics_kernel) or many):
+    kernel = inverse_dynamics_kernel if kernel is None else kernel
+    if kern is None or not (prefer_compiled(kernel) or many):
         return None
     return kern
 
@@ -1149,7 +1631,7 @@ def _run_kernel(model: ClosureModel, kern, work: _Work, Q, V, A, g, W, tol) -> t
                      EFFORT_BALANCE_RTOL, min(float(tol), 1e300),
                      float(np.linalg.norm(g)) / model.length])
     X, XW = np.zeros((N, na + nr)), np.zeros((N, na + nr))
-    RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
+    RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 5))
     inverse_dynamics_kernel(kern, Q, V, A, work.body, work.armature, g, W, has_w,
                             bool(model.output_point), work.row_units, cons, T, X, XW, RDD,
                             DRIFT, INFO)
@@ -1218,7 +1700,7 @@ def inverse_dynamics_batch(model: ClosureModel, Q, V, A, *, gravity=GRAVITY, wre
         T, X, XW, RDD, DRIFT, INFO = _run_kernel(model, kern, work, Q, V, A, g, W, tol)
     else:
         T, X, XW = np.zeros((N, model.nv)), np.zeros((N, na + nr)), np.zeros((N, na + nr))
-        RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 4))
+        RDD, DRIFT, INFO = np.zeros((N, nr)), np.zeros((N, nr)), np.zeros((N, 5))
         INFO[:, 0] = _TO_PYTHON
     for i in np.flatnonzero(INFO[:, 0] != _OK):
         try:
@@ -1232,7 +1714,7 @@ def inverse_dynamics_batch(model: ClosureModel, Q, V, A, *, gravity=GRAVITY, wre
         X[i] = np.r_[r.efforts, r.closure_forces]
         XW[i] = np.r_[r.payload_efforts, r.payload_closure_forces]
         T[i], RDD[i], DRIFT[i] = r.tree_efforts, r.acceleration_residual, r.drift
-        INFO[i, 1:] = r.balance_residual, r.condition, na + nr - r.redundant_rows
+        INFO[i, 1:4] = r.balance_residual, r.condition, na + nr - r.redundant_rows
     return InverseDynamicsBatch(
         efforts=X[:, :na], actuated=tuple(model.actuated), closure_forces=X[:, na:],
         redundant_rows=(na + nr - INFO[:, 3]).astype(int), payload_efforts=XW[:, :na],

@@ -627,13 +627,14 @@ def motion_states(model: ClosureModel, motion, times, q0, *, gravity=dynamics.GR
             guess = pin.integrate(model.tree, q[i - 1], v[i - 1] * dt + 0.5 * a[i - 1] * dt * dt)
         q[i] = _forward_kinematics(model, guess, q[i - 1] if i else guess, Qa[i], ti, tol)
         t1 = time.perf_counter()
-        try:
-            vi, ai = dynamics.motion_from_actuated(model, q[i], Qd[i], Qdd[i])
-            system = _ActuatedSystem(model, q[i])
-            rhs = Qdd[i] / system.units[system.act]
-            vi, ai = _carry_idle(model, system, q[i], vi, ai,
-                                 (v[i - 1], a[i - 1], ti - times[i - 1]) if i else None,
-                                 lambda _: rhs, gravity)
+        try:  # the compiled kernel where it certifies no idle motion, else numpy
+            vi, ai, determined = dynamics.actuated_motion(model, q[i], Qd[i], Qdd[i])
+            if not determined:
+                system = _ActuatedSystem(model, q[i])
+                rhs = Qdd[i] / system.units[system.act]
+                vi, ai = _carry_idle(model, system, q[i], vi, ai,
+                                     (v[i - 1], a[i - 1], ti - times[i - 1]) if i else None,
+                                     lambda _: rhs, gravity)
         except PkmError as e:  # SingularityError, InconsistentMotion
             raise _at_time(e, ti)
         v[i], a[i] = vi, ai

@@ -280,13 +280,52 @@ def _motion(kj, rate, ax, ay, az, q, i):
 # every array of its arguments member by member, ~150 scalars for the whole kernel (more
 # than the work of a small tree). Only closure_rows, once an evaluation, takes it.
 @register_jitable
+def _coordinate_axis(ax, ay, az):
+    """0, 1 or 2 where ``(ax, ay, az)`` is exactly ``e_x``, ``e_y`` or ``e_z`` (the axes
+    :func:`_one_dof_motion` snaps), else −1."""
+    if ay == 0.0 and az == 0.0 and ax == 1.0:
+        return 0
+    if ax == 0.0 and az == 0.0 and ay == 1.0:
+        return 1
+    if ax == 0.0 and ay == 0.0 and az == 1.0:
+        return 2
+    return -1
+
+
+@register_jitable
+def _rotated(T, e, c, s):
+    """``T`` (12 numbers, :func:`_load`) times the rotation of cosine ``c`` and sine
+    ``s`` about the coordinate axis ``e``: columns ``a``, ``b`` (``e_a × e_b = e_e``)
+    turned, ``(c T_a + s T_b, c T_b − s T_a)``, the third and the translation kept (what
+    :func:`_compose` with :func:`_rodrigues` gives, without its products by zeros)."""
+    if e == 0:
+        return (T[0], c * T[1] + s * T[2], c * T[2] - s * T[1],
+                T[3], c * T[4] + s * T[5], c * T[5] - s * T[4],
+                T[6], c * T[7] + s * T[8], c * T[8] - s * T[7], T[9], T[10], T[11])
+    if e == 1:
+        return (c * T[0] - s * T[2], T[1], c * T[2] + s * T[0],
+                c * T[3] - s * T[5], T[4], c * T[5] + s * T[3],
+                c * T[6] - s * T[8], T[7], c * T[8] + s * T[6], T[9], T[10], T[11])
+    return (c * T[0] + s * T[1], c * T[1] - s * T[0], T[2],
+            c * T[3] + s * T[4], c * T[4] - s * T[3], T[5],
+            c * T[6] + s * T[7], c * T[7] - s * T[6], T[8], T[9], T[10], T[11])
+
+
+@register_jitable
 def tree_placements(parent, place, kind, axis, rate, iq, q, oMi):
     """World placement ``oMi[j]`` (4 × 4) of every joint at ``q`` (the kernel's joint
     arrays)."""
     _store((1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), oMi, 0)
     for j in range(1, parent.shape[0]):
-        M = _motion(kind[j], rate[j], axis[j, 0], axis[j, 1], axis[j, 2], q, iq[j])
-        _store(_compose(_compose(_load(oMi, parent[j]), _load(place, j)), M), oMi, j)
+        kj = kind[j]
+        T = _compose(_load(oMi, parent[j]), _load(place, j))
+        e = _coordinate_axis(axis[j, 0], axis[j, 1], axis[j, 2])
+        if kj == REVOLUTE and e >= 0:
+            t = rate[j] * q[iq[j]]
+            _store(_rotated(T, e, math.cos(t), math.sin(t)), oMi, j)
+        else:
+            M = _motion(kj, rate[j], axis[j, 0], axis[j, 1], axis[j, 2], q, iq[j])
+            _store(_compose(T, M), oMi, j)
 
 
 @register_jitable

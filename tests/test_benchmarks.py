@@ -99,9 +99,12 @@ def test_bench_one_core_same_stewart_same_indices(capsys):
 def test_bench_dynamics_reports_both_ratios(capsys):
     """bench_dynamics.main times single calls, the hand-written solve, the Python path
     and the batch; the efforts agree (hand-written 1e-9, batch 1e-12) and both ratios
-    are printed."""
+    are printed; so are trajectory.study's motion step before / now and a whole study
+    per sample."""
     r = bench_dynamics.main(n=40, single=10, repeat=1)
     assert all(r[k] > 0 for k in ("single", "hand", "python", "batch"))
     assert r["diff"] < 1e-9 and r["diff_batch"] < 1e-12
+    assert all(r[f"motion {k}"] > 0 for k in ("before", "now", "study", "study motion"))
     out = capsys.readouterr().out
     assert "inverse_dynamics / hand-written" in out and "single calls / batch" in out
+    assert "velocity / acceleration step: before" in out and "a whole study" in out

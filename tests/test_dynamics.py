@@ -723,3 +723,140 @@ def test_idle_acceleration_mass_matrix_is_right_on_a_reused_data_with_mimic_join
         M = np.triu(M) + np.triu(M, 1).T
         z = np.linalg.solve(N.T @ M @ N, -(N.T @ r))
         np.testing.assert_allclose(got, a + N @ z, rtol=1e-9, atol=1e-9)
+
+
+# ------------------------------------------- the batch's LDLᵀ route, the motion kernel
+def cassie_path(n: int):
+    """The Cassie-like leg (seeded inertias) and ``n`` consistent samples along a closed
+    path of its motors (as benchmarks/bench_dynamics.py)."""
+    link = pkm_pin.load_mechanism(ROOT / "models" / "loops" / "cassie_knee.urdf")
+    cm, home = with_inertias(link.model), link.home_assembly
+    w, prev, Q, V, A = np.array([np.pi, 2 * np.pi]), home.q, [], [], []
+    for s in np.linspace(0.0, 2.0, n, endpoint=False):
+        q = link.forward_kinematics(home.q_actuated + 0.2 * np.sin(w * s), prev).q
+        v, a = dyn.motion_from_actuated(cm, q, 0.2 * w * np.cos(w * s),
+                                        -0.2 * w ** 2 * np.sin(w * s))
+        Q.append(q)
+        V.append(v)
+        A.append(a)
+        prev = q
+    return cm, np.array(Q), np.array(V), np.array(A)
+
+
+def test_batch_along_a_path_takes_the_ldl_route_and_equals_single_calls():
+    """40 samples of the Cassie-like leg along its path, with payload wrenches: after the
+    first sample (the Jacobi SVD) every balance takes the LDLᵀ route with certified
+    extreme eigenvalues (INFO's last column 0), and the batch equals single calls and
+    the Python path to 1e-9 of their size: efforts, closure forces (the minimum-norm
+    choice over the 3 redundant rows), payload parts, tree efforts; the condition to
+    1e-9 relative; the redundant rows and a balance residual at round-off."""
+    cm, Q, V, A = cassie_path(40)
+    W = np.random.default_rng(3).normal(size=(40, 6))
+    work, kern = dyn._work(cm, masses=True), dyn._compiled(cm, many=True)
+    info = dyn._run_kernel(cm, kern, work, Q, V, A, np.array(G), W,
+                           dyn.MOTION_CONSISTENCY_RTOL)[-1]
+    assert (info[:, 0] == dyn._OK).all()
+    assert info[0, 4] == 1 and not info[1:, 4].any()
+    b = dyn.inverse_dynamics_batch(cm, Q, V, A, gravity=G, wrenches=W)
+    for i in range(40):
+        r = dyn._python_path(cm, Q[i], V[i], A[i], np.array(G), W[i],
+                             dyn.MOTION_CONSISTENCY_RTOL)
+        one = dyn.inverse_dynamics(cm, Q[i], V[i], A[i], gravity=G, wrench=W[i])
+        for key in ("efforts", "closure_forces", "payload_efforts",
+                    "payload_closure_forces", "tree_efforts"):
+            y = getattr(r, key)
+            for x in (getattr(b[i], key), getattr(one, key)):
+                assert np.abs(x - y).max() <= 1e-9 * np.abs(y).max(), (i, key)
+        assert b[i].condition == pytest.approx(r.condition, rel=1e-9)
+        assert b[i].redundant_rows == r.redundant_rows == 3
+        assert b[i].balance_residual < 1e-12
+
+
+def test_batch_finds_type_two_and_idle_samples_after_regular_ones():
+    """A batch whose last sample is special after regular ones (the LDLᵀ route warm):
+    the five-bar with its distal links aligned (type II) gives SingularityError, the
+    RSSR rod's spin off its own dynamics the idle InconsistentMotion naming the ball,
+    both with the sample's index."""
+    cm, _ = model("five_bar_point")
+    y = np.sqrt(1 - 0.25 ** 2)
+    b1, a1 = np.arctan2(y, 0.25), np.arctan2(y, -0.25)
+    singular = np.array([a1, -a1, b1, np.pi - b1])
+    Q = [five_bar_q([0.7 + 0.01 * k, 1.2]) for k in range(9)] + [singular]
+    zero = np.zeros((10, cm.nv))
+    with pytest.raises(SingularityError, match="^sample 9: .*type II") as err:
+        dyn.inverse_dynamics_batch(cm, Q, zero, zero, gravity=G)
+    assert err.value.sample == 9
+    cm, q = model("rssr_idle")
+    rng = np.random.default_rng(8)
+    v = random_velocity(cm, q, rng)
+    a, _ = pinocchio_acceleration(cm, q, v, full_efforts(cm, random_efforts(cm, q, rng)))
+    J, _, _ = dyn.closure_acceleration(cm, q, v, a)
+    S = np.zeros((1, cm.nv))
+    S[0, cm.actuated_v[0]] = 1.0
+    idle = np.linalg.svd(np.vstack([J, S]))[2][-1]
+    with pytest.raises(InconsistentMotion, match="^sample 9: .*'ball'") as err:
+        dyn.inverse_dynamics_batch(cm, [q] * 10, [v] * 10, [a] * 9 + [a + 0.5 * idle],
+                                   gravity=G)
+    assert err.value.kind == "idle" and err.value.sample == 9
+
+
+@pytest.mark.parametrize("warm", [True, False])
+def test_certified_extreme_eigenvalues(warm):
+    """The power and inverse iterations of the LDLᵀ route (run as Python) on random
+    symmetric positive definite matrices of conditions 1 … 1e4, some with their two
+    largest eigenvalues 1e-3 apart (Temple's bound fails there: the shifted LDLᵀ
+    certifies): each certified value lies within EIG_RTOL of numpy's eigenvalue, on the
+    certified side; warm starts (the eigenvector plus 1e-3, 1e-9 where the two largest
+    are close: the power iteration's ratio is 0.999 there) are certified."""
+    rng = np.random.default_rng(11)
+    n, delta = 6, dyn.EIG_RTOL
+    for trial in range(12):
+        Qm = np.linalg.qr(rng.normal(size=(n, n)))[0]
+        lam = np.sort(np.exp(rng.uniform(0.0, np.log(1e4), n)))
+        if trial % 3 == 0:
+            lam[-2] = lam[-1] * (1 - 1e-3)
+        Gm = (Qm * lam) @ Qm.T
+        Gm = 0.5 * (Gm + Gm.T)
+        fro = float(np.sum(Gm * Gm))
+        w, X = np.linalg.eigh(Gm)
+        u = [X[:, -1], X[:, 0]] if warm else [rng.normal(size=n), rng.normal(size=n)]
+        noise = 1e-9 if trial % 3 == 0 else 1e-3
+        u = [x + (noise * rng.normal(size=n) if warm else 0.0) for x in u]
+        u = [x / np.linalg.norm(x) for x in u]
+        LG, invG, L, inv, z = np.zeros((n, n)), np.zeros(n), np.zeros((n, n)), np.zeros(n), \
+            np.zeros(n)
+        assert dyn._shifted_ldl(Gm, 1.0, 0.0, LG, invG)
+        plan = np.array([1, 1, 0, 0])
+        top = dyn._largest_eigenvalue(Gm, fro, u[0], z, L, inv, delta, plan)
+        low = dyn._smallest_eigenvalue(Gm, LG, invG, u[1], z, L, inv, delta, plan)
+        if warm:
+            assert top > 0 and low > 0, trial
+        if top > 0:
+            assert top * (1 - 1e-14) <= w[-1] <= top * (1 + delta), trial
+        if low > 0:
+            assert low * (1 - delta) <= w[0] <= low * (1 + 1e-12), trial
+
+
+@pytest.mark.parametrize("name", ["cassie_knee", "four_bar", "five_bar_point", "ankle",
+                                  "delta_loops", "stewart", "rpr3", "rssr_idle",
+                                  "delta_toml"])
+def test_compiled_motion_equals_the_python_path(name):
+    """actuated_motion: the compiled kernel (asked for more than PLAIN_CALLS times)
+    equals the numpy path of motion_from_actuated to 1e-9 (v and a, relative to their
+    size) where it certifies [J; S] of full column rank; the RSSR rod and the ankle
+    (idle motions: [J; S] has fewer rows than columns) and the TOML Delta (mimic joints,
+    no tree kernel) go to the numpy path."""
+    from pkm_pin.compiling import PLAIN_CALLS
+
+    cm, q = model(name)
+    rng = np.random.default_rng(12)
+    n = len(cm.actuated)
+    for _ in range(PLAIN_CALLS + 2):
+        qd, qdd = rng.normal(size=n), rng.normal(size=n)
+        v, a, determined = dyn.actuated_motion(cm, q, qd, qdd)
+        v0, a0 = dyn._motion_python(cm, q, qd, qdd)
+        assert np.abs(v - v0).max() <= 1e-9 * np.abs(v0).max(), name
+        assert np.abs(a - a0).max() <= 1e-9 * np.abs(a0).max(), name
+    assert determined == (name not in ("rssr_idle", "ankle", "delta_toml")), name
+    H = np.vstack([dyn.closure_acceleration(cm, q, v, a)[0], np.eye(cm.nv)[list(cm.actuated_v)]])
+    assert determined or name == "delta_toml" or np.linalg.matrix_rank(H) < cm.nv
