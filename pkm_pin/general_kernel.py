@@ -32,6 +32,7 @@ columns per velocity coordinate times :attr:`ClosureModel.velocity_units`.
 
 from __future__ import annotations
 
+import functools
 import math
 import weakref
 from typing import NamedTuple
@@ -44,7 +45,7 @@ from . import screws
 from .compiling import SameTypes
 from .engine.linalg import jacobi, largest
 from .model.closure_model import sparse_basis
-from .tolerances import ROTATION_COUNT_TOL
+from .tolerances import GIMBAL_LOCK_RTOL, ROTATION_COUNT_TOL
 from .tree_kernel import PRISMATIC, TreeKernel, closure_rows, tree_kernel, workspace
 
 #: Whether :meth:`Linkage.analyze` may use this module (False: the numpy path
@@ -67,6 +68,7 @@ class Layout(NamedTuple):
     length: float
     point_output: bool
     act_translating: np.ndarray  # (na,) bool: the actuated joint is prismatic
+    triples: np.ndarray  # (m, 3) revolute triples that may lock (:func:`revolute_triples`)
 
 
 class Core(NamedTuple):
@@ -98,6 +100,9 @@ class Core(NamedTuple):
     forward: float
     inverse: float
     translating: np.ndarray  # (na,) whether each actuated joint translates (prismatic)
+    #: (m,) whether each of :func:`revolute_triples` is at a gimbal lock (``None``:
+    #: not decided here, :func:`pkm_pin.linkage._representation` decides)
+    locked: np.ndarray | None = None
 
 
 class LazyKinematics:
@@ -138,6 +143,33 @@ class CompiledNullSpace:
         return self._rank_x if rtol == self._rtol else screws.svd_rank(self.X, rtol)[0]
 
 
+@functools.lru_cache(maxsize=64)
+def revolute_triples(model) -> np.ndarray:
+    """(m × 3) joint indices ``(p, j, c)`` of three consecutive revolute joints of the
+    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians)
+    whose axes meet at one point (``j`` and ``c`` placed without offset: three
+    revolutes standing for a spherical joint): where a gimbal lock, a representation
+    singularity, can occur (axes that meet elsewhere make a real singularity of the
+    linkage, not one of its description). Read-only; cached per model."""
+    tree, U = model.tree, model.velocity_units
+    tiny = 1e-12 * model.length
+
+    def revolute(j):
+        joint = tree.joints[j]
+        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0
+
+    def centred(j):
+        return np.linalg.norm(tree.jointPlacements[j].translation) <= tiny
+
+    out = [(tree.parents[tree.parents[c]], tree.parents[c], c) for c in range(1, tree.njoints)
+           if revolute(c) and revolute(tree.parents[c])
+           and revolute(tree.parents[tree.parents[c]])
+           and centred(c) and centred(tree.parents[c])]
+    triples = np.array(out, dtype=int).reshape(-1, 3)
+    triples.setflags(write=False)
+    return triples
+
+
 _LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -159,7 +191,8 @@ def layout(model, loops: tuple) -> Layout | None:
         out = Layout(k, out_support, loop_rows, np.array(plan.act_v, np.int64),
                      np.array(model.velocity_units, float), float(model.length),
                      bool(model.output_point),
-                     np.array([k.kind[j] == PRISMATIC for j in joints], dtype=bool))
+                     np.array([k.kind[j] == PRISMATIC for j in joints], dtype=bool),
+                     np.ascontiguousarray(revolute_triples(model), dtype=np.int64))
     _LAYOUTS[model] = out
     return out
 
@@ -174,12 +207,12 @@ def analysis_core(model, loops: tuple, q: np.ndarray, about_output: bool,
         return None
     q = np.ascontiguousarray(q, dtype=float)
     (rank, N, X, Yw, rank_x, idle_span, p, d, rotations, twists, wrenches, A, B, type_I,
-     type_II, cond, Xr, Yr, M, forward, inverse) = _ANALYSE(lay, q, bool(about_output),
+     type_II, cond, Xr, Yr, M, forward, inverse, locked) = _ANALYSE(lay, q, bool(about_output),
                                                           float(rtol))
     ns = CompiledNullSpace(rank, N, X, Yw, model.velocity_units, rtol, rank_x, idle_span)
     return Core(LazyKinematics(model, q), ns, p, d, rotations, twists, wrenches, A,
                 np.diag(B), type_I, type_II, cond, Xr, Yr, M, forward, inverse,
-                lay.act_translating.copy())
+                lay.act_translating.copy(), locked)
 
 
 # ============================================================ compiled algebra
@@ -212,6 +245,93 @@ def _singular_values(H):
     V, W, sv = np.eye(c), np.empty((r, c)), np.empty(c)
     jacobi(X, r, c, W, V, sv)
     return -np.sort(-sv)
+
+
+@register_jitable
+def _jacobi_sorted(H):
+    """One-sided Jacobi SVD of ``H`` (m × n, :func:`pkm_pin.engine.linalg.jacobi`):
+    ``(sv, V, W)`` with ``H V = W``, ``|W_j| = sv[j]``, columns sorted by ``sv``
+    descending (as LAPACK's ``Vt.T`` and ``U Σ``, up to the bases of repeated values)."""
+    m, n = H.shape
+    V, W, sv = np.eye(n), np.empty((m, n)), np.empty(n)
+    if n == 0:
+        return sv, V, W
+    X = np.ascontiguousarray(H)
+    if m > 0:
+        jacobi(X, m, n, W, V, sv)
+    else:
+        sv[:] = 0.0
+    order = np.argsort(-sv, kind="mergesort")
+    return sv[order], np.ascontiguousarray(V[:, order]), np.ascontiguousarray(W[:, order])
+
+
+@register_jitable
+def _rank_of(sv, rtol):
+    """:func:`pkm_pin.screws.svd_rank`'s rule on singular values sorted descending."""
+    rank = 0
+    if sv.shape[0] and sv[0] > 0:
+        for s in sv:
+            if s > rtol * sv[0]:
+                rank += 1
+    return rank
+
+
+@register_jitable
+def _householder(A):
+    """``(Q, R)``: ``A = Q R`` (m × n, m ≥ n), ``Q`` (m × m) orthogonal, full."""
+    m, n = A.shape
+    R, Q, v = A.copy(), np.eye(m), np.empty(m)
+    for k in range(min(m - 1, n)):
+        s = 0.0
+        for i in range(k, m):
+            s += R[i, k] * R[i, k]
+        if s == 0.0:
+            continue
+        alpha = -math.sqrt(s) if R[k, k] >= 0.0 else math.sqrt(s)
+        vv = 0.0
+        for i in range(k, m):
+            v[i] = R[i, k]
+        v[k] -= alpha
+        for i in range(k, m):
+            vv += v[i] * v[i]
+        for j in range(k, n):
+            f = 0.0
+            for i in range(k, m):
+                f += v[i] * R[i, j]
+            f *= 2.0 / vv
+            for i in range(k, m):
+                R[i, j] -= f * v[i]
+        for i in range(m):
+            f = 0.0
+            for c in range(k, m):
+                f += Q[i, c] * v[c]
+            f *= 2.0 / vv
+            for c in range(k, m):
+                Q[i, c] -= f * v[c]
+    return Q, R
+
+
+@register_jitable
+def _surely_full_rank(R, n, rtol):
+    """Whether the leading ``n × n`` upper triangle of ``R`` (the QR factor of a matrix
+    with ``n`` columns) certainly has every singular value above ``rtol`` times the
+    largest (:func:`pkm_pin.screws.svd_rank`'s full rank): ``1 / |R⁻¹|_F > rtol |R|_F``
+    bounds ``σ_min > rtol σ_max`` from the safe side (``False``: not decided here)."""
+    fro = 0.0
+    for i in range(n):
+        if R[i, i] == 0.0:
+            return False
+        for j in range(i, n):
+            fro += R[i, j] * R[i, j]
+    inv, x = 0.0, np.empty(n)
+    for c in range(n):  # column c of R⁻¹ by back substitution
+        for i in range(n - 1, -1, -1):
+            s = 1.0 if i == c else 0.0
+            for j in range(i + 1, n):
+                s -= R[i, j] * x[j]
+            x[i] = s / R[i, i]
+            inv += x[i] * x[i]
+    return inv > 0.0 and 1.0 / math.sqrt(inv) > rtol * math.sqrt(fro)
 
 
 @register_jitable
@@ -291,7 +411,33 @@ def _jacobians(lay, q):
             Jo[4, c] += wz * px - wx * pz
             Jo[5, c] += wx * py - wy * px
             Jo[0, c], Jo[1, c], Jo[2, c] = 0.0, 0.0, 0.0
-    return Jc, Jo, S, oMo
+    return Jc, Jo, S, oMo, ws.oMi
+
+
+@register_jitable
+def _gimbal_locked(triples, iv, S, oMi, L):
+    """``linkage._representation``'s gimbal-lock test of each revolute triple ``(p, j,
+    c)``: the unit homogenised twists of ``p`` and ``c`` about ``j``'s origin agree up
+    to sign (:data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`) while ``j``'s does not."""
+    m = triples.shape[0]
+    out = np.zeros(m, np.bool_)
+    T = np.empty((3, 6))
+    for t in range(m):
+        j = triples[t, 1]
+        centre = np.array([oMi[j, 0, 3], oMi[j, 1, 3], oMi[j, 2, 3]])
+        for a in range(3):
+            T[a] = np.ascontiguousarray(S[:, iv[triples[t, a]]])
+        H = _homogenised_rows(T, centre, L)
+        for a in range(3):
+            H[a] /= _norm(H[a])
+        out[t] = _apart(H[0], H[2]) <= GIMBAL_LOCK_RTOL < _apart(H[1], H[0])
+    return out
+
+
+@register_jitable
+def _apart(a, b):
+    """``min(|a − b|, |a + b|)``."""
+    return min(_norm(a - b), _norm(a + b))
 
 
 @register_jitable
@@ -302,8 +448,7 @@ def _null_space(Jc, Jo, units, act_v, rtol):
     H = Jc.copy()
     for c in range(nv):
         H[:, c] *= units[c]
-    rank, _, _, Vt = _svd_rank(H, rtol)
-    N = np.ascontiguousarray(Vt[rank:].T)
+    rank, N = _kernel_basis(H, rtol)
     X = np.empty((act_v.shape[0], N.shape[1]))
     for a in range(act_v.shape[0]):
         X[a] = N[act_v[a]]
@@ -311,9 +456,25 @@ def _null_space(Jc, Jo, units, act_v, rtol):
     for c in range(nv):
         UN[c] *= units[c]
     Yw = _mm(Jo, UN)
-    rank_x, _, _, Vtx = _svd_rank(X, rtol)
-    idle = _mm(N, np.ascontiguousarray(Vtx[rank_x:].T))
+    sv, Vx, _ = _jacobi_sorted(X)
+    rank_x = _rank_of(sv, rtol)
+    idle = _mm(N, np.ascontiguousarray(Vx[:, rank_x:]))
     return rank, N, X, Yw, rank_x, idle
+
+
+@register_jitable
+def _kernel_basis(H, rtol):
+    """``(rank, N)``: the rank of ``H`` (:func:`_svd_rank`'s rule) and an orthonormal
+    basis ``N`` of its null space. Where ``H`` (r × c, r ≤ c) surely has full row rank
+    (:func:`_surely_full_rank`), the last columns of the QR factor ``Q`` of ``Hᵀ``
+    (the generic case, a few µs); else LAPACK's SVD."""
+    r, c = H.shape
+    if r <= c:
+        Q, R = _householder(np.ascontiguousarray(H.T))
+        if _surely_full_rank(R, r, rtol):
+            return r, np.ascontiguousarray(Q[:, r:])
+    rank, _, _, Vt = _svd_rank(H, rtol)
+    return rank, np.ascontiguousarray(Vt[rank:].T)
 
 
 @register_jitable
@@ -322,14 +483,17 @@ def _twist_system(Yw, p, L, rtol):
     orthonormal twist basis ``P_h`` (d × 6), its rotations and the reciprocal wrench
     basis ``C_h`` ((6 − d) × 6)."""
     Yh = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Yw.T), p, L).T)
-    d, Uy, _, _ = _svd_rank(Yh, rtol)
-    P_h = np.ascontiguousarray(Uy[:, :d].T)
+    sv, _, Wy = _jacobi_sorted(Yh)
+    d = _rank_of(sv, rtol)
+    P_h = np.empty((d, 6))
+    for j in range(d):
+        P_h[j] = Wy[:, j] / sv[j]
     rotations = 0
     for s in _singular_values(P_h[:, :3]):
         if s > ROTATION_COUNT_TOL:
             rotations += 1
-    _, _, _, Vc = _svd_rank(_swap_halves(P_h), rtol)
-    return Yh, d, rotations, P_h, np.ascontiguousarray(Vc[d:])
+    _, Vc, _ = _jacobi_sorted(_swap_halves(P_h))
+    return Yh, d, rotations, P_h, np.ascontiguousarray(Vc[:, d:].T)
 
 
 @register_jitable
@@ -354,22 +518,80 @@ def _stacked(Jc, units, mask, Ho):
 @register_jitable
 def _actuation_row(G, col, rtol):
     """``linkage._actuation_row``: the homogenised ζ with ``β = 1`` orthogonal to the
-    admissible ζ with β = 0, and whether there is one."""
-    m, nv = G.shape
-    others = np.empty((m, nv - 1))
-    others[:, :col] = G[:, :col]
-    others[:, col:] = G[:, col + 1:]
-    rank, Ul, _, _ = _svd_rank(others, rtol)
-    W = np.ascontiguousarray(Ul[:, rank:].T)
+    admissible ζ with β = 0, and whether there is one. The admissible ``w`` span the
+    left null space of the other columns (:func:`_left_null`)."""
+    m = G.shape[0]
+    W = _left_null(G, col, rtol)
     g = np.ascontiguousarray(G[:, col])
     b = _mv(W, g)
     if _norm(b) <= rtol * max(_norm(g), 1e-300):
         return np.zeros(6), False
     ZT = np.ascontiguousarray(_swap_halves(W[:, m - 6:]).T)  # 6 × rows of W
+    return _least_wrench(ZT, b, rtol)
+
+
+@register_jitable
+def _least_wrench(ZT, b, rtol):
+    """The least ζ = ``Zᵀ y`` with ``β = bᵀ y = 1``, and whether it is not zero (zero:
+    the closures alone hold the actuated rate, no wrench on the output carries it)."""
     y0 = b / np.sum(b * b)
     zeta = _least_on_plane(ZT, b, y0, rtol)
-    # the closures alone hold the actuated rate: no wrench on the output carries it
     return zeta, _norm(zeta) > rtol * _norm(y0)
+
+
+@register_jitable
+def _left_null(G, col, rtol):
+    """Orthonormal rows spanning the ``w`` with ``w G_j = 0`` for every column ``j`` but
+    ``col`` (:func:`_svd_rank`'s rank rule). Columns of zeros are left out (they hold
+    nothing); where the other columns (m × k, k ≤ m) surely have full rank
+    (:func:`_surely_full_rank`), the last ``m − k`` columns of their QR factor ``Q``;
+    else LAPACK's SVD."""
+    m, nv = G.shape
+    keep = np.zeros(nv, np.bool_)
+    k = 0
+    for c in range(nv):
+        if c != col:
+            for r in range(m):
+                if G[r, c] != 0.0:
+                    keep[c] = True
+                    k += 1
+                    break
+    others = np.empty((m, k))
+    i = 0
+    for c in range(nv):
+        if keep[c]:
+            others[:, i] = G[:, c]
+            i += 1
+    if k <= m:
+        Q, R = _householder(others)
+        if _surely_full_rank(R, k, rtol):
+            return np.ascontiguousarray(Q[:, k:].T)
+    rank, Ul, _, _ = _svd_rank(others, rtol)
+    return np.ascontiguousarray(Ul[:, rank:].T)
+
+
+@register_jitable
+def _actuation_all(x_a, Yh, rtol):
+    """:func:`_actuation_row` with every closure stacked, in the null space ``N`` of
+    the closure rows: ``w_c J_c + w_o H_o = β e_a`` has a ``w_c`` exactly when
+    ``(β e_a − w_o H_o) N = 0``, i.e. ``Y_hᵀ w_o = β x_a`` (``Y_h = H_o N`` the
+    homogenised output twists, ``x_a = N[a]`` the actuated rates of the motions), so the
+    admissible ``(w_o, β)`` are the null space of ``(Y_hᵀ | −x_a)`` (dof × 7) and the
+    least ζ with β = 1 is the same."""
+    dof = Yh.shape[1]
+    K = np.empty((dof, 7))
+    for j in range(dof):
+        for r in range(6):
+            K[j, r] = Yh[r, j]
+        K[j, 6] = -x_a[j]
+    sv, V, _ = _jacobi_sorted(K)
+    rank = _rank_of(sv, rtol)
+    W = np.ascontiguousarray(V[:, rank:].T)  # rows (w_o; β), orthonormal
+    b = np.ascontiguousarray(W[:, 6])
+    if _norm(b) <= rtol:
+        return np.zeros(6), False
+    ZT = np.ascontiguousarray(_swap_halves(np.ascontiguousarray(W[:, :6])).T)
+    return _least_wrench(ZT, b, rtol)
 
 
 @register_jitable
@@ -420,21 +642,24 @@ def _scaled_wrench(zeta, p, L, unit, rtol):
 
 
 @register_jitable
-def _actuation(lay, Jc, Jo, S, p, rtol):
+def _actuation(lay, Jc, Jo, S, p, rtol, X, Yh):
     """``linkage._actuation``: ``A`` (na × 6, world origin), the diagonal of ``B`` and
-    the type I index."""
+    the type I index (every closure stacked: :func:`_actuation_all`, from the null
+    space's ``X`` and ``Y_h``)."""
     L, units, act_v = lay.length, lay.units, lay.act_v
     Ho = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Jo.T), p, L).T)
     for c in range(Ho.shape[1]):
         Ho[:, c] *= units[c]
     na = act_v.shape[0]
-    every = np.ones(Jc.shape[0])
     A, B, type_I = np.zeros((na, 6)), np.zeros(na), np.inf
     for k in range(na):
         col = act_v[k]
-        zeta, ok = _actuation_row(_stacked(Jc, units, lay.loop_rows[k], Ho), col, rtol)
-        if not ok:
-            zeta, ok = _actuation_row(_stacked(Jc, units, every, Ho), col, rtol)
+        if np.all(lay.loop_rows[k] > 0):
+            zeta, ok = _actuation_all(X[k], Yh, rtol)
+        else:
+            zeta, ok = _actuation_row(_stacked(Jc, units, lay.loop_rows[k], Ho), col, rtol)
+            if not ok:
+                zeta, ok = _actuation_all(X[k], Yh, rtol)
         if not ok:
             type_I = 0.0
             continue
@@ -472,14 +697,15 @@ def _generalised(N, X, Yh, rtol):
         return X.copy(), Yh.copy(), N.copy(), 1.0, 1.0
     S = np.empty((n + 6, dof))
     S[:n], S[n:] = X, Yh
-    m, _, _, Vt = _svd_rank(S, rtol)
-    V = np.ascontiguousarray(Vt[:m].T)
+    sv, Vs, Ws = _jacobi_sorted(S)
+    m = _rank_of(sv, rtol)
+    V = np.ascontiguousarray(Vs[:, :m])
     M, Xr, Yr = _mm(N, V), _mm(X, V), _mm(Yh, V)
     if m == 0:
         return Xr, Yr, M, 1.0, 1.0
-    S2 = np.empty((n + 6, m))
-    S2[:n], S2[n:] = Xr, Yr
-    Q = np.ascontiguousarray(np.linalg.qr(S2)[0])
+    Q = np.empty((n + 6, m))  # an orthonormal basis of the columns of (X_r; Y_r)
+    for j in range(m):
+        Q[:, j] = Ws[:, j] / sv[j]
     cx = _singular_values(Q[:n])
     cy = _singular_values(Q[n:])
     forward = cx[m - 1] if n >= m else 0.0
@@ -503,18 +729,20 @@ def _world(H, p, L):
 @njit(cache=True, nogil=True)
 def analyse_pose(lay, q, about_output, rtol):
     """The numbers of :func:`analysis_core` at ``q`` (compiled), in its order."""
-    Jc, Jo, S, oMo = _jacobians(lay, q)
+    Jc, Jo, S, oMo, oMi = _jacobians(lay, q)
     L = lay.length
+    locked = _gimbal_locked(lay.triples, lay.kernel.iv, S, oMi, L)
     p = np.zeros(3)
     if about_output:
         p[0], p[1], p[2] = oMo[0, 3], oMo[1, 3], oMo[2, 3]
     rank, N, X, Yw, rank_x, idle = _null_space(Jc, Jo, lay.units, lay.act_v, rtol)
     Yh, d, rotations, P_h, C_h = _twist_system(Yw, p, L, rtol)
-    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol)
+    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol, X, Yh)
     type_II, cond = _transmission(A, P_h, d, p, L)
     Xr, Yr, M, forward, inverse = _generalised(N, X, Yh, rtol)
     return (rank, N, X, Yw, rank_x, idle, p, d, rotations, _world(P_h, p, L),
-            _world(C_h, p, L), A, B, type_I, type_II, cond, Xr, Yr, M, forward, inverse)
+            _world(C_h, p, L), A, B, type_I, type_II, cond, Xr, Yr, M, forward, inverse,
+            locked)
 
 
 #: :func:`analyse_pose` as :func:`analysis_core` calls it: a model's layout is typed
