@@ -43,9 +43,9 @@ from numba.extending import register_jitable
 
 from . import screws
 from .compiling import SameTypes
-from .engine.linalg import jacobi, largest
+from .engine.linalg import JACOBI_TOL, jacobi, largest
 from .model.closure_model import sparse_basis
-from .tolerances import GIMBAL_LOCK_RTOL, ROTATION_COUNT_TOL
+from .tolerances import GIMBAL_LOCK_RTOL, JOINT_LIMIT_SLACK, ROTATION_COUNT_TOL
 from .tree_kernel import PRISMATIC, TreeKernel, closure_rows, tree_kernel, workspace
 
 #: Whether :meth:`Linkage.analyze` may use this module (False: the numpy path
@@ -103,6 +103,9 @@ class Core(NamedTuple):
     #: (m,) whether each of :func:`revolute_triples` is at a gimbal lock (``None``:
     #: not decided here, :func:`pkm_pin.linkage._representation` decides)
     locked: np.ndarray | None = None
+    #: whether a coordinate may be at a limit (``False``: none is within
+    #: :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK` of one; ``None``: not decided here)
+    near_limit: bool | None = None
 
 
 class LazyKinematics:
@@ -207,12 +210,12 @@ def analysis_core(model, loops: tuple, q: np.ndarray, about_output: bool,
         return None
     q = np.ascontiguousarray(q, dtype=float)
     (rank, N, X, Yw, rank_x, idle_span, p, d, rotations, twists, wrenches, A, B, type_I,
-     type_II, cond, Xr, Yr, M, forward, inverse, locked) = _ANALYSE(lay, q, bool(about_output),
-                                                          float(rtol))
+     type_II, cond, Xr, Yr, M, forward, inverse, locked,
+     near_limit) = _ANALYSE(lay, q, bool(about_output), float(rtol))
     ns = CompiledNullSpace(rank, N, X, Yw, model.velocity_units, rtol, rank_x, idle_span)
     return Core(LazyKinematics(model, q), ns, p, d, rotations, twists, wrenches, A,
                 np.diag(B), type_I, type_II, cond, Xr, Yr, M, forward, inverse,
-                lay.act_translating.copy(), locked)
+                lay.act_translating.copy(), locked, near_limit)
 
 
 # ============================================================ compiled algebra
@@ -243,7 +246,7 @@ def _singular_values(H):
     X = np.ascontiguousarray(H) if n <= m else np.ascontiguousarray(H.T)
     r, c = X.shape
     V, W, sv = np.eye(c), np.empty((r, c)), np.empty(c)
-    jacobi(X, r, c, W, V, sv)
+    jacobi(X, r, c, W, V, sv, JACOBI_TOL)  # values only: no polishing of the bases
     return -np.sort(-sv)
 
 
@@ -277,10 +280,13 @@ def _rank_of(sv, rtol):
 
 
 @register_jitable
-def _householder(A):
-    """``(Q, R)``: ``A = Q R`` (m × n, m ≥ n), ``Q`` (m × m) orthogonal, full."""
+def _householder(A, first):
+    """``(Q₂, R)``: ``A = Q R`` (m × n, m ≥ n) by Householder reflections, ``R`` upper
+    triangular (m × n), ``Q₂`` the columns ``first …`` of the orthogonal ``Q`` (from
+    ``n``: an orthonormal basis of the complement of ``A``'s columns, from 0 the first
+    ``n`` a basis of them, where ``A`` has full rank)."""
     m, n = A.shape
-    R, Q, v = A.copy(), np.eye(m), np.empty(m)
+    R, refl, vvs = A.copy(), np.zeros((n, m)), np.zeros(n)
     for k in range(min(m - 1, n)):
         s = 0.0
         for i in range(k, m):
@@ -290,25 +296,32 @@ def _householder(A):
         alpha = -math.sqrt(s) if R[k, k] >= 0.0 else math.sqrt(s)
         vv = 0.0
         for i in range(k, m):
-            v[i] = R[i, k]
-        v[k] -= alpha
+            refl[k, i] = R[i, k]
+        refl[k, k] -= alpha
         for i in range(k, m):
-            vv += v[i] * v[i]
+            vv += refl[k, i] * refl[k, i]
+        vvs[k] = vv
         for j in range(k, n):
             f = 0.0
             for i in range(k, m):
-                f += v[i] * R[i, j]
+                f += refl[k, i] * R[i, j]
             f *= 2.0 / vv
             for i in range(k, m):
-                R[i, j] -= f * v[i]
-        for i in range(m):
+                R[i, j] -= f * refl[k, i]
+    Q2 = np.zeros((m, m - first))
+    for j in range(m - first):
+        Q2[first + j, j] = 1.0
+    for k in range(min(m - 1, n) - 1, -1, -1):  # Q₂ = H₀ H₁ … E: the last one first
+        if vvs[k] == 0.0:
+            continue
+        for j in range(m - first):
             f = 0.0
-            for c in range(k, m):
-                f += Q[i, c] * v[c]
-            f *= 2.0 / vv
-            for c in range(k, m):
-                Q[i, c] -= f * v[c]
-    return Q, R
+            for i in range(k, m):
+                f += refl[k, i] * Q2[i, j]
+            f *= 2.0 / vvs[k]
+            for i in range(k, m):
+                Q2[i, j] -= f * refl[k, i]
+    return Q2, R
 
 
 @register_jitable
@@ -435,6 +448,17 @@ def _gimbal_locked(triples, iv, S, oMi, L):
 
 
 @register_jitable
+def _near_limit(lower, upper, q):
+    """Whether a coordinate is within :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK` of
+    its limit (``linkage._at_limits``'s test, before it names the joints)."""
+    for i in range(q.shape[0]):
+        if abs(q[i] - lower[i]) <= JOINT_LIMIT_SLACK \
+                or abs(q[i] - upper[i]) <= JOINT_LIMIT_SLACK:
+            return True
+    return False
+
+
+@register_jitable
 def _apart(a, b):
     """``min(|a − b|, |a + b|)``."""
     return min(_norm(a - b), _norm(a + b))
@@ -456,10 +480,23 @@ def _null_space(Jc, Jo, units, act_v, rtol):
     for c in range(nv):
         UN[c] *= units[c]
     Yw = _mm(Jo, UN)
+    if _surely_full_column_rank(X, rtol):  # no idle motion
+        return rank, N, X, Yw, X.shape[1], np.zeros((nv, 0))
     sv, Vx, _ = _jacobi_sorted(X)
     rank_x = _rank_of(sv, rtol)
     idle = _mm(N, np.ascontiguousarray(Vx[:, rank_x:]))
     return rank, N, X, Yw, rank_x, idle
+
+
+@register_jitable
+def _surely_full_column_rank(A, rtol):
+    """Whether ``A`` (m × n, m ≥ n ≥ 1) surely has rank ``n`` by :func:`_svd_rank`'s
+    rule (:func:`_surely_full_rank` of its QR factor; ``False``: not decided here)."""
+    m, n = A.shape
+    if n == 0 or m < n:
+        return False
+    _, R = _householder(np.ascontiguousarray(A), m)
+    return _surely_full_rank(R, n, rtol)
 
 
 @register_jitable
@@ -470,9 +507,9 @@ def _kernel_basis(H, rtol):
     (the generic case, a few µs); else LAPACK's SVD."""
     r, c = H.shape
     if r <= c:
-        Q, R = _householder(np.ascontiguousarray(H.T))
+        Q2, R = _householder(np.ascontiguousarray(H.T), r)
         if _surely_full_rank(R, r, rtol):
-            return r, np.ascontiguousarray(Q[:, r:])
+            return r, Q2
     rank, _, _, Vt = _svd_rank(H, rtol)
     return rank, np.ascontiguousarray(Vt[rank:].T)
 
@@ -483,15 +520,27 @@ def _twist_system(Yw, p, L, rtol):
     orthonormal twist basis ``P_h`` (d × 6), its rotations and the reciprocal wrench
     basis ``C_h`` ((6 − d) × 6)."""
     Yh = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Yw.T), p, L).T)
-    sv, _, Wy = _jacobi_sorted(Yh)
-    d = _rank_of(sv, rtol)
-    P_h = np.empty((d, 6))
-    for j in range(d):
-        P_h[j] = Wy[:, j] / sv[j]
+    d = Yh.shape[1]
+    Q = np.zeros((6, 0))
+    full = False
+    if 0 < d <= 6:
+        Q, R = _householder(Yh, 0)
+        full = _surely_full_rank(R, d, rtol)
+    if full:  # Q's first d columns span Y_h's
+        P_h = np.ascontiguousarray(Q[:, :d].T)
+    else:
+        sv, _, Wy = _jacobi_sorted(Yh)
+        d = _rank_of(sv, rtol)
+        P_h = np.empty((d, 6))
+        for j in range(d):
+            P_h[j] = Wy[:, j] / sv[j]
+        Q = np.zeros((6, 0))
     rotations = 0
     for s in _singular_values(P_h[:, :3]):
         if s > ROTATION_COUNT_TOL:
             rotations += 1
+    if Q.shape[1] == 6:  # Q's last 6 − d columns: the complement of Y_h's, swapped
+        return Yh, d, rotations, P_h, _swap_halves(np.ascontiguousarray(Q[:, d:].T))
     _, Vc, _ = _jacobi_sorted(_swap_halves(P_h))
     return Yh, d, rotations, P_h, np.ascontiguousarray(Vc[:, d:].T)
 
@@ -563,9 +612,9 @@ def _left_null(G, col, rtol):
             others[:, i] = G[:, c]
             i += 1
     if k <= m:
-        Q, R = _householder(others)
+        Q2, R = _householder(others, k)
         if _surely_full_rank(R, k, rtol):
-            return np.ascontiguousarray(Q[:, k:].T)
+            return np.ascontiguousarray(Q2.T)
     rank, Ul, _, _ = _svd_rank(others, rtol)
     return np.ascontiguousarray(Ul[:, rank:].T)
 
@@ -584,9 +633,8 @@ def _actuation_all(x_a, Yh, rtol):
         for r in range(6):
             K[j, r] = Yh[r, j]
         K[j, 6] = -x_a[j]
-    sv, V, _ = _jacobi_sorted(K)
-    rank = _rank_of(sv, rtol)
-    W = np.ascontiguousarray(V[:, rank:].T)  # rows (w_o; β), orthonormal
+    rank, Wt = _kernel_basis(K, rtol)
+    W = np.ascontiguousarray(Wt.T)  # rows (w_o; β), orthonormal
     b = np.ascontiguousarray(W[:, 6])
     if _norm(b) <= rtol:
         return np.zeros(6), False
@@ -697,15 +745,23 @@ def _generalised(N, X, Yh, rtol):
         return X.copy(), Yh.copy(), N.copy(), 1.0, 1.0
     S = np.empty((n + 6, dof))
     S[:n], S[n:] = X, Yh
-    sv, Vs, Ws = _jacobi_sorted(S)
-    m = _rank_of(sv, rtol)
-    V = np.ascontiguousarray(Vs[:, :m])
-    M, Xr, Yr = _mm(N, V), _mm(X, V), _mm(Yh, V)
-    if m == 0:
-        return Xr, Yr, M, 1.0, 1.0
-    Q = np.empty((n + 6, m))  # an orthonormal basis of the columns of (X_r; Y_r)
-    for j in range(m):
-        Q[:, j] = Ws[:, j] / sv[j]
+    full = False
+    if n + 6 >= dof:
+        Q, R = _householder(S, 0)
+        full = _surely_full_rank(R, dof, rtol)
+    if full:  # every motion moves an actuator or the output
+        m, Xr, Yr, M = dof, X.copy(), Yh.copy(), N.copy()
+        Q = np.ascontiguousarray(Q[:, :m])  # an orthonormal basis of the columns of S
+    else:
+        sv, Vs, Ws = _jacobi_sorted(S)
+        m = _rank_of(sv, rtol)
+        V = np.ascontiguousarray(Vs[:, :m])
+        M, Xr, Yr = _mm(N, V), _mm(X, V), _mm(Yh, V)
+        if m == 0:
+            return Xr, Yr, M, 1.0, 1.0
+        Q = np.empty((n + 6, m))  # an orthonormal basis of the columns of (X_r; Y_r)
+        for j in range(m):
+            Q[:, j] = Ws[:, j] / sv[j]
     cx = _singular_values(Q[:n])
     cy = _singular_values(Q[n:])
     forward = cx[m - 1] if n >= m else 0.0
@@ -732,6 +788,7 @@ def analyse_pose(lay, q, about_output, rtol):
     Jc, Jo, S, oMo, oMi = _jacobians(lay, q)
     L = lay.length
     locked = _gimbal_locked(lay.triples, lay.kernel.iv, S, oMi, L)
+    near_limit = _near_limit(lay.kernel.lower, lay.kernel.upper, q)
     p = np.zeros(3)
     if about_output:
         p[0], p[1], p[2] = oMo[0, 3], oMo[1, 3], oMo[2, 3]
@@ -742,7 +799,7 @@ def analyse_pose(lay, q, about_output, rtol):
     Xr, Yr, M, forward, inverse = _generalised(N, X, Yh, rtol)
     return (rank, N, X, Yw, rank_x, idle, p, d, rotations, _world(P_h, p, L),
             _world(C_h, p, L), A, B, type_I, type_II, cond, Xr, Yr, M, forward, inverse,
-            locked)
+            locked, near_limit)
 
 
 #: :func:`analyse_pose` as :func:`analysis_core` calls it: a model's layout is typed

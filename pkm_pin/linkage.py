@@ -918,7 +918,8 @@ def _ranks(ns: NullSpace, rtol: float) -> tuple[int, int]:
 
 
 def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
-              nearby: int = NEARBY_SAMPLES, seed: int = 0, locked=None) -> Mobility:
+              nearby: int = NEARBY_SAMPLES, seed: int = 0, locked=None,
+              near_limit: bool | None = None) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
     idle = ns.idle(rtol)
@@ -928,7 +929,7 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
         if text in words:  # two motions of the same joints: tell them apart by their rates
             text = describe_motion(model, kin, ns.units * idle[:, k], rates=True)
         words.append(text)
-    hold, representation = _representation(model, kin, locked=locked)
+    hold, representation = _representation(model, kin, locked=locked, near_limit=near_limit)
     here = _ranks(ns, rtol)
     generic = singular = None
     known = link._generic_ranks if rtol == RANK_RTOL else None
@@ -1027,7 +1028,8 @@ def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
 
 
 def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None,
-                    locked: np.ndarray | None = None) -> tuple[list, list]:
+                    locked: np.ndarray | None = None, near_limit: bool | None = None
+                    ) -> tuple[list, list]:
     """Representation singularities at ``kin.q`` (or ``q``; ``kin`` made only when
     needed): ``(velocity coordinates, sentences)``.
 
@@ -1048,7 +1050,7 @@ def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None,
             coords.append(tree.joints[j].idx_v)
             words.append(f"{tree.names[j]} at a gimbal lock (the axes of {tree.names[p]} "
                          f"and {tree.names[c]} coincide)")
-    for j, side, limit in _at_limits(model, q):
+    for j, side, limit in _at_limits(model, q) if near_limit is not False else ():
         if tree.joints[j].idx_v not in coords:
             coords.append(tree.joints[j].idx_v)
             words.append(f"{tree.names[j]} at its {side} limit {limit:.6g}")
@@ -1571,7 +1573,8 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
     core = general_kernel.analysis_core(model, link._loops, q, about == "output", rtol)
     if core is None:
         core = _numpy_core(link, model.kinematics(q), about, rtol)
-    mob = _mobility(link, core.kin, core.ns, rtol, nearby, locked=core.locked)
+    mob = _mobility(link, core.kin, core.ns, rtol, nearby, locked=core.locked,
+                    near_limit=core.near_limit)
     idx = {"type_I": core.type_I, "type_II": core.type_II, "condition_A": core.condition,
            "forward": core.forward, "inverse": core.inverse}
     singularity = classify(_smaller(core.type_I, core.inverse),

@@ -267,7 +267,7 @@ class ClosureModel:
     @property
     def n_rows(self) -> int:
         """Number of closure rows (the sum of the closures' :attr:`Closure.dim`)."""
-        return sum(c.dim for c in self.closures)
+        return self._plan.n_rows
 
     @property
     def velocity_units(self) -> np.ndarray:
