@@ -46,7 +46,15 @@ from .compiling import SameTypes
 from .engine.linalg import JACOBI_TOL, jacobi, largest
 from .model.closure_model import sparse_basis
 from .tolerances import GIMBAL_LOCK_RTOL, JOINT_LIMIT_SLACK, ROTATION_COUNT_TOL
-from .tree_kernel import PRISMATIC, TreeKernel, closure_rows, tree_kernel, workspace
+from .tree_kernel import (
+    PRISMATIC,
+    TreeKernel,
+    closure_rows,
+    tree_kernel,
+    tree_placements,
+    tree_twists,
+    workspace,
+)
 
 #: Whether :meth:`Linkage.analyze` may use this module (False: the numpy path
 #: everywhere, for comparisons and diagnosis).
@@ -800,6 +808,34 @@ def analyse_pose(lay, q, about_output, rtol):
     return (rank, N, X, Yw, rank_x, idle, p, d, rotations, _world(P_h, p, L),
             _world(C_h, p, L), A, B, type_I, type_II, cond, Xr, Yr, M, forward, inverse,
             locked, near_limit)
+
+
+def representation_flags(model, q: np.ndarray):
+    """``(locked, near_limit)`` of :class:`Core` at the checked configuration ``q``
+    without an analysis (for :func:`pkm_pin.linkage._representation` after a solve), or
+    ``None`` where this module does not apply."""
+    k = tree_kernel(model) if ENABLED else None
+    if k is None:
+        return None
+    triples = revolute_triples(model)
+    q = np.ascontiguousarray(q, dtype=float)
+    locked, near = _FLAGS(k, np.ascontiguousarray(triples, dtype=np.int64), q,
+                          float(model.length))
+    return locked, bool(near)
+
+
+@njit(cache=True, nogil=True)
+def flags_at(k, triples, q, L):
+    """The gimbal locks (:func:`_gimbal_locked`) and joint-limit proximity
+    (:func:`_near_limit`) at ``q`` from the compiled tree ``k`` alone."""
+    oMi = np.empty((k.parent.shape[0], 4, 4))
+    S = np.zeros((6, k.nv))
+    tree_placements(k.parent, k.place, k.kind, k.axis, k.rate, k.iq, q, oMi)
+    tree_twists(k.kind, k.iv, k.rate, k.axis, oMi, S)
+    return _gimbal_locked(triples, k.iv, S, oMi, L), _near_limit(k.lower, k.upper, q)
+
+
+_FLAGS = SameTypes(flags_at, key=0, plain=True)
 
 
 #: :func:`analyse_pose` as :func:`analysis_core` calls it: a model's layout is typed

@@ -1043,6 +1043,9 @@ def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None,
     q = kin.q if kin is not None else model.check_q(q)
     coords, words = [], []
     triples = _revolute_triples(model)
+    if kin is None and locked is None:  # from the compiled tree, if it is
+        flags = general_kernel.representation_flags(model, q)
+        locked, near_limit = flags if flags is not None else (None, near_limit)
     if len(triples) and locked is None:
         locked = _gimbal_locks(model, kin if kin is not None else model.kinematics(q), triples)
     if len(triples):
