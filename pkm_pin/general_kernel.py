@@ -528,29 +528,19 @@ def _twist_system(Yw, p, L, rtol):
     orthonormal twist basis ``P_h`` (d × 6), its rotations and the reciprocal wrench
     basis ``C_h`` ((6 − d) × 6)."""
     Yh = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Yw.T), p, L).T)
-    d = Yh.shape[1]
-    Q = np.zeros((6, 0))
-    full = False
-    if 0 < d <= 6:
-        Q, R = _householder(Yh, 0)
-        full = _surely_full_rank(R, d, rtol)
-    if full:  # Q's first d columns span Y_h's
-        P_h = np.ascontiguousarray(Q[:, :d].T)
-    else:
-        sv, _, Wy = _jacobi_sorted(Yh)
-        d = _rank_of(sv, rtol)
-        P_h = np.empty((d, 6))
-        for j in range(d):
-            P_h[j] = Wy[:, j] / sv[j]
-        Q = np.zeros((6, 0))
+    if Yh.shape[1] == 6:  # six motions: surely spanning every twist, no wrench left
+        _, R = _householder(Yh, 6)
+        if _surely_full_rank(R, 6, rtol):
+            P_h = np.eye(6)  # an orthonormal basis of all twists
+            return Yh, 6, 3, P_h, np.zeros((0, 6))
+    d, Uy, _, _ = _svd_rank(Yh, rtol)
+    P_h = np.ascontiguousarray(Uy[:, :d].T)
     rotations = 0
     for s in _singular_values(P_h[:, :3]):
         if s > ROTATION_COUNT_TOL:
             rotations += 1
-    if Q.shape[1] == 6:  # Q's last 6 − d columns: the complement of Y_h's, swapped
-        return Yh, d, rotations, P_h, _swap_halves(np.ascontiguousarray(Q[:, d:].T))
-    _, Vc, _ = _jacobi_sorted(_swap_halves(P_h))
-    return Yh, d, rotations, P_h, np.ascontiguousarray(Vc[:, d:].T)
+    _, _, _, Vc = _svd_rank(_swap_halves(P_h), rtol)
+    return Yh, d, rotations, P_h, np.ascontiguousarray(Vc[d:])
 
 
 @register_jitable
@@ -628,29 +618,6 @@ def _left_null(G, col, rtol):
 
 
 @register_jitable
-def _actuation_all(x_a, Yh, rtol):
-    """:func:`_actuation_row` with every closure stacked, in the null space ``N`` of
-    the closure rows: ``w_c J_c + w_o H_o = β e_a`` has a ``w_c`` exactly when
-    ``(β e_a − w_o H_o) N = 0``, i.e. ``Y_hᵀ w_o = β x_a`` (``Y_h = H_o N`` the
-    homogenised output twists, ``x_a = N[a]`` the actuated rates of the motions), so the
-    admissible ``(w_o, β)`` are the null space of ``(Y_hᵀ | −x_a)`` (dof × 7) and the
-    least ζ with β = 1 is the same."""
-    dof = Yh.shape[1]
-    K = np.empty((dof, 7))
-    for j in range(dof):
-        for r in range(6):
-            K[j, r] = Yh[r, j]
-        K[j, 6] = -x_a[j]
-    rank, Wt = _kernel_basis(K, rtol)
-    W = np.ascontiguousarray(Wt.T)  # rows (w_o; β), orthonormal
-    b = np.ascontiguousarray(W[:, 6])
-    if _norm(b) <= rtol:
-        return np.zeros(6), False
-    ZT = np.ascontiguousarray(_swap_halves(np.ascontiguousarray(W[:, :6])).T)
-    return _least_wrench(ZT, b, rtol)
-
-
-@register_jitable
 def _least_on_plane(ZT, b, y0, rtol):
     """The least ``Zᵀ y`` over ``y`` with ``bᵀ y = 1`` (``y0`` one of them): ``Zᵀ y0``
     less its projection on the range of ``Zᵀ (I − b bᵀ / bᵀb)`` — numpy's
@@ -698,24 +665,21 @@ def _scaled_wrench(zeta, p, L, unit, rtol):
 
 
 @register_jitable
-def _actuation(lay, Jc, Jo, S, p, rtol, X, Yh):
+def _actuation(lay, Jc, Jo, S, p, rtol):
     """``linkage._actuation``: ``A`` (na × 6, world origin), the diagonal of ``B`` and
-    the type I index (every closure stacked: :func:`_actuation_all`, from the null
-    space's ``X`` and ``Y_h``)."""
+    the type I index."""
     L, units, act_v = lay.length, lay.units, lay.act_v
     Ho = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Jo.T), p, L).T)
     for c in range(Ho.shape[1]):
         Ho[:, c] *= units[c]
     na = act_v.shape[0]
+    every = np.ones(Jc.shape[0])
     A, B, type_I = np.zeros((na, 6)), np.zeros(na), np.inf
     for k in range(na):
         col = act_v[k]
-        if np.all(lay.loop_rows[k] > 0):
-            zeta, ok = _actuation_all(X[k], Yh, rtol)
-        else:
-            zeta, ok = _actuation_row(_stacked(Jc, units, lay.loop_rows[k], Ho), col, rtol)
-            if not ok:
-                zeta, ok = _actuation_all(X[k], Yh, rtol)
+        zeta, ok = _actuation_row(_stacked(Jc, units, lay.loop_rows[k], Ho), col, rtol)
+        if not ok and not np.all(lay.loop_rows[k] > 0):
+            zeta, ok = _actuation_row(_stacked(Jc, units, every, Ho), col, rtol)
         if not ok:
             type_I = 0.0
             continue
@@ -802,7 +766,7 @@ def analyse_pose(lay, q, about_output, rtol):
         p[0], p[1], p[2] = oMo[0, 3], oMo[1, 3], oMo[2, 3]
     rank, N, X, Yw, rank_x, idle = _null_space(Jc, Jo, lay.units, lay.act_v, rtol)
     Yh, d, rotations, P_h, C_h = _twist_system(Yw, p, L, rtol)
-    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol, X, Yh)
+    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol)
     type_II, cond = _transmission(A, P_h, d, p, L)
     Xr, Yr, M, forward, inverse = _generalised(N, X, Yh, rtol)
     return (rank, N, X, Yw, rank_x, idle, p, d, rotations, _world(P_h, p, L),
