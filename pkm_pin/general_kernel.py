@@ -60,6 +60,11 @@ from .tree_kernel import (
 #: everywhere, for comparisons and diagnosis).
 ENABLED = True
 
+#: Beyond this many closure rows, an actuation row with every closure stacked is found
+#: in the null space of the closure rows (:func:`_actuation_all`), not from the stacked
+#: rows (the same wrench; below it, the stacked rows are the smaller problem).
+REDUCE_ROWS = 6
+
 
 class Layout(NamedTuple):
     """What the compiled analysis reads of one closure model, made once per model.
@@ -618,6 +623,31 @@ def _left_null(G, col, rtol):
 
 
 @register_jitable
+def _actuation_all(x_a, Yh, rtol):
+    """:func:`_actuation_row` with every closure stacked, in the null space ``N`` of
+    the closure rows: ``w_c J_c + w_o H_o = β e_a`` has a ``w_c`` exactly when
+    ``(β e_a − w_o H_o) N = 0``, i.e. ``Y_hᵀ w_o = β x_a`` (``Y_h = H_o N`` the
+    homogenised output twists, ``x_a = N[a]`` the actuated rates of the motions), so the
+    admissible ``(w_o, β)`` are the null space of ``(Y_hᵀ | −x_a)`` (dof × 7) and the
+    least ζ with β = 1 is the same (to round-off). Used where more than 6 closure
+    rows are stacked (:data:`REDUCE_ROWS`): there the QR of the stacked rows costs more
+    than this dof × 7 system."""
+    dof = Yh.shape[1]
+    K = np.empty((dof, 7))
+    for j in range(dof):
+        for r in range(6):
+            K[j, r] = Yh[r, j]
+        K[j, 6] = -x_a[j]
+    rank, Wt = _kernel_basis(K, rtol)
+    W = np.ascontiguousarray(Wt.T)  # rows (w_o; β), orthonormal
+    b = np.ascontiguousarray(W[:, 6])
+    if _norm(b) <= rtol:
+        return np.zeros(6), False
+    ZT = np.ascontiguousarray(_swap_halves(np.ascontiguousarray(W[:, :6])).T)
+    return _least_wrench(ZT, b, rtol)
+
+
+@register_jitable
 def _least_on_plane(ZT, b, y0, rtol):
     """The least ``Zᵀ y`` over ``y`` with ``bᵀ y = 1`` (``y0`` one of them): ``Zᵀ y0``
     less its projection on the range of ``Zᵀ (I − b bᵀ / bᵀb)`` — numpy's
@@ -665,9 +695,10 @@ def _scaled_wrench(zeta, p, L, unit, rtol):
 
 
 @register_jitable
-def _actuation(lay, Jc, Jo, S, p, rtol):
+def _actuation(lay, Jc, Jo, S, p, rtol, X, Yh):
     """``linkage._actuation``: ``A`` (na × 6, world origin), the diagonal of ``B`` and
-    the type I index."""
+    the type I index (every closure stacked, beyond :data:`REDUCE_ROWS` rows: in the
+    null space, :func:`_actuation_all`, from its ``X`` and ``Y_h``)."""
     L, units, act_v = lay.length, lay.units, lay.act_v
     Ho = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Jo.T), p, L).T)
     for c in range(Ho.shape[1]):
@@ -677,9 +708,16 @@ def _actuation(lay, Jc, Jo, S, p, rtol):
     A, B, type_I = np.zeros((na, 6)), np.zeros(na), np.inf
     for k in range(na):
         col = act_v[k]
-        zeta, ok = _actuation_row(_stacked(Jc, units, lay.loop_rows[k], Ho), col, rtol)
-        if not ok and not np.all(lay.loop_rows[k] > 0):
-            zeta, ok = _actuation_row(_stacked(Jc, units, every, Ho), col, rtol)
+        rows = lay.loop_rows[k]
+        if np.all(rows > 0) and rows.shape[0] > REDUCE_ROWS:
+            zeta, ok = _actuation_all(X[k], Yh, rtol)
+        else:
+            zeta, ok = _actuation_row(_stacked(Jc, units, rows, Ho), col, rtol)
+        if not ok and not np.all(rows > 0):
+            if every.shape[0] > REDUCE_ROWS:
+                zeta, ok = _actuation_all(X[k], Yh, rtol)
+            else:
+                zeta, ok = _actuation_row(_stacked(Jc, units, every, Ho), col, rtol)
         if not ok:
             type_I = 0.0
             continue
@@ -766,7 +804,7 @@ def analyse_pose(lay, q, about_output, rtol):
         p[0], p[1], p[2] = oMo[0, 3], oMo[1, 3], oMo[2, 3]
     rank, N, X, Yw, rank_x, idle = _null_space(Jc, Jo, lay.units, lay.act_v, rtol)
     Yh, d, rotations, P_h, C_h = _twist_system(Yw, p, L, rtol)
-    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol)
+    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol, X, Yh)
     type_II, cond = _transmission(A, P_h, d, p, L)
     Xr, Yr, M, forward, inverse = _generalised(N, X, Yh, rtol)
     return (rank, N, X, Yw, rank_x, idle, p, d, rotations, _world(P_h, p, L),
