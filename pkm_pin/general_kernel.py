@@ -830,11 +830,14 @@ def representation_flags(model, q: np.ndarray):
 def flags_at(k, triples, q, L):
     """The gimbal locks (:func:`_gimbal_locked`) and joint-limit proximity
     (:func:`_near_limit`) at ``q`` from the compiled tree ``k`` alone."""
+    near = _near_limit(k.lower, k.upper, q)
+    if triples.shape[0] == 0:  # no gimbal to lock: no tree pass
+        return np.zeros(0, np.bool_), near
     oMi = np.empty((k.parent.shape[0], 4, 4))
     S = np.zeros((6, k.nv))
     tree_placements(k.parent, k.place, k.kind, k.axis, k.rate, k.iq, q, oMi)
     tree_twists(k.kind, k.iv, k.rate, k.axis, oMi, S)
-    return _gimbal_locked(triples, k.iv, S, oMi, L), _near_limit(k.lower, k.upper, q)
+    return _gimbal_locked(triples, k.iv, S, oMi, L), near
 
 
 _FLAGS = SameTypes(flags_at, key=0, plain=True)
