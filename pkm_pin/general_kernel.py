@@ -32,6 +32,7 @@ columns per velocity coordinate times :attr:`ClosureModel.velocity_units`.
 
 from __future__ import annotations
 
+import functools
 import math
 import weakref
 from typing import NamedTuple
@@ -42,14 +43,27 @@ from numba.extending import register_jitable
 
 from . import screws
 from .compiling import SameTypes
-from .engine.linalg import jacobi, largest
+from .engine.linalg import JACOBI_TOL, jacobi, largest
 from .model.closure_model import sparse_basis
-from .tolerances import ROTATION_COUNT_TOL
-from .tree_kernel import PRISMATIC, TreeKernel, closure_rows, tree_kernel, workspace
+from .tolerances import GIMBAL_LOCK_RTOL, JOINT_LIMIT_SLACK, ROTATION_COUNT_TOL
+from .tree_kernel import (
+    PRISMATIC,
+    TreeKernel,
+    closure_rows,
+    tree_kernel,
+    tree_placements,
+    tree_twists,
+    workspace,
+)
 
 #: Whether :meth:`Linkage.analyze` may use this module (False: the numpy path
 #: everywhere, for comparisons and diagnosis).
 ENABLED = True
+
+#: Beyond this many closure rows, an actuation row with every closure stacked is found
+#: in the null space of the closure rows (:func:`_actuation_all`), not from the stacked
+#: rows (the same wrench; below it, the stacked rows are the smaller problem).
+REDUCE_ROWS = 6
 
 
 class Layout(NamedTuple):
@@ -67,6 +81,7 @@ class Layout(NamedTuple):
     length: float
     point_output: bool
     act_translating: np.ndarray  # (na,) bool: the actuated joint is prismatic
+    triples: np.ndarray  # (m, 3) revolute triples that may lock (:func:`revolute_triples`)
 
 
 class Core(NamedTuple):
@@ -98,6 +113,12 @@ class Core(NamedTuple):
     forward: float
     inverse: float
     translating: np.ndarray  # (na,) whether each actuated joint translates (prismatic)
+    #: (m,) whether each of :func:`revolute_triples` is at a gimbal lock (``None``:
+    #: not decided here, :func:`pkm_pin.linkage._representation` decides)
+    locked: np.ndarray | None = None
+    #: whether a coordinate may be at a limit (``False``: none is within
+    #: :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK` of one; ``None``: not decided here)
+    near_limit: bool | None = None
 
 
 class LazyKinematics:
@@ -138,6 +159,33 @@ class CompiledNullSpace:
         return self._rank_x if rtol == self._rtol else screws.svd_rank(self.X, rtol)[0]
 
 
+@functools.lru_cache(maxsize=64)
+def revolute_triples(model) -> np.ndarray:
+    """(m × 3) joint indices ``(p, j, c)`` of three consecutive revolute joints of the
+    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians)
+    whose axes meet at one point (``j`` and ``c`` placed without offset: three
+    revolutes standing for a spherical joint): where a gimbal lock, a representation
+    singularity, can occur (axes that meet elsewhere make a real singularity of the
+    linkage, not one of its description). Read-only; cached per model."""
+    tree, U = model.tree, model.velocity_units
+    tiny = 1e-12 * model.length
+
+    def revolute(j):
+        joint = tree.joints[j]
+        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0
+
+    def centred(j):
+        return np.linalg.norm(tree.jointPlacements[j].translation) <= tiny
+
+    out = [(tree.parents[tree.parents[c]], tree.parents[c], c) for c in range(1, tree.njoints)
+           if revolute(c) and revolute(tree.parents[c])
+           and revolute(tree.parents[tree.parents[c]])
+           and centred(c) and centred(tree.parents[c])]
+    triples = np.array(out, dtype=int).reshape(-1, 3)
+    triples.setflags(write=False)
+    return triples
+
+
 _LAYOUTS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 
@@ -159,7 +207,8 @@ def layout(model, loops: tuple) -> Layout | None:
         out = Layout(k, out_support, loop_rows, np.array(plan.act_v, np.int64),
                      np.array(model.velocity_units, float), float(model.length),
                      bool(model.output_point),
-                     np.array([k.kind[j] == PRISMATIC for j in joints], dtype=bool))
+                     np.array([k.kind[j] == PRISMATIC for j in joints], dtype=bool),
+                     np.ascontiguousarray(revolute_triples(model), dtype=np.int64))
     _LAYOUTS[model] = out
     return out
 
@@ -174,12 +223,12 @@ def analysis_core(model, loops: tuple, q: np.ndarray, about_output: bool,
         return None
     q = np.ascontiguousarray(q, dtype=float)
     (rank, N, X, Yw, rank_x, idle_span, p, d, rotations, twists, wrenches, A, B, type_I,
-     type_II, cond, Xr, Yr, M, forward, inverse) = _ANALYSE(lay, q, bool(about_output),
-                                                          float(rtol))
+     type_II, cond, Xr, Yr, M, forward, inverse, locked,
+     near_limit) = _ANALYSE(lay, q, bool(about_output), float(rtol))
     ns = CompiledNullSpace(rank, N, X, Yw, model.velocity_units, rtol, rank_x, idle_span)
     return Core(LazyKinematics(model, q), ns, p, d, rotations, twists, wrenches, A,
                 np.diag(B), type_I, type_II, cond, Xr, Yr, M, forward, inverse,
-                lay.act_translating.copy())
+                lay.act_translating.copy(), locked, near_limit)
 
 
 # ============================================================ compiled algebra
@@ -210,8 +259,105 @@ def _singular_values(H):
     X = np.ascontiguousarray(H) if n <= m else np.ascontiguousarray(H.T)
     r, c = X.shape
     V, W, sv = np.eye(c), np.empty((r, c)), np.empty(c)
-    jacobi(X, r, c, W, V, sv)
+    jacobi(X, r, c, W, V, sv, JACOBI_TOL)  # values only: no polishing of the bases
     return -np.sort(-sv)
+
+
+@register_jitable
+def _jacobi_sorted(H):
+    """One-sided Jacobi SVD of ``H`` (m × n, :func:`pkm_pin.engine.linalg.jacobi`):
+    ``(sv, V, W)`` with ``H V = W``, ``|W_j| = sv[j]``, columns sorted by ``sv``
+    descending (as LAPACK's ``Vt.T`` and ``U Σ``, up to the bases of repeated values)."""
+    m, n = H.shape
+    V, W, sv = np.eye(n), np.empty((m, n)), np.empty(n)
+    if n == 0:
+        return sv, V, W
+    X = np.ascontiguousarray(H)
+    if m > 0:
+        jacobi(X, m, n, W, V, sv)
+    else:
+        sv[:] = 0.0
+    order = np.argsort(-sv, kind="mergesort")
+    return sv[order], np.ascontiguousarray(V[:, order]), np.ascontiguousarray(W[:, order])
+
+
+@register_jitable
+def _rank_of(sv, rtol):
+    """:func:`pkm_pin.screws.svd_rank`'s rule on singular values sorted descending."""
+    rank = 0
+    if sv.shape[0] and sv[0] > 0:
+        for s in sv:
+            if s > rtol * sv[0]:
+                rank += 1
+    return rank
+
+
+@register_jitable
+def _householder(A, first):
+    """``(Q₂, R)``: ``A = Q R`` (m × n, m ≥ n) by Householder reflections, ``R`` upper
+    triangular (m × n), ``Q₂`` the columns ``first …`` of the orthogonal ``Q`` (from
+    ``n``: an orthonormal basis of the complement of ``A``'s columns, from 0 the first
+    ``n`` a basis of them, where ``A`` has full rank)."""
+    m, n = A.shape
+    R, refl, vvs = A.copy(), np.zeros((n, m)), np.zeros(n)
+    for k in range(min(m - 1, n)):
+        s = 0.0
+        for i in range(k, m):
+            s += R[i, k] * R[i, k]
+        if s == 0.0:
+            continue
+        alpha = -math.sqrt(s) if R[k, k] >= 0.0 else math.sqrt(s)
+        vv = 0.0
+        for i in range(k, m):
+            refl[k, i] = R[i, k]
+        refl[k, k] -= alpha
+        for i in range(k, m):
+            vv += refl[k, i] * refl[k, i]
+        vvs[k] = vv
+        for j in range(k, n):
+            f = 0.0
+            for i in range(k, m):
+                f += refl[k, i] * R[i, j]
+            f *= 2.0 / vv
+            for i in range(k, m):
+                R[i, j] -= f * refl[k, i]
+    Q2 = np.zeros((m, m - first))
+    for j in range(m - first):
+        Q2[first + j, j] = 1.0
+    for k in range(min(m - 1, n) - 1, -1, -1):  # Q₂ = H₀ H₁ … E: the last one first
+        if vvs[k] == 0.0:
+            continue
+        for j in range(m - first):
+            f = 0.0
+            for i in range(k, m):
+                f += refl[k, i] * Q2[i, j]
+            f *= 2.0 / vvs[k]
+            for i in range(k, m):
+                Q2[i, j] -= f * refl[k, i]
+    return Q2, R
+
+
+@register_jitable
+def _surely_full_rank(R, n, rtol):
+    """Whether the leading ``n × n`` upper triangle of ``R`` (the QR factor of a matrix
+    with ``n`` columns) certainly has every singular value above ``rtol`` times the
+    largest (:func:`pkm_pin.screws.svd_rank`'s full rank): ``1 / |R⁻¹|_F > rtol |R|_F``
+    bounds ``σ_min > rtol σ_max`` from the safe side (``False``: not decided here)."""
+    fro = 0.0
+    for i in range(n):
+        if R[i, i] == 0.0:
+            return False
+        for j in range(i, n):
+            fro += R[i, j] * R[i, j]
+    inv, x = 0.0, np.empty(n)
+    for c in range(n):  # column c of R⁻¹ by back substitution
+        for i in range(n - 1, -1, -1):
+            s = 1.0 if i == c else 0.0
+            for j in range(i + 1, n):
+                s -= R[i, j] * x[j]
+            x[i] = s / R[i, i]
+            inv += x[i] * x[i]
+    return inv > 0.0 and 1.0 / math.sqrt(inv) > rtol * math.sqrt(fro)
 
 
 @register_jitable
@@ -291,7 +437,44 @@ def _jacobians(lay, q):
             Jo[4, c] += wz * px - wx * pz
             Jo[5, c] += wx * py - wy * px
             Jo[0, c], Jo[1, c], Jo[2, c] = 0.0, 0.0, 0.0
-    return Jc, Jo, S, oMo
+    return Jc, Jo, S, oMo, ws.oMi
+
+
+@register_jitable
+def _gimbal_locked(triples, iv, S, oMi, L):
+    """``linkage._representation``'s gimbal-lock test of each revolute triple ``(p, j,
+    c)``: the unit homogenised twists of ``p`` and ``c`` about ``j``'s origin agree up
+    to sign (:data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`) while ``j``'s does not."""
+    m = triples.shape[0]
+    out = np.zeros(m, np.bool_)
+    T = np.empty((3, 6))
+    for t in range(m):
+        j = triples[t, 1]
+        centre = np.array([oMi[j, 0, 3], oMi[j, 1, 3], oMi[j, 2, 3]])
+        for a in range(3):
+            T[a] = np.ascontiguousarray(S[:, iv[triples[t, a]]])
+        H = _homogenised_rows(T, centre, L)
+        for a in range(3):
+            H[a] /= _norm(H[a])
+        out[t] = _apart(H[0], H[2]) <= GIMBAL_LOCK_RTOL < _apart(H[1], H[0])
+    return out
+
+
+@register_jitable
+def _near_limit(lower, upper, q):
+    """Whether a coordinate is within :data:`~pkm_pin.tolerances.JOINT_LIMIT_SLACK` of
+    its limit (``linkage._at_limits``'s test, before it names the joints)."""
+    for i in range(q.shape[0]):
+        if abs(q[i] - lower[i]) <= JOINT_LIMIT_SLACK \
+                or abs(q[i] - upper[i]) <= JOINT_LIMIT_SLACK:
+            return True
+    return False
+
+
+@register_jitable
+def _apart(a, b):
+    """``min(|a − b|, |a + b|)``."""
+    return min(_norm(a - b), _norm(a + b))
 
 
 @register_jitable
@@ -302,8 +485,7 @@ def _null_space(Jc, Jo, units, act_v, rtol):
     H = Jc.copy()
     for c in range(nv):
         H[:, c] *= units[c]
-    rank, _, _, Vt = _svd_rank(H, rtol)
-    N = np.ascontiguousarray(Vt[rank:].T)
+    rank, N = _kernel_basis(H, rtol)
     X = np.empty((act_v.shape[0], N.shape[1]))
     for a in range(act_v.shape[0]):
         X[a] = N[act_v[a]]
@@ -311,9 +493,38 @@ def _null_space(Jc, Jo, units, act_v, rtol):
     for c in range(nv):
         UN[c] *= units[c]
     Yw = _mm(Jo, UN)
-    rank_x, _, _, Vtx = _svd_rank(X, rtol)
-    idle = _mm(N, np.ascontiguousarray(Vtx[rank_x:].T))
+    if _surely_full_column_rank(X, rtol):  # no idle motion
+        return rank, N, X, Yw, X.shape[1], np.zeros((nv, 0))
+    sv, Vx, _ = _jacobi_sorted(X)
+    rank_x = _rank_of(sv, rtol)
+    idle = _mm(N, np.ascontiguousarray(Vx[:, rank_x:]))
     return rank, N, X, Yw, rank_x, idle
+
+
+@register_jitable
+def _surely_full_column_rank(A, rtol):
+    """Whether ``A`` (m × n, m ≥ n ≥ 1) surely has rank ``n`` by :func:`_svd_rank`'s
+    rule (:func:`_surely_full_rank` of its QR factor; ``False``: not decided here)."""
+    m, n = A.shape
+    if n == 0 or m < n:
+        return False
+    _, R = _householder(np.ascontiguousarray(A), m)
+    return _surely_full_rank(R, n, rtol)
+
+
+@register_jitable
+def _kernel_basis(H, rtol):
+    """``(rank, N)``: the rank of ``H`` (:func:`_svd_rank`'s rule) and an orthonormal
+    basis ``N`` of its null space. Where ``H`` (r × c, r ≤ c) surely has full row rank
+    (:func:`_surely_full_rank`), the last columns of the QR factor ``Q`` of ``Hᵀ``
+    (the generic case, a few µs); else LAPACK's SVD."""
+    r, c = H.shape
+    if r <= c:
+        Q2, R = _householder(np.ascontiguousarray(H.T), r)
+        if _surely_full_rank(R, r, rtol):
+            return r, Q2
+    rank, _, _, Vt = _svd_rank(H, rtol)
+    return rank, np.ascontiguousarray(Vt[rank:].T)
 
 
 @register_jitable
@@ -322,6 +533,11 @@ def _twist_system(Yw, p, L, rtol):
     orthonormal twist basis ``P_h`` (d × 6), its rotations and the reciprocal wrench
     basis ``C_h`` ((6 − d) × 6)."""
     Yh = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Yw.T), p, L).T)
+    if Yh.shape[1] == 6:  # six motions: surely spanning every twist, no wrench left
+        _, R = _householder(Yh, 6)
+        if _surely_full_rank(R, 6, rtol):
+            P_h = np.eye(6)  # an orthonormal basis of all twists
+            return Yh, 6, 3, P_h, np.zeros((0, 6))
     d, Uy, _, _ = _svd_rank(Yh, rtol)
     P_h = np.ascontiguousarray(Uy[:, :d].T)
     rotations = 0
@@ -354,22 +570,81 @@ def _stacked(Jc, units, mask, Ho):
 @register_jitable
 def _actuation_row(G, col, rtol):
     """``linkage._actuation_row``: the homogenised ζ with ``β = 1`` orthogonal to the
-    admissible ζ with β = 0, and whether there is one."""
-    m, nv = G.shape
-    others = np.empty((m, nv - 1))
-    others[:, :col] = G[:, :col]
-    others[:, col:] = G[:, col + 1:]
-    rank, Ul, _, _ = _svd_rank(others, rtol)
-    W = np.ascontiguousarray(Ul[:, rank:].T)
+    admissible ζ with β = 0, and whether there is one. The admissible ``w`` span the
+    left null space of the other columns (:func:`_left_null`)."""
+    m = G.shape[0]
+    W = _left_null(G, col, rtol)
     g = np.ascontiguousarray(G[:, col])
     b = _mv(W, g)
     if _norm(b) <= rtol * max(_norm(g), 1e-300):
         return np.zeros(6), False
     ZT = np.ascontiguousarray(_swap_halves(W[:, m - 6:]).T)  # 6 × rows of W
+    return _least_wrench(ZT, b, rtol)
+
+
+@register_jitable
+def _least_wrench(ZT, b, rtol):
+    """The least ζ = ``Zᵀ y`` with ``β = bᵀ y = 1``, and whether it is not zero (zero:
+    the closures alone hold the actuated rate, no wrench on the output carries it)."""
     y0 = b / np.sum(b * b)
     zeta = _least_on_plane(ZT, b, y0, rtol)
-    # the closures alone hold the actuated rate: no wrench on the output carries it
     return zeta, _norm(zeta) > rtol * _norm(y0)
+
+
+@register_jitable
+def _left_null(G, col, rtol):
+    """Orthonormal rows spanning the ``w`` with ``w G_j = 0`` for every column ``j`` but
+    ``col`` (:func:`_svd_rank`'s rank rule). Columns of zeros are left out (they hold
+    nothing); where the other columns (m × k, k ≤ m) surely have full rank
+    (:func:`_surely_full_rank`), the last ``m − k`` columns of their QR factor ``Q``;
+    else LAPACK's SVD."""
+    m, nv = G.shape
+    keep = np.zeros(nv, np.bool_)
+    k = 0
+    for c in range(nv):
+        if c != col:
+            for r in range(m):
+                if G[r, c] != 0.0:
+                    keep[c] = True
+                    k += 1
+                    break
+    others = np.empty((m, k))
+    i = 0
+    for c in range(nv):
+        if keep[c]:
+            others[:, i] = G[:, c]
+            i += 1
+    if k <= m:
+        Q2, R = _householder(others, k)
+        if _surely_full_rank(R, k, rtol):
+            return np.ascontiguousarray(Q2.T)
+    rank, Ul, _, _ = _svd_rank(others, rtol)
+    return np.ascontiguousarray(Ul[:, rank:].T)
+
+
+@register_jitable
+def _actuation_all(x_a, Yh, rtol):
+    """:func:`_actuation_row` with every closure stacked, in the null space ``N`` of
+    the closure rows: ``w_c J_c + w_o H_o = β e_a`` has a ``w_c`` exactly when
+    ``(β e_a − w_o H_o) N = 0``, i.e. ``Y_hᵀ w_o = β x_a`` (``Y_h = H_o N`` the
+    homogenised output twists, ``x_a = N[a]`` the actuated rates of the motions), so the
+    admissible ``(w_o, β)`` are the null space of ``(Y_hᵀ | −x_a)`` (dof × 7) and the
+    least ζ with β = 1 is the same (to round-off). Used where more than 6 closure
+    rows are stacked (:data:`REDUCE_ROWS`): there the QR of the stacked rows costs more
+    than this dof × 7 system."""
+    dof = Yh.shape[1]
+    K = np.empty((dof, 7))
+    for j in range(dof):
+        for r in range(6):
+            K[j, r] = Yh[r, j]
+        K[j, 6] = -x_a[j]
+    rank, Wt = _kernel_basis(K, rtol)
+    W = np.ascontiguousarray(Wt.T)  # rows (w_o; β), orthonormal
+    b = np.ascontiguousarray(W[:, 6])
+    if _norm(b) <= rtol:
+        return np.zeros(6), False
+    ZT = np.ascontiguousarray(_swap_halves(np.ascontiguousarray(W[:, :6])).T)
+    return _least_wrench(ZT, b, rtol)
 
 
 @register_jitable
@@ -420,9 +695,10 @@ def _scaled_wrench(zeta, p, L, unit, rtol):
 
 
 @register_jitable
-def _actuation(lay, Jc, Jo, S, p, rtol):
+def _actuation(lay, Jc, Jo, S, p, rtol, X, Yh):
     """``linkage._actuation``: ``A`` (na × 6, world origin), the diagonal of ``B`` and
-    the type I index."""
+    the type I index (every closure stacked, beyond :data:`REDUCE_ROWS` rows: in the
+    null space, :func:`_actuation_all`, from its ``X`` and ``Y_h``)."""
     L, units, act_v = lay.length, lay.units, lay.act_v
     Ho = np.ascontiguousarray(_homogenised_rows(np.ascontiguousarray(Jo.T), p, L).T)
     for c in range(Ho.shape[1]):
@@ -432,9 +708,16 @@ def _actuation(lay, Jc, Jo, S, p, rtol):
     A, B, type_I = np.zeros((na, 6)), np.zeros(na), np.inf
     for k in range(na):
         col = act_v[k]
-        zeta, ok = _actuation_row(_stacked(Jc, units, lay.loop_rows[k], Ho), col, rtol)
-        if not ok:
-            zeta, ok = _actuation_row(_stacked(Jc, units, every, Ho), col, rtol)
+        rows = lay.loop_rows[k]
+        if np.all(rows > 0) and rows.shape[0] > REDUCE_ROWS:
+            zeta, ok = _actuation_all(X[k], Yh, rtol)
+        else:
+            zeta, ok = _actuation_row(_stacked(Jc, units, rows, Ho), col, rtol)
+        if not ok and not np.all(rows > 0):
+            if every.shape[0] > REDUCE_ROWS:
+                zeta, ok = _actuation_all(X[k], Yh, rtol)
+            else:
+                zeta, ok = _actuation_row(_stacked(Jc, units, every, Ho), col, rtol)
         if not ok:
             type_I = 0.0
             continue
@@ -472,14 +755,23 @@ def _generalised(N, X, Yh, rtol):
         return X.copy(), Yh.copy(), N.copy(), 1.0, 1.0
     S = np.empty((n + 6, dof))
     S[:n], S[n:] = X, Yh
-    m, _, _, Vt = _svd_rank(S, rtol)
-    V = np.ascontiguousarray(Vt[:m].T)
-    M, Xr, Yr = _mm(N, V), _mm(X, V), _mm(Yh, V)
-    if m == 0:
-        return Xr, Yr, M, 1.0, 1.0
-    S2 = np.empty((n + 6, m))
-    S2[:n], S2[n:] = Xr, Yr
-    Q = np.ascontiguousarray(np.linalg.qr(S2)[0])
+    full = False
+    if n + 6 >= dof:
+        Q, R = _householder(S, 0)
+        full = _surely_full_rank(R, dof, rtol)
+    if full:  # every motion moves an actuator or the output
+        m, Xr, Yr, M = dof, X.copy(), Yh.copy(), N.copy()
+        Q = np.ascontiguousarray(Q[:, :m])  # an orthonormal basis of the columns of S
+    else:
+        sv, Vs, Ws = _jacobi_sorted(S)
+        m = _rank_of(sv, rtol)
+        V = np.ascontiguousarray(Vs[:, :m])
+        M, Xr, Yr = _mm(N, V), _mm(X, V), _mm(Yh, V)
+        if m == 0:
+            return Xr, Yr, M, 1.0, 1.0
+        Q = np.empty((n + 6, m))  # an orthonormal basis of the columns of (X_r; Y_r)
+        for j in range(m):
+            Q[:, j] = Ws[:, j] / sv[j]
     cx = _singular_values(Q[:n])
     cy = _singular_values(Q[n:])
     forward = cx[m - 1] if n >= m else 0.0
@@ -503,18 +795,52 @@ def _world(H, p, L):
 @njit(cache=True, nogil=True)
 def analyse_pose(lay, q, about_output, rtol):
     """The numbers of :func:`analysis_core` at ``q`` (compiled), in its order."""
-    Jc, Jo, S, oMo = _jacobians(lay, q)
+    Jc, Jo, S, oMo, oMi = _jacobians(lay, q)
     L = lay.length
+    locked = _gimbal_locked(lay.triples, lay.kernel.iv, S, oMi, L)
+    near_limit = _near_limit(lay.kernel.lower, lay.kernel.upper, q)
     p = np.zeros(3)
     if about_output:
         p[0], p[1], p[2] = oMo[0, 3], oMo[1, 3], oMo[2, 3]
     rank, N, X, Yw, rank_x, idle = _null_space(Jc, Jo, lay.units, lay.act_v, rtol)
     Yh, d, rotations, P_h, C_h = _twist_system(Yw, p, L, rtol)
-    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol)
+    A, B, type_I = _actuation(lay, Jc, Jo, S, p, rtol, X, Yh)
     type_II, cond = _transmission(A, P_h, d, p, L)
     Xr, Yr, M, forward, inverse = _generalised(N, X, Yh, rtol)
     return (rank, N, X, Yw, rank_x, idle, p, d, rotations, _world(P_h, p, L),
-            _world(C_h, p, L), A, B, type_I, type_II, cond, Xr, Yr, M, forward, inverse)
+            _world(C_h, p, L), A, B, type_I, type_II, cond, Xr, Yr, M, forward, inverse,
+            locked, near_limit)
+
+
+def representation_flags(model, q: np.ndarray):
+    """``(locked, near_limit)`` of :class:`Core` at the checked configuration ``q``
+    without an analysis (for :func:`pkm_pin.linkage._representation` after a solve), or
+    ``None`` where this module does not apply."""
+    k = tree_kernel(model) if ENABLED else None
+    if k is None:
+        return None
+    triples = revolute_triples(model)
+    q = np.ascontiguousarray(q, dtype=float)
+    locked, near = _FLAGS(k, np.ascontiguousarray(triples, dtype=np.int64), q,
+                          float(model.length))
+    return locked, bool(near)
+
+
+@njit(cache=True, nogil=True)
+def flags_at(k, triples, q, L):
+    """The gimbal locks (:func:`_gimbal_locked`) and joint-limit proximity
+    (:func:`_near_limit`) at ``q`` from the compiled tree ``k`` alone."""
+    near = _near_limit(k.lower, k.upper, q)
+    if triples.shape[0] == 0:  # no gimbal to lock: no tree pass
+        return np.zeros(0, np.bool_), near
+    oMi = np.empty((k.parent.shape[0], 4, 4))
+    S = np.zeros((6, k.nv))
+    tree_placements(k.parent, k.place, k.kind, k.axis, k.rate, k.iq, q, oMi)
+    tree_twists(k.kind, k.iv, k.rate, k.axis, oMi, S)
+    return _gimbal_locked(triples, k.iv, S, oMi, L), near
+
+
+_FLAGS = SameTypes(flags_at, key=0, plain=True)
 
 
 #: :func:`analyse_pose` as :func:`analysis_core` calls it: a model's layout is typed

@@ -70,7 +70,6 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 
 from __future__ import annotations
 
-import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -962,7 +961,8 @@ def _ranks(ns: NullSpace, rtol: float) -> tuple[int, int]:
 
 
 def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
-              nearby: int = NEARBY_SAMPLES, seed: int = 0) -> Mobility:
+              nearby: int = NEARBY_SAMPLES, seed: int = 0, locked=None,
+              near_limit: bool | None = None) -> Mobility:
     model = link.model
     dof = model.nv - ns.rank
     idle = ns.idle(rtol)
@@ -972,7 +972,7 @@ def _mobility(link: Linkage, kin: TreeKinematics, ns: NullSpace, rtol: float,
         if text in words:  # two motions of the same joints: tell them apart by their rates
             text = describe_motion(model, kin, ns.units * idle[:, k], rates=True)
         words.append(text)
-    hold, representation = _representation(model, kin)
+    hold, representation = _representation(model, kin, locked=locked, near_limit=near_limit)
     here = _ranks(ns, rtol)
     generic = singular = None
     known = link._generic_ranks if rtol == RANK_RTOL else None
@@ -1045,31 +1045,7 @@ def _inward(model: ClosureModel, q: np.ndarray, coords) -> np.ndarray:
     return out
 
 
-@functools.lru_cache(maxsize=64)
-def _revolute_triples(model: ClosureModel) -> np.ndarray:
-    """(m × 3) joint indices ``(p, j, c)`` of three consecutive revolute joints of the
-    tree (``p`` the parent of ``j``, ``j`` of ``c``; 1-DOF joints counted in radians)
-    whose axes meet at one point (``j`` and ``c`` placed without offset: three
-    revolutes standing for a spherical joint): where a gimbal lock, a representation
-    singularity, can occur (axes that meet elsewhere make a real singularity of the
-    linkage, not one of its description). Read-only; cached per model."""
-    tree, U = model.tree, model.velocity_units
-    tiny = 1e-12 * model.length
-
-    def revolute(j):
-        joint = tree.joints[j]
-        return j > 0 and joint.nq == joint.nv == 1 and U[joint.idx_v] == 1.0
-
-    def centred(j):
-        return np.linalg.norm(tree.jointPlacements[j].translation) <= tiny
-
-    out = [(tree.parents[tree.parents[c]], tree.parents[c], c) for c in range(1, tree.njoints)
-           if revolute(c) and revolute(tree.parents[c])
-           and revolute(tree.parents[tree.parents[c]])
-           and centred(c) and centred(tree.parents[c])]
-    triples = np.array(out, dtype=int).reshape(-1, 3)
-    triples.setflags(write=False)
-    return triples
+_revolute_triples = general_kernel.revolute_triples
 
 
 def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
@@ -1094,7 +1070,8 @@ def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
     return out
 
 
-def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None
+def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None,
+                    locked: np.ndarray | None = None, near_limit: bool | None = None
                     ) -> tuple[list, list]:
     """Representation singularities at ``kin.q`` (or ``q``; ``kin`` made only when
     needed): ``(velocity coordinates, sentences)``.
@@ -1105,32 +1082,43 @@ def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None
       while the middle one is not on it; the middle joint's coordinate.
     * A 1-DOF joint exactly at a finite limit (:func:`_at_limits`; the tree solver clips
       there)."""
-    tree, L = model.tree, model.length
+    tree = model.tree
     q = kin.q if kin is not None else model.check_q(q)
     coords, words = [], []
     triples = _revolute_triples(model)
+    if kin is None and locked is None:  # from the compiled tree, if it is
+        flags = general_kernel.representation_flags(model, q)
+        locked, near_limit = flags if flags is not None else (None, near_limit)
+    if len(triples) and locked is None:
+        locked = _gimbal_locks(model, kin if kin is not None else model.kinematics(q), triples)
     if len(triples):
-        kin = kin if kin is not None else model.kinematics(q)
-        J = kin.joint_twists
-        iv = np.array([tree.joints[k].idx_v for k in range(tree.njoints)])
-        centres = np.array([kin.joint_placements[j].translation for j in triples[:, 1]])
-        T = screws.homogenise(screws.about(J[iv[triples]], centres), L)  # m × 3 × 6
-        T /= np.linalg.norm(T, axis=2)[..., None]
-
-        def apart(a, b):
-            return np.minimum(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
-
-        locked = (apart(T[:, 0], T[:, 2]) <= GIMBAL_LOCK_RTOL) \
-            & (apart(T[:, 1], T[:, 0]) > GIMBAL_LOCK_RTOL)
         for p, j, c in triples[locked].tolist():
             coords.append(tree.joints[j].idx_v)
             words.append(f"{tree.names[j]} at a gimbal lock (the axes of {tree.names[p]} "
                          f"and {tree.names[c]} coincide)")
-    for j, side, limit in _at_limits(model, q):
+    for j, side, limit in _at_limits(model, q) if near_limit is not False else ():
         if tree.joints[j].idx_v not in coords:
             coords.append(tree.joints[j].idx_v)
             words.append(f"{tree.names[j]} at its {side} limit {limit:.6g}")
     return coords, words
+
+
+def _gimbal_locks(model: ClosureModel, kin: TreeKinematics, triples: np.ndarray
+                  ) -> np.ndarray:
+    """Whether each revolute triple ``(p, j, c)`` is at a gimbal lock (the test of
+    :func:`_representation`)."""
+    tree, L = model.tree, model.length
+    J = kin.joint_twists
+    iv = np.array([tree.joints[k].idx_v for k in range(tree.njoints)])
+    centres = np.array([kin.joint_placements[j].translation for j in triples[:, 1]])
+    T = screws.homogenise(screws.about(J[iv[triples]], centres), L)  # m × 3 × 6
+    T /= np.linalg.norm(T, axis=2)[..., None]
+
+    def apart(a, b):
+        return np.minimum(np.linalg.norm(a - b, axis=1), np.linalg.norm(a + b, axis=1))
+
+    return (apart(T[:, 0], T[:, 2]) <= GIMBAL_LOCK_RTOL) \
+        & (apart(T[:, 1], T[:, 0]) > GIMBAL_LOCK_RTOL)
 
 
 def _independent(model: ClosureModel, X: np.ndarray, rtol: float,
@@ -1650,7 +1638,8 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
     core = general_kernel.analysis_core(model, link._loops, q, about == "output", rtol)
     if core is None:
         core = _numpy_core(link, model.kinematics(q), about, rtol)
-    mob = _mobility(link, core.kin, core.ns, rtol, nearby)
+    mob = _mobility(link, core.kin, core.ns, rtol, nearby, locked=core.locked,
+                    near_limit=core.near_limit)
     idx = {"type_I": core.type_I, "type_II": core.type_II, "condition_A": core.condition,
            "forward": core.forward, "inverse": core.inverse}
     singularity = classify(_smaller(core.type_I, core.inverse),

@@ -267,7 +267,7 @@ class ClosureModel:
     @property
     def n_rows(self) -> int:
         """Number of closure rows (the sum of the closures' :attr:`Closure.dim`)."""
-        return sum(c.dim for c in self.closures)
+        return self._plan.n_rows
 
     @property
     def velocity_units(self) -> np.ndarray:
@@ -280,7 +280,7 @@ class ClosureModel:
     @property
     def actuated_v(self) -> tuple[int, ...]:
         """Velocity index of each actuated joint (its first coordinate)."""
-        return tuple(int(i) for i in self._plan.act_v)
+        return self._plan.act_v_tuple
 
     def actuated_values(self, q) -> np.ndarray:
         """Values [rad or m] of the actuated joints at ``q``: the coordinate of a 1-DOF
@@ -431,6 +431,7 @@ class _Plan:
                           for c in closures)
         joints = [tree.joints[tree.getJointId(a)] for a in model.actuated]
         self.act_v = np.array([j.idx_v for j in joints], dtype=int)
+        self.act_v_tuple = tuple(int(j.idx_v) for j in joints)
         self.act_q = np.array([j.idx_q for j in joints], dtype=int)
         self.act_ok = all(j.nv == 1 and j.nq in (1, 2) for j in joints)
         self.act_plain = all(j.nv == 1 and j.nq == 1 for j in joints)
