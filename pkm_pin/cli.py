@@ -1639,8 +1639,9 @@ def main(argv=None) -> int:
     parser = build_parser()
     try:
         args, extras = parser.parse_known_args(argv)
-        if extras and args.command == "fk" and not args.q:
-            args.q, extras = _fk_values_after_options(extras)
+        if extras and args.command == "fk":  # after an option, or a value such as
+            values, extras = _fk_values_after_options(extras)  # -7e-17 (argparse: an option)
+            args.q = list(args.q or []) + values
         if extras:
             parser.error(f"unrecognized arguments: {' '.join(extras)}")
     except SystemExit as e:  # --help (0) or a usage error (2), already printed

@@ -392,3 +392,11 @@ def test_mjcf_without_equality_is_a_tree_and_says_so(tmp_path, capsys):
     assert "DOF                2" in out
     assert main(["check", str(path)]) == 0
     assert "0 closures (none: a tree, analysed as a serial chain)" in capsys.readouterr().out
+
+
+def test_fk_takes_negative_values_in_scientific_notation(capsys):
+    """``fk FILE 0.1 -7e-17``: argparse reads ``-7e-17`` as an option; the values are kept
+    in order (found on kangaroo_like_2legs, whose reference holds such values)."""
+    assert main(["fk", str(FIVE_BAR_XML), "0.1", "-7e-17", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["q_actuated"] == pytest.approx([0.1, -7e-17], abs=1e-9)
