@@ -165,16 +165,7 @@ def view(
     if not isinstance(mech, Mechanism):
         raise InputError(f"view() takes a pkm_pin.Mechanism or a Linkage, got "
                          f"{type(mech).__name__}")
-    if pose_or_assembly is None:
-        assembly = mech.home_assembly
-    elif isinstance(pose_or_assembly, Assembly):
-        if pose_or_assembly.mechanism is not mech:
-            raise InputError("the assembly given belongs to another mechanism")
-        assembly = pose_or_assembly
-    else:
-        assembly = mech.assemble(as_pose(pose_or_assembly))
-    analysis = mech.analyze(assembly)
-
+    analysis = mech.analyze(_assembly_of(mech, pose_or_assembly))
     meshcat = _meshcat()[0]
     recorder = SceneRecorder(forward=None if visualizer is None else visualizer.window)
     vis = meshcat.Visualizer(window=recorder)
@@ -182,6 +173,30 @@ def view(
         vis.path = visualizer.path
     scene = Scene(vis, recorder, analysis, f"pkm/{node_name(mech.name)}")
     scene.source = source
+    _paint(scene, analysis, show_screws, show_wrenches, animate_singular)
+    if html is not None:
+        scene.to_html(html)
+    if open:
+        scene.open()
+    return scene
+
+
+def _assembly_of(mech: Mechanism, pose_or_assembly) -> Assembly:
+    """The assembly :func:`view` draws: home (``None``), an :class:`Assembly` of ``mech``,
+    or the assembly at a pose."""
+    if pose_or_assembly is None:
+        return mech.home_assembly
+    if isinstance(pose_or_assembly, Assembly):
+        if pose_or_assembly.mechanism is not mech:
+            raise InputError("the assembly given belongs to another mechanism")
+        return pose_or_assembly
+    return mech.assemble(as_pose(pose_or_assembly))
+
+
+def _paint(scene: Scene, analysis, show_screws: bool, show_wrenches: bool,
+           animate_singular: bool) -> None:
+    """Legs, platform, the screw and wrench layers asked for, the settings, and at a type
+    II/III singularity the uncontrolled motion (``scene.animated``)."""
     painter = _Painter(scene)
     painter.legs()
     painter.platform()
@@ -195,11 +210,6 @@ def view(
         painter.animate(analysis.uncontrolled_twist)
         scene.animated = True
     painter.finish()
-    if html is not None:
-        scene.to_html(html)
-    if open:
-        scene.open()
-    return scene
 
 
 # --------------------------------------------------------------- workspace cloud
