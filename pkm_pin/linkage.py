@@ -1045,9 +1045,6 @@ def _inward(model: ClosureModel, q: np.ndarray, coords) -> np.ndarray:
     return out
 
 
-_revolute_triples = general_kernel.revolute_triples
-
-
 def _at_limits(model: ClosureModel, q: np.ndarray) -> list:
     """``(joint, "lower" or "upper", limit)`` of the 1-DOF joints exactly at a finite
     limit of :func:`~pkm_pin.solve.tree_limits` (within
@@ -1076,16 +1073,17 @@ def _representation(model: ClosureModel, kin: TreeKinematics | None, q=None,
     """Representation singularities at ``kin.q`` (or ``q``; ``kin`` made only when
     needed): ``(velocity coordinates, sentences)``.
 
-    * Three consecutive revolute joints (:func:`_revolute_triples`) at a gimbal lock:
-      the first and third axes lie on one line (their unit homogenised twists about the
-      middle joint agree up to sign, :data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`)
-      while the middle one is not on it; the middle joint's coordinate.
+    * Three consecutive revolute joints
+      (:func:`pkm_pin.general_kernel.revolute_triples`) at a gimbal lock: the first and
+      third axes lie on one line (their unit homogenised twists about the middle joint
+      agree up to sign, :data:`~pkm_pin.tolerances.GIMBAL_LOCK_RTOL`) while the middle
+      one is not on it; the middle joint's coordinate.
     * A 1-DOF joint exactly at a finite limit (:func:`_at_limits`; the tree solver clips
       there)."""
     tree = model.tree
     q = kin.q if kin is not None else model.check_q(q)
     coords, words = [], []
-    triples = _revolute_triples(model)
+    triples = general_kernel.revolute_triples(model)
     if kin is None and locked is None:  # from the compiled tree, if it is
         flags = general_kernel.representation_flags(model, q)
         locked, near_limit = flags if flags is not None else (None, near_limit)

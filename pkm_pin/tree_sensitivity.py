@@ -292,8 +292,9 @@ def perturb(model: ClosureModel, errors) -> ClosureModel:
     parameters of :func:`parameter_names`) added to its geometry."""
     tree = pin.Model(model.tree)
     closures = list(model.closures)
-    for name, value in dict(errors).items():
-        select_parameters(model, [name])
+    errors = dict(errors)
+    select_parameters(model, list(errors))  # every name known, or the error naming it
+    for name, value in errors.items():
         value = float(value)
         if not np.isfinite(value):
             raise InputError(f"the error of {name!r} must be finite, got {value!r}")
