@@ -1121,6 +1121,9 @@ def cmd_dynamics(args) -> int:
     mech = _load(args)
     if args.indices:
         return _print_dynamic_indices(mech, args)
+    if args.sub is not None:
+        raise InputError("--sub K goes with --indices (the dynamic indices of one "
+                         "independent sub-mechanism); a study moves the whole mechanism")
     motion = None
     if args.trajectory is not None:
         model, _ = tr.closure_model_of(mech)
@@ -1214,7 +1217,37 @@ def _replay(mech, st) -> dict:
 
 def _print_dynamic_indices(mech, args) -> int:
     """``dynamics --indices``: :func:`pkm_pin.dynamic_indices.dynamic_indices` and the
-    gravity efforts at home."""
+    gravity efforts at home; for a linkage of several independent sub-mechanisms (a
+    biped's legs, :mod:`pkm_pin.submechanisms`) those of each one, with its own actuators
+    and output (JSON: ``submechanisms``, a list), and with ``--sub K`` those of K alone."""
+    parts = [mech]
+    if _is_linkage(mech):
+        subs = _submechanisms_or_why(mech, args.sub)
+        parts = subs if args.sub is None else [_pick_sub(mech, subs, args.sub)]
+    elif args.sub is not None:
+        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for "
+                         "a platform mechanism; leave --sub out")
+    rows = [(part, *_indices_of(part)) for part in parts]
+    if len(rows) > 1:
+        data = {"mechanism": mech.name, "submechanisms": [
+            {"index": k, "mechanism": p.name, **r.summary(), "gravity_efforts": t.tolist()}
+            for k, (p, r, t) in enumerate(rows)]}
+        print(_json(data) if args.json else "\n".join(
+            [f"mechanism  {mech.name}: {len(rows)} independent sub-mechanisms, each with "
+             "its own actuators and output (--sub K: one)"]
+            + [line for k, (p, r, t) in enumerate(rows)
+               for line in [f"sub {k}      {p.name}"] + _indices_lines(p, r, t)]))
+        return 0
+    part, r, tau = rows[0]
+    if args.json:
+        print(_json({"mechanism": part.name, **r.summary(), "gravity_efforts": tau.tolist()}))
+        return 0
+    print("\n".join(_indices_lines(part, r, tau)))
+    return 0
+
+
+def _indices_of(mech) -> tuple:
+    """``(indices, gravity efforts)`` of ``mech`` at home (``dynamics --indices``)."""
     from . import dynamic_indices as di
     from . import trajectory as tr
 
@@ -1222,24 +1255,23 @@ def _print_dynamic_indices(mech, args) -> int:
     if not any(inertia.mass > 0 for inertia in model.tree.inertias):
         raise InputError(f"{mech.name}: no body has a mass in the file; the dynamic indices "
                          "need the file's inertias")
-    r = di.dynamic_indices(model, q)
-    tau = di.gravity_efforts(model, q[None]).efforts[0]
-    if args.json:
-        print(_json({"mechanism": mech.name, **r.summary(), "gravity_efforts": tau.tolist()}))
-        return 0
+    return di.dynamic_indices(model, q), di.gravity_efforts(model, q[None]).efforts[0]
+
+
+def _indices_lines(mech, r, tau) -> list[str]:
+    """The text of ``dynamics --indices`` for one mechanism."""
     unit = {"rad": "N m", "m": "N"}
-    print(f"mechanism  {mech.name} (at home; docs/dynamics.md)")
-    for name, u, row, t in zip(r.actuated, r.units, r.inertia, tau):
-        print(f"actuator   {name} [{u}]: Λ row " + " ".join(f"{x:.4g}" for x in row)
-              + f"; gravity effort {t:.4g} {unit[u]}")
-    print("eigen      Λ̃ = Uₐ Λ Uₐ [kg m²]: " + " ".join(f"{x:.4g}" for x in r.eigenvalues)
-          + f"; condition {r.condition:.4g}; idle motions {r.idle_motions}")
+    lines = [f"mechanism  {mech.name} (at home; docs/dynamics.md)"]
+    lines += [f"actuator   {name} [{u}]: Λ row " + " ".join(f"{x:.4g}" for x in row)
+              + f"; gravity effort {t:.4g} {unit[u]}"
+              for name, u, row, t in zip(r.actuated, r.units, r.inertia, tau)]
+    lines.append("eigen      Λ̃ = Uₐ Λ Uₐ [kg m²]: " + " ".join(f"{x:.4g}" for x in r.eigenvalues)
+                 + f"; condition {r.condition:.4g}; idle motions {r.idle_motions}")
     X = r.output_inertia  # round-off of a rank-deficient Λ_x printed as 0
     X = np.where(np.abs(X) <= 1e-12 * max(np.abs(X).max(initial=0.0), 1e-300), 0.0, X)
-    print("output     Λ_x about the output origin, world axes, rows and columns (ω; v):")
-    for row in X:
-        print("           " + " ".join(f"{x + 0.0:>10.4g}" for x in row))
-    return 0
+    lines.append("output     Λ_x about the output origin, world axes, rows and columns (ω; v):")
+    lines += ["           " + " ".join(f"{x + 0.0:>10.4g}" for x in row) for row in X]
+    return lines
 
 
 def cmd_workspace(args) -> int:
@@ -1587,6 +1619,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="print the dynamic indices at home instead: actuator-space inertia "
                    "Gᵀ M G, its eigenvalues and condition, the apparent inertia at the "
                    "output, the gravity efforts")
+    p.add_argument("--sub", type=int, metavar="K",
+                   help="with --indices: independent sub-mechanism K of a linkage alone "
+                   "(a biped's leg K, numbered from 0); without it each one's")
     _linkage_options(p)
     p.set_defaults(func=cmd_dynamics)
     return parser

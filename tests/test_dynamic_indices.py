@@ -283,3 +283,48 @@ def test_cli_indices(capsys):
     assert main(["dynamics", "--indices"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "no body has a mass" in err[0]
+
+
+def test_cli_indices_per_submechanism(capsys):
+    """pkm-pin dynamics BIPED --indices: each leg's indices with its own six motors and
+    foot (issue 25): its Λ the whole's diagonal block (the legs share no moving body, so
+    the off-diagonal blocks are round-off), its gravity efforts the whole's, its Λ_x
+    that of its own foot named as the whole's output; --sub K: leg K alone; --sub on a
+    platform mechanism or without --indices: one line, exit 2."""
+    import json
+
+    from pkm_pin.cli import main
+
+    path = ROOT / "tests" / "data" / "gepetto" / "digit_like_2legs" / "robot.urdf"
+    assert main(["dynamics", str(path), "--indices", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    whole = pkm_pin.load_mechanism(path)
+    r = whole.dynamic_indices()
+    tau = di.gravity_efforts(whole.model, whole.home_assembly.q[None]).efforts[0]
+    legs = out["submechanisms"]
+    assert [len(s["actuated"]) for s in legs] == [6, 6]
+    assert np.abs(r.inertia[:6, 6:]).max() < 1e-12 * np.abs(r.inertia).max()
+    for k, (leg, block) in enumerate(zip(legs, (slice(0, 6), slice(6, 12)))):
+        assert leg["index"] == k and leg["actuated"] == list(r.actuated[block])
+        assert np.allclose(leg["inertia"], r.inertia[block, block], rtol=1e-9, atol=1e-14)
+        assert np.allclose(leg["gravity_efforts"], tau[block], rtol=1e-9, atol=1e-12)
+        ev = np.linalg.eigvalsh(r.inertia[block, block])
+        assert np.allclose(leg["eigenvalues"], ev, rtol=1e-9)
+        assert leg["condition"] == pytest.approx(ev[-1] / ev[0], rel=1e-9)
+    left = pkm_pin.load_mechanism(path, output="foot_left").dynamic_indices()
+    assert np.allclose(legs[0]["output_inertia"], r.output_inertia, rtol=1e-7, atol=1e-10)
+    assert np.allclose(legs[1]["output_inertia"], left.output_inertia, rtol=1e-7,
+                       atol=1e-10)
+    assert main(["dynamics", str(path), "--indices", "--sub", "1", "--json"]) == 0
+    one = json.loads(capsys.readouterr().out)
+    assert one["actuated"] == legs[1]["actuated"]
+    assert np.allclose(one["inertia"], legs[1]["inertia"], rtol=1e-12)
+    assert main(["dynamics", str(path), "--indices"]) == 0
+    text = capsys.readouterr().out
+    assert "2 independent sub-mechanisms" in text and text.count("condition") == 2
+    assert text.count("output     Λ_x") == 2
+    for argv, words in ((["--indices", "--sub", "2"], "numbered 0 to 1"),
+                        (["--sub", "0"], "--sub K goes with --indices")):
+        assert main(["dynamics", str(path), *argv]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and words in err[0]
