@@ -1285,7 +1285,7 @@ def cmd_workspace(args) -> int:
     from .view import workspace_cloud
 
     prefix = _out_prefix(args, f"workspace_{_slug(args.mechanism)}")
-    mech = _load(args)
+    mech, note = _workspace_part(args, _load(args))
     coords = args.coords
     if args.range is not None and coords is None:
         raise InputError("--range needs --coords (the coordinates it bounds)")
@@ -1337,8 +1337,29 @@ def cmd_workspace(args) -> int:
     if options.get("checkpoint") is not None:  # the outputs are written
         options["checkpoint"].remove()
     data["files"] = [str(f) for f in files]
-    print(_json(data) if args.json else _workspace_text(mech.name, ws, files))
+    print(_json(data) if args.json else "\n".join(
+        [_workspace_text(mech.name, ws, files)] + ([note] if note else [])))
     return 0
+
+
+def _workspace_part(args, mech) -> tuple:
+    """``(mechanism, note)``: what ``workspace`` studies: with ``--sub K`` a linkage's
+    independent sub-mechanism K (its own actuators and output, as ``map --sub K``), else
+    the whole, with a note when it has several sub-mechanisms (None otherwise)."""
+    if not _is_linkage(mech):
+        if args.sub is not None:
+            raise InputError("--sub K (one independent sub-mechanism of a linkage) is not "
+                             "for a platform mechanism")
+        return mech, None
+    subs = _submechanisms_or_why(mech, args.sub)
+    if args.sub is not None:
+        return _pick_sub(mech, subs, args.sub), None
+    if len(subs) <= 1:
+        return mech, None
+    words = "; ".join(f"{k}: {s.name}, output {s.output}" for k, s in enumerate(subs))
+    return mech, (f"note       {len(subs)} independent sub-mechanisms ({words}): this is the "
+                  f"workspace of the one output {mech.output!r}; --sub K studies one with "
+                  "its own output")
 
 
 def _workspace_text(name: str, ws, files: list) -> str:
@@ -1568,6 +1589,9 @@ def build_parser() -> argparse.ArgumentParser:
                    "and, for three coordinates, each workspace's boundary surface")
     p.add_argument("--jobs", type=int, default=1, help="worker processes (default 1)")
     p.add_argument("--chunk-size", type=int, default=2000, help="poses per task (2000)")
+    p.add_argument("--sub", type=int, metavar="K",
+                   help="independent sub-mechanism K of a linkage alone (a biped's leg K, "
+                   "numbered from 0), with its own actuators and output")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     _linkage_options(p)
     p.set_defaults(func=cmd_workspace)

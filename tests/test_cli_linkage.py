@@ -400,3 +400,36 @@ def test_fk_takes_negative_values_in_scientific_notation(capsys):
     assert main(["fk", str(FIVE_BAR_XML), "0.1", "-7e-17", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["q_actuated"] == pytest.approx([0.1, -7e-17], abs=1e-9)
+
+
+def test_workspace_of_one_submechanism(tmp_path, capsys):
+    """pkm-pin workspace BIPED --sub 1: the left leg alone with its own output (the left
+    foot, taken as a point): x, z over a 0.1 m square about its home, y held at the
+    left foot's home y; the 3 x 3 grid all reachable (volume 0.1², every motor of the
+    right leg locked), the same cells as the whole biped read with --output foot_left,
+    whose text names the two sub-mechanisms."""
+    path = MODELS.parent / "tests" / "data" / "gepetto" / "digit_like_2legs" / "robot.urdf"
+    foot = load_mechanism(path, output="foot_left", point=True).home_assembly
+    p = foot.output_pose.translation
+    box = [f"{v:.17g}" for v in (p[0] - 0.05, p[0] + 0.05, p[2] - 0.05, p[2] + 0.05)]
+    common = ["--point", "--coords", "x", "z", "--range", *box, "--n", "3",
+              "--kind", "reachable", "--quiet"]
+    assert main(["workspace", str(path), "--sub", "1", *common, "--json",
+                 "--out", str(tmp_path / "one")]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["mechanism"].endswith("[1]") and data["method"] == "linkage output"
+    assert data["fixed"]["y"] == pytest.approx(p[1], abs=1e-12) and p[1] > 0.05
+    assert data["home"] == pytest.approx([p[0], p[2]], abs=1e-12)
+    assert data["counts"]["reachable"] == 9
+    assert data["volumes"]["reachable"]["value"] == pytest.approx(0.01, rel=1e-9)
+    assert main(["workspace", str(path), "--output", "foot_left", *common,
+                 "--out", str(tmp_path / "whole")]) == 0
+    text = capsys.readouterr().out
+    assert "2 independent sub-mechanisms" in text and "--sub K" in text
+    one, whole = (np.load(tmp_path / f"{n}.npz") for n in ("one", "whole"))
+    assert np.array_equal(one["mask_reachable"], whole["mask_reachable"])
+    assert np.allclose(one["points"], whole["points"], atol=1e-12)
+    assert main(["workspace", str(path), "--sub", "2", *common,
+                 "--out", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "numbered 0 to 1" in err[0]
