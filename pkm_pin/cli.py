@@ -611,9 +611,6 @@ def cmd_ik(args) -> int:
     a partial pose (``--at``) is completed first and the full pose printed."""
     mech = _load(args)
     if _is_linkage(mech):
-        if getattr(args, "at", None) is not None:
-            raise InputError("--at (a partial pose) is for platform mechanisms; give a "
-                             "linkage's output pose with --pose")
         return _ik_linkage(args, mech)
     pose = _platform_pose(args)
     if args.all:
@@ -645,6 +642,17 @@ def _ik_linkage(args, link) -> int:
     from .report_linkage import assembly_data, fk_text, pose_dict
 
     _no_all(args)
+    given = _platform_pose(args)
+    if isinstance(given, dict):  # a partial pose (--at): the other coordinates free
+        data = assembly_data(link, link.inverse_kinematics(given))
+        data["given"] = given
+        if args.json:
+            print(_json(data))
+            return 0
+        print(f"given      {', '.join(f'{k}={v:g}' for k, v in given.items())} (the other "
+              "coordinates free)")
+        print(fk_text(data))
+        return 0
     target = link.assemble().output_pose if args.pose is None else as_pose(args.pose)
     data = assembly_data(link, link.inverse_kinematics(target))
     data["target"] = pose_dict(target)

@@ -834,12 +834,16 @@ class Linkage:
 
         A partial pose (a mapping of some of x, y, z, roll, pitch, yaw to values, the
         others solved for: :meth:`Mechanism.complete_pose`) is solved leg by leg through
-        :attr:`legs_mechanism` (refused with the reason where the model has no legs).
+        :attr:`legs_mechanism`; where the model has no legs, on the whole tree
+        (:func:`pkm_pin.output_driver.partial_pose`: the loops closed and the given
+        coordinates of the output frame met, the others free, nearest the guess).
 
         Raises:
             LoopClosureError: no start closes the loops and reaches the pose.
         """
         if isinstance(pose, Mapping):
+            if self.platform_structure[0] is None:
+                return self._partial_pose(pose, guess, starts=starts, seed=seed, tol=tol)
             mech = self._legs("a partial pose")
             return self.assemble(mech.source_configuration(mech.assemble(dict(pose))), starts=0)
         if not isinstance(pose, pin.SE3) or not np.isfinite(pose.homogeneous).all():
@@ -853,6 +857,21 @@ class Linkage:
         if not sol.converged:
             raise self._failure(sol, starts + 4, None, "output pose")
         return self._assembly(sol, iterations + home.iterations)
+
+    def _partial_pose(self, pose: Mapping, guess, *, starts: int, seed: int, tol: float
+                      ) -> LinkageAssembly:
+        """A partial output pose on the whole tree (:meth:`inverse_kinematics`)."""
+        from types import SimpleNamespace
+
+        from .output_driver import partial_pose
+
+        home = self.assemble(guess, starts=starts, seed=seed, tol=tol)
+        q, r = partial_pose(self._model, pose, home.q, tol)
+        sol = SimpleNamespace(q=q, residual=r, closure_norms=None, output_placement=None,
+                              converged=r <= tol, iterations=0, actuated=0.0, pose=r)
+        if not sol.converged:
+            raise self._failure(sol, 1, None, "partial output pose", tol)
+        return self._assembly(sol, home.iterations)
 
     def workspace(self, coords=None, **options):
         """Reachable, singularity-free and good-transmission (LTI of

@@ -73,15 +73,14 @@ from .errors import (
     SingularityError,
 )
 from .model.closure_model import ClosureModel
+from .output_driver import OutputCoordinates, OutputDriver, coordinate_errors_of  # noqa: F401
 from .solve import (
     POSE_COORDINATES,
-    coordinate_scales,
     iter_tree_starts,
     pose_coordinates,
     solve_tree,
     solve_tree_starts,
     tree_limits,
-    tree_step,
 )
 from .tolerances import CLOSURE_TOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
 
@@ -343,122 +342,20 @@ def pose_motion(t, poses, coordinates=POSE_COORDINATES, bc_type: str = "clamped"
     return OutputMotion(t, C[:, idx], tuple(coordinates), bc_type)
 
 
-class _OutputCoordinates:
-    """The output frame's pose coordinates on a closure model's tree and their first
-    and second derivatives (Pinocchio's frame Jacobian, velocity and accelerations):
-    ``c = (p; rpy)``, ``ċ = K v`` with ``K = [J_p; E(rpy)⁻¹ J_ω]`` (``ω = E ṙ``, world),
-    ``c̈ = K a + κ(q, v)``, ``κ = (p̈₀; E⁻¹ (ω̇₀ − Ė ṙ))`` where ``p̈₀``, ``ω̇₀`` are the
-    origin's classical and the frame's angular acceleration at ``a = 0``."""
-
-    def __init__(self, model: ClosureModel):
-        self.model, self.tree = model, model.tree
-        self.data = model.tree.createData()
-        self.fid = model.tree.getFrameId(model.output)
-        self.scales = coordinate_scales(model.length)
-
-    def values(self, q) -> np.ndarray:
-        pin.framesForwardKinematics(self.tree, self.data, q)
-        return pose_coordinates(self.data.oMf[self.fid])
-
-    def rates(self, q) -> tuple[np.ndarray, np.ndarray]:
-        """``(c, K)`` at ``q``, physical units (6,), (6 × nv)."""
-        tree, data = self.tree, self.data
-        pin.computeJointJacobians(tree, data, q)
-        pin.updateFramePlacements(tree, data)
-        c = pose_coordinates(data.oMf[self.fid])
-        J = pin.getFrameJacobian(tree, data, self.fid, pin.LOCAL_WORLD_ALIGNED)
-        K = np.vstack([J[:3], pin.rpy.computeRpyJacobianInverse(c[3:], pin.WORLD) @ J[3:]])
-        return c, K
-
-    def drift(self, q, v) -> np.ndarray:
-        """``κ(q, v)`` (6,): ``c̈`` at ``a = 0``."""
-        tree, data, f = self.tree, self.data, self.fid
-        pin.forwardKinematics(tree, data, q, v, np.zeros(tree.nv))
-        pin.updateFramePlacements(tree, data)
-        rpy = pin.rpy.matrixToRpy(data.oMf[f].rotation)
-        w = pin.getFrameVelocity(tree, data, f, pin.LOCAL_WORLD_ALIGNED).angular
-        Einv = pin.rpy.computeRpyJacobianInverse(rpy, pin.WORLD)
-        rd = Einv @ w
-        Ed = pin.rpy.computeRpyJacobianTimeDerivative(rpy, rd, pin.WORLD)
-        lin = pin.getFrameClassicalAcceleration(tree, data, f, pin.LOCAL_WORLD_ALIGNED).linear
-        ang = pin.getFrameAcceleration(tree, data, f, pin.LOCAL_WORLD_ALIGNED).angular
-        return np.r_[lin, Einv @ (ang - Ed @ rd)]
+#: The output frame's coordinates and rates (:mod:`pkm_pin.output_driver`).
+_OutputCoordinates = OutputCoordinates
 
 
-class _OutputDriver:
-    """The rows of a motion given by output coordinates: the given ones, then the held
-    ones (:class:`OutputMotion`), chosen at ``q0`` (dimensionless: coordinates divided
-    by :func:`pkm_pin.solve.coordinate_scales`, velocity coordinates by the units)."""
+class _OutputDriver(OutputDriver):
+    """:class:`pkm_pin.output_driver.OutputDriver` of an :class:`OutputMotion`'s
+    coordinates (the others held at ``q0``), with the velocity system of its rows."""
 
     def __init__(self, model: ClosureModel, motion: OutputMotion, q0: np.ndarray):
-        self.model, self.oc = model, _OutputCoordinates(model)
-        given = [POSE_COORDINATES.index(c) for c in motion.coordinates]
-        if model.output_point and max(given) > 2:
-            raise InputError(f"the output of {model.name or 'the model'} is a point: give "
-                             "x, y, z only")
-        c0, K = self.oc.rates(q0)
-        U = model.velocity_units
-        Jc = model.closure_jacobian(q0) * U
-        rank, _, _, Vt = screws.svd_rank(Jc, RANK_RTOL) if Jc.size else (0, 0, 0,
-                                                                           np.eye(model.nv))
-        G = (K / self.oc.scales[:, None] * U) @ Vt[rank:].T
-        top = max(float(np.linalg.norm(G, 2)), 1e-300)
-
-        def rank_of(rows):
-            s = np.linalg.svd(G[rows], compute_uv=False) if rows else np.zeros(0)
-            return int(np.sum(s > 1e-6 * top))
-        if rank_of(given) < len(given):
-            raise InputError(
-                f"the output coordinates {', '.join(motion.coordinates)} are not independent "
-                f"for {model.name or 'the model'} (its output moves in {rank_of(list(range(6)))}"
-                " dimensions): give fewer, or others")
-        rows, full = list(given), rank_of(list(range(6)))
-        for k in range(6):
-            if len(rows) < full and k not in rows and rank_of(rows + [k]) > len(rows):
-                rows.append(k)
-        self.rows, self.n_given, self.held = np.array(rows), len(given), c0[rows[len(given):]]
-        self.names = tuple(POSE_COORDINATES[k] for k in rows)
-
-    def targets(self, C, Cd, Cdd) -> tuple:
-        """The targets of every row (given, then held) over the samples."""
-        n, h = C.shape[0], len(self.held)
-        return (np.c_[C, np.tile(self.held, (n, 1))], np.c_[Cd, np.zeros((n, h))],
-                np.c_[Cdd, np.zeros((n, h))])
-
-    def position(self, guess, target, tol: float) -> tuple[np.ndarray, float]:
-        """Damped Newton (Levenberg–Marquardt as :func:`pkm_pin.solve.solve_tree`:
-        damping :func:`~pkm_pin.newton.lm_damping`, steps at most
-        :data:`~pkm_pin.newton.TREE_MAX_STEP`, dimensionless) on the closure rows and
-        the coordinate rows (angles wrapped) from ``guess``: ``(q, residual)``."""
-        model, rows, s = self.model, self.rows, self.oc.scales[self.rows]
-        q = guess.copy()
-        lo, up = tree_limits(model)
-        for _ in range(100):
-            c, K = self.oc.rates(q)
-            e = np.r_[model.closure_residual(q), coordinate_errors_of(c[rows], target, rows) / s]
-            r = float(np.abs(e).max(initial=0.0))
-            if r <= tol:
-                break
-            H = np.vstack([model.closure_jacobian(q), K[rows] / s[:, None]])
-            q, _ = tree_step(model, q, e, H, None, r, lo, up)
-        return q, r
+        super().__init__(model, motion.coordinates, q0)
 
     def system(self, q) -> "_ActuatedSystem":
         c, K = self.oc.rates(q)
         return _ActuatedSystem(self.model, q, K[self.rows] / self.oc.scales[self.rows, None])
-
-    def rhs(self, q, v, cdd) -> np.ndarray:
-        """The dimensionless right-hand side of the coordinate rows of ``[J; K] a``."""
-        s = self.oc.scales[self.rows]
-        return (cdd - self.oc.drift(q, v)[self.rows]) / s
-
-
-def coordinate_errors_of(c, target, rows) -> np.ndarray:
-    """``c − target`` with the angle rows wrapped to (−π, π]."""
-    d = np.asarray(c, float) - target
-    angle = np.asarray(rows) >= 3
-    d[angle] = (d[angle] + np.pi) % (2 * np.pi) - np.pi
-    return d
 
 
 # ------------------------------------------------------------ the mechanism

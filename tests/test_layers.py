@@ -37,9 +37,10 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         "split from the tree and its closures",
         ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
          "output_choice", "submechanisms")),
-    3: ("the closure solver, the Leg whose solve and inverse kinematics call it, and why "
-        "a linkage does not assemble (closure_gaps: open loops, joints at a limit)",
-        ("solve", "leg", "closure_gaps")),
+    3: ("the closure solver, the Leg whose solve and inverse kinematics call it, why "
+        "a linkage does not assemble (closure_gaps: open loops, joints at a limit), and the "
+        "tree solved for some of its output's pose coordinates (output_driver)",
+        ("solve", "leg", "closure_gaps", "output_driver")),
     4: ("screw analysis of one or N poses: the engine's driver, Analysis, transmission, "
         "closed-loop dynamics, the compiled general elimination of a linkage's analysis",
         ("engine", "engine.core", "analysis", "output_maps", "transmission", "dynamics",
