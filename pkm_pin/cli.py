@@ -186,15 +186,17 @@ def _is_linkage(mech) -> bool:
 
 def _linkage_assembly(args, link):
     """The linkage assembled as the options say: ``--q`` (forward kinematics), ``--pose``
-    (inverse kinematics of the output), else from the reference configuration."""
+    (inverse kinematics of the output), ``--at`` (a partial output pose, the other
+    coordinates free), else from the reference configuration."""
     from .assembly import as_pose
 
     q, pose = getattr(args, "q", None), getattr(args, "pose", None)
     if getattr(args, "at", None) is not None:
-        raise InputError("--at (a partial pose) is for platform mechanisms; give a linkage's "
-                         "output pose with --pose or its actuated values with --q")
+        pose = _platform_pose(args)
     if q is not None and pose is not None:
-        raise InputError("give --q (actuated values) or --pose (output pose), not both")
+        raise InputError("give --q (actuated values) or --pose / --at (output pose), not both")
+    if isinstance(pose, dict):
+        return link.inverse_kinematics(pose)
     if q is not None:
         return link.forward_kinematics(link.check_actuated(q, "--q"), guess=link.assemble())
     if pose is not None:

@@ -98,3 +98,15 @@ def test_cli_ik_at_on_a_linkage(capsys):
     assert main(["ik", path, "--at", "x=0.01"]) == 0
     assert capsys.readouterr().out.startswith("given      x=0.01 (the other coordinates free)")
     assert main(["ik", path, "--at", "x=0.01", "--pose", "0", "0", "0", "0", "0", "0"]) == 2
+
+
+def test_cli_analyze_at_on_a_linkage(capsys, five_bar):
+    """pkm-pin analyze FIVE_BAR --at x=0.01 --json: analysed at the configuration of
+    Linkage.inverse_kinematics({"x": 0.01}) (the same q to 1e-12); --at with --q: exit 2."""
+    path = str(MODELS / "loops" / "five_bar.urdf")
+    assert main(["analyze", path, "--at", "x=0.01", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["pose"]["xyz"][0] == pytest.approx(0.01, abs=1e-9)
+    assert np.allclose(data["q"], five_bar.inverse_kinematics({"x": 0.01}).q, atol=1e-12)
+    assert main(["analyze", path, "--at", "x=0.01", "--q", "0", "0"]) == 2
+    assert "not both" in capsys.readouterr().err
