@@ -1403,8 +1403,21 @@ def _write_text(path: str, text: str) -> None:
 
 
 # --------------------------------------------------------------------- parser
+#: A negative number as a command-line word, scientific notation included (``-7e-17``,
+#: ``-1.5E+3``, ``-.5``): argparse's own rule (``-12``, ``-1.5`` only, before Python
+#: 3.13) reads ``-7e-17`` as an option, so a value printed by ``fk --json`` and pasted
+#: into ``--q``, ``--pose``, ``--range`` or ``--payload`` was refused.
+NEGATIVE_NUMBER = re.compile(r"^-(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?$")
+
+
 class _Parser(argparse.ArgumentParser):
-    """``argparse`` parser whose usage errors are one line on stderr, status 2."""
+    """``argparse`` parser whose usage errors are one line on stderr, status 2, and whose
+    negative numbers (never options: none of ours looks like one) include scientific
+    notation (:data:`NEGATIVE_NUMBER`; the sub-commands' parsers are of this class too)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = NEGATIVE_NUMBER
 
     def error(self, message: str):  # noqa: D102
         self.exit(2, f"pkm-pin: error: {message} (see '{self.prog} --help')\n")

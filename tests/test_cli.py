@@ -364,3 +364,34 @@ def test_dynamics_refuses_a_file_without_masses(capsys):
     assert "note       no body of" in capsys.readouterr().out
     assert main(["dynamics"]) == 2  # the built-in 3-RPR has no inertias either
     assert "3-RPR (seed 000) has no mass on any body (A/A0_link" in one_error_line(capsys)
+
+
+def test_scientific_negative_values_in_every_numeric_option(capsys):
+    """Values such as -7e-17 (as --json prints them) are numbers, not options, in every
+    option taking numbers (argparse's own rule reads only -12 and -1.5 as numbers);
+    analyze --q with them gives the same assembly as with the plain spelling."""
+    from pathlib import Path
+
+    from pkm_pin.cli import build_parser
+
+    parser = build_parser()
+    cases = [(["fk", "m", "-7e-17", "-1E+0"], "q", [-7e-17, -1.0]),
+             (["analyze", "m", "--q", "-7e-17", "-.5"], "q", [-7e-17, -0.5]),
+             (["ik", "m", "--pose", "-1e-3", "0", "-2.5E-2", "-0.", "1e1", "-3e-1"], "pose",
+              [-1e-3, 0.0, -2.5e-2, 0.0, 10.0, -0.3]),
+             (["map", "m", "--range", "-1e-3", "2e-3", "-5E-1", "-.5e1"], "range",
+              [-1e-3, 2e-3, -0.5, -5.0]),
+             (["workspace", "m", "--coords", "x", "--range", "-2e-2", "-1e-2"], "range",
+              [-2e-2, -1e-2]),
+             (["dynamics", "m", "--payload", "0", "0", "-9.81e1", "-1e-3", "0", "0"],
+              "payload", [0.0, 0.0, -98.1, -1e-3, 0.0, 0.0])]
+    for argv, name, values in cases:
+        assert getattr(parser.parse_args(argv), name) == values, argv
+    path = str(Path(__file__).resolve().parents[1] / "models" / "loops" / "five_bar.urdf")
+    outs = []
+    for q in (["-7e-17", "-1E-3"], ["0", "-0.001"]):
+        assert main(["analyze", path, "--q", *q, "--json"]) == 0
+        outs.append(json.loads(capsys.readouterr().out))
+    assert outs[0]["q_actuated"] == pytest.approx([0.0, -1e-3], abs=1e-12)
+    assert np.allclose(outs[0]["q"], outs[1]["q"], atol=1e-12)
+    assert main(["analyze", path, "--q", "-7e-17", "-x1"]) == 2  # still an error
