@@ -46,7 +46,26 @@ def _listing(names: Iterable[str], limit: int = 25) -> str:
 
 
 class PkmError(Exception):
-    """Base class of every error raised by pkm_pin."""
+    """Base class of every error raised by pkm_pin.
+
+    Pickling (an error raised in a worker process of a sweep comes back to the parent
+    pickled) keeps the class, ``args`` (the message) and every attribute, without
+    calling ``__init__`` again: the errors whose ``__init__`` builds the message from
+    other arguments (:class:`AssemblyError`,
+    :class:`~pkm_pin.linkage.LoopClosureError`: loop, residual, q, diagnosis) could not
+    be rebuilt from their message by the default reduction."""
+
+    def __reduce__(self):
+        return _rebuilt, (type(self), self.args, self.__dict__.copy())
+
+
+def _rebuilt(cls, args: tuple, state: dict) -> PkmError:
+    """The error of class ``cls`` with these ``args`` and attributes
+    (:meth:`PkmError.__reduce__`)."""
+    error = cls.__new__(cls, *args)
+    error.args = args
+    error.__dict__.update(state)
+    return error
 
 
 class InputError(PkmError, ValueError):

@@ -190,3 +190,29 @@ def test_cli_view_draws_a_file_that_does_not_assemble_and_analyze_refuses_it(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("pkm-pin: error: ")
     assert "open loops: 'closedloop7_BCclosedloop7_A'" in err and "hint: " in err
+
+
+def test_errors_survive_pickling():
+    """A LoopClosureError (four-bar driven to an unreachable crank angle: targets not
+    met, a loop open by tens of mm, the crank at a limit) comes back from pickle with
+    its class, message, loop, residual, best q and diagnosis; so do AssemblyError and
+    an InputError (an error raised in a worker process reaches the parent pickled)."""
+    import pickle
+
+    from pkm_pin.errors import AssemblyError, InputError
+    from pkm_pin.linkage import LoopClosureError
+
+    link = pkm_pin.load_mechanism(Path(__file__).resolve().parents[1] / "models" / "loops"
+                                  / "four_bar.urdf")
+    with pytest.raises(LoopClosureError) as raised:
+        link.forward_kinematics([5.0] * len(link.actuated))
+    err = raised.value
+    back = pickle.loads(pickle.dumps(err))
+    assert type(back) is LoopClosureError and str(back) == str(err)
+    assert back.leg == err.leg and back.residual == err.residual > 0.5
+    assert np.array_equal(back.q, err.q) and back.diagnosis.words() == err.diagnosis.words()
+    assert "mm" in back.diagnosis.words()
+    for e in (AssemblyError("leg 2", 0.25, "8 starts"), InputError("bad --q")):
+        b = pickle.loads(pickle.dumps(e))
+        assert type(b) is type(e) and str(b) == str(e) and b.args == e.args
+    assert pickle.loads(pickle.dumps(AssemblyError("leg 2", 0.25))).residual == 0.25
