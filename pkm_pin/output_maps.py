@@ -26,6 +26,7 @@ import numpy as np
 
 from . import screws
 from .errors import InputError, SingularityError
+from .tolerances import RANK_RTOL
 from .transmission import Ellipsoid
 
 __all__ = ["OutputMaps"]
@@ -107,12 +108,29 @@ class OutputMaps:
     @cached_property
     def unresisted_wrench(self) -> np.ndarray | None:
         """At a type II/III singularity, an output wrench that no combination of
-        actuation and constraint wrenches balances; ``None`` elsewhere."""
+        actuation and constraint wrenches balances with bounded efforts; ``None``
+        elsewhere. Where the rows ``[A; C]`` (unit, homogenised about :attr:`centre`)
+        lose rank: the direction they miss (the last right singular vector, its singular
+        value well apart from the others'). Where they keep it and the singularity is in
+        ``B`` instead (``A Δ t = B q̇_a`` with ``B`` unbounded, as a linkage's generalised
+        forward index reads it): the actuation wrench of ``B``'s largest singular
+        direction, its part off the constraint wrenches (unique, never decided by the
+        order of equal singular values)."""
         if self._closeness[1] >= self.singular_tol:
             return None
         H = screws.normalised_rows(self._about_centre(self.full_jacobian), self.length)
-        _, _, Vt = np.linalg.svd(H, full_matrices=True)
-        return self._to_origin(Vt[-1])
+        _, s, Vt = np.linalg.svd(H, full_matrices=True)
+        B = np.atleast_2d(np.asarray(self.B, dtype=float))
+        if s[-1] < 1e-3 * s[0] or not B.size or not np.isfinite(B).all():
+            return self._to_origin(Vt[-1])
+        U, _, _ = np.linalg.svd(B)
+        n = B.shape[0]
+        w = U[:, 0] @ H[:n]  # the actuation wrench needing unbounded effort
+        C = H[n:]
+        if C.size:
+            rank, _, _, Ct = screws.svd_rank(C, RANK_RTOL)
+            w = w - (w @ Ct[:rank].T) @ Ct[:rank]
+        return self._to_origin(w / max(float(np.linalg.norm(w)), 1e-300))
 
     @cached_property
     def lost_actuated_rates(self) -> np.ndarray | None:

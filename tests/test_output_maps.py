@@ -107,15 +107,28 @@ def test_singular_directions_of_a_linkage_off_its_dead_centre():
         dn.actuator_efforts(np.r_[0, 0, 0, 0, 0, 1.0])
     with pytest.raises(SingularityError, match="ellipsoids undefined"):
         dn.velocity_ellipsoid()
+    # Compared as projectors onto the lines they span (sign-free), never as the vectors
+    # an SVD happens to return: here the unit rows [A; C] are orthonormal (six equal
+    # singular values; the singularity is in B), so no order of them may decide.
+    def line(v):
+        return np.outer(v, v) / (v @ v)
+
+    H = screws.normalised_rows(screws.about(dn.full_jacobian, dn.centre), dn.length)
+    np.testing.assert_allclose(np.linalg.svd(H, compute_uv=False), 1.0, atol=1e-9)
     t = dn.uncontrolled_twist
     crank_axis = dn.platform_twists[0]
-    assert abs(abs(screws.homogenised_about(t[None], dn.centre, dn.length)[0]
-                   @ screws.homogenised_about(crank_axis[None], dn.centre, dn.length)[0])
-               - 1.0) < 1e-9
+    th, ch = (screws.homogenised_about(x[None], dn.centre, dn.length)[0]
+              for x in (t, crank_axis))
+    np.testing.assert_allclose(line(th), line(ch), atol=1e-9)
+    assert np.linalg.norm(th) == pytest.approx(1.0, rel=1e-9)
     w = dn.unresisted_wrench  # the couple about the crank's pivot axis z, unit / L
+    np.testing.assert_allclose(line(w), np.diag([0.0] * 5 + [1.0]), atol=1e-9)
     np.testing.assert_allclose(w[:5], 0.0, atol=1e-9)
     assert abs(w[5]) == pytest.approx(dn.length, rel=1e-9)
     assert abs(screws.reciprocal_product(w, t)) == pytest.approx(dn.length, rel=1e-9)
+    wh = screws.homogenised_about(w[None], dn.centre, dn.length)[0]
+    C = screws.normalised_rows(screws.about(dn.constraint_wrenches, dn.centre), dn.length)
+    np.testing.assert_allclose(C @ wh, 0.0, atol=1e-9)  # none of it is a constraint's
 
 
 def test_underactuated_output_refuses_ellipsoids_in_a_sentence():
