@@ -10,7 +10,7 @@
     pkm-pin map MECHANISM --axes x z [--at NAME=V...] --range A B C D --n 100 --out PREFIX
     pkm-pin view MECHANISM [--pose ...] [--html FILE]   browser preview (meshcat)
     pkm-pin dynamics [MECHANISM] [--trajectory CSV] [--duration T] [--samples N]
-                     [--simulate | --indices]
+                     [--simulate | --indices [--sub K]]
                      [--payload FX FY FZ MX MY MZ] [--json] [--out PREFIX]
                                                    actuator efforts along a motion
 
@@ -1433,7 +1433,8 @@ def _at_option(p, text: str = "") -> None:
     p.add_argument("--at", nargs="+", metavar="NAME=VALUE",
                    help=text or "a partial pose: some of x, y, z [m], roll, pitch, yaw [rad] "
                    "that are independent coordinates of the mechanism (e.g. z=0.8 roll=0.1 "
-                   "pitch=0 for a 3-RPS); the others are solved for")
+                   "pitch=0 for a 3-RPS); the others are solved for (a linkage without "
+                   "legs: its output frame's coordinates given, the others free)")
 
 
 def _linkage_options(p, q: bool = False) -> None:
