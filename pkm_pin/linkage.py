@@ -866,12 +866,12 @@ class Linkage:
         from .output_driver import partial_pose
 
         home = self.assemble(guess, starts=starts, seed=seed, tol=tol)
-        q, r = partial_pose(self._model, pose, home.q, tol)
+        q, r, steps = partial_pose(self._model, pose, home.q, tol)
         sol = SimpleNamespace(q=q, residual=r, closure_norms=None, output_placement=None,
-                              converged=r <= tol, iterations=0, actuated=0.0, pose=r)
+                              converged=r <= tol, iterations=steps, actuated=0.0, pose=r)
         if not sol.converged:
             raise self._failure(sol, 1, None, "partial output pose", tol)
-        return self._assembly(sol, home.iterations)
+        return self._assembly(sol, home.iterations + steps)
 
     def workspace(self, coords=None, **options):
         """Reachable, singularity-free and good-transmission (LTI of

@@ -131,7 +131,7 @@ class OutputDriver:
         model, rows, s = self.model, self.rows, self.oc.scales[self.rows]
         q = guess.copy()
         lo, up = tree_limits(model)
-        for _ in range(100):
+        for self.iterations in range(100):  # the steps taken, kept for an error message
             c, K = self.oc.rates(q)
             e = np.r_[model.closure_residual(q), coordinate_errors_of(c[rows], target, rows) / s]
             r = float(np.abs(e).max(initial=0.0))
@@ -156,8 +156,8 @@ def coordinate_errors_of(c, target, rows) -> np.ndarray:
 
 
 def partial_pose(model: ClosureModel, values: Mapping, q0, tol: float = CLOSURE_TOL
-                 ) -> tuple[np.ndarray, float]:
-    """``(q, residual)``: the tree configuration nearest ``q0`` (damped Newton from it,
+                 ) -> tuple[np.ndarray, float, int]:
+    """``(q, residual, iterations)``: the tree configuration nearest ``q0`` (damped Newton from it,
     :meth:`OutputDriver.position`) that closes the loops and puts the output frame's
     coordinates named in ``values`` (a mapping of some of x, y, z, roll, pitch, yaw to
     values) at those values, the other coordinates free; ``residual``: the largest
@@ -175,4 +175,6 @@ def partial_pose(model: ClosureModel, values: Mapping, q0, tol: float = CLOSURE_
     if not np.isfinite(target).all():
         raise InputError(f"a partial pose needs finite values; got {dict(zip(names, target))}")
     q0 = model.check_q(q0)
-    return OutputDriver(model, names, q0, hold=False).position(q0, target, tol)
+    driver = OutputDriver(model, names, q0, hold=False)
+    q, r = driver.position(q0, target, tol)
+    return q, r, driver.iterations

@@ -14,6 +14,7 @@ import pytest
 import pkm_pin
 from pkm_pin.cli import main
 from pkm_pin.errors import InputError
+from pkm_pin.linkage import LoopClosureError
 from pkm_pin.output_driver import OutputDriver, partial_pose
 from pkm_pin.solve import POSE_COORDINATES, pose_coordinates
 
@@ -74,7 +75,8 @@ def test_partial_pose_of_the_cassie_knee(cassie):
 
 def test_partial_pose_refusals(five_bar):
     """Coordinates the output cannot move along, an angle of a point output, an unknown
-    name: one InputError sentence each."""
+    name, a value that is not finite: one InputError sentence each; a coordinate out of
+    reach: a LoopClosureError naming the partial output pose."""
     q0 = five_bar.home_assembly.q
     with pytest.raises(InputError, match="not independent"):
         partial_pose(five_bar.model, {"z": 0.0}, q0)
@@ -84,6 +86,11 @@ def test_partial_pose_refusals(five_bar):
         OutputDriver(five_bar.model, ("w",), q0)
     with pytest.raises(InputError, match="finite"):
         partial_pose(five_bar.model, {"x": float("nan")}, q0)
+    with pytest.raises(LoopClosureError, match="partial output pose") as raised:
+        five_bar.inverse_kinematics({"x": 10.0})  # far beyond the links' reach (0.15 m)
+    assert raised.value.residual > 1.0
+    q, r, steps = partial_pose(five_bar.model, {"x": 0.01}, q0)
+    assert r < 1e-9 and 0 < steps < 100
 
 
 def test_cli_ik_at_on_a_linkage(capsys):
