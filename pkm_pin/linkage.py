@@ -448,6 +448,8 @@ class Linkage:
     # ---------------------------------------------------------------- inputs
     def check_actuated(self, q_actuated, name: str = "q_actuated") -> np.ndarray:
         """``q_actuated`` as a finite array of one value per actuated joint."""
+        if screws.is_vector(q_actuated, len(self.actuated)):
+            return q_actuated
         return screws.as_vector(q_actuated, len(self.actuated), name, ", ".join(self.actuated))
 
     def _guess_q(self, guess) -> np.ndarray | None:
