@@ -820,10 +820,26 @@ def representation_flags(model, q: np.ndarray):
     if k is None:
         return None
     triples = revolute_triples(model)
+    if not len(triples) and not _finite_limits(model, k):  # nothing to flag
+        return _NO_LOCKS, False
     q = np.ascontiguousarray(q, dtype=float)
     locked, near = _FLAGS(k, np.ascontiguousarray(triples, dtype=np.int64), q,
                           float(model.length))
     return locked, bool(near)
+
+
+_NO_LOCKS = np.zeros(0, np.bool_)
+_NO_LOCKS.flags.writeable = False
+
+
+def _finite_limits(model, k) -> bool:
+    """Whether a coordinate of the compiled tree ``k`` of ``model`` has a finite limit
+    (kept on the model, as :func:`~pkm_pin.tree_kernel.tree_kernel`)."""
+    cached = model.__dict__.get("_finite_limits")
+    if cached is None:
+        cached = bool(np.isfinite(k.lower).any() or np.isfinite(k.upper).any())
+        object.__setattr__(model, "_finite_limits", cached)
+    return cached
 
 
 @njit(cache=True, nogil=True)

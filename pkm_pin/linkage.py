@@ -72,7 +72,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
 import numpy as np
@@ -448,6 +448,8 @@ class Linkage:
     # ---------------------------------------------------------------- inputs
     def check_actuated(self, q_actuated, name: str = "q_actuated") -> np.ndarray:
         """``q_actuated`` as a finite array of one value per actuated joint."""
+        if screws.is_vector(q_actuated, len(self.actuated)):
+            return q_actuated
         return screws.as_vector(q_actuated, len(self.actuated), name, ", ".join(self.actuated))
 
     def _guess_q(self, guess) -> np.ndarray | None:
@@ -567,8 +569,8 @@ class Linkage:
             kin = model.kinematics(q)
             norms, oMo = model.closure_norms(kin.residual), kin.output_placement
         names = dict(zip(self._closure_names, norms.tolist()))
-        return LinkageAssembly(q.copy(), float(sol.residual), int(iterations), names,
-                               _actuated_or_nan(model, q), oMo)
+        return _new_assembly(q.copy(), float(sol.residual), int(iterations), names,
+                             _actuated_or_nan(model, q), oMo)
 
     def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL
                  ) -> LoopClosureError:
@@ -962,6 +964,18 @@ def _loops_of_actuators(model: ClosureModel) -> tuple:
                 loops.append(k)
         out.append(tuple(loops))
     return tuple(out)
+
+
+_ASSEMBLY_FIELDS = tuple(f.name for f in fields(LinkageAssembly))
+
+
+def _new_assembly(*values) -> LinkageAssembly:
+    """``LinkageAssembly(*values)`` (every field given) without the frozen dataclass's
+    ``__init__`` (one ``object.__setattr__`` a field: ~1 µs of a warm forward
+    kinematics)."""
+    out = object.__new__(LinkageAssembly)
+    out.__dict__.update(zip(_ASSEMBLY_FIELDS, values))
+    return out
 
 
 def _actuated_or_nan(model: ClosureModel, q: np.ndarray) -> np.ndarray:

@@ -50,6 +50,7 @@ DELTA.setflags(write=False)
 RTOL = RANK_RTOL
 
 _SWAP = np.r_[3:6, 0:3]
+_FLOAT = np.dtype(float)
 
 
 # --------------------------------------------------------------------------- checks
@@ -76,7 +77,8 @@ def as_vector(x, n: int, name: str = "vector", what: str = "", noun: str = "valu
               ) -> np.ndarray:
     """``x`` as a finite float array of shape (n,), or an :class:`InputError` naming
     ``name`` (and ``what`` the n values are, when given)."""
-    a = as_float_array(x, name)
+    # an exact float64 vector (the solvers' own arrays) skips the conversion
+    a = x if type(x) is np.ndarray and x.dtype is _FLOAT else as_float_array(x, name)
     if a.shape != (n,):
         detail = f" ({what})" if what else ""
         raise InputError(f"{name} must have {n} {noun}{detail}, got shape {a.shape}")
@@ -85,6 +87,13 @@ def as_vector(x, n: int, name: str = "vector", what: str = "", noun: str = "valu
     if not math.isfinite(a.dot(a)) and not np.isfinite(a).all():
         raise InputError(f"{name} must be finite, got {a}")
     return a
+
+
+def is_vector(x, n: int) -> bool:
+    """Whether ``x`` already is what :func:`as_vector` returns for it (a finite float64
+    array of shape (n,)): the callers' fast path, which skips making their messages."""
+    return type(x) is np.ndarray and x.dtype is _FLOAT and x.shape == (n,) \
+        and math.isfinite(x.dot(x))
 
 
 def as_vector3(x, name: str = "vector") -> np.ndarray:

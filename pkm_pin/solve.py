@@ -66,7 +66,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections import namedtuple
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from enum import IntEnum
 
 import numpy as np
@@ -936,6 +936,7 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
 
 
 _NO_TARGETS = np.zeros(0)
+_FLOAT = np.dtype(np.float64)
 _TREE_KERNEL = None
 
 
@@ -958,14 +959,28 @@ def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolut
         if free.shape != (kern.nv,):
             raise ValueError(f"free must have one entry per velocity coordinate ({kern.nv})")
     has = targets is not None
-    t = np.ascontiguousarray(targets, dtype=np.float64) if has else _NO_TARGETS
+    t = targets if type(targets) is np.ndarray and targets.dtype is _FLOAT \
+        and targets.flags.c_contiguous else \
+        np.ascontiguousarray(targets, dtype=np.float64) if has else _NO_TARGETS
     if has and t.shape != kern.act_q.shape:
         raise ValueError(f"targets must have one value per actuated joint ({len(kern.act_q)})")
     norms, oMo, info = np.empty(kern.ckind.shape[0]), np.empty((4, 4)), np.empty(6)
     tk.SOLVE(kern, q, free, has, t, float(tol), int(max_iter), norms, oMo, info)
     r, closure, actuated, iterations, converged, at_q = info.tolist()
-    return TreeSolution(q, r, closure, actuated, 0.0, int(iterations), converged == 1.0,
-                        norms if at_q else None, pin.SE3(oMo) if at_q else None)
+    return _tree_solution(q, r, closure, actuated, 0.0, int(iterations), converged == 1.0,
+                          norms if at_q else None, pin.SE3(oMo) if at_q else None)
+
+
+_TREE_SOLUTION_FIELDS = tuple(f.name for f in fields(TreeSolution))
+
+
+def _tree_solution(*values) -> TreeSolution:
+    """``TreeSolution(*values)`` (every field given) without the frozen dataclass's
+    ``__init__``, which sets each field through ``object.__setattr__`` (~1 µs a solve
+    of a small tree)."""
+    sol = object.__new__(TreeSolution)
+    sol.__dict__.update(zip(_TREE_SOLUTION_FIELDS, values))
+    return sol
 
 
 def tree_starts(model, warm=None, count: int = 0, seed: int = 0) -> np.ndarray:
@@ -983,7 +998,8 @@ def iter_tree_starts(model, warm=None, count: int = 0, seed: int = 0):
     the warm start makes none of the others)."""
     lo, up = tree_limits(model)
     if warm is not None:  # np.clip's wrapper costs more than the solve of a small tree
-        yield np.minimum(np.maximum(model.check_q(warm), lo), up)
+        warm = model.check_q(warm)
+        yield np.minimum(np.maximum(warm, lo), up) if _limited(model) else warm.copy()
     ref = np.array(model.reference)
     middle = np.where(np.isfinite(lo), 0.5 * (np.nan_to_num(lo) + np.nan_to_num(up)), ref)
     for row in (ref, pin.neutral(model.tree), middle):
@@ -991,6 +1007,17 @@ def iter_tree_starts(model, warm=None, count: int = 0, seed: int = 0):
     rng = np.random.default_rng(seed)
     for _ in range(count):
         yield np.clip(_random_tree_q(model, rng, lo, up), lo, up)
+
+
+def _limited(model) -> bool:
+    """Whether a coordinate has a finite limit of :func:`tree_limits` (kept on the
+    model: without one, clipping a start is a copy)."""
+    cached = model.__dict__.get("_tree_limited")
+    if cached is None:
+        lo, up = tree_limits(model)
+        cached = bool(np.isfinite(lo).any() or np.isfinite(up).any())
+        object.__setattr__(model, "_tree_limited", cached)
+    return cached
 
 
 def _random_tree_q(model, rng, lo, up) -> np.ndarray:

@@ -290,6 +290,8 @@ class ClosureModel:
 
     def check_q(self, q) -> np.ndarray:
         """``q`` as a finite array of shape (nq,), or an :class:`InputError`."""
+        if screws.is_vector(q, self.tree.nq):
+            return q
         return screws.as_vector(q, self.nq, f"the configuration of {self.name or 'the tree'}",
                                 "the tree's configuration vector")
 
