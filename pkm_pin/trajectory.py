@@ -66,6 +66,7 @@ import pinocchio as pin
 from . import dynamics, screws
 from . import output_kernel as ok
 from . import tree_kernel as tk
+from .compiling import prefer_compiled
 from .dynamics import body_names
 from .errors import (
     ForwardKinematicsError,
@@ -430,10 +431,10 @@ class _OutputDriver:
     def position(self, guess, target, tol: float, compiled: bool | None = None
                  ) -> tuple[np.ndarray, float]:
         """:meth:`position_reference` compiled (:mod:`pkm_pin.output_kernel`) where the
-        tree kernel represents the model (``compiled`` None: by default; False: the
-        Python reference)."""
+        tree kernel represents the model (``compiled`` True: so; None: when that code is
+        ready, :func:`pkm_pin.compiling.prefer_compiled`; False: the Python reference)."""
         kern = tk.tree_kernel(self.model) if compiled is not False and tk.ENABLED else None
-        if kern is None:
+        if kern is None or not (compiled or prefer_compiled(ok.solve_output_kernel)):
             return self.position_reference(guess, target, tol)
         rows = self.rows.astype(np.int64)
         q, info = np.array(guess, dtype=float), np.empty(2)
