@@ -18,7 +18,10 @@ from collections.abc import Mapping
 import numpy as np
 import pinocchio as pin
 
+from . import output_kernel as ok
 from . import screws
+from . import tree_kernel as tk
+from .compiling import prefer_compiled
 from .errors import InputError
 from .model.closure_model import ClosureModel
 from .solve import (
@@ -123,7 +126,25 @@ class OutputDriver:
         return (np.c_[C, np.tile(self.held, (n, 1))], np.c_[Cd, np.zeros((n, h))],
                 np.c_[Cdd, np.zeros((n, h))])
 
-    def position(self, guess, target, tol: float) -> tuple[np.ndarray, float]:
+    def position(self, guess, target, tol: float, compiled: bool | None = None
+                 ) -> tuple[np.ndarray, float]:
+        """:meth:`position_reference` compiled (:mod:`pkm_pin.output_kernel`) where the
+        tree kernel represents the model (``compiled`` True: so; None: when that code is
+        ready, :func:`pkm_pin.compiling.prefer_compiled`; False: the Python reference);
+        the steps taken are kept in ``iterations``."""
+        kern = tk.tree_kernel(self.model) if compiled is not False and tk.ENABLED else None
+        if kern is None or not (compiled or prefer_compiled(ok.solve_output_kernel)):
+            return self.position_reference(guess, target, tol)
+        rows = self.rows.astype(np.int64)
+        q, info = np.array(guess, dtype=float), np.empty(2)
+        lo, up = tree_limits(self.model)
+        ok.SOLVE_OUTPUT(kern, q, rows, np.asarray(target, dtype=float),
+                        np.ascontiguousarray(self.oc.scales[rows]), np.asarray(lo, float),
+                        np.asarray(up, float), float(tol), 100, info)
+        self.iterations = int(info[1])
+        return q, float(info[0])
+
+    def position_reference(self, guess, target, tol: float) -> tuple[np.ndarray, float]:
         """Damped Newton (Levenberg–Marquardt as :func:`pkm_pin.solve.solve_tree`:
         damping :func:`~pkm_pin.newton.lm_damping`, steps at most
         :data:`~pkm_pin.newton.TREE_MAX_STEP`, dimensionless) on the closure rows and

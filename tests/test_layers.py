@@ -35,7 +35,7 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         "serial chains, the assembly record whose twists that pass verifies, the default "
         "output chosen from one configuration's motions and the independent sub-mechanisms "
         "split from the tree and its closures",
-        ("newton", "kernels", "tree_kernel", "twists", "serial", "assembly",
+        ("newton", "kernels", "tree_kernel", "output_kernel", "twists", "serial", "assembly",
          "output_choice", "submechanisms")),
     3: ("the closure solver, the Leg whose solve and inverse kinematics call it, why "
         "a linkage does not assemble (closure_gaps: open loops, joints at a limit), and the "
