@@ -30,7 +30,7 @@ import numpy as np
 import pinocchio as pin
 from timing import best_of_each
 
-from pkm_pin import load_mechanism
+from pkm_pin import Mechanism, load_mechanism
 from pkm_pin.builders.extended_urdf import write_extended_urdf
 from pkm_pin.model import configuration
 
@@ -93,6 +93,10 @@ def main(n: int = 50, repeat: int = 5) -> dict:
         "urdf/general": lambda: [general.analyze(q) for q in urdf_q_all],
     }, repeat)
     per_pose = {k: v / len(targets) * 1e6 for k, v in times.items()}
+    print("one class: " + ", ".join(f"{key} {'Mechanism' if isinstance(m, Mechanism) else '?'}"
+                                    f"(backend {m.backend!r})" for key, m in
+                                    (("toml", toml), ("urdf/legs", legs),
+                                     ("urdf/general", general))))
     print(f"6-UPS, {len(targets)} poses: largest index difference to the TOML "
           f"(type I, type II, condition of A)")
     print(f"  urdf/legs                         {diff_legs:.2e}   (target 1e-9)")

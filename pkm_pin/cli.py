@@ -179,9 +179,9 @@ def _load(args, spec: str | None = None):
 
 
 def _is_linkage(mech) -> bool:
-    from .linkage import Linkage
-
-    return isinstance(mech, Linkage)
+    """Whether ``mech`` is read by the general backend (:attr:`Mechanism.backend`): its
+    report, view and studies are the general elimination's."""
+    return getattr(mech, "backend", "legs") == "general"
 
 
 def _linkage_assembly(args, link):

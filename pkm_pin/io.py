@@ -85,17 +85,19 @@ BACKENDS = ("legs", "general")
 def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | None = None,
                    output: str | None = None, point: bool | None = None,
                    backend: str | None = None):
-    """Read a mechanism file, by its suffix:
+    """Read a mechanism file: a :class:`Mechanism` whatever the file, whose
+    :attr:`~Mechanism.backend` is chosen by its suffix:
 
-    * ``.toml``: our format (this module's docstring): legs fixed to a platform give a
-      :class:`Mechanism`; legs meeting at a pin (``closure = "spherical"`` or
-      ``"revolute"``, :mod:`pkm_pin.model.pinned`) a :class:`~pkm_pin.linkage.Linkage`;
+    * ``.toml``: our format (this module's docstring): legs fixed to a platform are read
+      by the per-leg engine (``"legs"``); legs meeting at a pin (``closure =
+      "spherical"`` or ``"revolute"``, :mod:`pkm_pin.model.pinned`) by the general
+      elimination (``"general"``, :class:`~pkm_pin.linkage.Linkage`);
     * ``.urdf``: Extended URDF, the URDF tree plus its closures file (YAML or TOML with
       the keys of Gepetto's example-parallel-robots; beside the URDF, or ``closures``),
-      :func:`pkm_pin.model.read_extended_urdf`: a :class:`~pkm_pin.linkage.Linkage`;
+      :func:`pkm_pin.model.read_extended_urdf`: ``"general"``;
     * ``.xml`` / ``.mjcf``: MJCF with ``<equality>`` closures,
-      :func:`pkm_pin.model.read_mjcf`: a :class:`~pkm_pin.linkage.Linkage` (a tree
-      without closures when it has none).
+      :func:`pkm_pin.model.read_mjcf`: ``"general"`` (a tree without closures when it
+      has none).
 
     Args:
         closures: The closures file of a URDF (default: found beside it).
@@ -108,7 +110,7 @@ def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | Non
             Extended URDF or MJCF file in which that structure is detected
             (:meth:`Mechanism.from_closure_model`: the same machine written as TOML legs
             gives the same numbers); a file without it is refused with the reason.
-            ``"general"``: the general elimination, a :class:`~pkm_pin.linkage.Linkage`,
+            ``"general"``: the general elimination (:attr:`Mechanism.general`),
             for every file (TOML legs through their :attr:`Mechanism.closure_model`).
 
     Raises:
@@ -120,7 +122,14 @@ def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | Non
                          "or leave it out")
     path = Path(path)
     label = str(path)
-    return _with_backend(_load_file(path, label, closures, output, point), backend, label)
+    mech = _with_backend(_load_file(path, label, closures, output, point), backend, label)
+    return Mechanism.of_linkage(mech, description=_description(path)) \
+        if isinstance(mech, Linkage) else mech
+
+
+def _description(path: Path) -> str:
+    """The one-line description of a file read by the general backend."""
+    return f"read from {path.name}"
 
 
 def _load_file(path: Path, label: str, closures, output, point):

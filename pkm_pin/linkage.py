@@ -70,8 +70,9 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 
 from __future__ import annotations
 
+import copy
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field, fields, replace
 from functools import cached_property
 
@@ -84,7 +85,6 @@ from .analysis import classify
 from .assembly import Assembly
 from .closure_gaps import Diagnosis, diagnose
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
-from .mechanism import Mechanism
 from .model.closure_model import (
     ClosureModel,
     NullSpace,
@@ -232,16 +232,29 @@ class Mobility:
 class Linkage:
     """A general closed-loop mechanism (see the module docstring).
 
+    This is the general backend of :class:`pkm_pin.Mechanism` (which every file gives);
+    it stands alone on any closure model.
+
     Args:
         model: The closure model (immutable; kept as :attr:`model`).
         output: Another frame of the tree to analyse instead of ``model.output``.
         point: Analyse the output frame's origin as a point (its translations only,
             :attr:`ClosureModel.output_point`), or as a body (``False``); default: as
             ``model`` says.
+        legs: The per-leg reading of a base–legs–platform machine detected in the model
+            (a function of the tree configuration returning the legs backend, a
+            :class:`pkm_pin.Mechanism`): what :attr:`legs_mechanism` and the
+            capabilities that read a machine leg by leg use. :class:`pkm_pin.Mechanism`
+            gives it; a linkage made alone has none and refuses those capabilities with
+            the reason.
     """
 
+    #: Which backend answers (:attr:`pkm_pin.Mechanism.backend`): the general elimination.
+    backend = "general"
+
     def __init__(self, model: ClosureModel, output: str | None = None,
-                 point: bool | None = None):
+                 point: bool | None = None, *,
+                 legs: Callable[[np.ndarray], object] | None = None):
         if not isinstance(model, ClosureModel):
             raise InputError(f"model must be a ClosureModel, got {type(model).__name__}")
         if output is not None and output != model.output:
@@ -256,6 +269,7 @@ class Linkage:
         self._generic_ranks: tuple[int, int] | None = None
         self._closure_names = tuple(c.name or f"closure {k}"
                                     for k, c in enumerate(model.closures))
+        self._legs_reader = legs
 
     def __repr__(self) -> str:
         return f"Linkage({self.name!r}, actuated={self.actuated}, output={self.output!r})"
@@ -264,6 +278,20 @@ class Linkage:
     def model(self) -> ClosureModel:
         """The closure model."""
         return self._model
+
+    def with_legs(self, legs: Callable[[np.ndarray], object]) -> Linkage:
+        """This linkage with the per-leg reader ``legs`` (the ``legs`` argument), what it
+        has computed kept (its home assembly)."""
+        other = copy.copy(self)
+        other.__dict__.pop("legs_mechanism", None)
+        other._legs_reader = legs
+        return other
+
+    @property
+    def general(self) -> Linkage:
+        """The general reading of this mechanism: itself (:attr:`pkm_pin.Mechanism.general`
+        gives the same name on every mechanism)."""
+        return self
 
     @property
     def name(self) -> str:
@@ -314,18 +342,27 @@ class Linkage:
         return detect_platform(self._model)
 
     @cached_property
-    def legs_mechanism(self) -> Mechanism:
-        """The per-leg reading of this linkage (:meth:`Mechanism.from_closure_model` at
-        :attr:`home_assembly`): what the capabilities that read a machine leg by leg
-        (sensitivity to geometric errors, every working mode, the Study homotopy) use
-        (cached).
+    def legs_mechanism(self):
+        """The per-leg reading of this linkage (:meth:`pkm_pin.Mechanism.from_closure_model`
+        at :attr:`home_assembly`, through the ``legs`` reader given): what the
+        capabilities that read a machine leg by leg (sensitivity to geometric errors,
+        every working mode, the Study homotopy) use (cached).
 
         Raises:
-            InputError: no base–legs–platform structure in the model (the reason).
+            InputError: no base–legs–platform structure in the model (the reason), or a
+                linkage made alone (no ``legs`` reader: use :class:`pkm_pin.Mechanism`).
         """
-        return Mechanism.from_closure_model(self._model, self.home_assembly.q)
+        structure, reason = self.platform_structure
+        if structure is None:
+            raise InputError(f"{self.name or 'this linkage'} is not a base–legs–platform "
+                             f"machine: {reason}")
+        if self._legs_reader is None:
+            raise InputError("a Linkage made alone has no per-leg reading: load the file "
+                             "with pkm_pin.load_mechanism or use "
+                             "pkm_pin.Mechanism.from_model(model)")
+        return self._legs_reader(self.home_assembly.q)
 
-    def _legs(self, what: str) -> Mechanism:
+    def _legs(self, what: str):
         """:attr:`legs_mechanism`, or an :class:`InputError` saying that ``what`` needs
         legs and why this model has none."""
         structure, reason = self.platform_structure
@@ -333,6 +370,10 @@ class Linkage:
             raise InputError(f"{what} reads a machine leg by leg (legs between the base "
                              f"and one platform), and {self.name or 'this linkage'} is not "
                              f"one: {reason}")
+        if self._legs_reader is None:
+            raise InputError(f"{what} reads a machine leg by leg: a Linkage made alone has "
+                             "none; load the file with pkm_pin.load_mechanism or use "
+                             "pkm_pin.Mechanism.from_model(model)")
         return self.legs_mechanism
 
     def legs_assembly(self, q=None) -> Assembly:
@@ -702,7 +743,7 @@ class Linkage:
                              {"starts": tried, "batches": batch, "modes": len(found)},
                              perf_counter() - t0)
 
-    def _homotopy_legs(self, method: str, distance_legs) -> Mechanism | None:
+    def _homotopy_legs(self, method: str, distance_legs):
         """The legs the Study homotopy runs on for ``method`` (``None``: use the
         multistart); ``"homotopy"`` where it does not apply is an :class:`InputError`."""
         if method == "multistart" or (method == "auto"

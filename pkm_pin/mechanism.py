@@ -34,6 +34,7 @@ from .errors import (
     PkmError,
 )
 from .leg import Leg
+from .linkage import Linkage, LoopClosureError
 from .model.chain_urdf import chain_urdf
 from .screws import as_fraction, as_vector, homogenise
 from .solve import (
@@ -54,9 +55,31 @@ from .tolerances import (
 )
 from .twists import LegFrames, TreePass, has_mimic, leg_frames, verified_twists
 
+#: The backends of a :class:`Mechanism` (:attr:`Mechanism.backend`).
+BACKENDS = ("legs", "general")
+
 
 class Mechanism:
-    """A parallel mechanism: legs whose tips are fixed to one platform.
+    """A closed-loop mechanism, whatever file it came from: one closure model (a
+    Pinocchio tree plus closures, :attr:`model`) read by one of two backends
+    (:attr:`backend`):
+
+    * ``"legs"``: a base–legs–platform machine (legs whose tips are fixed to one
+      platform), given as legs (TOML) or detected in any closure model
+      (:meth:`from_closure_model`), analysed leg by leg with seed 000's screws and the
+      compiled per-leg engine;
+    * ``"general"``: any closure model (:meth:`from_model`: an Extended URDF, MJCF,
+      legs meeting at a pin …), read by the general elimination
+      (:class:`~pkm_pin.linkage.Linkage`, :attr:`general`); where a platform structure is
+      detected in it the capabilities that read a machine leg by leg (sensitivity, every
+      working mode, the Study homotopy, partial poses) use its per-leg reading
+      (:attr:`legs_mechanism`).
+
+    Every mechanism answers the same names; those of one backend only are answered on the
+    other through :attr:`general` (mobility, idle motions, transmission over the tree,
+    sub-mechanisms) or :attr:`legs_mechanism`, or refused with the reason.
+
+    The per-leg backend:
 
     The description (legs, anchors, home) is set once; what is computed from it is
     cached in the properties declared below (:attr:`characteristic_length`,
@@ -124,6 +147,64 @@ class Mechanism:
         #: directly (TOML).
         self.source_model = None
         self.structure = None
+        #: ``"legs"`` (this constructor) or ``"general"`` (:meth:`from_model`).
+        self.backend = "legs"
+
+    @classmethod
+    def from_model(cls, model, *, output: str | None = None, point: bool | None = None,
+                   backend: str = "general", q=None, description: str = "") -> Mechanism:
+        """The mechanism of any closure model (:class:`~pkm_pin.model.ClosureModel`).
+
+        Args:
+            output, point: Another output frame, or the output's origin as a point
+                (:class:`~pkm_pin.linkage.Linkage`'s arguments).
+            backend: ``"general"`` (the general elimination answers; a platform structure
+                detected in the model serves the per-leg capabilities) or ``"legs"``
+                (:meth:`from_closure_model`: the per-leg engine answers; the model must
+                hold a base–legs–platform machine).
+            q: For ``backend="legs"``, an assembled configuration of the tree.
+            description: One line saying what it is.
+        """
+        if backend not in BACKENDS:
+            raise InputError(f"backend={backend!r}: write one of "
+                             f"{', '.join(map(repr, BACKENDS))}")
+        if backend == "legs":
+            link = Linkage(model, output, point)
+            return cls.from_closure_model(link.model, q, description=description)
+        return cls.of_linkage(Linkage(model, output, point), description=description)
+
+    @classmethod
+    def of_linkage(cls, link: Linkage, *, description: str = "") -> Mechanism:
+        """The mechanism read by the general backend ``link`` (what it has computed,
+        such as its home assembly, kept)."""
+        if not isinstance(link, Linkage):
+            raise InputError(f"of_linkage() takes a pkm_pin.linkage.Linkage, got "
+                             f"{type(link).__name__}")
+        mech = _ReadByGeneral.__new__(_ReadByGeneral)
+        mech.description = description
+        mech.__dict__["general"] = link.with_legs(mech._legs_at)
+        return mech
+
+    def _legs_at(self, q: np.ndarray) -> Mechanism:
+        """The per-leg reading of the general backend's model at its configuration
+        ``q`` (:attr:`Linkage.legs_mechanism`)."""
+        return Mechanism.from_closure_model(self.general.model, q,
+                                            description=self.description)
+
+    def _itself(self, q: np.ndarray) -> Mechanism:
+        """The per-leg reading of a per-leg mechanism: itself."""
+        return self
+
+    @cached_property
+    def general(self) -> Linkage:
+        """The general elimination of this mechanism (a
+        :class:`~pkm_pin.linkage.Linkage` of :attr:`model`, whose reference
+        configuration is home: its ``home_assembly`` is this mechanism's; cached): what
+        answers mobility, idle motions, point outputs, any output frame and the
+        transmission over the tree on a per-leg mechanism, and everything on a
+        mechanism read by the general backend."""
+        model = dataclasses.replace(self.model, reference=self.tree_configuration())
+        return Linkage(model, legs=self._itself)
 
     @classmethod
     def from_closure_model(cls, model, q=None, *, description: str = "") -> Mechanism:
@@ -200,6 +281,61 @@ class Mechanism:
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, legs={[leg.name for leg in self.legs]})"
+
+    # -------------------------------------------- the general backend's answers
+    def _tree_q(self, q):
+        """The tree configuration of ``q``: an :class:`Assembly` of this mechanism
+        (:meth:`tree_configuration`), a tree configuration as it is, ``None``: home."""
+        if q is None:
+            return self.general.home_assembly.q
+        return self.tree_configuration(q) if isinstance(q, Assembly) else q
+
+    @property
+    def legs_mechanism(self) -> Mechanism:
+        """The per-leg reading of this mechanism: itself (read by the general backend,
+        the machine detected in its model, or the reason there is none)."""
+        return self
+
+    @property
+    def platform_structure(self) -> tuple:
+        """``(structure, reason)``: the base–legs–platform machine detected in
+        :attr:`model` (:func:`pkm_pin.model.structure.detect_platform`)."""
+        return self.general.platform_structure
+
+    def mobility(self, q=None, **options):
+        """The mobility at ``q`` (an :class:`Assembly`, a tree configuration; default
+        home) over the whole tree, its ranks compared with nearby configurations on
+        the closure manifold (:meth:`pkm_pin.linkage.Linkage.mobility`)."""
+        return self.general.mobility(self._tree_q(q), **options)
+
+    def transmission(self, q=None, **options):
+        """The transmission indices over the tree at ``q`` (an :class:`Assembly`, a tree
+        configuration; default home), each actuator's side of its loops its "leg"
+        (:meth:`pkm_pin.linkage.Linkage.transmission`)."""
+        return self.general.transmission(self._tree_q(q), **options)
+
+    def submechanisms(self, q=None) -> list:
+        """The independent sub-mechanisms at ``q`` (:meth:`pkm_pin.linkage.Linkage.
+        submechanisms`): ``[self]`` for one mechanism (a platform machine is one)."""
+        subs = self.general.submechanisms(self._tree_q(q))
+        return [self if sub is self.general else sub for sub in subs]
+
+    def tree_sensitivity(self, q=None, parameters=None):
+        """Sensitivity of the output to any parameter of the model's tree
+        (:meth:`pkm_pin.linkage.Linkage.tree_sensitivity`) at ``q`` (default home)."""
+        return self.general.tree_sensitivity(self._tree_q(q), parameters)
+
+    def reached(self, error: LoopClosureError):
+        """Where an assembly that failed stopped (:meth:`pkm_pin.linkage.Linkage.reached`)."""
+        return self.general.reached(error)
+
+    def legs_assembly(self, q=None) -> Assembly:
+        """The :class:`Assembly` at the tree configuration ``q`` (default home) of a
+        machine detected in a model (:meth:`pkm_pin.linkage.Linkage.legs_assembly`)."""
+        if self.structure is None:
+            raise InputError(f"{self.name} is given as legs: its assemblies are "
+                             "assemble()/assembly_at(), not a tree configuration's")
+        return self.general.legs_assembly(None if q is None else self._tree_q(q))
 
     # ------------------------------------------------------------------ counts
     @property
@@ -833,6 +969,80 @@ def _unique(model: pin.Model, name: str) -> str:
     while model.existFrame(out) or model.existJointName(out):
         out, k = f"{name}_{k}", k + 1
     return out
+
+
+class _ReadByGeneral(Mechanism):
+    """A :class:`Mechanism` read by the general backend (:meth:`Mechanism.from_model`):
+    the names the general elimination has (:class:`~pkm_pin.linkage.Linkage`) are its
+    answers; those of the per-leg engine alone are the per-leg reading's
+    (:attr:`~pkm_pin.linkage.Linkage.legs_mechanism`: the machine detected in the model,
+    or an :class:`InputError` saying why there is none)."""
+
+    backend = "general"
+    submechanisms = Mechanism.submechanisms
+
+    def __getattr__(self, name: str):
+        # names of the general backend alone (idle motions, partial poses on linkages …)
+        if name.startswith("__") or "general" not in self.__dict__:
+            raise AttributeError(name)
+        return getattr(self.__dict__["general"], name)
+
+    def __repr__(self) -> str:
+        return f"Mechanism({self.name!r}, backend='general')"
+
+    def __getstate__(self) -> dict:
+        return dict(self.__dict__)
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
+    @property
+    def name(self) -> str:
+        return self.general.name
+
+    @property
+    def legs_mechanism(self) -> Mechanism:
+        return self.general.legs_mechanism
+
+    @property
+    def structure(self):
+        return self.general.platform_structure[0]
+
+    @property
+    def legs(self) -> list:
+        return self.general.legs_mechanism.legs
+
+    @property
+    def length_unit(self) -> str:
+        return "m"
+
+    @property
+    def source_model(self):
+        return self.general.model
+
+
+def _forward(name: str, member, to: str):
+    """``member`` of :class:`Mechanism` answered on a :class:`_ReadByGeneral` by the
+    member of the same name of ``to`` (``"general"`` or ``"legs_mechanism"``)."""
+    if isinstance(member, (property, cached_property)):
+        return property(lambda self: getattr(getattr(self, to), name),
+                        doc=(member.__doc__ if to == "legs_mechanism" else
+                             getattr(Linkage, name).__doc__))
+
+    def call(self, *args, **kwargs):
+        return getattr(getattr(self, to), name)(*args, **kwargs)
+    call.__name__ = call.__qualname__ = name
+    call.__doc__ = member.__doc__ if to == "legs_mechanism" else getattr(Linkage, name).__doc__
+    return call
+
+
+for _name, _member in list(vars(Mechanism).items()):
+    if _name.startswith("_") or _name in vars(_ReadByGeneral) or _name == "general" \
+            or isinstance(_member, (classmethod, staticmethod)):
+        continue
+    setattr(_ReadByGeneral, _name,
+            _forward(_name, _member, "general" if hasattr(Linkage, _name) else "legs_mechanism"))
+del _name, _member
 
 
 __all__ = ["Assembly", "Mechanism", "as_pose", "placement"]

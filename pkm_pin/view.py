@@ -154,12 +154,10 @@ def view(
         InputError: ``mech`` is not a mechanism or the pose is malformed.
         AssemblyError: the mechanism does not assemble at the pose given.
     """
-    from .linkage import Linkage
-
-    if isinstance(mech, Linkage):  # a general linkage: pkm_pin.view_linkage
+    if getattr(mech, "backend", None) == "general":  # pkm_pin.view_linkage
         from .view_linkage import view_linkage
 
-        return view_linkage(mech, pose_or_assembly, visualizer=visualizer, open=open,
+        return view_linkage(mech.general, pose_or_assembly, visualizer=visualizer, open=open,
                             html=html, show_screws=show_screws, show_wrenches=show_wrenches,
                             source=source)
     if not isinstance(mech, Mechanism):

@@ -198,6 +198,7 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
         LoopClosureError: the inverse kinematics of a pose fails (a pose is not
             drawn open).
     """
+    link = getattr(link, "general", link)  # a Mechanism read by the general backend
     if not isinstance(link, Linkage):
         raise InputError(f"view_linkage() takes a pkm_pin Linkage, got {type(link).__name__}")
     assembly = _assembly(link, where)

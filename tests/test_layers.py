@@ -50,10 +50,13 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         "dynamics; dynamic_indices: actuator-space and output inertias, gravity maps)",
         ("position", "modes", "sweep", "workspace", "sensitivity", "tree_sensitivity",
          "calibration", "trajectory", "simulation", "dynamic_indices")),
-    6: ("the facades: Mechanism and Linkage tie solver, analysis and studies together; "
-        "io reads every file format into one of them",
-        ("mechanism", "linkage", "io")),
-    7: ("outputs and applications of the facades: reports, scenes, plots, the CLI, the "
+    6: ("the general backend: Linkage, the general elimination over one tree and its "
+        "closures, on the solver, the analysis and the studies",
+        ("linkage",)),
+    7: ("the facade: Mechanism, one closure model read by the per-leg engine or the "
+        "general backend; io reads every file format into one",
+        ("mechanism", "io")),
+    8: ("outputs and applications of the facades: reports, scenes, plots, the CLI, the "
         "cross-check, the example builders, the package's public names",
         ("report", "report_linkage", "scene", "view", "view_linkage", "plots", "cli",
          "crosscheck", "builders", "builders.__main__", "builders.design",

@@ -85,12 +85,15 @@ def test_forward_kinematics_agree_and_map_back_to_the_file(stewart):
 
 
 def test_general_backend_of_the_toml_stewart(stewart):
-    """load_mechanism(backend='general') reads TOML legs as a Linkage with the same
-    forward velocity map; backend='legs' of the URDF is a Mechanism."""
+    """load_mechanism(backend='general') reads TOML legs as a Mechanism whose answers
+    are the general elimination's (a Linkage), with the same forward velocity map;
+    backend='legs' of the URDF is a Mechanism read leg by leg."""
     toml, _, _, path = stewart
     general = pkm_pin.load_mechanism(STEWART, backend="general")
-    assert isinstance(general, Linkage)
-    assert isinstance(pkm_pin.load_mechanism(path, backend="legs"), Mechanism)
+    assert isinstance(general, Mechanism) and general.backend == "general"
+    assert isinstance(general.general, Linkage)
+    legs = pkm_pin.load_mechanism(path, backend="legs")
+    assert isinstance(legs, Mechanism) and legs.backend == "legs"
     q = configuration(toml, toml.home_assembly)
     la, ma = general.analyze(q), toml.home_analysis
     for k in range(6):
@@ -325,7 +328,8 @@ def test_default_backend_gives_the_machines_indices(stewart):
     seed 000 indices are the TOML's to 1e-9 — the indices of the machine, not of the
     tree the file wrote (issue 24's 0.993/0.958, 0.166/0.400 came from two lengths)."""
     toml, link, q, _ = stewart
-    assert isinstance(link, Linkage)
+    assert isinstance(link, Mechanism) and link.backend == "general"
+    assert isinstance(link.general, Linkage)
     assert link.model.length == pytest.approx(toml.characteristic_length, rel=1e-12)
     a, b = link.analyze(q), toml.home_analysis
     assert (a.dof, a.singularity) == (b.dof, b.singularity)

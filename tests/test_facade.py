@@ -1,0 +1,126 @@
+"""One facade (issue 24): every file gives a :class:`pkm_pin.Mechanism`, whose
+``backend`` says which engine answers, and both backends answer the same names.
+
+The general backend's answers are its :attr:`Mechanism.general`'s (a Linkage) exactly;
+the per-leg backend answers the tree's questions (mobility with generic ranks,
+transmission over the tree, sub-mechanisms) through the general elimination of its own
+closure model assembled at its home; a per-leg-only name on a model with no legs is refused
+with the reason.
+"""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pkm_pin
+from pkm_pin import Mechanism, load_mechanism
+from pkm_pin.errors import InputError
+from pkm_pin.linkage import Linkage
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = ROOT / "models"
+FIVE_BAR = MODELS / "loops" / "five_bar.urdf"
+FOUR_BAR = MODELS / "loops" / "four_bar.urdf"
+RPR3 = MODELS / "mechanisms" / "rpr3.toml"
+STEWART = MODELS / "mechanisms" / "stewart.toml"
+SHIPPED = sorted([*MODELS.glob("mechanisms/*.toml"), *MODELS.glob("pinned/*.toml"),
+                  *MODELS.glob("loops/*.urdf"), *MODELS.glob("loops/*.xml")])
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_every_shipped_file_is_a_mechanism(path):
+    """One class whatever the file; the backend by suffix (TOML legs: legs; the rest:
+    general) and the general backend's object behind it."""
+    mech = load_mechanism(path)
+    assert isinstance(mech, Mechanism)
+    expected = "legs" if path.parent.name == "mechanisms" else "general"
+    assert mech.backend == expected
+    assert isinstance(mech.general, Linkage)
+    assert mech.name == mech.general.name
+    assert repr(mech).startswith("Mechanism(")
+
+
+def test_general_backend_answers_are_its_linkages():
+    """The five-bar: assembly, analysis, FK, mobility, transmission and the actuated
+    names are those of mech.general to the last bit."""
+    mech = load_mechanism(FIVE_BAR)
+    link = mech.general
+    a = mech.assemble()
+    np.testing.assert_array_equal(a.q, link.assemble().q)
+    an, ref = mech.analyze(a.q), link.analyze(a.q)
+    np.testing.assert_array_equal(an.A, ref.A)
+    np.testing.assert_array_equal(an.B, ref.B)
+    assert an.dof == ref.dof == 2
+    assert mech.actuated_names == link.actuated_names and mech.n_actuated == 2
+    qa = a.q_actuated + 0.05
+    np.testing.assert_array_equal(mech.forward_kinematics(qa, guess=a.q).q,
+                                  link.forward_kinematics(qa, guess=a.q).q)
+    assert mech.mobility(a) == link.mobility(a.q)
+    assert mech.submechanisms() == [mech]
+    t, r = mech.transmission(a.q), link.transmission(a.q)
+    assert t.worst == r.worst
+
+
+def test_per_leg_backend_answers_the_trees_questions():
+    """The TOML Stewart answers mobility (generic ranks), transmission over the tree and
+    its sub-mechanisms through its general reading, assembled at its home."""
+    mech = load_mechanism(STEWART)
+    assert mech.backend == "legs" and mech.legs_mechanism is mech
+    home = mech.home_assembly
+    mob = mech.mobility(home)
+    # 6 × (U 2 + P 1 + S 3) + the platform's 6 = 42 rates, 6 welds = 36 rows: Grübler 6
+    assert mob.dof == mech.home_analysis.dof == 6 and mob.idle_dof == 0 and mob.grubler == 6
+    assert not mob.singular
+    np.testing.assert_allclose(mech.general.home_assembly.q, mech.tree_configuration(home),
+                               atol=1e-12)
+    assert mech.submechanisms() == [mech]
+    structure, _ = mech.platform_structure
+    assert structure is not None and len(structure.legs) == 6
+
+
+def test_from_model_reads_either_backend():
+    """Mechanism.from_model: the general backend by default, the per-leg engine on a
+    detected machine with backend='legs' (same forward velocity map at home)."""
+    source = load_mechanism(FOUR_BAR)
+    general = Mechanism.from_model(source.model)
+    assert general.backend == "general"
+    legs = Mechanism.from_model(source.model, backend="legs", q=source.home_assembly.q)
+    assert legs.backend == "legs" and legs.structure is not None
+    with pytest.raises(InputError, match="backend='planar'.*'legs', 'general'"):
+        Mechanism.from_model(source.model, backend="planar")
+    with pytest.raises(InputError, match="takes a pkm_pin.linkage.Linkage"):
+        Mechanism.of_linkage(source)
+
+
+def test_per_leg_names_on_a_model_without_legs_say_why():
+    """A per-leg-only name (the compiled leg frames) on the five-bar, whose closures do
+    not join one platform, is refused with the structure's reason; a Linkage made alone
+    points to the facade."""
+    mech = load_mechanism(FIVE_BAR)
+    with pytest.raises(InputError, match="not a base–legs–platform machine"):
+        mech.leg_frames
+    four = load_mechanism(FOUR_BAR)
+    alone = Linkage(four.model)
+    with pytest.raises(InputError, match="Mechanism.from_model"):
+        alone.legs_mechanism
+    assert isinstance(four.legs_mechanism, Mechanism)
+    assert four.legs_mechanism.backend == "legs"
+
+
+def test_general_backend_mechanism_pickles():
+    """A general-backend mechanism crosses process boundaries (workspaces with jobs)."""
+    mech = load_mechanism(FIVE_BAR)
+    a = mech.assemble()
+    back = pickle.loads(pickle.dumps(mech))
+    assert back.backend == "general" and back.name == mech.name
+    np.testing.assert_allclose(back.analyze(a.q).A, mech.analyze(a.q).A, atol=1e-12)
+
+
+def test_the_public_name_is_the_facade():
+    """pkm_pin.Mechanism is the class every loader returns."""
+    assert pkm_pin.Mechanism is Mechanism
+    assert isinstance(load_mechanism(RPR3), pkm_pin.Mechanism)
