@@ -551,7 +551,7 @@ def sensitivity_text(data: dict, top: int) -> str:
 
 
 def _submechanisms_or_why(link, k: int | None, failed: dict | None = None) -> list:
-    """:meth:`Linkage.submechanisms` as an optional section
+    """:meth:`Mechanism.submechanisms` (``[mech]`` for a platform machine) as an optional section
     (:func:`pkm_pin.report.optional`: ``[link]`` with the error in ``failed`` when the
     split fails), or, for ``--sub K`` (``k`` given), the error in one line."""
     from .report import optional
@@ -1230,13 +1230,8 @@ def _print_dynamic_indices(mech, args) -> int:
     gravity efforts at home; for a linkage of several independent sub-mechanisms (a
     biped's legs, :mod:`pkm_pin.submechanisms`) those of each one, with its own actuators
     and output (JSON: ``submechanisms``, a list), and with ``--sub K`` those of K alone."""
-    parts = [mech]
-    if _is_linkage(mech):
-        subs = _submechanisms_or_why(mech, args.sub)
-        parts = subs if args.sub is None else [_pick_sub(mech, subs, args.sub)]
-    elif args.sub is not None:
-        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for "
-                         "a platform mechanism; leave --sub out")
+    subs = _submechanisms_or_why(mech, args.sub)
+    parts = subs if args.sub is None else [_pick_sub(mech, subs, args.sub)]
     rows = [(part, *_indices_of(part)) for part in parts]
     if len(rows) > 1:
         data = {"mechanism": mech.name, "submechanisms": [
@@ -1356,11 +1351,6 @@ def _workspace_part(args, mech) -> tuple:
     """``(mechanism, note)``: what ``workspace`` studies: with ``--sub K`` a linkage's
     independent sub-mechanism K (its own actuators and output, as ``map --sub K``), else
     the whole, with a note when it has several sub-mechanisms (None otherwise)."""
-    if not _is_linkage(mech):
-        if args.sub is not None:
-            raise InputError("--sub K (one independent sub-mechanism of a linkage) is not "
-                             "for a platform mechanism")
-        return mech, None
     subs = _submechanisms_or_why(mech, args.sub)
     if args.sub is not None:
         return _pick_sub(mech, subs, args.sub), None

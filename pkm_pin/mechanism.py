@@ -273,11 +273,11 @@ class Mechanism:
         return q
 
     def __getstate__(self) -> dict:
-        """Pickle without the cached home analysis and closure model (recomputed on
-        demand; the closure model's Pinocchio tree may hold mimic joints, which
-        Pinocchio 4.1 does not unpickle soundly: see :meth:`Leg.__getstate__`)."""
+        """Pickle without the cached home analysis, closure model and general reading
+        (recomputed on demand; the closure model's Pinocchio tree may hold mimic joints,
+        which Pinocchio 4.1 does not unpickle soundly: see :meth:`Leg.__getstate__`)."""
         return {k: v for k, v in self.__dict__.items()
-                if k not in ("home_analysis", "closure_model", "tree_pass")}
+                if k not in ("home_analysis", "closure_model", "tree_pass", "general")}
 
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, legs={[leg.name for leg in self.legs]})"
@@ -316,7 +316,10 @@ class Mechanism:
 
     def submechanisms(self, q=None) -> list:
         """The independent sub-mechanisms at ``q`` (:meth:`pkm_pin.linkage.Linkage.
-        submechanisms`): ``[self]`` for one mechanism (a platform machine is one)."""
+        submechanisms`): ``[self]`` for one mechanism (a platform machine is one: its
+        legs share the platform)."""
+        if self.backend == "legs":
+            return [self]
         subs = self.general.submechanisms(self._tree_q(q))
         return [self if sub is self.general else sub for sub in subs]
 

@@ -124,3 +124,19 @@ def test_the_public_name_is_the_facade():
     """pkm_pin.Mechanism is the class every loader returns."""
     assert pkm_pin.Mechanism is Mechanism
     assert isinstance(load_mechanism(RPR3), pkm_pin.Mechanism)
+
+
+def test_sub_on_a_platform_machine_is_one_path(tmp_path, capsys):
+    """--sub K goes through Mechanism.submechanisms for every mechanism: a platform
+    machine is one ([mech]), so --sub 0 on the Stewart is refused in one line saying so,
+    by workspace and by dynamics --indices alike (one path, no branch per backend)."""
+    from pkm_pin.cli import main
+
+    mech = load_mechanism(STEWART)
+    assert mech.submechanisms() == [mech]
+    for argv in (["dynamics", str(STEWART), "--indices", "--sub", "0"],
+                 ["workspace", str(STEWART), "--sub", "0", "--n", "2", "--quiet",
+                  "--out", str(tmp_path / "ws")]):
+        assert main(argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "is one mechanism (no independent sub-mechanisms)" in err[0]
