@@ -635,22 +635,23 @@ class Linkage:
                                 diagnosis=found)
 
     # ------------------------------------------------------------- mobility
-    def mobility(self, q, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
+    def mobility(self, q=None, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
                  seed: int = 0) -> Mobility:
         """:class:`Mobility` at the configuration ``q`` (assembled, or a
-        :class:`LinkageAssembly`), its ranks compared with those at ``nearby``
+        :class:`LinkageAssembly`; default :attr:`home_assembly`), its ranks compared with those at ``nearby``
         configurations on the closure manifold (``0``: not compared; ``seed``: of their
         random steps)."""
+        q = self.home_assembly.q if q is None else q
         q = q.q if isinstance(q, LinkageAssembly) else q
         kin = self._model.kinematics(q)
         return _mobility(self, kin, NullSpace(self._model, kin, rtol), rtol, nearby, seed)
 
     # ------------------------------------------------------------- analysis
-    def analyze(self, q, *, about: str = "output", generic: LinkageAnalysis | None = None,
+    def analyze(self, q=None, *, about: str = "output", generic: LinkageAnalysis | None = None,
                 rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL,
                 nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
         """:class:`LinkageAnalysis` of the output frame at the assembled ``q`` (or a
-        :class:`LinkageAssembly`).
+        :class:`LinkageAssembly`; default :attr:`home_assembly`).
 
         Args:
             about: ``"output"`` (homogenise about the output frame's origin: frame-
@@ -664,6 +665,7 @@ class Linkage:
         """
         if about not in ("output", "world"):
             raise InputError(f"about must be 'output' or 'world', got {about!r}")
+        q = self.home_assembly.q if q is None else q
         q = self._model.check_q(q.q if isinstance(q, LinkageAssembly) else q)
         return _analyse(self, q, about, generic, rtol, singular_tol, nearby)
 
@@ -757,9 +759,9 @@ class Linkage:
             return None
         return mech if method == "homotopy" or distance_legs(mech) is not None else None
 
-    def transmission(self, q, *, analysis: LinkageAnalysis | None = None):
+    def transmission(self, q=None, *, analysis: LinkageAnalysis | None = None):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or
-        :class:`LinkageAssembly`; :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010):
+        :class:`LinkageAssembly`; default :attr:`home_assembly`; :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010):
         each actuator's side of its loops is its "leg". ``analysis``: :meth:`analyze` of
         the same ``q`` about the output, when the caller has made it (not made again).
 
@@ -792,6 +794,7 @@ class Linkage:
         """
         from .transmission import Transmission, transmission_indices
 
+        q = self.home_assembly.q if q is None else q
         q = q.q if isinstance(q, LinkageAssembly) else self._model.check_q(q)
         model, kin = self._model, self._model.kinematics(q)
         an = analysis

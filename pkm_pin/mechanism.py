@@ -457,7 +457,7 @@ class Mechanism:
         for constraint singularities: the home pose is taken as a generic pose)."""
         return self.analyze(self.home_assembly)
 
-    def assemble(self, pose, guess=None, *, tol: float = CLOSURE_TOL,
+    def assemble(self, pose=None, guess=None, *, tol: float = CLOSURE_TOL,
                  restarts: int = 24, project: bool = True) -> Assembly:
         """Solve every leg so that its tip coincides with ``pose * anchor``.
 
@@ -465,7 +465,8 @@ class Mechanism:
             pose: Platform pose (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw), or
                 a partial pose: a mapping of some of x, y, z, roll, pitch, yaw to values
                 (completed first, :meth:`complete_pose`; ``info["given"]``,
-                ``info["held"]``).
+                ``info["held"]``); default :attr:`home` (every mechanism assembles
+                without an argument, as a general-backend one from its reference).
             guess: An :class:`Assembly` or a list of leg configurations to warm-start
                 from (default: the home assembly), which keeps the legs on its branch.
             tol: Relative closure tolerance of each leg.
@@ -487,6 +488,7 @@ class Mechanism:
             DependentCoordinates, ForwardKinematicsError: a partial pose that is not
                 one of the mechanism's independent coordinates, or cannot be completed.
         """
+        pose = self.home if pose is None else pose
         tol = as_fraction(tol, "tol")
         if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) \
                 or restarts < 0:

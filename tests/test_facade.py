@@ -140,3 +140,22 @@ def test_sub_on_a_platform_machine_is_one_path(tmp_path, capsys):
         assert main(argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and "is one mechanism (no independent sub-mechanisms)" in err[0]
+
+
+@pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_every_mechanism_answers_the_same_names(path):
+    """The names both backends share answer without arguments at home (assemble,
+    analyze, mobility, transmission, sub-mechanisms, the tree's configuration), and
+    agree with each other: the analysis' DOF is the mobility's, the home configuration
+    closes the loops, assembling again lands on it."""
+    mech = load_mechanism(path)
+    a = mech.assemble()
+    an = mech.analyze()
+    mob = mech.mobility()
+    assert an.dof == mob.dof >= 1
+    assert mech.transmission() is not None
+    assert mech.submechanisms()[0] is mech or len(mech.submechanisms()) > 1
+    q = mech.tree_configuration()
+    assert np.abs(mech.model.closure_residual(q)).max() < 1e-8
+    np.testing.assert_allclose(mech.tree_configuration(a) if mech.backend == "legs" else a.q,
+                               q, atol=1e-7)
