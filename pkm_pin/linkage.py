@@ -102,6 +102,8 @@ from .tolerances import (
     CLOSURE_TOL,
     GIMBAL_LOCK_RTOL,
     JOINT_LIMIT_SLACK,
+    MODES_MAX,
+    MODES_MAX_BATCHES,
     MODES_PATIENCE,
     NEARBY_SAMPLES,
     NEARBY_STEP,
@@ -638,9 +640,9 @@ class Linkage:
     def mobility(self, q=None, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
                  seed: int = 0) -> Mobility:
         """:class:`Mobility` at the configuration ``q`` (assembled, or a
-        :class:`LinkageAssembly`; default :attr:`home_assembly`), its ranks compared with those at ``nearby``
-        configurations on the closure manifold (``0``: not compared; ``seed``: of their
-        random steps)."""
+        :class:`LinkageAssembly`; default :attr:`home_assembly`), its ranks compared with
+        those at ``nearby`` configurations on the closure manifold (``0``: not compared;
+        ``seed``: of their random steps)."""
         q = self.home_assembly.q if q is None else q
         q = q.q if isinstance(q, LinkageAssembly) else q
         kin = self._model.kinematics(q)
@@ -718,8 +720,15 @@ class Linkage:
         t0 = perf_counter()
         target = self.check_actuated(q_actuated)
         model = self._model
-        found, signatures, batch, quiet, tried = [], [], 0, 0, 0
+        found, signatures, batch, quiet, tried = [], np.zeros((0, 0)), 0, 0, 0
         while quiet < patience:
+            if batch >= MODES_MAX_BATCHES or len(found) > MODES_MAX:
+                raise ForwardKinematicsError(
+                    f"the assemblies of {self.name!r} at the actuated values "
+                    f"{np.round(target, 6)} do not settle into modes: {len(found)} distinct "
+                    f"ones after {tried} starts, new ones still appearing (a continuum: "
+                    "see mobility()'s idle motions); forward_kinematics gives the one "
+                    "nearest a guess")
             rows = tree_starts(model, None if batch else model.reference, count=starts,
                                seed=seed + batch)
             new = False
@@ -729,10 +738,15 @@ class Linkage:
                 if not sol.converged:
                     continue
                 sig = self._signature(sol.q)
-                if all(np.max(np.abs(sig - s)) > SAME_CONFIGURATION_TOL for s in signatures):
-                    signatures.append(sig)
-                    found.append(self._assembly(sol, sol.iterations))
-                    new = True
+                if not found:
+                    self._refuse_continuum(sol.q)
+                    signatures = sig[None, :]
+                elif (np.abs(signatures - sig).max(axis=1) > SAME_CONFIGURATION_TOL).all():
+                    signatures = np.vstack([signatures, sig])
+                else:
+                    continue
+                found.append(self._assembly(sol, sol.iterations))
+                new = True
             batch += 1
             quiet = 0 if new else quiet + 1
         if not found:
@@ -744,6 +758,33 @@ class Linkage:
         return AssemblyModes(found, False, "multistart",
                              {"starts": tried, "batches": batch, "modes": len(found)},
                              perf_counter() - t0)
+
+    def _refuse_continuum(self, q) -> None:
+        """A :class:`ForwardKinematicsError` where the assembled ``q`` moves with every
+        actuated joint locked in a way that moves a joint origin or the output (an
+        underactuated mechanism, a gripper's adaptive fingers): its assemblies at these
+        actuated values form a continuum, which no list of modes enumerates. Idle
+        motions that move nothing (a rod spinning between its spherical joints) pass.
+        Decided on the closure Jacobian with the actuated rows added (rates in radians
+        and lengths ``L``, rank by :data:`~pkm_pin.tolerances.RANK_RTOL`), each free
+        direction's effect on :meth:`_signature` by a central difference."""
+        model = self._model
+        U = model.velocity_units
+        H = model.closure_jacobian(q) * U
+        H = np.vstack([H, np.eye(model.nv)[list(model.actuated_v)]])
+        rank, _, _, Vt = svd_rank(H, RANK_RTOL)
+        moving, h = 0, 1e-6
+        for n in Vt[rank:]:
+            up = self._signature(pin.integrate(model.tree, q, h * U * n))
+            down = self._signature(pin.integrate(model.tree, q, -h * U * n))
+            moving += float(np.abs(up - down).max()) / (2 * h) > 1e-3
+        if moving:
+            raise ForwardKinematicsError(
+                f"{self.name!r} still moves with its actuated joints locked ({moving} "
+                f"motion{'s' * (moving > 1)} that move its bodies: it is underactuated, "
+                "see mobility()): its assemblies at given actuated values form a "
+                "continuum, not a list of modes; forward_kinematics gives the one nearest "
+                "a guess")
 
     def _homotopy_legs(self, method: str, distance_legs):
         """The legs the Study homotopy runs on for ``method`` (``None``: use the
@@ -761,9 +802,10 @@ class Linkage:
 
     def transmission(self, q=None, *, analysis: LinkageAnalysis | None = None):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or
-        :class:`LinkageAssembly`; default :attr:`home_assembly`; :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010):
-        each actuator's side of its loops is its "leg". ``analysis``: :meth:`analyze` of
-        the same ``q`` about the output, when the caller has made it (not made again).
+        :class:`LinkageAssembly`; default :attr:`home_assembly`;
+        :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010): each actuator's side of its
+        loops is its "leg". ``analysis``: :meth:`analyze` of the same ``q`` about the
+        output, when the caller has made it (not made again).
 
         The transmission wrench of an actuator is the one its loop passes on to the
         output: reciprocal to every passive freedom of the loop (its passive joints and

@@ -191,6 +191,14 @@ HOMOTOPY_REAL_TOL = 1e-6
 #: in a row that find no new assembly mode.
 MODES_PATIENCE = 5
 
+#: The multistart of a general linkage's :meth:`~pkm_pin.linkage.Linkage.
+#: forward_kinematics_all` gives up after this many batches, or this many distinct
+#: assemblies (new ones still appearing: a continuum the local check at the first
+#: assembly did not see, not a list of modes). Healthy files settle in 6 to 10 batches
+#: with 2 to 8 modes.
+MODES_MAX_BATCHES = 64
+MODES_MAX = 256
+
 # ====================================================================== dynamics
 #: Inverse dynamics (:mod:`pkm_pin.dynamics`): a velocity with ``J v`` or an
 #: acceleration with ``J a + J̇ v`` above this fraction of the size of its terms (the

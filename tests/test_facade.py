@@ -159,3 +159,30 @@ def test_every_mechanism_answers_the_same_names(path):
     assert np.abs(mech.model.closure_residual(q)).max() < 1e-8
     np.testing.assert_allclose(mech.tree_configuration(a) if mech.backend == "legs" else a.q,
                                q, atol=1e-7)
+
+
+GRIPPER = ROOT / "tests" / "data" / "menagerie" / "robotiq_2f85" / "2f85.xml"
+DISNEY = ROOT / "tests" / "data" / "gepetto" / "disney_like" / "robot.urdf"
+
+
+def test_every_mode_of_an_underactuated_mechanism_is_refused_in_a_sentence():
+    """Robotiq's 2F-85 (one motor, two adaptive fingers: mobility 3, idle 2) has a
+    continuum of assemblies at a motor value: forward_kinematics_all says so at once
+    (the free directions of the closure Jacobian with the motor locked move its bodies)
+    instead of collecting 'modes' for minutes; the disney-like leg, whose hip group spins
+    with every motor locked, stops when new assemblies keep appearing; the five-bar
+    still finds its two modes."""
+    from pkm_pin.errors import ForwardKinematicsError
+
+    gripper = load_mechanism(GRIPPER)
+    mob = gripper.mobility()
+    assert (mob.dof, mob.idle_dof, gripper.n_actuated) == (3, 2, 1)
+    with pytest.raises(ForwardKinematicsError, match="still moves with its actuated joints "
+                       "locked \\(2 motions"):
+        gripper.forward_kinematics_all(gripper.home_assembly.q_actuated)
+    disney = load_mechanism(DISNEY)
+    with pytest.raises(ForwardKinematicsError, match="do not settle into modes"):
+        disney.forward_kinematics_all(disney.home_assembly.q_actuated)
+    five = load_mechanism(FIVE_BAR)
+    modes = five.forward_kinematics_all(five.home_assembly.q_actuated)
+    assert len(modes) == 2 and modes.counts["batches"] <= 10
