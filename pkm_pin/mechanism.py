@@ -992,6 +992,10 @@ class _ReadByGeneral(Mechanism):
             raise AttributeError(name)
         return getattr(self.__dict__["general"], name)
 
+    def __dir__(self) -> list:
+        return sorted(set(super().__dir__()) | {n for n in dir(self.general)
+                                               if not n.startswith("_")})
+
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, backend='general')"
 
@@ -1015,7 +1019,19 @@ class _ReadByGeneral(Mechanism):
 
     @property
     def legs(self) -> list:
-        return self.general.legs_mechanism.legs
+        """The legs of the machine detected in the model (:attr:`legs_mechanism`)."""
+        return self.legs_mechanism.legs
+
+    @property
+    def anchors(self) -> list:
+        """The legs' anchors on the platform of the detected machine."""
+        return self.legs_mechanism.anchors
+
+    @property
+    def home(self) -> pin.SE3:
+        """The platform's home pose of the detected machine (the output's home pose of
+        any model: ``home_assembly.output_pose``)."""
+        return self.legs_mechanism.home
 
     @property
     def length_unit(self) -> str:

@@ -197,6 +197,9 @@ MODES_PATIENCE = 5
 #: assembly did not see, not a list of modes). Healthy files settle in 6 to 10 batches
 #: with 2 to 8 modes.
 MODES_MAX_BATCHES = 64
+
+#: The distinct assemblies after which that multistart gives up (see
+#: :data:`MODES_MAX_BATCHES`).
 MODES_MAX = 256
 
 # ====================================================================== dynamics

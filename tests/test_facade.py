@@ -186,3 +186,24 @@ def test_every_mode_of_an_underactuated_mechanism_is_refused_in_a_sentence():
     five = load_mechanism(FIVE_BAR)
     modes = five.forward_kinematics_all(five.home_assembly.q_actuated)
     assert len(modes) == 2 and modes.counts["batches"] <= 10
+
+
+def test_a_general_backend_mechanism_lists_what_it_answers():
+    """dir() of a general-backend mechanism holds the general backend's public names
+    (idle motions, partial poses, the tree's sensitivity) besides the facade's."""
+    names = dir(load_mechanism(FIVE_BAR))
+    for name in ("mobility", "legs_mechanism", "tree_sensitivity", "reached", "with_legs",
+                 "analyze", "backend", "general"):
+        assert name in names, name
+
+
+def test_per_leg_description_of_a_general_backend_mechanism():
+    """legs, anchors and home of a general-backend mechanism are those of the machine
+    detected in its model (the four-bar: two legs, the rocker's home at x = 0.1), and a
+    sentence where there is none (the five-bar's output is a point)."""
+    four = load_mechanism(FOUR_BAR)
+    assert len(four.legs) == len(four.anchors) == 2
+    np.testing.assert_allclose(four.home.translation,
+                               four.home_assembly.output_pose.translation, atol=1e-12)
+    with pytest.raises(InputError, match="the output is a point"):
+        load_mechanism(FIVE_BAR).home
