@@ -25,7 +25,13 @@ from numba.extending import register_jitable
 
 from .compiling import SameTypes
 from .newton import lm_damping
-from .tree_kernel import _newton_step, _relative_columns, closure_rows, tree_integrate, workspace
+from .tree_kernel import (
+    _newton_step,
+    _relative_columns,
+    closure_rows,
+    stepped_within,
+    workspace,
+)
 
 
 @register_jitable
@@ -107,14 +113,7 @@ def solve_output_kernel(k, q, sel, target, scales, lower, upper, tol, max_iter, 
             break
         for a in range(nv):
             dv[a] = units[a] * dx[a]
-        for a in range(nq):
-            q_new[a] = q[a]
-        tree_integrate(kind, iq, iv, q_new, dv)
-        finite = True
-        for a in range(nq):
-            q_new[a] = min(upper[a], max(lower[a], q_new[a]))
-            finite = finite and math.isfinite(q_new[a])
-        if not finite:
+        if not stepped_within(kind, iq, iv, nq, q, dv, lower, upper, q_new):
             break
         for a in range(nq):
             q[a] = q_new[a]

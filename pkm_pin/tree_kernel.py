@@ -703,6 +703,20 @@ def _actuated_rows(n0, act_q, act_two, act_scales, act_v, q, targets, e, H):
 
 
 @register_jitable
+def stepped_within(kind, iq, iv, nq, q, dv, lower, upper, q_new) -> bool:
+    """``q_new ← integrate(q, dv)`` (the first ``nq`` coordinates) clipped to the limits
+    ``[lower, upper]``; False when a coordinate is not finite (the step to refuse)."""
+    for a in range(nq):
+        q_new[a] = q[a]
+    tree_integrate(kind, iq, iv, q_new, dv)
+    finite = True
+    for a in range(nq):
+        q_new[a] = min(upper[a], max(lower[a], q_new[a]))
+        finite = finite and math.isfinite(q_new[a])
+    return finite
+
+
+@register_jitable
 def _newton_step(Hf, e, m, nf, lam, N, g, inv, dx) -> bool:
     """The damped Newton step ``dx = −(Hfᵀ Hf + λ I)⁻¹ Hfᵀ e`` on the first ``m`` rows and
     ``nf`` columns (``L D Lᵀ`` of the normal equations), shortened to
@@ -799,14 +813,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
         for a in range(nf):
             step += dx[a] * dx[a]
             dv[cols[a]] = units[cols[a]] * dx[a]
-        for a in range(nq):
-            q_new[a] = q[a]
-        tree_integrate(kind, iq, iv, q_new, dv)
-        finite = True
-        for a in range(nq):
-            q_new[a] = min(upper[a], max(lower[a], q_new[a]))
-            finite = finite and math.isfinite(q_new[a])
-        if not finite:
+        if not stepped_within(kind, iq, iv, nq, q, dv, lower, upper, q_new):
             break
         it += 1
         moved = _moved(kind, iq, iv, units, q, q_new, dv)
