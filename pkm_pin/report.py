@@ -302,13 +302,10 @@ def transmission_data(tr) -> dict:
 def _idle(analysis) -> list[str]:
     """The idle motions of the mechanism at the analysed assembly, in words: the motions
     of its joints that move neither an actuator nor the platform (a leg spinning about
-    the line through its two spherical joints), read from its closure model."""
-    from .linkage import Linkage
-    from .model.closure_model import configuration
-
-    mech = analysis.mechanism
-    link = Linkage(mech.closure_model)
-    return list(link.mobility(configuration(mech, analysis.assembly), nearby=0).idle_motions)
+    the line through its two spherical joints), read from its closure model
+    (:meth:`Mechanism.mobility`, the general reading of its tree)."""
+    mob = analysis.mechanism.mobility(analysis.assembly, nearby=0)
+    return list(mob.idle_motions)
 
 
 # ---------------------------------------------------------------------- Markdown

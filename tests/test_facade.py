@@ -207,3 +207,13 @@ def test_per_leg_description_of_a_general_backend_mechanism():
                                four.home_assembly.output_pose.translation, atol=1e-12)
     with pytest.raises(InputError, match="the output is a point"):
         load_mechanism(FIVE_BAR).home
+
+
+def test_builders_give_a_mechanism_for_pinned_legs_too():
+    """A design whose legs meet at a pin builds a Mechanism read by the general backend
+    (it was a bare Linkage): the five-bar, DOF 2 as before."""
+    from pkm_pin.builders.pinned import five_bar
+
+    mech = five_bar().build()
+    assert isinstance(mech, Mechanism) and mech.backend == "general"
+    assert mech.analyze().dof == 2

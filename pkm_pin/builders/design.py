@@ -114,16 +114,18 @@ class MechanismDesign:
         return [leg.leg() for leg in self.legs]
 
     def build(self):
-        """The :class:`~pkm_pin.mechanism.Mechanism` of this design (a
-        :class:`~pkm_pin.linkage.Linkage` when the legs meet at a pin)."""
+        """The :class:`~pkm_pin.mechanism.Mechanism` of this design (read by the general
+        backend, :attr:`~pkm_pin.mechanism.Mechanism.general`, when the legs meet at a
+        pin)."""
         from ..mechanism import Mechanism
 
         if self.closure != "weld":
-            from ..linkage import Linkage
             from ..model.pinned import pinned_legs
 
-            return Linkage(pinned_legs(self.legs_built(), [leg.anchor for leg in self.legs],
-                                       self.closure, name=self.name, home_q=self.home_q))
+            return Mechanism.from_model(
+                pinned_legs(self.legs_built(), [leg.anchor for leg in self.legs],
+                            self.closure, name=self.name, home_q=self.home_q),
+                description=self.description)
 
         return Mechanism(
             legs=self.legs_built(),
