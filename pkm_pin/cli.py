@@ -181,7 +181,7 @@ def _load(args, spec: str | None = None):
 def _is_linkage(mech) -> bool:
     """Whether ``mech`` is read by the general backend (:attr:`Mechanism.backend`): its
     report, view and studies are the general elimination's."""
-    return getattr(mech, "backend", "legs") == "general"
+    return mech.backend == "general"
 
 
 def _linkage_assembly(args, link):

@@ -33,7 +33,6 @@ starts); ``load_mechanism`` then returns a :class:`~pkm_pin.linkage.Linkage`.
 
 from __future__ import annotations
 
-import dataclasses
 import os
 import sys
 from pathlib import Path
@@ -161,12 +160,11 @@ def _load_file(path: Path, label: str, closures, output, point):
 def general_reading(mech: Mechanism, output: str | None = None,
                     point: bool | None = None) -> Linkage:
     """The general elimination (:class:`~pkm_pin.linkage.Linkage`) of a platform
-    mechanism's legs-and-platform tree (:attr:`~Mechanism.closure_model`), assembled from
-    its home (the tree's reference is :meth:`Mechanism.tree_configuration` at home, so its
-    ``home_assembly`` is the mechanism's), with another output frame or a point if
-    asked."""
-    model = dataclasses.replace(mech.closure_model, reference=mech.tree_configuration())
-    return Linkage(model, output=output, point=point)
+    mechanism (:attr:`Mechanism.general`: its model's tree assembled from its home), with
+    another output frame or a point if asked."""
+    if output is None and point is None:
+        return mech.general
+    return Linkage(mech.general.model, output=output, point=point)
 
 
 def other_output(mech: Mechanism, output: str | None, point: bool | None,

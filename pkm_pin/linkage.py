@@ -96,7 +96,13 @@ from .model.closure_model import (
 from .model.structure import detect_platform, legs_length
 from .output_maps import OutputMaps
 from .screws import from_homogenised, homogenised_about, svd_rank
-from .solve import iter_tree_starts, solve_tree, solve_tree_starts, tree_starts
+from .solve import (
+    TreeSolution,
+    iter_tree_starts,
+    solve_tree,
+    solve_tree_starts,
+    tree_starts,
+)
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
@@ -354,29 +360,31 @@ class Linkage:
             InputError: no base–legs–platform structure in the model (the reason), or a
                 linkage made alone (no ``legs`` reader: use :class:`pkm_pin.Mechanism`).
         """
-        structure, reason = self.platform_structure
-        if structure is None:
-            raise InputError(f"{self.name or 'this linkage'} is not a base–legs–platform "
-                             f"machine: {reason}")
-        if self._legs_reader is None:
-            raise InputError("a Linkage made alone has no per-leg reading: load the file "
-                             "with pkm_pin.load_mechanism or use "
-                             "pkm_pin.Mechanism.from_model(model)")
+        self._check_legs(None)
         return self._legs_reader(self.home_assembly.q)
 
     def _legs(self, what: str):
         """:attr:`legs_mechanism`, or an :class:`InputError` saying that ``what`` needs
         legs and why this model has none."""
-        structure, reason = self.platform_structure
-        if structure is None:
-            raise InputError(f"{what} reads a machine leg by leg (legs between the base "
-                             f"and one platform), and {self.name or 'this linkage'} is not "
-                             f"one: {reason}")
-        if self._legs_reader is None:
-            raise InputError(f"{what} reads a machine leg by leg: a Linkage made alone has "
-                             "none; load the file with pkm_pin.load_mechanism or use "
-                             "pkm_pin.Mechanism.from_model(model)")
+        self._check_legs(what)
         return self.legs_mechanism
+
+    def _check_legs(self, what: str | None) -> None:
+        """An :class:`InputError` where there is no per-leg reading: no base–legs–platform
+        structure in the model (the reason), or a linkage made alone; ``what``: the
+        capability that needs one (None: the reading itself)."""
+        structure, reason = self.platform_structure
+        name = self.name or "this linkage"
+        if structure is None:
+            raise InputError(f"{name} is not a base–legs–platform machine: {reason}"
+                             if what is None else
+                             f"{what} reads a machine leg by leg (legs between the base "
+                             f"and one platform), and {name} is not one: {reason}")
+        if self._legs_reader is None:
+            raise InputError(("" if what is None else f"{what} reads a machine leg by leg: ")
+                             + "a Linkage made alone has no per-leg reading; load the file "
+                             "with pkm_pin.load_mechanism or use "
+                             "pkm_pin.Mechanism.from_model(model)")
 
     def legs_assembly(self, q=None) -> Assembly:
         """The assembly of :attr:`legs_mechanism` at the tree configuration ``q`` (a
@@ -949,14 +957,12 @@ class Linkage:
     def _partial_pose(self, pose: Mapping, guess, *, starts: int, seed: int, tol: float
                       ) -> LinkageAssembly:
         """A partial output pose on the whole tree (:meth:`inverse_kinematics`)."""
-        from types import SimpleNamespace
-
         from .output_driver import partial_pose
 
         home = self.assemble(guess, starts=starts, seed=seed, tol=tol)
         q, r, steps = partial_pose(self._model, pose, home.q, tol)
-        sol = SimpleNamespace(q=q, residual=r, closure_norms=None, output_placement=None,
-                              converged=r <= tol, iterations=steps, actuated=0.0, pose=r)
+        closure = float(np.abs(self._model.closure_residual(q)).max(initial=0.0))
+        sol = TreeSolution(q, r, closure, 0.0, r, steps, r <= tol)
         if not sol.converged:
             raise self._failure(sol, 1, None, "partial output pose", tol)
         return self._assembly(sol, home.iterations + steps)

@@ -102,6 +102,10 @@ class Mechanism:
             own unit, and every index and rank decision is unit-invariant.
     """
 
+    #: Which backend answers: ``"legs"`` here, ``"general"`` for a mechanism made by
+    #: :meth:`from_model` (:data:`BACKENDS`).
+    backend = "legs"
+
     def __init__(
         self,
         legs: Sequence[Leg],
@@ -147,8 +151,6 @@ class Mechanism:
         #: directly (TOML).
         self.source_model = None
         self.structure = None
-        #: ``"legs"`` (this constructor) or ``"general"`` (:meth:`from_model`).
-        self.backend = "legs"
 
     @classmethod
     def from_model(cls, model, *, output: str | None = None, point: bool | None = None,
@@ -999,11 +1001,8 @@ class _ReadByGeneral(Mechanism):
     def __repr__(self) -> str:
         return f"Mechanism({self.name!r}, backend='general')"
 
-    def __getstate__(self) -> dict:
+    def __getstate__(self) -> dict:  # the general reading is all there is to keep
         return dict(self.__dict__)
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
 
     @property
     def name(self) -> str:
@@ -1016,22 +1015,6 @@ class _ReadByGeneral(Mechanism):
     @property
     def structure(self):
         return self.general.platform_structure[0]
-
-    @property
-    def legs(self) -> list:
-        """The legs of the machine detected in the model (:attr:`legs_mechanism`)."""
-        return self.legs_mechanism.legs
-
-    @property
-    def anchors(self) -> list:
-        """The legs' anchors on the platform of the detected machine."""
-        return self.legs_mechanism.anchors
-
-    @property
-    def home(self) -> pin.SE3:
-        """The platform's home pose of the detected machine (the output's home pose of
-        any model: ``home_assembly.output_pose``)."""
-        return self.legs_mechanism.home
 
     @property
     def length_unit(self) -> str:
@@ -1057,6 +1040,10 @@ def _forward(name: str, member, to: str):
     return call
 
 
+for _name in ("legs", "anchors", "home", "home_q"):  # the per-leg description
+    setattr(_ReadByGeneral, _name, property(
+        lambda self, name=_name: getattr(self.legs_mechanism, name),
+        doc=f"``{_name}`` of the machine detected in the model (:attr:`legs_mechanism`)."))
 for _name, _member in list(vars(Mechanism).items()):
     if _name.startswith("_") or _name in vars(_ReadByGeneral) or _name == "general" \
             or isinstance(_member, (classmethod, staticmethod)):
