@@ -150,6 +150,27 @@ class Analysis(OutputMaps):
         return int(self._results.dof[0])
 
     @property
+    def output_dof(self) -> int:
+        """Dimension of the platform's twist system: :attr:`dof`. (A general linkage's
+        analysis has both: its ``dof`` counts every motion of its tree, idle ones
+        included, its ``output_dof`` the output's.)"""
+        return self.dof
+
+    @cached_property
+    def mobility(self):
+        """The mobility of the mechanism's whole tree at this assembly
+        (:meth:`Mechanism.mobility`, a :class:`~pkm_pin.linkage.Mobility`: the idle
+        motions in words, the ranks compared with nearby configurations, the actuators
+        that can be driven independently, Grübler's count of the tree; cached)."""
+        return self.mechanism.mobility(self.assembly)
+
+    @property
+    def idle_dof(self) -> int:
+        """Motions of the tree left with every actuated joint locked
+        (:attr:`mobility`'s ``idle_dof``: a leg spinning about its own axis)."""
+        return self.mobility.idle_dof
+
+    @property
     def translations(self) -> int:
         """Dimension of the pure translations (couples) in the platform twist system."""
         return int(self._results.translations[0])

@@ -93,6 +93,29 @@ class Assembly:
             [q[leg.actuated_q] for leg, q in zip(self.mechanism.legs, self.leg_q)]
         ) if self.leg_q else np.zeros(0)
 
+    # ---- the tree's view: what a general linkage's assembly answers, under the same names
+    @property
+    def q(self) -> np.ndarray:
+        """Configuration of the mechanism's whole Pinocchio tree (``mechanism.model.tree``,
+        its joint order; :meth:`Mechanism.tree_configuration`): the order in which
+        :meth:`Mechanism.inverse_dynamics` and the general backend take ``q``. Computed
+        from the legs and the pose once, then kept."""
+        q = self.__dict__.get("_tree_q")
+        if q is None:
+            q = self.__dict__["_tree_q"] = self.mechanism.tree_configuration(self)
+        return q
+
+    @property
+    def output_pose(self) -> pin.SE3:
+        """The output (platform) frame's world placement: :attr:`pose`."""
+        return self.pose
+
+    @property
+    def closure_residuals(self) -> dict:
+        """Norm of each closure's residual rows at :attr:`q`, by closure name (the
+        closures of ``mechanism.model``: a TOML machine's welds, a file's own closures)."""
+        return self.mechanism.general.residuals_at(self.q)
+
 
 def checked_twists(assembly: Assembly, tol: float = ASSEMBLY_CHECK_RTOL) -> np.ndarray:
     """The joint twists of an assembly that did not come with them (one made by hand, or

@@ -601,6 +601,11 @@ class Linkage:
                              "configuration reached (its q)")
         return self._at(self._model.check_q(error.q))
 
+    def residuals_at(self, q) -> dict:
+        """Norm of each closure's residual rows at the tree configuration ``q``, by
+        closure name (dimensionless, as :attr:`LinkageAssembly.closure_residuals`)."""
+        return self._at(self._model.check_q(q)).closure_residuals
+
     def _at(self, q: np.ndarray) -> LinkageAssembly:
         """The configuration ``q`` as a :class:`LinkageAssembly` (its ``residual``: the
         largest closure residual there; no solve)."""

@@ -335,12 +335,20 @@ class Mechanism:
         return self.general.reached(error)
 
     def legs_assembly(self, q=None) -> Assembly:
-        """The :class:`Assembly` at the tree configuration ``q`` (default home) of a
-        machine detected in a model (:meth:`pkm_pin.linkage.Linkage.legs_assembly`)."""
-        if self.structure is None:
-            raise InputError(f"{self.name} is given as legs: its assemblies are "
-                             "assemble()/assembly_at(), not a tree configuration's")
-        return self.general.legs_assembly(None if q is None else self._tree_q(q))
+        """The :class:`Assembly` at the configuration ``q`` of :attr:`model`'s tree
+        (:attr:`Assembly.q`; default home): the pose of the output there, the legs
+        solved from ``q``'s values (:meth:`assemble` with them as the guess, so the
+        result is checked to close). A machine detected in a file reads its legs'
+        joints off the file's tree (:meth:`pkm_pin.linkage.Linkage.legs_assembly`); a
+        TOML machine's tree is its legs, then the platform's free flyer."""
+        if q is None:
+            return self.home_assembly
+        q = self.model.check_q(np.asarray(self._tree_q(q), dtype=float))
+        if self.structure is not None:
+            return self.general.legs_assembly(q)
+        ends = np.cumsum([0] + [leg.nq for leg in self.legs])
+        pose = pin.XYZQUATToSE3(q[ends[-1]:ends[-1] + 7])
+        return self.assemble(pose, guess=[q[a:b] for a, b in zip(ends[:-1], ends[1:])])
 
     # ------------------------------------------------------------------ counts
     @property
@@ -605,13 +613,26 @@ class Mechanism:
 
     # ----------------------------------------------------------------- analysis
     def assembly_at(self, pose_or_assembly=None) -> Assembly:
-        """The home assembly (``None``), an :class:`Assembly` as it is, or the assembly
-        at a pose (:meth:`assemble` from home)."""
+        """The home assembly (``None``), an :class:`Assembly` as it is, the assembly at
+        a configuration of the whole tree (a vector of ``model.tree.nq`` numbers, as
+        :attr:`Assembly.q` and a general linkage's configurations are; read per leg,
+        :meth:`legs_assembly`), or the assembly at a pose (:meth:`assemble` from home; a
+        6-vector is a pose ``(x, y, z, roll, pitch, yaw)``)."""
         if pose_or_assembly is None:
             return self.home_assembly
         if isinstance(pose_or_assembly, Assembly):
             return pose_or_assembly
+        if self._is_tree_configuration(pose_or_assembly):
+            return self.legs_assembly(pose_or_assembly)
         return self.assemble(pose_or_assembly)
+
+    def _is_tree_configuration(self, x) -> bool:
+        """Whether ``x`` is a configuration of :attr:`model`'s tree (a 1-D vector of its
+        ``nq`` numbers, ``nq`` ≠ 6: six numbers are a pose)."""
+        if isinstance(x, pin.SE3) or self.model.tree.nq == 6:
+            return False
+        shape = np.shape(x)
+        return len(shape) == 1 and shape[0] == self.model.tree.nq
 
     def analyze(self, pose_or_assembly=None, **options) -> Analysis:
         """Screw analysis (:class:`~pkm_pin.analysis.Analysis`) at a pose or assembly

@@ -217,3 +217,63 @@ def test_builders_give_a_mechanism_for_pinned_legs_too():
     mech = five_bar().build()
     assert isinstance(mech, Mechanism) and mech.backend == "general"
     assert mech.analyze().dof == 2
+
+
+# ------------------------------------------- one assembly, one analysis (issue 24, item 2)
+PARITY = [MODELS / "mechanisms" / "stewart.toml", MODELS / "mechanisms" / "delta.toml",
+          MODELS / "mechanisms" / "rrr3.toml", MODELS / "mechanisms" / "upu3.toml",
+          MODELS / "loops" / "delta_loops.urdf", MODELS / "loops" / "four_bar.xml",
+          MODELS / "loops" / "five_bar.xml"]
+
+
+@pytest.mark.parametrize("path", PARITY, ids=lambda p: p.name)
+def test_a_per_leg_assembly_answers_the_trees_names(path):
+    """A per-leg Assembly answers what a general linkage's assembly does, with the same
+    numbers: ``q`` (the whole tree, the model's order), ``output_pose``,
+    ``q_actuated``, ``closure_residuals``; and ``q`` read back per leg gives the legs."""
+    legs = load_mechanism(path, backend="legs")
+    general = load_mechanism(path, backend="general")
+    a, g = legs.home_assembly, general.home_assembly
+    assert a.q.shape == (legs.model.tree.nq,) == g.q.shape
+    # the same tree configuration (legs read off it close the loops the same way)
+    assert max(a.closure_residuals.values()) < 1e-12
+    assert set(a.closure_residuals) == set(g.closure_residuals)
+    np.testing.assert_allclose(a.output_pose.homogeneous, g.output_pose.homogeneous,
+                               atol=1e-12)
+    np.testing.assert_allclose(np.sort(a.q_actuated), np.sort(g.q_actuated), atol=1e-12)
+    back = legs.legs_assembly(a.q)
+    for q0, q1 in zip(a.leg_q, back.leg_q):
+        np.testing.assert_allclose(q1, q0, atol=1e-10)
+    assert a.q is a.q  # computed once
+
+
+@pytest.mark.parametrize("path", PARITY, ids=lambda p: p.name)
+def test_analyze_takes_the_trees_configuration_on_either_backend(path):
+    """``analyze(assembly.q)`` is ``analyze(assembly)`` on both backends (one way to name
+    a configuration), and a per-leg analysis answers ``output_dof``, ``idle_dof`` and
+    ``mobility`` with the general reading's numbers."""
+    for backend in ("legs", "general"):
+        mech = load_mechanism(path, backend=backend)
+        a = mech.assemble()
+        an, by_q = mech.analyze(a), mech.analyze(a.q)
+        np.testing.assert_allclose(by_q.A, an.A, atol=1e-9)
+        assert by_q.indices == pytest.approx(an.indices, abs=1e-9)
+    legs = load_mechanism(path, backend="legs").home_analysis
+    general = load_mechanism(path, backend="general").home_analysis
+    assert legs.output_dof == general.output_dof == legs.dof
+    assert legs.idle_dof == general.idle_dof
+    assert legs.mobility.dof == general.mobility.dof
+    assert legs.mobility.grubler == general.mobility.grubler
+
+
+def test_a_stewart_assembly_away_from_home_round_trips_through_its_tree():
+    """Off home (forward kinematics of longer legs), the TOML Stewart's tree
+    configuration gives the same pose and legs back, and the analysis there."""
+    mech = load_mechanism(STEWART)
+    a = mech.forward_kinematics(mech.home_assembly.q_actuated + 0.02)
+    back = mech.assembly_at(a.q)
+    np.testing.assert_allclose(back.pose.homogeneous, a.pose.homogeneous, atol=1e-12)
+    np.testing.assert_allclose(back.q_actuated, a.q_actuated, atol=1e-12)
+    assert mech.analyze(a.q).indices == pytest.approx(mech.analyze(a).indices, abs=1e-9)
+    with pytest.raises(InputError):
+        mech.legs_assembly(np.zeros(mech.model.tree.nq - 1))
