@@ -449,7 +449,8 @@ def cmd_fk(args) -> int:
         found = [mech.forward_kinematics(q)]
     rows = [{"pose": _pose_dict(a.pose), "q_actuated": a.q_actuated.tolist(),
              "residual": float(a.residual),
-             "leg_q": {leg.name: qi.tolist() for leg, qi in zip(mech.legs, a.leg_q)}}
+             "leg_q": {leg.name: qi.tolist() for leg, qi in zip(mech.legs, a.leg_q)},
+             "q": a.q.tolist()}
             for a in found]
     if args.json:
         print(_json(rows if args.all else rows[0]))

@@ -390,7 +390,8 @@ def _matrix_table(M, rows: Sequence[str], columns: Sequence[str]) -> list[str]:
 def text(r: dict) -> str:
     """Plain-text report (the output of ``pkm-pin analyze``) from :func:`report_data`:
     the summary (DOF and motion type, Grübler count, singularity class, uncontrolled
-    twist, indices; a non-finite index ``undefined``) before the tables."""
+    twist, indices; a non-finite index ``undefined``; the idle motions, one sentence
+    each) before the tables."""
     out = [f"mechanism          {r['mechanism']}",
            f"pose               xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
            f"DOF                {r['dof']}  ({r['motion_type']})",
@@ -402,8 +403,11 @@ def text(r: dict) -> str:
         out += [f"uncontrolled twist {r['uncontrolled_twist']}"]
     out += ["indices            " + ", ".join(
         f"{k} = {v:.6g}" if v is not None and np.isfinite(v) else f"{k} = undefined"
-        for k, v in r["indices"].items()),
-        "platform twists (ω; v_O):"]
+        for k, v in r["indices"].items())]
+    idle = r.get("idle_motions") or []
+    out += ["idle motions       " + (f"{len(idle)} (with every actuated joint locked):"
+                                     if idle else "none")] + [f"    {m}" for m in idle]
+    out += ["platform twists (ω; v_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]]
     out += ["constraint wrenches (f; m_O):"]
     out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["constraint_basis"]] or ["    none"]

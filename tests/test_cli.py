@@ -11,6 +11,7 @@ import pinocchio as pin
 import pytest
 from helpers import MECHANISM_DIR, one_error_line
 
+from pkm_pin import load_mechanism
 from pkm_pin.builders import DESCRIPTIONS
 from pkm_pin.cli import main
 
@@ -180,6 +181,12 @@ def test_ik_then_fk_round_trip(capsys):
     found = json.loads(capsys.readouterr().out)
     assert found["pose"]["xyz"] == pytest.approx([0.85, 0.0, 0.62], abs=1e-9)
     assert found["pose"]["rpy"] == pytest.approx([0.0, 0.55, 0.0], abs=1e-9)
+    # the whole tree's configuration, as a general linkage's fk gives it: legs, then the
+    # platform's free flyer (its position is the pose's)
+    mech = load_mechanism(MECHANISM_DIR / "rpr3.toml")
+    assert len(found["q"]) == mech.model.tree.nq
+    assert found["q"][-7:-4] == pytest.approx([0.85, 0.0, 0.62], abs=1e-9)
+    assert np.concatenate(list(found["leg_q"].values())).tolist() == found["q"][:-7]
 
 
 def test_ik_all_lists_the_home_working_mode_first(capsys):

@@ -11,7 +11,14 @@ from hypothesis import strategies as st
 
 from pkm_pin import screws
 from pkm_pin.builders import MECHANISMS
-from pkm_pin.report import BasisScrew, markdown, readable_basis, readable_directions, report_data
+from pkm_pin.report import (
+    BasisScrew,
+    markdown,
+    readable_basis,
+    readable_directions,
+    report_data,
+    text,
+)
 
 
 @pytest.fixture(scope="module")
@@ -159,3 +166,18 @@ def test_report_gives_the_transmission_indices_in_words():
     data["transmission"] = odd
     assert "transmission       LTI = n/a, CTI = 1:" in text(data)
     assert "LTI = n/a (good transmission" in markdown(an, data=data)
+
+
+def test_text_says_the_idle_motions_one_sentence_each(analyses):
+    """The platform text report names the idle motions after the summary (none for the
+    3-RPS; a mechanism with some gets one line per motion under their count)."""
+    data = report_data(analyses["rps3"])
+    lines = text(data).splitlines()
+    assert "idle motions       none" in lines
+    assert lines.index("idle motions       none") > next(
+        i for i, x in enumerate(lines) if x.startswith("indices"))
+    data["idle_motions"] = ["leg 1 spins about the line through its two spherical joints",
+                            "leg 2 spins about the line through its two spherical joints"]
+    lines = text(data).splitlines()
+    k = lines.index("idle motions       2 (with every actuated joint locked):")
+    assert lines[k + 1:k + 3] == [f"    {m}" for m in data["idle_motions"]]
