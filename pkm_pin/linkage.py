@@ -106,6 +106,10 @@ from .solve import (
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
+    FK_CONTINUATION_CORRECTION,
+    FK_CONTINUATION_MAX_SOLVES,
+    FK_CONTINUATION_STEP_ITER,
+    FK_FOLD_REACH,
     GIMBAL_LOCK_RTOL,
     JOINT_LIMIT_SLACK,
     MODES_MAX,
@@ -137,21 +141,53 @@ class LoopClosureError(AssemblyError):
         q: The best configuration reached (nq,), or None: ``pkm-pin view`` draws the
             open tree there.
         diagnosis: The :class:`~pkm_pin.closure_gaps.Diagnosis` at :attr:`q`, or None.
+        continuation: For a forward kinematics from a guess whose direct solve failed,
+            the continuation from the guess along the straight path of actuated values
+            (``t``: the fraction of the path where the loops still closed; ``fold``:
+            it stopped at a fold, a type II singularity, at ``t_fold``; ``type_ii``: the
+            closeness index at the guess and at ``t``; ``q_actuated``: the actuated
+            values at ``t``),
+            else None. When it ran, the message begins with what it found.
     """
 
     def __init__(self, loop: str, residual: float, detail: str = "", *, q=None,
-                 diagnosis: Diagnosis | None = None):
+                 diagnosis: Diagnosis | None = None, cause: str = ""):
         super().__init__(loop, residual, detail)
         self.q = None if q is None else np.array(q, dtype=float)
         self.diagnosis = diagnosis
+        self.continuation = None
         message = (f"loop {loop!r} does not close: the best configuration found within the "
                    f"joint limits leaves a relative residual of {self.residual:.3g}")
         message += f" ({detail})" if detail else ""
         words = "" if diagnosis is None else diagnosis.words()
-        self.args = (message + (f"; {words}" if words else ""),)
+        self.args = ((f"{cause}; " if cause else "") + message
+                     + (f"; {words}" if words else ""),)
 
     def __str__(self) -> str:
         return self.args[0]
+
+
+@dataclass(eq=False)
+class _Continuation:
+    """A forward kinematics' continuation from its guess (:meth:`Linkage._continuation`):
+    the solution at the target (None: not reached), the fraction ``t`` of the straight
+    path of actuated values reached, the assemblies it started from (``origin``; None:
+    the guess could not be closed) and last reached (``q``), the solves and iterations
+    spent; filled in by :meth:`Linkage._fold_words` on a failure: the type II closeness
+    index at ``origin`` and ``q``, the actuated values at ``q``, the fraction of the path
+    where that index extrapolates to zero (``t_fold``) and whether it stopped at a
+    fold."""
+
+    solution: TreeSolution | None
+    t: float
+    origin: np.ndarray | None = field(repr=False)
+    q: np.ndarray | None = field(repr=False)
+    solves: int
+    iterations: int
+    type_ii: tuple = ()
+    q_actuated: np.ndarray | None = field(default=None, repr=False)
+    t_fold: float = math.inf
+    fold: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -512,14 +548,22 @@ class Linkage:
 
     # ------------------------------------------------------------ assembly
     def assemble(self, guess=None, *, q_actuated=None, starts: int = 16, seed: int = 0,
-                 tol: float = CLOSURE_TOL, max_iter: int = 100) -> LinkageAssembly:
+                 tol: float = CLOSURE_TOL, max_iter: int = 100,
+                 continuation: bool = False) -> LinkageAssembly:
         """Close every loop (and, with ``q_actuated``, pin the actuated joints).
 
         Starts (:func:`pkm_pin.solve.tree_starts`): ``guess`` (a configuration or a
         :class:`LinkageAssembly`), ``model.reference``, neutral, the middle of the limits
         and ``starts`` random configurations within the limits (``seed``). A converged
         warm start is kept; otherwise the converged solution nearest ``guess`` (default
-        the reference) is. A solution on a representation singularity (three revolutes
+        the reference) is. With ``continuation`` (:meth:`forward_kinematics`),
+        ``q_actuated`` and a guess whose direct solve fails, the guess's branch is first
+        continued along the straight path of actuated values (:meth:`_continuation`);
+        when that stops short too, the other starts are tried and the error says how far
+        the continuation got and whether a fold (a type II singularity) stopped it
+        (:meth:`_fold_words`). A sweep (already a continuation, point to point) does
+        without.
+        A solution on a representation singularity (three revolutes
         at a gimbal lock, a joint exactly at a limit) whose ranks are below those of
         nearby configurations is not kept: the nearest generic configuration found by
         stepping off it along the allowed motions, keeping the actuated values (any
@@ -535,16 +579,121 @@ class Linkage:
         warm = self._guess_q(guess)
         targets = None if q_actuated is None else self.check_actuated(q_actuated)
         rows = iter_tree_starts(model, warm, count=int(starts), seed=seed)
-        sol, iterations = solve_tree_starts(model, rows, targets=targets, tol=tol,
-                                            max_iter=max_iter,
-                                            nearest=model.reference if warm is None else warm)
+        path = None
+        if warm is None or targets is None or not continuation:
+            sol, iterations = solve_tree_starts(
+                model, rows, targets=targets, tol=tol, max_iter=max_iter,
+                nearest=model.reference if warm is None else warm)
+        else:
+            sol = solve_tree(model, next(rows), targets=targets, tol=tol, max_iter=max_iter)
+            iterations = sol.iterations
+            if not sol.converged:
+                path = self._continuation(warm, targets, tol, max_iter)
+                iterations += path.iterations
+                if path.solution is not None:
+                    sol = path.solution
+                else:
+                    rest, more = solve_tree_starts(model, rows, targets=targets, tol=tol,
+                                                   max_iter=max_iter, nearest=warm,
+                                                   keep_first=False)
+                    iterations += more
+                    sol = rest if rest.converged or rest.residual < sol.residual else sol
         if not sol.converged:
             raise self._failure(sol, int(starts) + 3 + (warm is not None), targets,
-                                tol=tol)
+                                tol=tol, path=path)
         off = self._off_representation(sol.q, targets, seed, tol, max_iter)
         if off is not None:
             sol, iterations = off[0], iterations + off[1]
         return self._assembly(sol, iterations)
+
+    def _continuation(self, warm: np.ndarray, targets: np.ndarray, tol: float,
+                      max_iter: int) -> _Continuation:
+        """Forward kinematics from the guess ``warm`` by continuation: the actuated
+        values moved along the straight path from the guess's own to ``targets`` in
+        steps (a fraction of the path: a half first, halved on a failure, doubled on a
+        success), each closed by :func:`~pkm_pin.solve.solve_tree` from the last
+        assembly reached, at most :data:`~pkm_pin.tolerances.FK_CONTINUATION_MAX_SOLVES`
+        solves of at most :data:`~pkm_pin.tolerances.FK_CONTINUATION_STEP_ITER`
+        iterations each (a step that needs more is halved). Each step starts from the
+        first-order prediction (the tangent of the branch: the least-squares rates of
+        the closure and actuated rows, no idle motion) and is kept only when the
+        correction to it is at most :data:`~pkm_pin.tolerances.FK_CONTINUATION_CORRECTION`
+        of the predicted motion (halved otherwise): a step across a fold onto another
+        branch corrects by as much as it moves. A guess whose loops do not close is
+        first closed at its own actuated values. The branch of the guess is followed up
+        to a fold (a type II singularity), where the steps shrink until the budget is
+        spent."""
+        model = self._model
+        start = _actuated_or_nan(model, warm)
+        if not np.isfinite(start).all():
+            return _Continuation(None, 0.0, None, None, 0, 0)
+        q, solves, iterations = warm, 0, 0
+        if float(model.closure_norms(model.kinematics(q).residual).max(initial=0.0)) > tol:
+            sol = solve_tree(model, q, targets=start, tol=tol, max_iter=max_iter)
+            solves, iterations = 1, sol.iterations
+            if not sol.converged:
+                return _Continuation(None, 0.0, None, None, solves, iterations)
+            q = sol.q
+        origin, t, h = q, 0.0, 0.5
+        step_iter = min(max_iter, FK_CONTINUATION_STEP_ITER)
+        U, rows = model.velocity_units, np.eye(model.nv)[list(model.actuated_v)]
+        rhs = np.zeros(model.n_rows + len(start))
+        rhs[model.n_rows:] = (targets - start) / U[list(model.actuated_v)]
+        tangent = None
+        while solves < FK_CONTINUATION_MAX_SOLVES:
+            if tangent is None:  # d(v / U)/dt along the branch, no idle motion in it
+                H = np.vstack([model.closure_jacobian(q) * U, rows])
+                tangent = np.linalg.lstsq(H, rhs, rcond=None)[0]
+            s = min(1.0, t + h)
+            guess = pin.integrate(model.tree, q, (s - t) * U * tangent)
+            sol = solve_tree(model, guess, targets=start + s * (targets - start), tol=tol,
+                             max_iter=step_iter)
+            solves, iterations = solves + 1, iterations + sol.iterations
+            moved = float(np.linalg.norm(pin.difference(model.tree, guess, sol.q) / U))
+            if not sol.converged or moved > FK_CONTINUATION_CORRECTION * (s - t) \
+                    * float(np.linalg.norm(tangent)):
+                h *= 0.5
+                continue
+            t, q, h, tangent = s, sol.q, 2.0 * h, None
+            if t >= 1.0:
+                return _Continuation(sol, 1.0, origin, q, solves, iterations)
+        return _Continuation(None, t, origin, q, solves, iterations)
+
+    def _fold_words(self, path: _Continuation, targets: np.ndarray) -> str:
+        """What the continuation of a failed forward kinematics found (``""``: none ran
+        from an assembly): how far along the straight path of actuated values it got and
+        the type II closeness index there and at the guess.
+
+        A fold (the guess's branch turns back at a type II singularity between the guess
+        and the target) is told from the index: near a fold its square falls linearly
+        with the path parameter to zero there, so the line through the squared indices
+        at the guess (``t = 0``) and where the continuation stopped (``t``) meets zero at
+        the fold (``t_fold``, kept on ``path``). A fold is reported where the index fell
+        and ``t_fold`` lies before the target (``≤ 1``) and within
+        :data:`~pkm_pin.tolerances.FK_FOLD_REACH` of the path beyond the stop."""
+        if path is None or path.origin is None:
+            return ""
+        model = self._model
+        at = [self.analyze(q, nearby=0).indices["type_II"] for q in (path.origin, path.q)]
+        path.type_ii = tuple(float(x) for x in at)
+        path.q_actuated = _actuated_or_nan(model, path.q)
+        start = _actuated_or_nan(model, path.origin)
+        s0, s1 = (x * x for x in path.type_ii)
+        path.t_fold = path.t + s1 * path.t / (s0 - s1) if s1 < s0 else math.inf
+        where = (f"continued from the guess (actuated {np.round(start, 6)}) along the "
+                 f"straight path to {np.round(targets, 6)}, the loops close up to "
+                 f"{100 * path.t:.3g}% of the way (actuated {np.round(path.q_actuated, 6)}; "
+                 f"{path.solves} solves), where the type II closeness index is "
+                 f"{at[1]:.3g} ({at[0]:.3g} at the guess)")
+        if path.t > 0.0 and path.t_fold <= min(1.0, path.t + FK_FOLD_REACH):
+            path.fold = True
+            fold = start + path.t_fold * (targets - start)
+            return ("the actuated values lie beyond a fold of the guess's assembly branch "
+                    "(a type II singularity between the guess and them, where the branch "
+                    f"turns back): {where}; its square falling linearly, the index reaches "
+                    f"zero {100 * path.t_fold:.3g}% of the way (actuated "
+                    f"{np.round(fold, 6)})")
+        return f"{where}; no fold found on the way"
 
     def _off_representation(self, q: np.ndarray, targets, seed: int, tol: float,
                             max_iter: int):
@@ -628,26 +777,33 @@ class Linkage:
         return _new_assembly(q.copy(), float(sol.residual), int(iterations), names,
                              _actuated_or_nan(model, q), oMo)
 
-    def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL
-                 ) -> LoopClosureError:
+    def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL,
+                 path: _Continuation | None = None) -> LoopClosureError:
         """The error for a best solution ``sol`` that did not converge, with its
         :func:`~pkm_pin.closure_gaps.diagnose` (limits lifted only for a plain
-        assembly: no targets, no output pose)."""
+        assembly: no targets, no output pose) and what a forward kinematics' continuation
+        from its guess found (``path``: :meth:`_fold_words`)."""
         model = self._model
         residual = model.closure_residual(sol.q)
         norms = [float(np.linalg.norm(residual[s])) for s in model.closure_slices()]
         detail = f"{n_starts} starts, {sol.iterations} iterations in the best one"
         found = diagnose(model, sol.q, tol=tol, lift_limits=targets is None and not what)
+        cause = self._fold_words(path, targets)
+        if path is not None and path.fold and found is not None:
+            found = replace(found, hint="")  # not a wrong length: the values are beyond reach
         if norms and max(norms) > sol.actuated and max(norms) >= sol.pose:
             k = int(np.argmax(norms))
-            return LoopClosureError(model.closures[k].name or f"closure {k}", norms[k], detail,
-                                    q=sol.q, diagnosis=found)
-        if targets is not None and sol.actuated >= sol.pose:
-            return LoopClosureError("actuated targets", sol.actuated,
-                                    detail + f"; targets {np.round(targets, 6)}", q=sol.q,
-                                    diagnosis=found)
-        return LoopClosureError(what or "output pose", sol.pose, detail, q=sol.q,
-                                diagnosis=found)
+            error = LoopClosureError(model.closures[k].name or f"closure {k}", norms[k],
+                                     detail, q=sol.q, diagnosis=found, cause=cause)
+        elif targets is not None and sol.actuated >= sol.pose:
+            error = LoopClosureError("actuated targets", sol.actuated,
+                                     detail + f"; targets {np.round(targets, 6)}", q=sol.q,
+                                     diagnosis=found, cause=cause)
+        else:
+            error = LoopClosureError(what or "output pose", sol.pose, detail, q=sol.q,
+                                     diagnosis=found, cause=cause)
+        error.continuation = path
+        return error
 
     # ------------------------------------------------------------- mobility
     def mobility(self, q=None, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
@@ -689,8 +845,13 @@ class Linkage:
                            tol: float = CLOSURE_TOL) -> LinkageAssembly:
         """Every joint and the output pose from the actuated values [rad or m]: the
         branch nearest ``guess`` (a configuration or :class:`LinkageAssembly`; default
-        the reference configuration)."""
-        return self.assemble(guess, q_actuated=q_actuated, starts=starts, seed=seed, tol=tol)
+        the reference configuration). Where the direct solve from ``guess`` fails, the
+        guess's branch is continued along the straight path of actuated values before
+        the other starts are tried (:meth:`assemble`); values beyond a fold of that
+        branch (a type II singularity on the way) are refused with its place and the
+        type II closeness index (:class:`LoopClosureError`)."""
+        return self.assemble(guess, q_actuated=q_actuated, starts=starts, seed=seed, tol=tol,
+                             continuation=True)
 
     def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
                                patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL,

@@ -1039,11 +1039,12 @@ def _random_tree_q(model, rng, lo, up) -> np.ndarray:
 
 
 def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose_rows=None,
-                      nearest=None, tol: float = CLOSURE_TOL, max_iter: int = 100
-                      ) -> tuple[TreeSolution, int]:
+                      nearest=None, tol: float = CLOSURE_TOL, max_iter: int = 100,
+                      keep_first: bool = True) -> tuple[TreeSolution, int]:
     """:func:`solve_tree` from each row of ``starts`` (an array, or any iterable of
     configurations such as :func:`iter_tree_starts`) in turn. The first start's
-    solution is kept when it converges (the branch continued from a warm start);
+    solution is kept when it converges (the branch continued from a warm start; not
+    with ``keep_first=False``: the warm start was tried before these rows);
     otherwise every start is solved and, among those that converge, the one nearest
     ``nearest`` (default the first start; distance ``|pin.difference / velocity_units|``)
     is kept; none converging: the smallest residual. Returns ``(solution, total
@@ -1057,7 +1058,7 @@ def solve_tree_starts(model, starts, free=None, targets=None, pose=None, *, pose
                          max_iter=max_iter)
         total += sol.iterations
         found.append(sol)
-        if k == 0 and sol.converged:
+        if k == 0 and keep_first and sol.converged:
             return sol, total
         if first is None:
             first = q0

@@ -174,6 +174,27 @@ CONTINUATION_MIN_STEP = 1e-6
 #: are below ``max(tol, FK_ACCEPT_FLOOR)`` (the floor: what Newton reaches in floating
 #: point on ill-conditioned mechanisms).
 FK_ACCEPT_FLOOR = 1e-10
+#: Closure solves a linkage's forward kinematics may spend continuing from its guess
+#: (an assembly) along the straight path of actuated values when the direct solve from
+#: the guess fails (:meth:`pkm_pin.linkage.Linkage.assemble`): steps of a fraction of
+#: the path, halved on a failure and doubled on a success, each warm-started from the
+#: last assembly reached.
+FK_CONTINUATION_MAX_SOLVES = 48
+#: Newton (Levenberg–Marquardt) iterations one step of that continuation may take; a
+#: step that needs more is halved (from the last assembly a short step converges in a
+#: few).
+FK_CONTINUATION_STEP_ITER = 25
+#: A step of that continuation is kept when the Newton correction from its first-order
+#: prediction (the branch's tangent times the step) is at most this fraction of the
+#: predicted motion (both in the tree's velocity units: radians and characteristic
+#: lengths); a larger one (a jump across a fold onto another branch) halves the step.
+FK_CONTINUATION_CORRECTION = 0.5
+#: That continuation stopped short of its target at a fold of the guess's assembly
+#: branch (a type II singularity on the path) when the type II closeness index fell on
+#: the way and its square, extrapolated linearly along the path, reaches zero before the
+#: target and at most this fraction of the path beyond where it stopped (a fraction of
+#: the path from the guess to the target).
+FK_FOLD_REACH = 0.05
 #: Two assembly modes are the same when their platform poses differ by less than this
 #: (:func:`pkm_pin.leg.pose_error` at the characteristic length).
 SAME_POSE_TOL = 1e-6

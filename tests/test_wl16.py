@@ -147,6 +147,102 @@ def test_forward_kinematics_keeps_the_actuated_values_off_the_lock(wl16):
     assert (mob.dof, mob.idle_dof, mob.singular, mob.representation) == (12, 6, False, ())
 
 
+# ----------------------------------------------- forward kinematics near home (issue 25)
+#: Actuated values (motor_1, motor_2, motor_3, motor_5, motor_6, motor_4 [m]) of an
+#: assembly away from the type II singularities the home sits next to (type II index
+#: 0.025 where home's is 0.00126).
+GENERIC = np.array([0.965, 0.963, 0.831, 0.43, 0.694, 0.996])
+
+
+def _type_ii(link: Linkage, a) -> float:
+    return link.analyze(a, nearby=0).indices["type_II"]
+
+
+def _check_fk(link: Linkage, b, target: np.ndarray) -> None:
+    """``b`` closes every loop, has the target actuated values (to 1e-9), and its
+    output pose gives them back (inverse kinematics from ``b``, to 1e-7)."""
+    norms = link.model.closure_norms(link.model.kinematics(b.q).residual)
+    assert norms.max() < 1e-10 and b.residual < 1e-10
+    np.testing.assert_allclose(b.q_actuated, target, atol=1e-9)
+    back = link.inverse_kinematics(b.output_pose, guess=b)
+    np.testing.assert_allclose(back.q_actuated, target, atol=1e-7)
+
+
+@pytest.fixture(scope="module")
+def wl16_generic(wl16):
+    link, _ = wl16
+    return link.assemble(q_actuated=GENERIC)
+
+
+def test_fk_one_centimetre_on_each_motor_from_a_generic_assembly(wl16, wl16_generic):
+    """From an assembly off the singularities (type II index 0.025), ±0.01 m on each
+    of the six motors: forward kinematics closes the loops (1e-10), reproduces the
+    motor values (1e-9) and the pose found gives them back."""
+    link, _ = wl16
+    a = wl16_generic
+    assert _type_ii(link, a) > 0.02 and not link.mobility(a, nearby=0).singular
+    for k in range(6):
+        for step in (0.01, -0.01):
+            target = a.q_actuated + step * np.eye(6)[k]
+            _check_fk(link, link.forward_kinematics(target, a), target)
+
+
+def test_home_sits_next_to_folds_and_fk_beyond_one_says_so(wl16):
+    """The file's home (its legs nearly coplanar with the hip plane) is near a type II
+    singularity (index 0.00126, condition of A 1471). +0.01 m on motor_2 lies beyond a
+    fold of home's branch: the continuation closes the loops up to 0.35 % of the way
+    (3.5e-5 m), where the index has fallen tenfold and its square extrapolates to zero
+    at the fold (t 0.0035; an independent fine continuation, 5e-7 m steps, stops at
+    0.0035 too); the error says so with those numbers. -0.01 m on motor_2 and on
+    motor_4, and -0.001 m on all six, move away from it and succeed."""
+    link, home = wl16
+    qa = home.q_actuated
+    index = link.analyze(home, nearby=0).indices
+    assert index["type_II"] == pytest.approx(0.00126, rel=0.01)
+    assert index["condition_A"] == pytest.approx(1471, rel=0.01)
+    target = qa + 0.01 * np.eye(6)[1]
+    with pytest.raises(pkm_pin.linkage.LoopClosureError) as info:
+        link.forward_kinematics(target, home)
+    path = info.value.continuation
+    assert path.fold and 0.0034 < path.t <= path.t_fold < 0.0036
+    assert path.type_ii[0] == pytest.approx(index["type_II"])
+    assert path.type_ii[1] < 0.15 * path.type_ii[0]
+    np.testing.assert_allclose(path.q_actuated, qa + path.t * (target - qa), atol=1e-9)
+    assert str(info.value).startswith("the actuated values lie beyond a fold of the "
+                                      "guess's assembly branch (a type II singularity")
+    assert "hint:" not in str(info.value)
+    q = home.q
+    for t in np.linspace(0.0, 0.0034, 69)[1:]:  # the branch exists up to there
+        sol = solve_tree(link.model, q, targets=qa + t * (target - qa))
+        assert sol.converged
+        q = sol.q
+    for k, step in ((1, -0.01), (5, -0.01)):
+        target = qa + step * np.eye(6)[k]
+        _check_fk(link, link.forward_kinematics(target, home), target)
+    _check_fk(link, link.forward_kinematics(qa - 0.001, home), qa - 0.001)
+
+
+def test_fk_continuation_does_not_jump_across_a_fold(wl16, wl16_generic):
+    """From the generic assembly, -0.05 m on motor_5: the solve from the guess alone
+    does not converge, and the guess's branch ends at a fold on the way (a sweep of 100
+    steps closes up to some step, then none). The continuation of forward kinematics
+    stops between those two steps, not past them on another branch (its corrections
+    from the tangent prediction are bounded), and says it is a fold."""
+    link, _ = wl16
+    a = wl16_generic
+    target = a.q_actuated - 0.05 * np.eye(6)[3]
+    assert not solve_tree(link.model, a.q, targets=target).converged
+    ts = np.linspace(0.0, 1.0, 101)[1:]
+    swept = link.sweep(a.q_actuated + ts[:, None] * (target - a.q_actuated), a)
+    last = int(np.flatnonzero(swept.converged).max())
+    assert 0 < last < 99 and swept.converged[:last + 1].all()
+    assert not swept.converged[last + 1:].any()
+    path = link._continuation(a.q, target, 1e-12, 100)
+    assert path.solution is None and ts[last] <= path.t < ts[last + 1]
+    link._fold_words(path, target)
+    assert path.fold and path.t <= path.t_fold < ts[last + 1]
+
+
 def test_wl16_sparse_idle_basis(wl16):
     """The six idle motions each move at most 4 joints (a leg's spin: its hip rev2 and
     its foot-side joints; the orthonormal basis moves 14 joints per motion), span the
