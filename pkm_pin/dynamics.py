@@ -66,8 +66,9 @@ the condition from the extreme eigenvalues of ``A Aᵀ``, each certified to
 :data:`EIG_RTOL` (power and inverse iterations warm-started from the previous samples,
 Temple's bound or a shifted ``L D Lᵀ`` as certificate), with a condition certified far
 below the type II threshold; elsewhere (the first sample of a call, idle motions,
-rank-deficient or ill-conditioned ``A``) a warm-started Jacobi SVD with iterative
-refinement and the type II test on its vectors. :func:`motion_kernel` is
+rank-deficient or ill-conditioned ``A``, and the sample after an SVD one out of the
+Cholesky route's reach) a warm-started Jacobi SVD with iterative refinement and the
+type II test on its vectors. :func:`motion_kernel` is
 :func:`motion_from_actuated` compiled the same way (:func:`actuated_motion`).
 
 Gravity is set per call on a private copy of the tree kept per thread (Pinocchio reads
@@ -1235,6 +1236,15 @@ def _extrapolate(u, prev, w):
 
 
 @register_jitable
+def _within_reach(nr, nv, kappa) -> bool:
+    """Whether the Cholesky route certifies the condition of a balance whose ``G = A
+    Aᵀ`` (``nr`` closure rows, ``nv`` velocity coordinates) has the condition ``kappa``
+    (``κ(A)²``): the round-off of ``G``, ``(nr + 4) nv eps κ(G)``, plus the certified
+    widths within :data:`CONDITION_RTOL` (:func:`_balance_cholesky`)."""
+    return 2.0 * EIG_RTOL + (nr + 4) * nv * 2.2e-16 * kappa <= 2.0 * CONDITION_RTOL
+
+
+@register_jitable
 def _balance_cholesky(act, s, has_w):
     """The balance by the Cholesky (``L D Lᵀ``) factors of ``G = A Aᵀ`` where ``A`` has
     full row rank with a certified condition: the minimum-norm solutions of ``b`` and
@@ -1255,8 +1265,7 @@ def _balance_cholesky(act, s, has_w):
         return False, 0.0, 0.0, 0.0
     lmin = _smallest_eigenvalue(s.G, s.LG, s.invG, s.umin, s.z, s.L, s.inv, EIG_RTOL,
                                 s.plan)
-    if lmin <= 0.0 or 2.0 * EIG_RTOL + (nr + 4) * nv * 2.2e-16 * lmax / lmin > \
-            2.0 * CONDITION_RTOL:
+    if lmin <= 0.0 or not _within_reach(nr, nv, lmax / lmin):
         return False, 0.0, 0.0, 0.0
     res = _min_norm(act, s.Hu, s.LG, s.invG, s.b, s.y, s.rv, s.z)
     if has_w:
@@ -1272,9 +1281,13 @@ def _balance(k, s, cons, has_w):
     """The balance ``A x = b`` (and ``bw``) of one sample: by :func:`_balance_cholesky`
     once a previous sample of the batch has given warm vectors and ``A`` can have full
     row rank, else (or where it declines) by :func:`_balance_svd`, whose basis then
-    gives the warm vectors. Returns ``(rank, σ_max, σ_min kept, relative residual,
-    svd)``: ``svd`` whether ``s.V``, ``s.sv`` hold this sample's SVD (the type II test
-    reads it; the Cholesky route certifies ``σ_min / σ_max`` far above
+    gives the warm vectors. Along a path the previous sample predicts the route: after
+    an SVD sample whose ``A`` is rank-deficient or too ill-conditioned for the Cholesky
+    route (:func:`_within_reach`: near a type II singularity, say) the next sample takes
+    the SVD at once (no Cholesky attempt bound to be declined); the route comes back
+    after an SVD sample within reach. Returns ``(rank, σ_max, σ_min kept, relative
+    residual, svd)``: ``svd`` whether ``s.V``, ``s.sv`` hold this sample's SVD (the type
+    II test reads it; the Cholesky route certifies ``σ_min / σ_max`` far above
     :data:`CLOSENESS_SINGULAR_TOL`)."""
     nv, na, nr = s.G.shape[0], k.act_v.shape[0], s.H.shape[0]
     if s.warm[0] and na + nr >= nv:
@@ -1292,7 +1305,7 @@ def _balance(k, s, cons, has_w):
     for i in range(nv):
         s.umax[i], s.umin[i] = s.V[i, hi], s.V[i, lo]
         s.pmax[i], s.pmin[i] = s.V[i, hi], s.V[i, lo]
-    s.warm[0] = 1
+    s.warm[0] = 1 if rank == nv and _within_reach(nr, nv, (smax / smin) ** 2) else 0
     return rank, smax, smin, res, True
 
 
@@ -1435,7 +1448,8 @@ class _Scratch(NamedTuple):
     umin: np.ndarray  # (nv,)
     pmax: np.ndarray  # (nv,) … the ones before (:func:`_extrapolate`)
     pmin: np.ndarray  # (nv,)
-    warm: np.ndarray  # (1,) whether umax, umin hold a previous sample's vectors
+    warm: np.ndarray  # (1,) whether umax, umin hold a previous sample's vectors (and
+    # its balance was within the Cholesky route's reach, :func:`_balance`)
     plan: np.ndarray  # (4,) the iterations' first certificate steps (:func:`_certified`)
 
 

@@ -772,6 +772,35 @@ def test_batch_along_a_path_takes_the_ldl_route_and_equals_single_calls():
         assert b[i].balance_residual < 1e-12
 
 
+def test_batch_near_a_type_two_singularity_equals_single_calls():
+    """The five-bar's tip driven towards its type II configuration (distal links
+    aligned, the balance's condition up to ~4e4) and back: every sample stays in the
+    compiled kernel; the ill-conditioned stretch (beyond the LDLᵀ route's reach) takes
+    the Jacobi SVD, the LDLᵀ route comes back on the way out; the batch equals single
+    calls sample by sample (efforts, closure forces, tree efforts to 1e-9 of their
+    size, the condition to 1e-9 relative)."""
+    cm, _ = model("five_bar_point")
+    y = np.sqrt(1 - 0.25 ** 2)  # the tip at (0.75, y): type II
+    rng = np.random.default_rng(6)
+    s = np.linspace(0.0, 1.0, 60)
+    heights = 0.5 + (y - 0.5) * (1 - 10.0 ** (-4 * np.r_[s, s[::-1]]))
+    Q = [five_bar_q([0.75, h]) for h in heights]
+    V, A = zip(*[dyn.motion_from_actuated(cm, q, rng.normal(size=2), rng.normal(size=2))
+                 for q in Q])
+    work, kern = dyn._work(cm, masses=True), dyn._compiled(cm, many=True)
+    info = dyn._run_kernel(cm, kern, work, np.array(Q), np.array(V), np.array(A),
+                           np.array(G), None, dyn.MOTION_CONSISTENCY_RTOL)[-1]
+    assert (info[:, 0] == dyn._OK).all()
+    assert info[:, 2].max() > 1e4 and info[55:65, 4].all() and not info[-10:, 4].any()
+    b = dyn.inverse_dynamics_batch(cm, Q, V, A, gravity=G)
+    for i in range(len(Q)):
+        one = dyn.inverse_dynamics(cm, Q[i], V[i], A[i], gravity=G)
+        for key in ("efforts", "closure_forces", "tree_efforts"):
+            x, ref = getattr(b[i], key), getattr(one, key)
+            assert np.abs(x - ref).max() <= 1e-9 * np.abs(ref).max(), (i, key)
+        assert b[i].condition == pytest.approx(one.condition, rel=1e-9), i
+
+
 def test_batch_finds_type_two_and_idle_samples_after_regular_ones():
     """A batch whose last sample is special after regular ones (the LDLᵀ route warm):
     the five-bar with its distal links aligned (type II) gives SingularityError, the
