@@ -125,8 +125,9 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
         backend: ``"legs"`` or ``"general"``, as :func:`pkm_pin.load_mechanism`.
 
     Returns:
-        A :class:`~pkm_pin.Mechanism`, or a :class:`~pkm_pin.linkage.Linkage` for a
-        ``.urdf``, ``.xml`` / ``.mjcf`` or pinned ``.toml`` file.
+        A :class:`~pkm_pin.Mechanism` (read by the general backend for a ``.urdf``,
+        ``.xml`` / ``.mjcf`` or pinned ``.toml`` file, another output or ``--backend
+        general``).
 
     Raises:
         MechanismFileError: the file is missing or wrong (or the options do not apply).
@@ -134,6 +135,7 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
     """
     from .builders import MECHANISMS
     from .io import general_reading, load_mechanism, other_output
+    from .mechanism import Mechanism
 
     options = {"closures": closures, "output": output, "point": point}
     if spec is None or (spec in MECHANISMS and not _is_file(Path(spec))):
@@ -142,8 +144,12 @@ def load(spec: str | None, closures: str | None = None, output: str | None = Non
                              "own closures")
         mech = MECHANISMS["rpr3" if spec is None else spec]().build()
         if output is not None or point is not None:
-            return other_output(mech, output, point)
-        return mech if backend != "general" else general_reading(mech)
+            link = other_output(mech, output, point)
+        elif backend == "general":
+            link = general_reading(mech)
+        else:
+            return mech
+        return Mechanism.of_linkage(link, description=mech.description)
     path = Path(spec)
     if _is_file(path) or spec.endswith(LINKAGE_SUFFIXES + (".toml",)) or "/" in spec \
             or "\\" in spec:
@@ -240,49 +246,37 @@ def cmd_list(args) -> int:
 
 
 def cmd_analyze(args) -> int:
-    """Report of one pose (default: home) as text or JSON, optionally as Markdown."""
+    """Report of one assembly (default: home; ``--q``, ``--pose``, ``--at``) as text or
+    JSON, optionally as Markdown: the one report of :mod:`pkm_pin.report`, whichever
+    backend reads the mechanism."""
     from . import report
 
     mech = _load(args)
-    if _is_linkage(mech):
-        return _analyze_linkage(args, mech)
+    assembly = _assembly(args, mech)
+    data = report.report_data(mech, assembly, plots=args.plots or ())
+    if args.markdown:
+        _write_text(args.markdown, report.markdown(data=data))
+    if args.json:
+        print(_json(data))
+    else:
+        likely, frames = report.output_hint(mech.general.model, assembly.q)
+        print(report.text(data, frames, likely))
+        if args.markdown:
+            print(f"markdown           {args.markdown}")
+    return 0
+
+
+def _assembly(args, mech):
+    """The mechanism assembled as the options say: ``--q`` (forward kinematics from
+    home), ``--pose`` / ``--at`` (a full or partial output pose), else home."""
+    if _is_linkage(mech):  # a pose is the general backend's inverse kinematics
+        return _linkage_assembly(args, mech)
     pose = _platform_pose(args)
     if args.q is not None:
         if pose is not None:
             raise InputError("give --q (actuated values) or --pose / --at, not both")
-        analysis = mech.analyze(mech.forward_kinematics(mech.check_actuated(args.q)))
-    else:
-        analysis = mech.analyze(pose)
-    data = report.report_data(analysis, plots=args.plots or ())
-    if args.markdown:
-        _write_text(args.markdown, report.markdown(analysis, data=data))
-    if args.json:
-        print(_json(data))
-    else:
-        print(report.text(data))
-        if args.markdown:
-            print(f"markdown           {args.markdown}")
-    return 0
-
-
-def _analyze_linkage(args, link) -> int:
-    """``analyze`` of a linkage: assembled (``--q``, ``--pose`` or the reference; the
-    position problems on the branch of the reference assembly), then
-    the report of :mod:`pkm_pin.report_linkage`."""
-    from . import report_linkage as rl
-
-    assembly = _linkage_assembly(args, link)
-    data = rl.linkage_report_data(link, assembly, plots=args.plots or ())
-    if args.markdown:
-        _write_text(args.markdown, rl.linkage_markdown(data))
-    if args.json:
-        print(_json(data))
-    else:
-        likely, frames = rl.output_hint(link.model, assembly.q)
-        print(rl.linkage_text(data, frames, likely))
-        if args.markdown:
-            print(f"markdown           {args.markdown}")
-    return 0
+        return mech.forward_kinematics(mech.check_actuated(args.q))
+    return mech.assembly_at(pose)
 
 
 def cmd_check(args) -> int:
@@ -389,7 +383,7 @@ def _check_linkage(path: Path, link) -> int:
 def _check_output_choice(link, asm) -> None:
     """``check``'s line on an output the file did not name: chosen by the default rule
     (:mod:`pkm_pin.output_choice`), with the others that fit as well and how to pick one."""
-    from .report_linkage import output_hint
+    from .report import output_hint
 
     if link.model.output_named:
         return

@@ -27,6 +27,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from .model.closure_model import duplicate_closures
 from .tolerances import DIRECTION_SNAP
 
 #: Components of a unit direction below this are printed as 0 (alias of
@@ -157,66 +158,69 @@ def readable_basis(S, centre, length: float, translations: int | None = None) ->
 
 
 # ------------------------------------------------------------------- report data
-def report_data(analysis, plots: Sequence[str | Path] = ()) -> dict:
-    """Plain-data summary of an :class:`~pkm_pin.analysis.Analysis` (JSON-ready).
+def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
+                analysis=None) -> dict:
+    """The report of a mechanism at an assembly as plain data (JSON-ready): one set of
+    keys for every :class:`~pkm_pin.Mechanism`, whichever backend reads it.
 
-    Keys: ``mechanism``, ``description``, ``pose`` (``xyz`` [m], ``rpy`` [rad]),
-    ``dof``, ``motion_type``, ``grubler``, ``redundant_constraints``, ``idle_dof`` and
-    ``idle_motions`` (in words, from the closure model), ``length`` (the
-    characteristic length), ``platform_twists`` (the readable basis of the text report:
-    unit directions, lines through points; not scaled by the characteristic length),
-    ``motion_basis`` and ``constraint_basis``
-    (readable bases, see :func:`readable_basis`, with ``words``), ``actuated``, ``A``,
-    ``B``, ``singularity``, ``constraint_singular``, ``indices``, ``transmission``
-    (ITI, OTI per actuator, LTI, CTI, the weakest in words; ``None`` at a type II pose),
+    Args:
+        subject: A mechanism (reported at ``assembly``, default its home assembly), or
+            the per-leg :class:`~pkm_pin.analysis.Analysis` of one (its mechanism at its
+            assembly).
+        assembly: The mechanism's assembly (an :class:`~pkm_pin.assembly.Assembly` or a
+            general linkage's ``LinkageAssembly``).
+        plots: Image files the report links.
+        analysis: The mechanism's analysis at ``assembly``, when already made.
+
+    Keys: the tree's (:func:`linkage_report_data`, read by the mechanism's general
+    elimination, :attr:`Mechanism.general`: the output and how to choose another, the
+    structure detected, the whole tree's configuration joint by joint, the mobility with
+    its idle motions and generic ranks, the independent sub-mechanisms), with the numbers
+    of the backend that reads the mechanism (``A``, ``B``, the bases, ``singularity``,
+    ``indices``, ``transmission``; :attr:`Mechanism.backend`); then ``backend``,
+    ``description``, ``length`` (the characteristic length), ``length_unit``, ``legs``
+    (the legs' names of a mechanism read per leg, else ``[]``), ``actuated`` and
+    ``q_actuated`` (the order of ``A``'s rows), ``grubler`` and
+    ``redundant_constraints`` (the per-leg engine's counts where it reads the machine),
     ``uncontrolled_twist`` (words, at a type II/III singularity, else ``None``),
-    ``crosscheck`` (quantity → largest dimensionless difference, or ``None``),
-    ``crosscheck_max_error``, ``plots`` (file paths) and ``failed_sections`` (section →
-    error, for the optional sections that failed: :func:`optional`).
+    ``crosscheck`` (quantity → largest dimensionless difference from the hand-written
+    formulas of the papers, or ``None``), ``crosscheck_max_error``, ``plots`` and
+    ``failed_sections`` (section → error, for the optional sections that failed:
+    :func:`optional`).
     """
+    from .analysis import Analysis
     from .crosscheck import crosscheck
 
-    mech = analysis.mechanism
-    failed: dict = {}
-    checks = optional("crosscheck", lambda: crosscheck(analysis), failed)
-    pose = analysis.assembly.pose
-    centre = pose.translation
-    motion = readable_basis(analysis.platform_twists, centre, analysis.length,
-                            analysis.translations)
-    constraints = readable_basis(analysis.constraint_wrenches, centre, analysis.length)
-    free = optional("uncontrolled_twist", lambda: analysis.uncontrolled_twist, failed)
-    idle = optional("idle_motions", lambda: _idle(analysis), failed) or []
-    tr = optional("transmission", lambda: _transmission(analysis), failed)
-    return {
-        "mechanism": mech.name,
+    if isinstance(subject, Analysis):
+        mech, assembly, analysis = subject.mechanism, subject.assembly, subject
+    else:
+        mech = subject
+        assembly = mech.home_assembly if assembly is None else assembly
+    an = mech.analyze(assembly) if analysis is None else analysis
+    per_leg = isinstance(an, Analysis)
+    data = linkage_report_data(mech.general, assembly, an, plots,
+                               transmission=(lambda: an.transmission) if per_leg else None)
+    failed = data["failed_sections"]
+    checks = optional("crosscheck", lambda: crosscheck(an), failed) if per_leg else None
+    free = optional("uncontrolled_twist", lambda: an.uncontrolled_twist, failed)
+    centre = assembly.output_pose.translation
+    data.update({
+        "backend": mech.backend,
         "description": mech.description,
-        "pose": {"xyz": pose.translation.tolist(),
-                 "rpy": pin.rpy.matrixToRpy(pose.rotation).tolist()},
-        "dof": analysis.dof,
-        "motion_type": analysis.motion_type,
-        "grubler": analysis.grubler,
-        "redundant_constraints": analysis.redundant_constraints,
-        "idle_dof": len(idle),
-        "idle_motions": idle,
-        "length": analysis.length,
+        "length": an.length,
         "length_unit": getattr(mech, "length_unit", "m"),
-        "platform_twists": [b.screw.tolist() for b in motion],
-        "motion_basis": [b.as_dict() for b in motion],
-        "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
-        "actuated": mech.actuated_names,
-        "A": analysis.A.tolist(),
-        "B": analysis.B.tolist(),
-        "singularity": analysis.singularity,
-        "constraint_singular": bool(analysis.constraint_singular),
-        "indices": analysis.indices,
-        "transmission": tr,
+        "legs": [leg.name for leg in mech.legs] if per_leg else [],
+        "actuated": list(mech.actuated_names),
+        "q_actuated": np.asarray(assembly.q_actuated, dtype=float).tolist(),
         "uncontrolled_twist": None if free is None else
-        readable_basis(free[None], centre, analysis.length)[0].words(),
+        readable_basis(free[None], centre, an.length)[0].words(),
         "crosscheck": checks,
         "crosscheck_max_error": None if checks is None else max(checks.values()),
-        "plots": [str(p) for p in plots],
-        "failed_sections": failed,
-    }
+    })
+    if per_leg:
+        data.update(grubler=an.grubler, redundant_constraints=an.redundant_constraints,
+                    constraint_singular=bool(an.constraint_singular))
+    return data
 
 
 def optional(section: str, compute, failed: dict):
@@ -237,15 +241,14 @@ def failed_lines(r: dict) -> list[str]:
             for name, why in r.get("failed_sections", {}).items()]
 
 
-def _transmission(analysis) -> dict | None:
-    """The motion/force transmission indices (:attr:`Analysis.transmission`) as plain
-    data with the weakest one in words; ``None`` where they are not defined (a type II
-    pose)."""
+def _transmission_of(compute) -> dict | None:
+    """``compute()`` (a :class:`~pkm_pin.transmission.Transmission`) as plain data with
+    the weakest index in words; ``None`` where it is not defined (a type II pose)."""
     from .errors import PkmError
 
     try:
-        tr = analysis.transmission
-    except PkmError:
+        tr = compute()
+    except (PkmError, np.linalg.LinAlgError):
         return None
     return transmission_data(tr)
 
@@ -299,62 +302,367 @@ def transmission_data(tr) -> dict:
             "words": tr.worst}
 
 
-def _idle(analysis) -> list[str]:
-    """The idle motions of the mechanism at the analysed assembly, in words: the motions
-    of its joints that move neither an actuator nor the platform (a leg spinning about
-    the line through its two spherical joints), read from its closure model
-    (:meth:`Mechanism.mobility`, the general reading of its tree)."""
-    mob = analysis.mechanism.mobility(analysis.assembly, nearby=0)
-    return list(mob.idle_motions)
+# ------------------------------------------------------------------- plain data
+def pose_dict(pose: pin.SE3) -> dict:
+    """``{"xyz": [m], "rpy": [rad]}`` of a placement (URDF roll, pitch, yaw)."""
+    return {"xyz": pose.translation.tolist(), "rpy": pin.rpy.matrixToRpy(pose.rotation).tolist()}
+
+
+def joint_values(model, q) -> dict:
+    """The configuration ``q`` joint by joint: name → its coordinates (a list of
+    ``nq`` numbers, e.g. a quaternion ``x, y, z, w`` for a spherical joint)."""
+    tree = model.tree
+    q = np.asarray(q, dtype=float)
+    return {tree.names[j]: q[tree.joints[j].idx_q:tree.joints[j].idx_q + tree.joints[j].nq]
+            .tolist() for j in range(1, tree.njoints) if tree.joints[j].nq}
+
+
+def body_frames(model) -> list[str]:
+    """Names of the tree's body frames (the choices of ``--output``), in tree order."""
+    return [f.name for f in model.tree.frames if f.type == pin.FrameType.BODY
+            and f.name != "universe"]
+
+
+def output_hint(model, q) -> tuple[list[str], list[str]]:
+    """``(likely, frames)`` for the ``--output`` hint at the assembled ``q``: the likely
+    outputs (:func:`pkm_pin.output_choice.choose_output`: the body the mechanism exists
+    to move and those that fit equally) and every body frame, the candidates in the
+    rule's order first, then the frames of the closures (tree order); the frames in tree
+    order and no likely one when the rule cannot be evaluated."""
+    from .errors import PkmError
+    from .output_choice import choose_output
+
+    frames = body_frames(model)
+    try:
+        choice = choose_output(model, q)
+    except (PkmError, np.linalg.LinAlgError):
+        return [], frames
+    ranked = [c.frame for c in choice.candidates]
+    return list(choice.likely()), ranked + [f for f in frames if f not in set(ranked)]
+
+
+def assembly_data(link, assembly) -> dict:
+    """Plain data of a :class:`~pkm_pin.linkage.LinkageAssembly`: ``mechanism``,
+    ``output``, ``output_is_point``, ``pose`` (the output frame's), ``actuated``,
+    ``q_actuated``, ``q`` (the whole tree, Pinocchio's joint order, full precision),
+    ``joint_names``, ``joints`` (:func:`joint_values`), ``actuator_matches`` (each
+    actuator identifier of the file and the joints it picked), ``residual`` and ``closures``
+    (name, kind, frames and residual of each)."""
+    model = link.model
+    return {
+        "kind": "linkage",
+        "mechanism": link.name,
+        "output": link.output,
+        "output_is_point": bool(model.output_point),
+        "pose": pose_dict(assembly.output_pose),
+        "actuated": list(link.actuated),
+        "actuator_matches": {name: list(joints) for name, joints in model.actuator_matches},
+        "notes": list(model.notes),
+        "q_actuated": assembly.q_actuated.tolist(),
+        "q": assembly.q.tolist(),
+        "joint_names": list(model.tree.names[1:]),
+        "joints": joint_values(model, assembly.q),
+        "residual": float(assembly.residual),
+        "closures": [{"name": name, "kind": c.kind, "frame_a": c.frame_a,
+                      "frame_b": c.frame_b, "residual": res}
+                     for c, (name, res) in zip(model.closures,
+                                                assembly.closure_residuals.items())],
+    }
+
+
+def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Path] = (),
+                        transmission=None) -> dict:
+    """Plain-data summary (JSON-ready) of a linkage at an assembly: the tree's part of
+    :func:`report_data` (``analysis``: the one to report, default ``link``'s own;
+    ``transmission``: a function giving the :class:`~pkm_pin.transmission.Transmission`
+    to report, default :meth:`Linkage.transmission` over the tree).
+
+    Keys: those of :func:`assembly_data`, then ``description`` (``""``),
+    ``output_named`` (the output was named by the file or the caller, not chosen by the
+    default rule), ``output_likely`` (the frames that fit the rule best, the chosen one
+    among them: :func:`output_hint`), ``structure``
+    (:func:`structure_data`), ``duplicate_closures``, ``dof``,
+    ``idle_dof``, ``idle_motions`` (sentences), ``singular`` (a rank below the generic
+    one: :attr:`~pkm_pin.linkage.Mobility.singular`, ``None``: not decided),
+    ``generic_dof``, ``generic_idle_dof``, ``representation_singularities`` (sentences),
+    ``singular_words`` (the sentence, ``""`` when not singular),
+    ``redundant_constraints``, ``grubler``,
+    ``independent_actuators``, ``output_dof``, ``motion_type``, ``platform_twists`` (the
+    readable basis of the output twists, as the text prints them: unit directions, lines
+    through points), ``motion_basis`` and ``constraint_basis``
+    (readable bases about the output origin, with ``words``), ``A``, ``B``,
+    ``singularity``, ``constraint_singular`` (``None``: not decided), ``indices``
+    (``None`` where undefined), ``indices_undefined`` (:func:`undefined_indices`: why
+    each ``None`` index is not defined), ``submechanisms`` (:func:`submechanisms_data`: ``[]``
+    for a single mechanism, ``None`` when it failed), and, as in the platform report,
+    ``uncontrolled_twist``, ``crosscheck``, ``crosscheck_max_error`` (``None``: no
+    hand-written formulas) and ``plots``.
+    """
+    an = analysis if analysis is not None else link.analyze(assembly)
+    centre = assembly.output_pose.translation
+    motion = readable_basis(an.platform_twists, centre, an.length, an.translations)
+    constraints = readable_basis(an.constraint_wrenches, centre, an.length)
+    mob = an.mobility
+    data = assembly_data(link, assembly)
+    failed: dict = {}
+    data.update({
+        "description": "",
+        "output_named": bool(link.model.output_named),
+        "output_likely": optional("output_likely",
+                                  lambda: output_hint(link.model, assembly.q)[0], failed),
+        "structure": structure_data(link),
+        "duplicate_closures": [list(pair) for pair in duplicate_closures(link.model.closures)],
+        "dof": mob.dof,
+        "idle_dof": an.idle_dof,
+        "idle_motions": list(mob.idle_motions),
+        "singular": mob.singular,
+        "generic_dof": mob.generic_dof,
+        "generic_idle_dof": mob.generic_idle_dof,
+        "representation_singularities": list(mob.representation),
+        "singular_words": mob.singular_words,
+        "redundant_constraints": an.redundant_constraints,
+        "grubler": mob.grubler,
+        "independent_actuators": list(mob.independent_actuators),
+        "output_dof": an.output_dof,
+        "motion_type": an.motion_type,
+        "platform_twists": [b.screw.tolist() for b in motion],
+        "motion_basis": [b.as_dict() for b in motion],
+        "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
+        "A": an.A.tolist(),
+        "B": an.B.tolist(),
+        "singularity": an.singularity,
+        "constraint_singular": an.constraint_singular,
+        "indices": {k: finite_or_none(v) for k, v in an.indices.items()},
+        "indices_undefined": undefined_indices(link, an),
+        "transmission": optional("transmission", lambda: _tree_transmission(
+            link, assembly) if transmission is None else _transmission_of(transmission),
+            failed),
+        "submechanisms": optional("submechanisms",
+                                  lambda: submechanisms_data(link, assembly), failed),
+        "uncontrolled_twist": None,
+        "crosscheck": None,
+        "crosscheck_max_error": None,
+        "plots": [str(p) for p in plots],
+        "failed_sections": failed,
+    })
+    return data
+
+
+def undefined_indices(link, an) -> dict:
+    """``{index: why it is not defined}`` for each index of the analysis ``an`` that is
+    not finite (``null`` in the JSON, ``undefined`` in the text): no actuator; actuators
+    whose wrench on the output is zero (rows of ``A`` that cannot be made unit: a type I
+    singularity, e.g. the other leg's motors of a biped read with one foot); else ``A Δ``
+    singular (an infinite condition number)."""
+    bad = {k: float(v) for k, v in an.indices.items() if not np.isfinite(v)}
+    if not bad:
+        return {}
+    A = np.asarray(an.A, dtype=float).reshape(-1, 6)
+    zero = [n for n, row in zip(link.actuated, A) if not np.any(np.abs(row) > 1e-12)]
+    if not link.actuated:
+        why = "no actuator: A has no row"
+    elif zero:
+        why = (f"{len(zero)} actuator{'s' * (len(zero) != 1)} ({', '.join(zero[:6])}"
+               f"{', …' if len(zero) > 6 else ''}) exert no wrench on the output: zero rows "
+               "of A (a type I singularity), which cannot be scaled to unit length")
+    else:
+        why = "A Δ is singular here"
+    return {k: f"{'infinite' if np.isinf(v) else 'not a number'}: {why}"
+            for k, v in bad.items()}
+
+
+def submechanisms_data(link, assembly) -> list:
+    """The independent sub-mechanisms of the linkage at the assembly
+    (:meth:`Linkage.submechanisms`: a biped's legs), each ``{"name", "joints"`` (its
+    tree's joints), ``"actuated", "output", "dof", "idle_dof", "motion_type",
+    "singularity", "indices"}``; ``[]`` when the linkage is one mechanism (the report is
+    its own)."""
+    subs = link.submechanisms(assembly.q)
+    if len(subs) == 1 and subs[0] is link:
+        return []
+    out = []
+    for sub in subs:
+        an = sub.analyze(sub.home_assembly)
+        out.append({"name": sub.name, "joints": sub.model.tree.njoints - 1,
+                    "actuated": list(sub.actuated), "output": sub.output, "dof": an.dof,
+                    "idle_dof": an.idle_dof, "motion_type": an.motion_type,
+                    "singularity": an.singularity,
+                    "indices": {k: finite_or_none(v) for k, v in an.indices.items()}})
+    return out
+
+
+def submechanism_lines(r: dict) -> list[str]:
+    """Two text lines per sub-mechanism (:func:`submechanisms_data`), none for one."""
+    subs = r.get("submechanisms") or []
+    if not subs:
+        return []
+    out = [f"sub-mechanisms     {len(subs)} independent (no movable joint shared; each "
+           "analysed with the others held, with its own output: the singularity class "
+           "above is that of one output for all of them):"]
+    for s in subs:
+        idx = ", ".join(f"{k} {_index(v, 'undefined', '.3g')}" for k, v in s["indices"].items())
+        out += [f"    {s['name']}: {s['joints']} joints, {len(s['actuated'])} actuators "
+                f"({', '.join(s['actuated'])}), output {s['output']}",
+                f"        DOF {s['dof']} (idle DOF {s['idle_dof']}; output motion "
+                f"{s['motion_type']}; singularity {s['singularity']}); {idx}"]
+    return out
+
+
+def structure_data(link) -> dict:
+    """The base–legs–platform structure detected in the linkage's model
+    (:attr:`Linkage.platform_structure`): ``{"platform": True, "legs": [{"name", "kind",
+    "joints"}]}``, or ``{"platform": False, "reason": …}``."""
+    structure, reason = link.platform_structure
+    if structure is None:
+        return {"platform": False, "reason": reason}
+    names = link.model.tree.names
+    return {"platform": True, "legs": [
+        {"name": leg.name, "kind": leg.kind, "joints": [names[j] for j in leg.joints]}
+        for leg in structure.legs]}
+
+
+def structure_line(r: dict) -> str:
+    """One line: the structure found, and the backend that reads it per leg."""
+    s = r.get("structure")
+    if s is None:
+        return ""
+    if not s["platform"]:
+        return f"structure          general linkage (not base–legs–platform: {s['reason']})"
+    kinds = ", ".join(f"{leg['name']}: {leg['kind']}" for leg in s["legs"])
+    how = ("analysed per leg" if r.get("backend") == "legs" else
+           "--backend legs analyses it per leg")
+    return (f"structure          base–legs–platform machine, {len(s['legs'])} legs ({kinds}); "
+            f"{how} (seed 000's indices, each actuation wrench orthogonal to its own leg's "
+            "constraints)")
+
+
+# ------------------------------------------------------------------------- text
+def output_line(r: dict, frames: Sequence[str] = (), likely: Sequence[str] = ()) -> str:
+    """The output frame, how it is analysed, and how to choose another: the ``likely``
+    outputs first (:func:`output_hint`), then the other ``frames`` (eight in all)."""
+    how, other = (("its origin as a point", "--body: as a body") if r["output_is_point"]
+                  else ("as a body", "--point: its origin as a point"))
+    rest = [f for f in frames if f not in set(likely)]
+    n = max(8 - len(likely), 3)
+    parts = [f"likely: {', '.join(likely)}"] if likely else []
+    if rest:
+        parts.append(("other frames: " if likely else "frames: ") + ", ".join(rest[:n])
+                     + (", …" if len(rest) > n else ""))
+    choices = f" ({'; '.join(parts)})" if parts else ""
+    return (f"output             {r['output']}, {how}  [another frame: --output FRAME"
+            f"{choices}; {other}]")
+
+
+def joints_lines(r: dict) -> list[str]:
+    """One line per joint: name and coordinates."""
+    width = max((len(n) for n in r["joints"]), default=0)
+    return [f"    {n:<{width}}  {_list(v)}" for n, v in r["joints"].items()]
+
+
+def _tree_transmission(link, assembly) -> dict | None:
+    """:meth:`Linkage.transmission` as plain data (ITI/OTI per actuator, LTI, CTI per
+    actuator side and their minimum, the weakest in words); ``None`` where it is not
+    defined."""
+    return _transmission_of(lambda: link.transmission(assembly))
+
+
+def _matches_words(matches: dict) -> str:
+    """What the file's actuator identifiers picked, where one is not a joint's own name
+    (``"  (name_mot 'mot' picked mot1, mot2)"``); ``""`` otherwise."""
+    picked = [f"{name!r} picked {', '.join(joints)}" for name, joints in matches.items()
+              if list(joints) != [name]]
+    return f"  (identifiers: {'; '.join(picked)})" if picked else ""
+
+
+def linkage_markdown(r: dict) -> str:
+    """:func:`markdown` of a report's plain data (the name the linkage report had)."""
+    return markdown(data=r)
+
+
+def _submechanisms_markdown(subs: list) -> list[str]:
+    """A table of the independent sub-mechanisms (:func:`submechanisms_data`), none for
+    one mechanism."""
+    if not subs:
+        return []
+    out = ["", f"{len(subs)} independent sub-mechanisms (no movable joint shared), each "
+           "analysed with the others held and its own output:", "",
+           "| sub-mechanism | actuators | output | DOF | idle DOF | motion | singularity |",
+           "|---|---|---|---|---|---|---|"]
+    out += [f"| {s['name']} | {', '.join(s['actuated']) or 'none'} | {s['output']} | "
+            f"{s['dof']} | {s['idle_dof']} | {s['motion_type']} | {s['singularity']} |"
+            for s in subs]
+    return out
 
 
 # ---------------------------------------------------------------------- Markdown
-def markdown(analysis, plots: Sequence[str | Path] = (), data: dict | None = None) -> str:
-    """Markdown report of an analysis; ``plots`` are image files linked at the end.
+def markdown(subject=None, plots: Sequence[str | Path] = (), data: dict | None = None) -> str:
+    """Markdown report of a mechanism (every backend): the summary (output, DOF, idle
+    DOF, motion, class, the independent sub-mechanisms, duplicate closures, failed
+    optional sections) before the pose, the joint table, mobility, actuation,
+    singularity, transmission and cross-check sections; ``plots`` are image files linked
+    at the end.
 
     Args:
-        analysis: The :class:`~pkm_pin.analysis.Analysis`.
+        subject: What :func:`report_data` takes (a mechanism at its home, or a per-leg
+            :class:`~pkm_pin.analysis.Analysis`), unless ``data`` is given.
         plots: Image files (e.g. from :func:`pkm_pin.plots.save_maps`); linked as given.
-        data: :func:`report_data` of the same analysis, when already computed.
+        data: :func:`report_data` already computed.
     """
-    r = data if data is not None else report_data(analysis, plots)
+    r = data if data is not None else report_data(subject, plots=plots)
     xyz, rpy = r["pose"]["xyz"], r["pose"]["rpy"]
+    how = "its origin, as a point" if r.get("output_is_point") else "as a body"
     lines = [f"# {r['mechanism']}", ""]
-    if r["description"]:
+    if r.get("description"):
         lines += [r["description"], ""]
+    lines += ["## Summary", "",
+              f"- output frame `{r['output']}` ({how}) at xyz {_vec(xyz)} m, "
+              f"rpy {_vec(rpy)} rad",
+              f"- DOF **{r['dof']}**, idle DOF {r['idle_dof']}, output motion "
+              f"{r['motion_type']}, singularity **{r['singularity']}**"]
+    lines += [f"- duplicate closure `{a}` repeats `{b}`: its rows are redundant"
+              for a, b in r.get("duplicate_closures", [])]
+    lines += [f"- {name}: not computed ({why})"
+              for name, why in r.get("failed_sections", {}).items()]
+    lines += _submechanisms_markdown(r.get("submechanisms") or [])
     u = r.get("length_unit", "m")
-    lines += ["## Pose", "", f"| x [{u}] | y [{u}] | z [{u}] | roll [rad] | pitch [rad] | "
-              "yaw [rad] |",
-              "|---|---|---|---|---|---|",
-              "| " + " | ".join(_num(v) for v in [*xyz, *rpy]) + " |", ""]
-    lines += ["## Mobility", "",
+    lines += ["", "## Pose", "", f"| x [{u}] | y [{u}] | z [{u}] | roll [rad] | pitch [rad] | "
+              "yaw [rad] |", "|---|---|---|---|---|---|",
+              "| " + " | ".join(_num(v) for v in [*xyz, *rpy]) + " |"]
+    lines += ["", "## Configuration", "", "| joint | q |", "|---|---|"]
+    lines += [f"| {n} | {_vec(v)} |" for n, v in r["joints"].items()]
+    redundant = "constraints" if r.get("legs") else "closure equations"
+    lines += ["", "## Mobility", "",
               f"- degree of freedom: **{r['dof']}** ({r['motion_type']})",
-              f"- Grübler–Kutzbach count: {r['grubler']}",
-              f"- redundant constraints: {r['redundant_constraints']}",
-              f"- idle motions: {r['idle_dof']}" + "".join(
-                  f"\n  - {m}" for m in r["idle_motions"]),
-              "", "Platform twists (ω; v_O) about the world origin:", "",
+              f"- idle degrees of freedom: {r['idle_dof']}"]
+    lines += [f"  - {m}" for m in r["idle_motions"]]
+    if r.get("singular_words"):
+        lines += [f"- {r['singular_words']}"]
+    lines += [f"- Grübler–Kutzbach count: {r['grubler']}",
+              f"- redundant {redundant}: {r['redundant_constraints']}",
+              f"- independent actuators: {', '.join(r['independent_actuators']) or 'none'}",
+              "", "Output twists (ω; v_O) about the world origin:", "",
               "| # | twist (ω; v_O) | in words |", "|---|---|---|"]
     lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
               for i, b in enumerate(r["motion_basis"])]
-    lines += ["", "Constraint wrenches (f; m_O) on the platform:", ""]
+    lines += ["", "Constraint wrenches (f; m_O) on the output:", ""]
     if r["constraint_basis"]:
         lines += ["| # | wrench (f; m_O) | in words |", "|---|---|---|"]
         lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
                   for i, b in enumerate(r["constraint_basis"])]
     else:
-        lines += ["none: the platform is free in space."]
+        lines += ["none: the output is free in space."]
     lines += ["", "## Actuation: A Δ t = B q̇_a", "",
               "Rows of A: the actuation wrenches (f; m_O), one per actuated joint.", ""]
     lines += _matrix_table(r["A"], r["actuated"], ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"])
     lines += ["", "B (diagonal):", ""]
     lines += _matrix_table(r["B"], r["actuated"], r["actuated"])
     lines += ["", "## Singularity", "", f"- class: **{r['singularity']}**",
-              f"- constraint singular: {'yes' if r['constraint_singular'] else 'no'}"]
-    if r["uncontrolled_twist"]:
+              f"- constraint singular: {'yes' if r.get('constraint_singular') else 'no'}"]
+    if r.get("uncontrolled_twist"):
         lines += [f"- uncontrolled twist: {r['uncontrolled_twist']}"]
     lines += ["", "| index | value |", "|---|---|"]
-    lines += [f"| {k} | {_num(v)} |" for k, v in r["indices"].items()]
+    lines += [f"| {k} | {'undefined' if v is None else _num(v)} |"
+              for k, v in r["indices"].items()]
     tr = r.get("transmission")
     if tr is not None:
         lines += ["", "## Motion/force transmission", "", f"{tr['words']}.", "",
@@ -364,7 +672,7 @@ def markdown(analysis, plots: Sequence[str | Path] = (), data: dict | None = Non
         lines += ["", f"LTI = {_index(tr['lti'])} (good transmission: ≥ 0.7), "
                   f"CTI = {_index(tr['cti'])}"]
     lines += ["", "## Cross-check against the hand-written formulas", ""]
-    if r["crosscheck"] is None:
+    if r.get("crosscheck") is None:
         lines += ["No hand-written formulas exist for this mechanism."]
     else:
         lines += ["Largest dimensionless difference |Pinocchio − formulas|:", "",
@@ -387,44 +695,68 @@ def _matrix_table(M, rows: Sequence[str], columns: Sequence[str]) -> list[str]:
 
 
 # --------------------------------------------------------------------------- text
-def text(r: dict) -> str:
-    """Plain-text report (the output of ``pkm-pin analyze``) from :func:`report_data`:
-    the summary (DOF and motion type, Grübler count, singularity class, uncontrolled
-    twist, indices; a non-finite index ``undefined``; the idle motions, one sentence
-    each) before the tables."""
-    out = [f"mechanism          {r['mechanism']}",
-           f"pose               xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
-           f"DOF                {r['dof']}  ({r['motion_type']})",
-           f"Grübler count      {r['grubler']}  (redundant constraints: "
-           f"{r['redundant_constraints']})",
-           f"singularity        {r['singularity']}"
-           + ("  (constraint singular)" if r["constraint_singular"] else "")]
-    if r["uncontrolled_twist"]:
+def text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] | None = None) -> str:
+    """Plain-text report (the output of ``pkm-pin analyze``) from :func:`report_data`,
+    for every mechanism: what it is and its output (``frames``: the choices of
+    ``--output`` to suggest, ``likely`` those named first, default the report's
+    ``output_likely``: :func:`output_hint`), then the summary (DOF with the idle motions,
+    one sentence each, Grübler's count, singularity class, uncontrolled twist, indices
+    with why an undefined one is, transmission, cross-check, actuators), then the tables
+    (the whole tree's configuration, output twists and constraint wrenches, ``A``,
+    ``B``)."""
+    likely = r.get("output_likely") or [] if likely is None else likely
+    joints, closures = len(r["joints"]), len(r["closures"])
+    tree = (f"{joints} joints, {closures} closure{'s' if closures != 1 else ''}"
+            + ("; no closure: a tree, analysed as a serial chain" if not closures else ""))
+    legs = r.get("legs") or []
+    what = (f"{len(legs)} legs: {', '.join(legs)}; tree: {tree}" if legs else f"linkage: {tree}")
+    out = [f"mechanism          {r['mechanism']}  ({what})"]
+    out += [f"description        {r['description']}"] if r.get("description") else []
+    out += [output_line(r, frames, likely)]
+    out += [line for line in (structure_line(r),) if line]
+    out += [f"note               {n}" for n in r.get("notes", [])]
+    out += [f"pose               xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}",
+            f"DOF                {r['dof']}  (idle DOF {r['idle_dof']}; output motion "
+            f"{r['motion_type']}; singularity {r['singularity']})",
+            "idle motions       " + ("none" if not r["idle_motions"] else
+                                     f"{r['idle_dof']} (with every actuated joint locked):")]
+    out += [f"    {m}" for m in r["idle_motions"]]
+    if r.get("singular_words"):
+        out += [f"singular           {r['singular_words']}"]
+    out += submechanism_lines(r)
+    out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
+            for a, b in r.get("duplicate_closures", [])]
+    out += [f"Grübler count      {r['grubler']}  (redundant "
+            f"{'constraints' if legs else 'closure equations'}: {r['redundant_constraints']})",
+            f"singularity        {r['singularity']}"
+            + ("  (constraint singular)" if r.get("constraint_singular") else "")]
+    if r.get("uncontrolled_twist"):
         out += [f"uncontrolled twist {r['uncontrolled_twist']}"]
     out += ["indices            " + ", ".join(
         f"{k} = {v:.6g}" if v is not None and np.isfinite(v) else f"{k} = undefined"
         for k, v in r["indices"].items())]
-    idle = r.get("idle_motions") or []
-    out += ["idle motions       " + (f"{len(idle)} (with every actuated joint locked):"
-                                     if idle else "none")] + [f"    {m}" for m in idle]
-    out += ["platform twists (ω; v_O):"]
-    out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]]
-    out += ["constraint wrenches (f; m_O):"]
-    out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["constraint_basis"]] or ["    none"]
-    out += [f"actuated joints    {', '.join(r['actuated'])}",
-            "A (actuation wrenches (f; m_O), A Δ t = B q̇_a):"]
-    out += [f"    {_row(row)}" for row in r["A"]]
-    out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
+    out += [f"    {k} undefined ({why})" for k, why in r.get("indices_undefined", {}).items()]
     tr = r.get("transmission")
     if tr is not None:
         out += [f"transmission       LTI = {_index(tr['lti'], fmt='.3g')}, "
                 f"CTI = {_index(tr['cti'], fmt='.3g')}: {tr['words']}"]
-    if r["crosscheck"] is None:
+    if r.get("crosscheck") is None:
         out += ["cross-check        no hand-written formulas for this mechanism"]
     else:
         parts = ", ".join(f"{k} {v:.2g}" for k, v in r["crosscheck"].items())
         out += ["cross-check        max |Pinocchio − formulas| = "
                 f"{r['crosscheck_max_error']:.3g}  ({parts})"]
+    out += [f"actuated joints    {', '.join(r['actuated'])} = {_list(r['q_actuated'])}"
+            + _matches_words(r.get("actuator_matches", {})),
+            f"independent        {', '.join(r['independent_actuators']) or 'none'}",
+            "joints (q):"] + joints_lines(r)
+    out += [f"{'platform' if legs else 'output'} twists ({r['output']}; ω; v_O):"]
+    out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["motion_basis"]] or ["    none"]
+    out += ["constraint wrenches on the output (f; m_O):"]
+    out += [f"    {_row(b['screw'])}   {b['words']}" for b in r["constraint_basis"]] or ["    none"]
+    out += ["A (actuation wrenches (f; m_O), A Δ t = B q̇_a):"]
+    out += [f"    {_row(row)}" for row in r["A"]]
+    out += ["B:"] + [f"    {_row(row)}" for row in r["B"]]
     out += failed_lines(r)
     out += [f"plot               {p}" for p in r.get("plots", [])]
     return "\n".join(out)

@@ -22,7 +22,7 @@ def test_analyze_default_prints_the_3rpr_report(capsys):
     assert main(["analyze"]) == 0
     out = capsys.readouterr().out
     assert "3-RPR" in out
-    assert "DOF                3  (2T1R)" in out
+    assert "DOF                3  (idle DOF 0; output motion 2T1R; singularity none)" in out
     assert "singularity        none" in out
     assert "cross-check" in out
 

@@ -301,13 +301,14 @@ def test_linkage_transmission_of_the_five_bar_and_four_bar_closed_forms(five):
 
 
 def test_linkage_report_gives_the_transmission_in_words(five):
-    from pkm_pin.report_linkage import linkage_report_data, linkage_text
+    from pkm_pin.report import linkage_report_data, text
 
     a = five.assemble()
     data = linkage_report_data(five, a)
     tr = five.transmission(a)
     assert data["transmission"]["lti"] == pytest.approx(tr.lti, rel=1e-12)
-    assert f"transmission       LTI = {tr.lti:.3g}: {tr.worst}" in linkage_text(data)
+    assert (f"transmission       LTI = {tr.lti:.3g}, CTI = {tr.cti:.3g}: {tr.worst}"
+            in text(data))
 
 
 def test_linkage_cti_of_planar_loops_is_one(five):

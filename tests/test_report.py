@@ -169,15 +169,15 @@ def test_report_gives_the_transmission_indices_in_words():
 
 
 def test_text_says_the_idle_motions_one_sentence_each(analyses):
-    """The platform text report names the idle motions after the summary (none for the
-    3-RPS; a mechanism with some gets one line per motion under their count)."""
+    """The text report names the idle motions right under the DOF (none for the 3-RPS;
+    a mechanism with some gets one line per motion under their count)."""
     data = report_data(analyses["rps3"])
     lines = text(data).splitlines()
-    assert "idle motions       none" in lines
-    assert lines.index("idle motions       none") > next(
-        i for i, x in enumerate(lines) if x.startswith("indices"))
+    k = next(i for i, x in enumerate(lines) if x.startswith("DOF "))
+    assert lines[k + 1] == "idle motions       none"
     data["idle_motions"] = ["leg 1 spins about the line through its two spherical joints",
                             "leg 2 spins about the line through its two spherical joints"]
+    data["idle_dof"] = 2
     lines = text(data).splitlines()
     k = lines.index("idle motions       2 (with every actuated joint locked):")
     assert lines[k + 1:k + 3] == [f"    {m}" for m in data["idle_motions"]]
