@@ -711,7 +711,6 @@ def text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] | None = Non
     legs = r.get("legs") or []
     what = (f"{len(legs)} legs: {', '.join(legs)}; tree: {tree}" if legs else f"linkage: {tree}")
     out = [f"mechanism          {r['mechanism']}  ({what})"]
-    out += [f"description        {r['description']}"] if r.get("description") else []
     out += [output_line(r, frames, likely)]
     out += [line for line in (structure_line(r),) if line]
     out += [f"note               {n}" for n in r.get("notes", [])]
