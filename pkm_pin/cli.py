@@ -280,36 +280,67 @@ def _assembly(args, mech):
 
 
 def cmd_check(args) -> int:
-    """Load a mechanism file, assemble it at home and analyse it; report problems."""
+    """Load a mechanism file, assemble it at home and analyse it; report problems. One
+    path for every mechanism: the tree's lines read through :attr:`Mechanism.general`
+    (closures, idle motions, duplicate closures, the output choice, the independent
+    sub-mechanisms), the numbers of the backend that reads it, and the per-leg engine's
+    cross-check with the papers' formulas where they exist."""
+    from .analysis import Analysis
     from .crosscheck import crosscheck
     from .io import load_mechanism
+    from .linkage import LoopClosureError
+    from .model.closure_model import duplicate_closures
+    from .report import optional
+    from .submechanisms import analysed
 
     path = Path(args.file)
     if not _is_file(path) and _is_file(models_dir() / f"{args.file}.toml"):
         path = models_dir() / f"{args.file}.toml"
     mech = load_mechanism(path, closures=args.closures, output=args.output, point=args.point,
                           backend=args.backend)
-    if _is_linkage(mech):
-        return _check_linkage(path, mech)
-    print(f"ok    loads: {mech.name!r}, {len(mech.legs)} legs "
-          f"({', '.join(f'{leg.name}: {leg.nv} joints' for leg in mech.legs)}), "
-          f"{mech.n_actuated} actuated ({', '.join(mech.actuated_names)})")
-    asm = mech.home_assembly
-    print(f"ok    assembles at home {_pose_text(asm.pose)} (closure residual {asm.residual:.2g})")
+    link, model = mech.general, mech.general.model
+    closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or (
+        "none: a tree, analysed as a serial chain")
+    per_leg = mech.backend == "legs"
+    legs = (f"; read per leg: {len(mech.legs)} legs "
+            f"({', '.join(f'{leg.name}: {leg.nv} joints' for leg in mech.legs)})"
+            if per_leg else "")
+    print(f"ok    loads: {mech.name!r}, {model.tree.njoints - 1} joints (nq {model.nq}, "
+          f"nv {model.nv}), {len(model.closures)} closure{'s' * (len(model.closures) != 1)} "
+          f"({closures}), {mech.n_actuated} actuated "
+          f"({', '.join(mech.actuated_names) or 'none'}), output {link.output!r} "
+          f"({'point' if model.output_point else 'body'}){legs}")
+    try:
+        asm = mech.home_assembly
+    except LoopClosureError as e:
+        raise InputError(f"{path}: {e}") from e
+    print(f"ok    assembles {'at home' if per_leg else 'from the reference configuration'} "
+          f"(closure residual {asm.residual:.2g}); output at {_pose_text(asm.output_pose)}")
+    for note in model.notes:
+        print(f"info  {note}")
+    _check_output_choice(link, asm)
     an = mech.analyze(asm)
-    print(f"ok    analysis: DOF {an.dof} ({an.motion_type}), Grübler count {an.grubler}, "
-          f"redundant constraints {an.redundant_constraints}, singularity {an.singularity}")
-    warnings = []
-    if an.dof == 0:
-        warnings.append("the platform cannot move at home (DOF 0)")
-    if mech.n_actuated != an.dof:
-        more = "more" if mech.n_actuated > an.dof else "fewer"
-        warnings.append(f"{mech.n_actuated} actuated joints for {an.dof} DOF: {more} actuators "
-                        "than degrees of freedom")
-    if an.singularity != "none":
-        warnings.append(f"the home pose is a type {an.singularity} singularity (indices "
-                        + ", ".join(f"{k} {v:.2g}" for k, v in an.indices.items()) + ")")
-    checks = crosscheck(an)
+    mob = an.mobility
+    print(f"ok    mobility: DOF {mob.dof}, idle DOF {an.idle_dof}, Grübler count "
+          f"{an.grubler}, redundant {'constraints' if per_leg else 'closure equations'} "
+          f"{an.redundant_constraints}, output motion {an.motion_type}, singularity "
+          f"{an.singularity}")
+    for motion in mob.idle_motions:
+        print(f"info  idle motion (actuators locked): {motion}")
+    warnings = _check_actuators(mech, an)
+    if mob.singular:
+        warnings.append(mob.singular_words)
+    warnings += [f"closure {a!r} repeats {b!r}: its rows are redundant (remove one)"
+                 for a, b in duplicate_closures(model.closures)]
+    failed: dict = {}
+    parts = optional("submechanisms", lambda: analysed(link, asm.q), failed)
+    warnings += [f"sub-mechanisms not computed ({why})" for why in failed.values()]
+    if parts:
+        warnings += _check_submechanisms(link, an, parts)
+    elif an.singularity != "none":
+        warnings.append(f"the reference assembly is a type {an.singularity} singularity "
+                        f"({_indices_words(an.indices)})")
+    checks = crosscheck(an) if isinstance(an, Analysis) else None
     if checks is not None:
         worst = max(checks.values())
         if worst > CROSSCHECK_TOL:
@@ -322,62 +353,23 @@ def cmd_check(args) -> int:
     return 1 if warnings else 0
 
 
-def _check_linkage(path: Path, link) -> int:
-    """``check`` of a linkage: loads, assembles from the reference configuration (the
-    loop that does not close and its residual otherwise), mobility and singularity."""
-    from .linkage import LoopClosureError
-    from .model.closure_model import duplicate_closures
-    from .report import optional
-    from .submechanisms import analysed
-
-    model = link.model
-    closures = ", ".join(f"{c.name}: {c.kind}" for c in model.closures) or (
-        "none: a tree, analysed as a serial chain")
-    print(f"ok    loads: {link.name!r}, {model.tree.njoints - 1} joints (nq {model.nq}, "
-          f"nv {model.nv}), {len(model.closures)} closure{'s' * (len(model.closures) != 1)} "
-          f"({closures}), "
-          f"{len(link.actuated)} actuated ({', '.join(link.actuated) or 'none'}), output "
-          f"{link.output!r} ({'point' if model.output_point else 'body'})")
-    try:
-        asm = link.assemble()
-    except LoopClosureError as e:
-        raise InputError(f"{path}: {e}") from e
-    print(f"ok    assembles from the reference configuration (closure residual "
-          f"{asm.residual:.2g}); output at {_pose_text(asm.output_pose)}")
-    for note in model.notes:
-        print(f"info  {note}")
-    _check_output_choice(link, asm)
-    an = link.analyze(asm)
-    print(f"ok    mobility: DOF {an.dof}, idle DOF {an.idle_dof}, Grübler count "
-          f"{link.grubler}, redundant closure equations {an.redundant_constraints}, "
-          f"output motion {an.motion_type}, singularity {an.singularity}")
-    for motion in an.mobility.idle_motions:
-        print(f"info  idle motion (actuators locked): {motion}")
-    warnings = []
-    if an.dof == 0:
-        warnings.append("the linkage cannot move here (DOF 0)")
-    if not link.actuated:
+def _check_actuators(mech, an) -> list[str]:
+    """``check``'s warnings on the actuators: none, too few to drive the output, or some
+    that depend on the others (redundant actuation), and a mechanism that cannot move."""
+    mob, warnings = an.mobility, []
+    if mob.dof == 0:
+        warnings.append("the mechanism cannot move here (DOF 0)")
+    if not mech.n_actuated:
         warnings.append("no actuated joint")
-    dependent = [a for a in link.actuated if a not in an.mobility.independent_actuators]
+    elif len(mob.independent_actuators) < an.output_dof:
+        warnings.append(f"{len(mob.independent_actuators)} actuated joints for "
+                        f"{an.output_dof} DOF: fewer actuators than degrees of freedom of "
+                        "the output")
+    dependent = [a for a in mech.general.actuated if a not in mob.independent_actuators]
     if dependent:
         warnings.append(f"actuated joints {', '.join(dependent)} depend on the others "
                         "(redundant actuation)")
-    if an.mobility.singular:
-        warnings.append(an.mobility.singular_words)
-    warnings += [f"closure {a!r} repeats {b!r}: its rows are redundant (remove one)"
-                 for a, b in duplicate_closures(model.closures)]
-    failed: dict = {}
-    parts = optional("submechanisms", lambda: analysed(link, asm.q), failed)
-    warnings += [f"sub-mechanisms not computed ({why})" for why in failed.values()]
-    if parts:
-        warnings += _check_submechanisms(link, an, parts)
-    elif an.singularity != "none":
-        warnings.append(f"the reference assembly is a type {an.singularity} singularity "
-                        f"({_indices_words(an.indices)})")
-    for w in warnings:
-        print(f"warn  {w}")
-    print(f"{path}: " + (f"{len(warnings)} warning(s)" if warnings else "fine"))
-    return 1 if warnings else 0
+    return warnings
 
 
 def _check_output_choice(link, asm) -> None:

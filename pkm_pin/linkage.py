@@ -1857,6 +1857,12 @@ class LinkageAnalysis(OutputMaps):
         return self.mobility.redundant_constraints
 
     @property
+    def grubler(self) -> int:
+        """Grübler–Kutzbach count of the tree and its closures (:attr:`Mobility.grubler`;
+        a per-leg :class:`~pkm_pin.analysis.Analysis` answers the same name)."""
+        return self.mobility.grubler
+
+    @property
     def motion_type(self) -> str:
         """``"3T"``, ``"1T2R"``, ``"3T3R"`` … of the output; ``"0"`` when it is rigid."""
         t, r = self.translations, self.output_dof - self.translations
