@@ -421,62 +421,69 @@ def _check_submechanisms(link, an, parts) -> list[str]:
 
 
 def cmd_fk(args) -> int:
-    """Forward kinematics: pose(s) for the actuated coordinates."""
+    """Forward kinematics, one path for every mechanism: every joint and the output pose
+    for the actuated values (the branch nearest home, as ``ik`` and ``analyze --q``), or
+    every assembly mode found (``--all``); with several independent sub-mechanisms (a
+    biped's legs) each one's output pose too, and ``--sub K``: the values are
+    sub-mechanism K's alone (:func:`_fk_sub`)."""
+    from .report import optional
+    from .report_linkage import fk_submechanisms_data, fk_text
+
     mech = _load(args)
-    if _is_linkage(mech):
-        return _fk_linkage(args, mech)
-    if args.sub is not None:
-        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for "
-                         f"a platform mechanism; give all {mech.n_actuated} actuated values")
-    q = mech.check_actuated(args.q)
+    failed: dict = {}
+    subs = _submechanisms_or_why(mech, args.sub, failed)
     if args.all:
-        found = mech.forward_kinematics_all(q, starts=args.starts, seed=args.seed)
+        if args.sub is not None:
+            raise InputError("--all and --sub K: give the values of the whole mechanism "
+                             "for every assembly mode")
+        return _fk_modes(args, mech)
+    if args.sub is not None:
+        assembly = _fk_sub(mech, subs, args.sub, args.q)
     else:
-        found = [mech.forward_kinematics(q)]
-    rows = [{"pose": _pose_dict(a.pose), "q_actuated": a.q_actuated.tolist(),
-             "residual": float(a.residual),
-             "leg_q": {leg.name: qi.tolist() for leg, qi in zip(mech.legs, a.leg_q)},
-             "q": a.q.tolist()}
-            for a in found]
+        if len(args.q) != mech.n_actuated and len(subs) > 1:
+            raise InputError(f"{len(args.q)} actuated values given, {mech.n_actuated} "
+                             f"expected ({', '.join(mech.actuated_names)}); for one "
+                             "independent sub-mechanism alone give --sub K and its values: "
+                             + _subs_words(subs))
+        assembly = mech.forward_kinematics(mech.check_actuated(args.q),
+                                           guess=mech.home_assembly)
+    data = _assembly_data(mech, assembly)
+    data["submechanisms"] = optional(
+        "submechanisms", lambda: fk_submechanisms_data(mech, subs, assembly), failed)
+    data["failed_sections"] = failed
+    print(_json(data) if args.json else fk_text(data))
+    return 0
+
+
+def _assembly_data(mech, assembly) -> dict:
+    """:func:`pkm_pin.report.assembly_data` of any mechanism's assembly (the tree read
+    through :attr:`Mechanism.general`), the actuated names in the order of the values,
+    and each leg's configuration (``leg_q``) where the mechanism is read per leg."""
+    from .report import assembly_data
+
+    data = assembly_data(mech.general, assembly)
+    data["actuated"] = list(mech.actuated_names)
+    if mech.backend == "legs":
+        data["leg_q"] = {leg.name: q.tolist() for leg, q in zip(mech.legs, assembly.leg_q)}
+    return data
+
+
+def _fk_modes(args, mech) -> int:
+    """``fk --all``: every assembly mode found for the actuated values
+    (:meth:`Mechanism.forward_kinematics_all`), nearest home first; one line each (the
+    output pose), or the list of their assemblies in JSON."""
+    q = mech.check_actuated(args.q)
+    found = mech.forward_kinematics_all(q, starts=args.starts, seed=args.seed)
+    rows = [_assembly_data(mech, a) for a in found]
     if args.json:
-        print(_json(rows if args.all else rows[0]))
+        print(_json(rows))
         return 0
     print(f"mechanism  {mech.name}")
     print(f"actuated   {', '.join(mech.actuated_names)} = {_fmt(q)}")
     if not found:
         print("no assembly mode found")
     for i, a in enumerate(found):
-        label = f"mode {i + 1}" if args.all else "pose"
-        print(f"{label:<10} {_pose_text(a.pose)}")
-    return 0
-
-
-def _fk_linkage(args, link) -> int:
-    """``fk`` of a linkage: every joint and the output pose (the branch nearest the
-    reference assembly, as ``ik`` and ``analyze --q``); with several independent
-    sub-mechanisms (a biped's legs) each one's output pose too, and ``--sub K``: the
-    values are sub-mechanism K's alone (:func:`_fk_sub`)."""
-    from .report import optional
-    from .report_linkage import assembly_data, fk_submechanisms_data, fk_text
-
-    _no_all(args)
-    failed: dict = {}
-    subs = _submechanisms_or_why(link, args.sub, failed)
-    if args.sub is not None:
-        assembly = _fk_sub(link, subs, args.sub, args.q)
-    else:
-        if len(args.q) != len(link.actuated) and len(subs) > 1:
-            raise InputError(f"{len(args.q)} actuated values given, {len(link.actuated)} "
-                             f"expected ({', '.join(link.actuated)}); for one independent "
-                             "sub-mechanism alone give --sub K and its values: "
-                             + _subs_words(subs))
-        q = link.check_actuated(args.q)
-        assembly = link.forward_kinematics(q, guess=link.assemble())
-    data = assembly_data(link, assembly)
-    data["submechanisms"] = optional(
-        "submechanisms", lambda: fk_submechanisms_data(link, subs, assembly), failed)
-    data["failed_sections"] = failed
-    print(_json(data) if args.json else fk_text(data))
+        print(f"{f'mode {i + 1}':<10} {_pose_text(a.output_pose)}")
     return 0
 
 

@@ -209,10 +209,21 @@ def test_ik_defaults_to_the_reference_output_pose(capsys):
     assert report["q_actuated"] == pytest.approx(link.assemble().q_actuated, abs=1e-7)
 
 
-def test_fk_all_and_wrong_counts_are_refused(capsys):
-    """fk --all (platforms only) and a wrong number of values are one error line."""
-    assert main(["fk", str(FOUR_BAR), "0.3", "--all"]) == 2
-    assert "--all" in one_error_line(capsys)
+def test_fk_all_gives_both_modes_and_wrong_counts_are_refused(capsys):
+    """fk --all of a linkage (one path with the platforms'): the four-bar's two assembly
+    modes at crank 0.3 (open and crossed: the coupler on either side of the line from
+    the crank pin to the rocker pivot), the first the plain fk's, each closing the loop;
+    a wrong number of values is one error line."""
+    modes = _json(capsys, ["fk", str(FOUR_BAR), "0.3", "--all", "--json"])
+    one = _json(capsys, ["fk", str(FOUR_BAR), "0.3", "--json"])
+    assert len(modes) == 2 and modes[0]["q"] == pytest.approx(one["q"], abs=1e-9)
+    assert all(m["q_actuated"] == [0.3] and m["residual"] < 1e-12 for m in modes)
+    link = load_mechanism(FOUR_BAR).general
+    for m in modes:  # the loop closes: the closure's residual at q is zero
+        assert max(link.residuals_at(np.array(m["q"])).values()) < 1e-12
+    assert abs(modes[0]["q"][2] - modes[1]["q"][2]) > 1.0  # two distinct rocker angles
+    assert main(["fk", str(FOUR_BAR), "0.3", "--all"]) == 0
+    assert capsys.readouterr().out.count("\nmode ") == 2
     assert main(["fk", str(FIVE_BAR_XML), "0.3"]) == 2
     assert "mot1, mot2" in one_error_line(capsys)
 
