@@ -271,11 +271,11 @@ def _assembly(args, mech):
     home), ``--pose`` / ``--at`` (a full or partial output pose), else home."""
     if _is_linkage(mech):  # a pose is the general backend's inverse kinematics
         return _linkage_assembly(args, mech)
-    pose = _platform_pose(args)
-    if args.q is not None:
+    pose, q = _platform_pose(args), getattr(args, "q", None)
+    if q is not None:
         if pose is not None:
             raise InputError("give --q (actuated values) or --pose / --at, not both")
-        return mech.forward_kinematics(mech.check_actuated(args.q))
+        return mech.forward_kinematics(mech.check_actuated(q))
     return mech.assembly_at(pose)
 
 
@@ -462,7 +462,7 @@ def _assembly_data(mech, assembly) -> dict:
     from .report import assembly_data
 
     data = assembly_data(mech.general, assembly)
-    data["actuated"] = list(mech.actuated_names)
+    data["backend"], data["actuated"] = mech.backend, list(mech.actuated_names)
     if mech.backend == "legs":
         data["leg_q"] = {leg.name: q.tolist() for leg, q in zip(mech.legs, assembly.leg_q)}
     return data
@@ -596,67 +596,56 @@ def _fk_sub(link, subs, k: int, values):
     return link.forward_kinematics([targets[n] for n in link.actuated], guess=q)
 
 
-def _no_all(args) -> None:
-    if args.all:
-        raise InputError("--all (every assembly mode) is for platform mechanisms; for a "
-                         "linkage fk/ik give the branch nearest the reference assembly")
-
-
 def cmd_ik(args) -> int:
-    """Inverse kinematics: actuated coordinates at a pose (every working mode with --all);
-    a partial pose (``--at``) is completed first and the full pose printed."""
-    mech = _load(args)
-    if _is_linkage(mech):
-        return _ik_linkage(args, mech)
-    pose = _platform_pose(args)
-    if args.all:
-        found = mech.inverse_kinematics_all(mech.home if pose is None else pose)
-    else:
-        found = [mech.assemble(mech.home if pose is None else pose)]
-    modes = [a.q_actuated for a in found]
-    if args.json:
-        body = {"actuated": mech.actuated_names, "q_actuated": [m.tolist() for m in modes],
-                "pose": _pose_dict(found[0].pose)}
-        if not args.all:
-            body["q_actuated"] = body["q_actuated"][0]
-        print(_json(body))
-        return 0
-    print(f"mechanism  {mech.name}")
-    if isinstance(pose, dict):
-        print(f"given      {', '.join(f'{k}={v:g}' for k, v in pose.items())}")
-    print(f"pose       {_pose_text(found[0].pose)}")
-    print(f"actuated   {', '.join(mech.actuated_names)}")
-    for i, m in enumerate(modes):
-        print(f"{f'mode {i + 1}' if args.all else 'q':<10} {_fmt(m)}")
-    return 0
-
-
-def _ik_linkage(args, link) -> int:
-    """``ik`` of a linkage: the assembly whose output reaches the pose (default: the
-    output pose of the reference assembly), as far as the output can move."""
+    """Inverse kinematics, one path for every mechanism: the assembly whose output
+    reaches the pose (``--pose``; ``--at``: a partial pose, the other coordinates free;
+    default the home pose), its actuated values, every joint and the output pose; every
+    working mode with ``--all``."""
     from .assembly import as_pose
-    from .report_linkage import assembly_data, fk_text, pose_dict
+    from .report_linkage import fk_text, pose_dict
 
-    _no_all(args)
+    mech = _load(args)
     given = _platform_pose(args)
-    if isinstance(given, dict):  # a partial pose (--at): the other coordinates free
-        data = assembly_data(link, link.inverse_kinematics(given))
+    if args.all:
+        return _ik_modes(args, mech, given)
+    data = _assembly_data(mech, _assembly(args, mech))
+    if isinstance(given, dict):  # the other coordinates free
         data["given"] = given
-        if args.json:
-            print(_json(data))
-            return 0
-        print(f"given      {', '.join(f'{k}={v:g}' for k, v in given.items())} (the other "
-              "coordinates free)")
-        print(fk_text(data))
-        return 0
-    target = link.assemble().output_pose if args.pose is None else as_pose(args.pose)
-    data = assembly_data(link, link.inverse_kinematics(target))
-    data["target"] = pose_dict(target)
+        head = (f"given      {', '.join(f'{k}={v:g}' for k, v in given.items())} (the "
+                "other coordinates free)")
+    else:
+        data["target"] = pose_dict(mech.home_assembly.output_pose if given is None
+                                   else as_pose(given))
+        head = (f"target     xyz {_fmt(data['target']['xyz'])}  "
+                f"rpy {_fmt(data['target']['rpy'])}")
     if args.json:
         print(_json(data))
         return 0
-    print(f"target     xyz {_fmt(data['target']['xyz'])}  rpy {_fmt(data['target']['rpy'])}")
+    print(head)
     print(fk_text(data))
+    return 0
+
+
+def _ik_modes(args, mech, given) -> int:
+    """``ik --all``: every working mode at the pose (default home;
+    :meth:`Mechanism.inverse_kinematics_all`), the home one first: the actuated values
+    of each, and in JSON the assembly of each too (``modes``)."""
+    pose = mech.home_assembly.output_pose if given is None else given
+    found = mech.inverse_kinematics_all(pose)
+    values = [np.asarray(a.q_actuated, dtype=float).tolist() for a in found]
+    if args.json:
+        print(_json({"actuated": list(mech.actuated_names), "q_actuated": values,
+                     "pose": _pose_dict(found[0].output_pose) if found else None,
+                     "modes": [_assembly_data(mech, a) for a in found]}))
+        return 0
+    print(f"mechanism  {mech.name}")
+    if isinstance(given, dict):
+        print(f"given      {', '.join(f'{k}={v:g}' for k, v in given.items())}")
+    if found:
+        print(f"pose       {_pose_text(found[0].output_pose)}")
+    print(f"actuated   {', '.join(mech.actuated_names)}")
+    for i, m in enumerate(values):
+        print(f"{f'mode {i + 1}':<10} {_fmt(m)}")
     return 0
 
 

@@ -350,7 +350,6 @@ def assembly_data(link, assembly) -> dict:
     (name, kind, frames and residual of each)."""
     model = link.model
     return {
-        "kind": "linkage",
         "mechanism": link.name,
         "output": link.output,
         "output_is_point": bool(model.output_point),
