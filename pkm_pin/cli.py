@@ -608,11 +608,12 @@ def cmd_ik(args) -> int:
     given = _platform_pose(args)
     if args.all:
         return _ik_modes(args, mech, given)
-    data = _assembly_data(mech, _assembly(args, mech))
-    if isinstance(given, dict):  # the other coordinates free
+    assembly = _assembly(args, mech)
+    data = _assembly_data(mech, assembly)
+    if isinstance(given, dict):  # the other coordinates free: the pose they completed
         data["given"] = given
         head = (f"given      {', '.join(f'{k}={v:g}' for k, v in given.items())} (the "
-                "other coordinates free)")
+                f"other coordinates free)\npose       {_pose_text(assembly.output_pose)}")
     else:
         data["target"] = pose_dict(mech.home_assembly.output_pose if given is None
                                    else as_pose(given))
