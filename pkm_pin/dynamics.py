@@ -809,7 +809,7 @@ def _unbalanced(model: ClosureModel, work: _Work, res: np.ndarray, balance: floa
 _OK, _TO_PYTHON = 0, 1
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _body_motions(k, S, v, a, Vb, Ab, sv):
     """World twists ``Vb`` (nj × 6) and spatial accelerations ``Ab`` (axis-first, about
     the world origin) of every joint's body: ``V_j = V_p + S_j v_j``, ``A_j = A_p + S_j
@@ -865,7 +865,7 @@ def _weld_rows(Mh, nud, r0, out, lg, Jl, w3, A3, Cm, R, p):
         out[r0 + a], out[r0 + 3 + a] = ang, lin
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _second_derivative_world(k, ws, Vb, Ab, H, a, row_units, rdd, nud, Mh, lg, Jl, A3):
     """Every closure's ``J a + J̇ v`` (physical) from the bodies' motions; a coupling's
     (linear in q) is ``J a`` from its dimensionless row of ``H``."""
@@ -885,7 +885,7 @@ def _second_derivative_world(k, ws, Vb, Ab, H, a, row_units, rdd, nud, Mh, lg, J
             _weld_rows(Mh, nud, k.rows[c], rdd, lg, Jl, ws.w, A3, ws.Cm, ws.Rrel, ws.prel)
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _output_columns(k, ws, point, Jo):
     """The output Jacobian (6 × nv, axis-first, world origin; a point output: ``(0;
     v_p)``) from the joints' twists."""
@@ -956,7 +956,7 @@ def _type_two(V, sv, small, Jo, U, F, o, length, close, t):
     return False
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _right_side(k, Jo, tau, w, has_w, point, b, bw):
     """``b = U (τ_tree − J_oᵀ Δ w)`` and its payload part ``bw`` (for a point output
     only the force acts, on the point's velocity)."""
@@ -1244,7 +1244,7 @@ def _within_reach(nr, nv, kappa) -> bool:
     return 2.0 * EIG_RTOL + (nr + 4) * nv * 2.2e-16 * kappa <= 2.0 * CONDITION_RTOL
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _balance_cholesky(act, s, has_w):
     """The balance by the Cholesky (``L D Lᵀ``) factors of ``G = A Aᵀ`` where ``A`` has
     full row rank with a certified condition: the minimum-norm solutions of ``b`` and
@@ -1276,7 +1276,7 @@ def _balance_cholesky(act, s, has_w):
     return True, math.sqrt(lmax), math.sqrt(lmin), res / scale
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _balance(k, s, cons, has_w):
     """The balance ``A x = b`` (and ``bw``) of one sample: by :func:`_balance_cholesky`
     once a previous sample of the batch has given warm vectors and ``A`` can have full
@@ -1354,7 +1354,7 @@ def _balance_svd(k, H, At, Wj, V, sv, b, bw, y, yw, r, cons, has_w):
     return rank, smax, smin, res / scale
 
 
-@register_jitable
+@register_jitable(inline="always")
 def _rnea_world(k, oMi, S, Vb, Ab, a, body, armature, g, Fb, tau):
     """``rnea(q, v, a)`` with gravity ``g`` from the bodies' world twists and spatial
     accelerations: per body (``body[j]`` = mass, centre of mass in the joint frame, its
@@ -1490,6 +1490,10 @@ def inverse_dynamics_kernel(k, Q, V_, A, body, armature, g, W, has_w, point, row
 # work arrays are ~70 arrays, passed to a dozen functions per sample, which cost more
 # than the arithmetic. The sample loop allocates nothing and is compiled without
 # reference counting (numba's ``_nrt`` option; its caller keeps the arrays alive).
+# A call also passes each array of a named tuple member by member (~8 scalars per
+# array): the functions that take the tree kernel or the work arrays whole (``k``,
+# ``ws``, ``s``: ~500 scalars a call) are inlined into the loop (``inline="always"``,
+# numba's own inlining: LLVM leaves functions of that size as calls).
 @njit(cache=True, nogil=True, _nrt=False)
 def _samples(k, ws, s, Q, V_, A, body, armature, g, W, has_w, point, row_units, cons, T, X,
              XW, RDD, DRIFT, INFO):
