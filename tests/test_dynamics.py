@@ -89,10 +89,17 @@ MODELS = {
     "four_bar_mjcf": lambda: _loaded("models/loops/four_bar.xml"),
 }
 #: The Gepetto corpus (tests/data/gepetto, their own inertias; some bodies massless) that
-#: assembles and is regular at home.
+#: assembles and is not type II at home (kangaroo_like_2legs's pistons are type I there:
+#: no effort is unbounded); wl16_like at a generic assembly (:data:`WL16_MOTORS`), its
+#: home being next to a fold (type II index 0.0013: test_wl16). Not here: disney_like (an
+#: idle motion moves the foot: its error is tested below), kangaroo_like and
+#: true_talos_2_legs (they do not assemble: test_corpus).
 CORPUS = ("5bar_linkage_iso3d", "5bar_linkage_iso6d", "robot_delta", "cassie_like",
           "digit_like", "talos_like", "battobot_6d", "digit_like_2legs",
-          "digit_like_2legs_6D", "digit_like_2legs_old", "old/digit_like_2legs")
+          "digit_like_2legs_6D", "digit_like_2legs_old", "old/digit_like_2legs",
+          "wl16_like", "kangaroo_like_2legs")
+#: wl16_like's motors [m] at a generic assembly (type II index 0.025; tests/test_wl16.py).
+WL16_MOTORS = (0.965, 0.963, 0.831, 0.43, 0.694, 0.996)
 #: The other shipped TOML mechanisms (legs welded to a free-flyer platform).
 OTHER_TOML = ("agile_eye", "orthoglide", "orthoglide_quasi", "prs3", "rpr3", "rps3", "rrr3",
               "upu3")
@@ -105,6 +112,9 @@ def model(name: str):
         return with_inertias(five_bar("revolute")), five_bar_q([0.7, 1.2])
     if name in OTHER_TOML:
         return _toml(name)
+    if name == "wl16_like":  # forward kinematics from home to a generic assembly
+        link = pkm_pin.load_mechanism(ROOT / "tests/data/gepetto/wl16_like/robot.urdf")
+        return link.model, link.forward_kinematics(WL16_MOTORS, guess=link.home_assembly).q
     if name in CORPUS:
         return _loaded(f"tests/data/gepetto/{name}/robot.urdf", False)
     return MODELS[name]()
