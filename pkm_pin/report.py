@@ -608,31 +608,51 @@ def markdown(subject=None, plots: Sequence[str | Path] = (), data: dict | None =
         data: :func:`report_data` already computed.
     """
     r = data if data is not None else report_data(subject, plots=plots)
+    lines = [f"# {r['mechanism']}", ""] + ([r["description"], ""] if r.get("description")
+                                             else [])
+    for section in (_md_summary, _md_pose_and_joints, _md_mobility, _md_actuation,
+                    _md_singularity, _md_transmission, _md_crosscheck):
+        lines += section(r)
+    if r["plots"]:
+        lines += ["", "## Plots", ""]
+        lines += [f"![{Path(p).stem}]({p})" for p in r["plots"]]
+    return "\n".join(lines) + "\n"
+
+
+def _md_summary(r: dict) -> list[str]:
+    """The summary: output, DOF, idle DOF, motion, class, duplicate closures, failed
+    optional sections, the independent sub-mechanisms."""
     xyz, rpy = r["pose"]["xyz"], r["pose"]["rpy"]
     how = "its origin, as a point" if r.get("output_is_point") else "as a body"
-    lines = [f"# {r['mechanism']}", ""]
-    if r.get("description"):
-        lines += [r["description"], ""]
-    lines += ["## Summary", "",
-              f"- output frame `{r['output']}` ({how}) at xyz {_vec(xyz)} m, "
-              f"rpy {_vec(rpy)} rad",
-              f"- DOF **{r['dof']}**, idle DOF {r['idle_dof']}, output motion "
-              f"{r['motion_type']}, singularity **{r['singularity']}**"]
+    lines = ["## Summary", "",
+             f"- output frame `{r['output']}` ({how}) at xyz {_vec(xyz)} m, "
+             f"rpy {_vec(rpy)} rad",
+             f"- DOF **{r['dof']}**, idle DOF {r['idle_dof']}, output motion "
+             f"{r['motion_type']}, singularity **{r['singularity']}**"]
     lines += [f"- duplicate closure `{a}` repeats `{b}`: its rows are redundant"
               for a, b in r.get("duplicate_closures", [])]
     lines += [f"- {name}: not computed ({why})"
               for name, why in r.get("failed_sections", {}).items()]
-    lines += _submechanisms_markdown(r.get("submechanisms") or [])
+    return lines + _submechanisms_markdown(r.get("submechanisms") or [])
+
+
+def _md_pose_and_joints(r: dict) -> list[str]:
+    """The output pose (in the model's length unit) and the joint table."""
     u = r.get("length_unit", "m")
-    lines += ["", "## Pose", "", f"| x [{u}] | y [{u}] | z [{u}] | roll [rad] | pitch [rad] | "
-              "yaw [rad] |", "|---|---|---|---|---|---|",
-              "| " + " | ".join(_num(v) for v in [*xyz, *rpy]) + " |"]
+    lines = ["", "## Pose", "", f"| x [{u}] | y [{u}] | z [{u}] | roll [rad] | pitch [rad] | "
+             "yaw [rad] |", "|---|---|---|---|---|---|",
+             "| " + " | ".join(_num(v) for v in [*r["pose"]["xyz"], *r["pose"]["rpy"]]) + " |"]
     lines += ["", "## Configuration", "", "| joint | q |", "|---|---|"]
-    lines += [f"| {n} | {_vec(v)} |" for n, v in r["joints"].items()]
+    return lines + [f"| {n} | {_vec(v)} |" for n, v in r["joints"].items()]
+
+
+def _md_mobility(r: dict) -> list[str]:
+    """DOF, idle motions, Grübler's count, redundancy, independent actuators and the
+    bases of the output twists and constraint wrenches."""
     redundant = "constraints" if r.get("legs") else "closure equations"
-    lines += ["", "## Mobility", "",
-              f"- degree of freedom: **{r['dof']}** ({r['motion_type']})",
-              f"- idle degrees of freedom: {r['idle_dof']}"]
+    lines = ["", "## Mobility", "",
+             f"- degree of freedom: **{r['dof']}** ({r['motion_type']})",
+             f"- idle degrees of freedom: {r['idle_dof']}"]
     lines += [f"  - {m}" for m in r["idle_motions"]]
     if r.get("singular_words"):
         lines += [f"- {r['singular_words']}"]
@@ -644,43 +664,55 @@ def markdown(subject=None, plots: Sequence[str | Path] = (), data: dict | None =
     lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
               for i, b in enumerate(r["motion_basis"])]
     lines += ["", "Constraint wrenches (f; m_O) on the output:", ""]
-    if r["constraint_basis"]:
-        lines += ["| # | wrench (f; m_O) | in words |", "|---|---|---|"]
-        lines += [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
-                  for i, b in enumerate(r["constraint_basis"])]
-    else:
-        lines += ["none: the output is free in space."]
-    lines += ["", "## Actuation: A Δ t = B q̇_a", "",
-              "Rows of A: the actuation wrenches (f; m_O), one per actuated joint.", ""]
+    if not r["constraint_basis"]:
+        return lines + ["none: the output is free in space."]
+    lines += ["| # | wrench (f; m_O) | in words |", "|---|---|---|"]
+    return lines + [f"| {i + 1} | {_vec(b['screw'])} | {b['words']} |"
+                    for i, b in enumerate(r["constraint_basis"])]
+
+
+def _md_actuation(r: dict) -> list[str]:
+    """``A`` and ``B`` of ``A Δ t = B q̇_a`` as tables."""
+    lines = ["", "## Actuation: A Δ t = B q̇_a", "",
+             "Rows of A: the actuation wrenches (f; m_O), one per actuated joint.", ""]
     lines += _matrix_table(r["A"], r["actuated"], ["f_x", "f_y", "f_z", "m_x", "m_y", "m_z"])
-    lines += ["", "B (diagonal):", ""]
-    lines += _matrix_table(r["B"], r["actuated"], r["actuated"])
-    lines += ["", "## Singularity", "", f"- class: **{r['singularity']}**",
-              f"- constraint singular: {'yes' if r.get('constraint_singular') else 'no'}"]
+    return lines + ["", "B (diagonal):", ""] + _matrix_table(r["B"], r["actuated"],
+                                                            r["actuated"])
+
+
+def _md_singularity(r: dict) -> list[str]:
+    """The singularity class, the uncontrolled twist and the indices."""
+    lines = ["", "## Singularity", "", f"- class: **{r['singularity']}**",
+             f"- constraint singular: {'yes' if r.get('constraint_singular') else 'no'}"]
     if r.get("uncontrolled_twist"):
         lines += [f"- uncontrolled twist: {r['uncontrolled_twist']}"]
     lines += ["", "| index | value |", "|---|---|"]
-    lines += [f"| {k} | {'undefined' if v is None else _num(v)} |"
-              for k, v in r["indices"].items()]
+    return lines + [f"| {k} | {'undefined' if v is None else _num(v)} |"
+                    for k, v in r["indices"].items()]
+
+
+def _md_transmission(r: dict) -> list[str]:
+    """ITI and OTI per actuator, LTI and CTI (none where they are not defined)."""
     tr = r.get("transmission")
-    if tr is not None:
-        lines += ["", "## Motion/force transmission", "", f"{tr['words']}.", "",
-                  "| actuator | ITI | OTI |", "|---|---|---|"]
-        lines += [f"| {a} | {_index(i, '—')} | {_index(o, '—')} |"
-                  for a, i, o in zip(r["actuated"], tr["iti"], tr["oti"])]
-        lines += ["", f"LTI = {_index(tr['lti'])} (good transmission: ≥ 0.7), "
-                  f"CTI = {_index(tr['cti'])}"]
-    lines += ["", "## Cross-check against the hand-written formulas", ""]
+    if tr is None:
+        return []
+    lines = ["", "## Motion/force transmission", "", f"{tr['words']}.", "",
+             "| actuator | ITI | OTI |", "|---|---|---|"]
+    lines += [f"| {a} | {_index(i, '—')} | {_index(o, '—')} |"
+              for a, i, o in zip(r["actuated"], tr["iti"], tr["oti"])]
+    return lines + ["", f"LTI = {_index(tr['lti'])} (good transmission: ≥ 0.7), "
+                    f"CTI = {_index(tr['cti'])}"]
+
+
+def _md_crosscheck(r: dict) -> list[str]:
+    """The largest differences from the papers' hand-written formulas, or that none
+    exist for the mechanism."""
+    lines = ["", "## Cross-check against the hand-written formulas", ""]
     if r.get("crosscheck") is None:
-        lines += ["No hand-written formulas exist for this mechanism."]
-    else:
-        lines += ["Largest dimensionless difference |Pinocchio − formulas|:", "",
-                  "| quantity | difference |", "|---|---|"]
-        lines += [f"| {k} | {v:.3g} |" for k, v in r["crosscheck"].items()]
-    if r["plots"]:
-        lines += ["", "## Plots", ""]
-        lines += [f"![{Path(p).stem}]({p})" for p in r["plots"]]
-    return "\n".join(lines) + "\n"
+        return lines + ["No hand-written formulas exist for this mechanism."]
+    lines += ["Largest dimensionless difference |Pinocchio − formulas|:", "",
+              "| quantity | difference |", "|---|---|"]
+    return lines + [f"| {k} | {v:.3g} |" for k, v in r["crosscheck"].items()]
 
 
 def _matrix_table(M, rows: Sequence[str], columns: Sequence[str]) -> list[str]:
