@@ -179,8 +179,8 @@ def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
     of the backend that reads the mechanism (``A``, ``B``, the bases, ``singularity``,
     ``indices``, ``transmission``; :attr:`Mechanism.backend`); then ``backend``,
     ``description``, ``length`` (the characteristic length), ``length_unit``, ``legs``
-    (the legs' names of a mechanism read per leg, else ``[]``), ``actuated`` and
-    ``q_actuated`` (the order of ``A``'s rows), ``grubler`` and
+    (the legs' names of a mechanism read per leg, else ``[]``), ``actuated`` (the
+    names in the order of ``q_actuated`` and of ``A``'s rows), ``grubler`` and
     ``redundant_constraints`` (the per-leg engine's counts where it reads the machine),
     ``uncontrolled_twist`` (words, at a type II/III singularity, else ``None``),
     ``crosscheck`` (quantity → largest dimensionless difference from the hand-written
@@ -211,7 +211,6 @@ def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
         "length_unit": getattr(mech, "length_unit", "m"),
         "legs": [leg.name for leg in mech.legs] if per_leg else [],
         "actuated": list(mech.actuated_names),
-        "q_actuated": np.asarray(assembly.q_actuated, dtype=float).tolist(),
         "uncontrolled_twist": None if free is None else
         readable_basis(free[None], centre, an.length)[0].words(),
         "crosscheck": checks,
