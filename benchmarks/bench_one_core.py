@@ -7,10 +7,10 @@ five 3D point closures; the six prismatic joints are actuated. Three readings of
 same machine, at the same poses (home and ``n`` random poses around it):
 
   * ``toml``: ``load_mechanism("stewart.toml")`` (the per-leg engine);
-  * ``urdf/legs``: ``load_mechanism(urdf, backend="legs")`` at the TOML's home
-    (:meth:`Mechanism.from_closure_model`: the structure detected in the file);
-  * ``urdf/general``: ``load_mechanism(urdf)`` (the general elimination, the default
-    for a .urdf today; its characteristic length is the detected legs' —
+  * ``urdf/legs``: ``load_mechanism(urdf)`` at the TOML's home (the default: the
+    structure detected in the file is read per leg, :meth:`Mechanism.from_closure_model`);
+  * ``urdf/general``: ``load_mechanism(urdf, backend="general")`` (the general
+    elimination; its characteristic length is the detected legs' —
     :func:`pkm_pin.model.structure.legs_length` — so its indices are the machine's too),
     analysed at each pose's configuration of the URDF's tree (the TOML assembly's joint
     values, :func:`urdf_q`; their closure residuals checked).
@@ -60,7 +60,7 @@ def readings(folder: Path):
     """The TOML mechanism, the URDF through the legs backend and the general backend."""
     toml = load_mechanism(STEWART)
     path = write_extended_urdf(toml, folder)
-    general = load_mechanism(path)
+    general = load_mechanism(path, backend="general")
     q = urdf_q(toml, general, toml.home_assembly)
     legs = type(toml).from_closure_model(general.model, q)
     return toml, legs, general, q

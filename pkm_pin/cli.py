@@ -731,28 +731,29 @@ def cmd_map(args) -> int:
     from .plots import save_maps
 
     mech = _load(args)
-    if not _is_linkage(mech) and args.actuated is not None:
+    per_leg = None
+    if not _is_linkage(mech) and (args.actuated is not None or args.sub is not None):
+        per_leg = mech
         if args.axes is not None or args.at is not None or args.plane is not None:
-            raise InputError("--actuated maps over actuated coordinates; --axes/--plane/--at "
+            option = "--actuated" if args.actuated is not None else "--sub K"
+            raise InputError(f"{option} maps over actuated coordinates; --axes/--plane/--at "
                              "over pose coordinates: give one or the other")
-        mech = general_reading(mech)  # over actuated coordinates: its legs-and-platform tree
+        mech = general_reading(mech)  # over actuated coordinates: the whole tree
     if _is_linkage(mech):
         if args.axes is not None or args.at is not None:
             raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
                              "over actuated coordinates (--actuated NAME [NAME], --fixed)")
         subs = _submechanisms_or_why(mech, args.sub)
         if args.sub is not None:
-            return _map_linkage(args, _pick_sub(mech, subs, args.sub))
+            return _map_linkage(args, _pick_sub(mech, subs, args.sub), None if len(subs) > 1
+                                else per_leg)
         if len(subs) > 1:
             words = "; ".join(f"{k}: {s.name}, output {s.output}" for k, s in enumerate(subs))
             print(f"note       {len(subs)} independent sub-mechanisms ({words}): "
                   f"the classes below are those of the one output {mech.output!r}, which "
                   "the others' motors do not move (type I); --sub K maps one with its own "
                   "output")
-        return _map_linkage(args, mech)
-    if args.sub is not None:
-        raise InputError("--sub K (one independent sub-mechanism of a linkage) is not for a "
-                         "platform mechanism")
+        return _map_linkage(args, mech, per_leg)
     axes = _map_axes_names(args)
     tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
     prefix = _map_prefix(args, tag)
@@ -974,10 +975,12 @@ def _snake(n_u: int, n_v: int) -> np.ndarray:
     return np.concatenate([r if j % 2 == 0 else r[::-1] for j, r in enumerate(rows)])
 
 
-def _map_linkage(args, link) -> int:
+def _map_linkage(args, link, per_leg=None) -> int:
     """``map`` of a linkage over one or two actuated coordinates (grid walked in a snake
     from the reference assembly's branch, :meth:`Linkage.sweep`); writes PREFIX.npz and
-    the PNG maps."""
+    the PNG maps. For a mechanism read per leg (``per_leg``), the classes, the type I/II
+    indices and the condition of ``A`` at each grid point are its own
+    (:func:`_per_leg_classes`), as ``analyze`` reports them."""
     from .report_linkage import save_linkage_maps
 
     if args.plane is not None:
@@ -1005,6 +1008,8 @@ def _map_linkage(args, link) -> int:
         grid = np.empty_like(a)
         grid[order] = a
         data[key] = grid.reshape(shape + a.shape[1:]) if len(varied) == 2 else grid
+    if per_leg is not None:
+        _per_leg_classes(per_leg, data)
     names = [link.actuated[k] for k in varied]
     data.update(u=u, labels=np.array([f"{n} [{_unit(link, k)}]" for n, k in zip(names, varied)]),
                 mechanism=np.array(link.name), actuated=np.array(link.actuated),
@@ -1022,6 +1027,26 @@ def _map_linkage(args, link) -> int:
     for path in [npz, *pngs]:
         print(f"wrote      {path}")
     return 0
+
+
+def _per_leg_classes(mech, data: dict) -> None:
+    """Replace the general elimination's ``singularity`` and ``condition`` of an
+    actuated map by those of ``mech``'s per-leg analysis at each assembled grid point
+    (its tree configuration read per leg, :meth:`Mechanism.analyze`), and add its
+    ``type_I`` and ``type_II`` indices (nan where it does not assemble); the
+    ``forward`` and ``inverse`` indices stay the general elimination's
+    (docs/indices.md)."""
+    ok = np.asarray(data["converged"], bool)
+    cls = np.asarray(data["singularity"]).astype(object)
+    extra = {k: np.full(ok.shape, np.nan) for k in ("condition", "type_I", "type_II")}
+    for idx in zip(*np.nonzero(ok)):
+        an = mech.analyze(data["q"][idx])
+        cls[idx] = an.singularity
+        extra["condition"][idx] = an.indices["condition_A"]
+        extra["type_I"][idx], extra["type_II"][idx] = (an.indices["type_I"],
+                                                       an.indices["type_II"])
+    data["singularity"] = cls.astype(str)
+    data.update(extra)
 
 
 def _unit(link, k: int) -> str:
@@ -1044,20 +1069,11 @@ def cmd_view(args) -> int:
     mech = _load(args)
     if args.html is not None and Path(args.html).is_dir():  # a folder: the page inside it
         args.html = str(Path(args.html) / f"{_slug(args.mechanism)}.html")
-    if _is_linkage(mech):
-        where = _open_or_assembled(args, mech)
-    else:
-        pose = _platform_pose(args)
-        if args.q is not None and pose is not None:
-            raise InputError("give --q (actuated values) or --pose / --at, not both")
-        if args.q is not None:
-            where = mech.forward_kinematics(mech.check_actuated(args.q))
-        elif isinstance(pose, dict):  # a partial pose: completed on the motion
-            where = mech.assemble(pose)
-            print(f"given      {', '.join(f'{k}={v:g}' for k, v in pose.items())}")
-            print(f"pose       {_pose_text(where.pose)}")
-        else:
-            where = pose
+    where = _open_or_assembled(args, mech)
+    pose = _platform_pose(args)
+    if isinstance(pose, dict) and not isinstance(where, Exception):  # completed pose
+        print(f"given      {', '.join(f'{k}={v:g}' for k, v in pose.items())}")
+        print(f"pose       {_pose_text(where.output_pose)}")
     scene = view(mech, where, html=args.html, open=args.html is None or args.open,
                  show_screws=not args.no_screws, show_wrenches=not args.no_wrenches,
                  source=args.mechanism)
@@ -1079,14 +1095,14 @@ def cmd_view(args) -> int:
     return 0
 
 
-def _open_or_assembled(args, link):
-    """:func:`_linkage_assembly`, or the :class:`LoopClosureError` of a linkage that does
-    not assemble when it carries the best configuration reached (``view`` draws it open,
+def _open_or_assembled(args, mech):
+    """:func:`_assembly`, or the :class:`LoopClosureError` of a linkage that does not
+    assemble when it carries the best configuration reached (``view`` draws it open,
     with its gaps)."""
     from .linkage import LoopClosureError
 
     try:
-        return _linkage_assembly(args, link)
+        return _assembly(args, mech)
     except LoopClosureError as e:
         if e.q is None:
             raise

@@ -93,10 +93,15 @@ def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | Non
       elimination (``"general"``, :class:`~pkm_pin.linkage.Linkage`);
     * ``.urdf``: Extended URDF, the URDF tree plus its closures file (YAML or TOML with
       the keys of Gepetto's example-parallel-robots; beside the URDF, or ``closures``),
-      :func:`pkm_pin.model.read_extended_urdf`: ``"general"``;
+      :func:`pkm_pin.model.read_extended_urdf`;
     * ``.xml`` / ``.mjcf``: MJCF with ``<equality>`` closures,
-      :func:`pkm_pin.model.read_mjcf`: ``"general"`` (a tree without closures when it
-      has none).
+      :func:`pkm_pin.model.read_mjcf` (a tree without closures when it has none).
+
+    An Extended URDF or MJCF file is read per leg (``"legs"``) where a
+    base–legs–platform machine is detected in it and its legs take the actuated values
+    in the file's order (so that the same machine has the same indices whatever file
+    describes it, docs/indices.md), by the general elimination (``"general"``)
+    otherwise (multi-loop legs, a point output, coupled chains …).
 
     Args:
         closures: The closures file of a URDF (default: found beside it).
@@ -104,7 +109,7 @@ def load_mechanism(path: str | os.PathLike, *, closures: str | os.PathLike | Non
             analysed (default: the file's).
         point: For a :class:`~pkm_pin.linkage.Linkage`, analyse the output frame's origin
             as a point (``True``) or as a body (``False``; default: the file's).
-        backend: ``None`` (default): by file, as above. ``"legs"``: the per-leg screw
+        backend: ``None`` (default): as above. ``"legs"``: the per-leg screw
             engine of a base–legs–platform machine, a :class:`Mechanism`, also for an
             Extended URDF or MJCF file in which that structure is detected
             (:meth:`Mechanism.from_closure_model`: the same machine written as TOML legs
@@ -233,6 +238,8 @@ def _linkage_file(path: Path, suffix: str, closures, output, point):
 def _with_backend(mech, backend: str | None, label: str):
     """``mech`` (a :class:`Mechanism` or a :class:`~pkm_pin.linkage.Linkage`) read
     through the ``backend`` of :func:`load_mechanism`."""
+    if backend is None and isinstance(mech, Linkage):
+        return _detected(mech, label)
     if backend is None or (backend == "legs") == isinstance(mech, Mechanism):
         return mech
     if backend == "general":
@@ -247,6 +254,22 @@ def _with_backend(mech, backend: str | None, label: str):
     except InputError as e:
         raise MechanismFileError(label, "", f"{e}; analyse it with the general backend "
                                  "(the default for this file)") from e
+
+
+def _detected(link: Linkage, label: str):
+    """The default reading of a linkage read from a file: the per-leg engine where a
+    base–legs–platform machine is detected in it and its legs take the actuated values
+    in the file's order (so that a vector of actuated values means the same to both
+    readings), its indices then those of the same machine written as TOML legs
+    (docs/indices.md); else the general elimination, ``link`` itself."""
+    if not link.model.closures or link.platform_structure[0] is None:
+        return link  # a serial tree is not a base–legs–platform machine
+    try:
+        legs = _with_backend(link, "legs", label)
+    except (PkmError, ValueError, RuntimeError):  # e.g. it does not assemble from its
+        return link  # reference: the general elimination reads it, and says why
+    same = legs.actuated_names == list(link.actuated)
+    return legs if same else link
 
 
 def _load_toml(path: Path):

@@ -353,7 +353,12 @@ class Mechanism:
     # ------------------------------------------------------------------ counts
     @property
     def actuated_names(self) -> list[str]:
-        """Actuated joints as ``"leg/joint"``, in the order of the actuated coordinates."""
+        """Actuated joints in the order of the actuated coordinates: as ``"leg/joint"``
+        for legs given directly (TOML: two legs may name a joint alike), as the file
+        names them for a machine detected in a file (:meth:`from_closure_model`: a
+        tree's joint names are distinct)."""
+        if self.source_model is not None:
+            return [a for leg in self.legs for a in leg.actuated]
         return [f"{leg.name}/{a}" for leg in self.legs for a in leg.actuated]
 
     @property
@@ -476,7 +481,11 @@ class Mechanism:
                 a partial pose: a mapping of some of x, y, z, roll, pitch, yaw to values
                 (completed first, :meth:`complete_pose`; ``info["given"]``,
                 ``info["held"]``); default :attr:`home` (every mechanism assembles
-                without an argument, as a general-backend one from its reference).
+                without an argument, as a general-backend one from its reference); or,
+                as a general-backend mechanism takes it, a configuration of
+                :attr:`model`'s tree that need not close: the loops are closed nearest
+                it (:meth:`pkm_pin.linkage.Linkage.assemble`) and the result read per
+                leg (:meth:`legs_assembly`).
             guess: An :class:`Assembly` or a list of leg configurations to warm-start
                 from (default: the home assembly), which keeps the legs on its branch.
             tol: Relative closure tolerance of each leg.
@@ -500,6 +509,8 @@ class Mechanism:
         """
         pose = self.home if pose is None else pose
         tol = as_fraction(tol, "tol")
+        if self._is_tree_configuration(pose):
+            return self.legs_assembly(self.general.assemble(pose, tol=tol).q)
         if isinstance(restarts, bool) or not isinstance(restarts, (int, np.integer)) \
                 or restarts < 0:
             raise InputError(f"restarts must be a non-negative integer, got {restarts!r}")
@@ -643,15 +654,18 @@ class Mechanism:
     def forward_kinematics(self, q_actuated, guess=None, *, steps: int | None = None,
                            tol: float = CLOSURE_TOL, inertia_tol: float = INERTIA_TOL,
                            max_newton: int = 50, max_inertia: int = 200,
-                           method: str = "auto") -> Assembly:
+                           method: str = "auto", starts: int | None = None,
+                           seed: int = 0) -> Assembly:
         """Platform pose (an :class:`Assembly`) for the actuated coordinates, by
-        continuation from ``guess`` (default: home).
+        continuation from ``guess`` (default: home; an :class:`Assembly`, a pose or a
+        configuration of :attr:`model`'s tree).
 
         See :func:`pkm_pin.position.forward_kinematics`.
         """
         return position.forward_kinematics(
             self, q_actuated, guess, steps=steps, tol=tol, inertia_tol=inertia_tol,
-            max_newton=max_newton, max_inertia=max_inertia, method=method)
+            max_newton=max_newton, max_inertia=max_inertia, method=method, starts=starts,
+            seed=seed)
 
     def forward_kinematics_all(self, q_actuated, *, starts: int = 32, seed: int = 0,
                                tol: float = CLOSURE_TOL, max_iter: int = 100,

@@ -189,7 +189,8 @@ def _assembly_of(mech, state: ClosureSolution) -> Assembly:
 def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None,
                        tol: float = CLOSURE_TOL, inertia_tol: float = INERTIA_TOL,
                        max_newton: int = 50, max_inertia: int = 200,
-                       method: str = "auto") -> Assembly:
+                       method: str = "auto", starts: int | None = None,
+                       seed: int = 0) -> Assembly:
     """Platform pose (an :class:`~pkm_pin.assembly.Assembly`) for the actuated
     coordinates ``q_actuated``, by continuation from ``guess``.
 
@@ -225,6 +226,12 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
             inertia" along the last twist.
         max_newton: Newton iterations of the final correction.
         max_inertia: Inertia moves allowed in a row.
+        starts, seed: As a general-backend mechanism takes them: with ``starts``, a
+            target the continuation does not reach is solved from ``starts`` random
+            starts too (:meth:`pkm_pin.linkage.Linkage.forward_kinematics` on the tree,
+            ``mech.general``, from ``guess``'s branch) and the result read per leg
+            (:meth:`Mechanism.legs_assembly`); the continuation's error is raised when
+            that fails as well. ``None`` (default): the continuation alone.
 
     Returns:
         The assembly; its ``info`` holds ``steps`` (accepted continuation steps),
@@ -244,6 +251,27 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
     if steps is not None and (not isinstance(steps, (int, np.integer)) or steps < 1):
         raise InputError(f"steps must be a positive integer, got {steps!r}")
     start = mech.assembly_at(guess)
+    try:
+        return _continued(mech, target, start, steps, tol, inertia_tol, max_newton,
+                          max_inertia, method)
+    except (ForwardKinematicsError, AssemblyError) as failure:
+        if starts is None:
+            raise
+        general = mech.general
+        order = [list(general.actuated).index(name) for name in mech.actuated]
+        values = np.empty(len(order))
+        values[order] = target
+        try:
+            found = general.forward_kinematics(values, mech.tree_configuration(start),
+                                               starts=starts, seed=seed, tol=tol)
+        except PkmError:
+            raise failure from None
+        return mech.legs_assembly(found.q)
+
+
+def _continued(mech, target: np.ndarray, start: Assembly, steps, tol: float,
+               inertia_tol: float, max_newton: int, max_inertia: int, method: str) -> Assembly:
+    """:func:`forward_kinematics` by continuation from the assembly ``start``."""
     _check_limits(mech, target)
     if method not in ("auto", "compiled", "euler"):
         raise InputError(f"method must be 'auto', 'compiled' or 'euler', got {method!r}")

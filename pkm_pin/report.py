@@ -527,11 +527,12 @@ def structure_line(r: dict) -> str:
     if not s["platform"]:
         return f"structure          general linkage (not base–legs–platform: {s['reason']})"
     kinds = ", ".join(f"{leg['name']}: {leg['kind']}" for leg in s["legs"])
-    how = ("analysed per leg" if r.get("backend") == "legs" else
-           "--backend legs analyses it per leg")
+    seed = "seed 000's indices, each actuation wrench orthogonal to its own leg's constraints"
+    how = (f"analysed per leg ({seed}; --backend general: the general elimination)"
+           if r.get("backend") == "legs" else
+           f"read by the general elimination; --backend legs analyses it per leg ({seed})")
     return (f"structure          base–legs–platform machine, {len(s['legs'])} legs ({kinds}); "
-            f"{how} (seed 000's indices, each actuation wrench orthogonal to its own leg's "
-            "constraints)")
+            f"{how}")
 
 
 # ------------------------------------------------------------------------- text

@@ -109,8 +109,9 @@ def test_analyze_at_actuated_values(capsys):
     assembly = link.forward_kinematics([0.1, 0.2], guess=link.assemble())
     assert report["q_actuated"] == pytest.approx([0.1, 0.2], abs=1e-12)
     assert report["q"] == pytest.approx(assembly.q.tolist(), abs=1e-12)
-    assert report["indices"]["forward"] == pytest.approx(
-        link.analyze(assembly).indices["forward"], rel=1e-9)
+    for index in ("type_I", "type_II"):
+        assert report["indices"][index] == pytest.approx(
+            link.analyze(assembly).indices[index], rel=1e-9)
 
 
 def test_analyze_writes_markdown(tmp_path, capsys):
@@ -288,8 +289,8 @@ def test_map_of_two_actuated_coordinates(tmp_path, capsys):
     """map over the two motors of the five-bar: npz on the grid (rows v, columns u),
     classes and indices equal to the API's at each assembled q, and two PNGs."""
     prefix = tmp_path / "m"
-    assert main(["map", str(FIVE_BAR_XML), "--range", "-0.6", "-0.2", "0.2", "0.6",
-                 "--n", "4", "--out", str(prefix)]) == 0
+    assert main(["map", str(FIVE_BAR_XML), "--actuated", "mot1", "mot2", "--range", "-0.6",
+                 "-0.2", "0.2", "0.6", "--n", "4", "--out", str(prefix)]) == 0
     out = capsys.readouterr().out
     assert "16 points (snake order)" in out
     data = np.load(tmp_path / "m.npz")
@@ -297,13 +298,17 @@ def test_map_of_two_actuated_coordinates(tmp_path, capsys):
     assert data["converged"].all()
     assert data["u"] == pytest.approx(np.linspace(-0.6, -0.2, 4))
     assert data["q_actuated"][2, 1] == pytest.approx([data["u"][1], data["v"][2]])
-    link = load_mechanism(FIVE_BAR_XML)
+    link = load_mechanism(FIVE_BAR_XML)  # read per leg: a structure is detected in it
+    assert link.backend == "legs"
     for j, i in [(0, 0), (1, 3), (3, 2)]:
-        an = link.analyze(data["q"][j, i])
+        an, general = link.analyze(data["q"][j, i]), link.general.analyze(data["q"][j, i])
         assert link.model.actuated_values(data["q"][j, i]) == pytest.approx(
             [data["u"][i], data["v"][j]], abs=1e-9)
-        assert data["forward"][j, i] == pytest.approx(an.indices["forward"], rel=1e-9)
-        assert data["inverse"][j, i] == pytest.approx(an.indices["inverse"], rel=1e-9)
+        assert data["forward"][j, i] == pytest.approx(general.indices["forward"], rel=1e-9)
+        assert data["inverse"][j, i] == pytest.approx(general.indices["inverse"], rel=1e-9)
+        for index in ("type_I", "type_II"):
+            assert data[index][j, i] == pytest.approx(an.indices[index], rel=1e-9)
+        assert data["condition"][j, i] == pytest.approx(an.indices["condition_A"], rel=1e-9)
         assert str(data["singularity"][j, i]) == an.singularity
     assert (tmp_path / "m_singularity.png").is_file() and (tmp_path / "m_indices.png").is_file()
 
@@ -337,8 +342,8 @@ def test_map_of_a_platform_mechanism_over_actuated_coordinates(tmp_path, capsys)
 def test_map_of_one_actuated_coordinate(tmp_path, capsys):
     """The four-bar has one actuator: a line of n points and the index plot."""
     prefix = tmp_path / "f"
-    assert main(["map", str(FOUR_BAR), "--n", "12", "--range", "-1", "1",
-                 "--out", str(prefix)]) == 0
+    assert main(["map", str(FOUR_BAR), "--actuated", "crank_joint", "--n", "12", "--range",
+                 "-1", "1", "--out", str(prefix)]) == 0
     data = np.load(tmp_path / "f.npz")
     assert data["converged"].shape == (12,) and data["converged"].all()
     assert data["q_actuated"][:, 0] == pytest.approx(np.linspace(-1, 1, 12))
@@ -348,8 +353,11 @@ def test_map_of_one_actuated_coordinate(tmp_path, capsys):
 def test_map_options_of_a_linkage_are_checked(tmp_path, capsys):
     """--plane, a wrong --actuated or a wrong number of bounds are one error line."""
     out = str(tmp_path / "x")
-    assert main(["map", str(FIVE_BAR_XML), "--plane", "xz", "--out", out]) == 2
+    assert main(["map", str(FIVE_BAR_XML), "--plane", "xz", "--out", out,
+                 "--backend", "general"]) == 2
     assert "--plane" in one_error_line(capsys)
+    assert main(["map", str(FIVE_BAR_XML), "--plane", "xz", "--out", out]) == 2  # per leg
+    assert "x, z are not independent coordinates" in one_error_line(capsys)
     assert main(["map", str(FIVE_BAR_XML), "--actuated", "nope", "--out", out]) == 2
     assert "mot1, mot2" in one_error_line(capsys)
     assert main(["map", str(FIVE_BAR_XML), "--range", "0", "1", "--out", out]) == 2

@@ -203,7 +203,7 @@ def test_errors_survive_pickling():
     from pkm_pin.linkage import LoopClosureError
 
     link = pkm_pin.load_mechanism(Path(__file__).resolve().parents[1] / "models" / "loops"
-                                  / "four_bar.urdf")
+                                  / "four_bar.urdf", backend="general")
     with pytest.raises(LoopClosureError) as raised:
         link.forward_kinematics([5.0] * len(link.actuated))
     err = raised.value

@@ -33,12 +33,19 @@ SHIPPED = sorted([*MODELS.glob("mechanisms/*.toml"), *MODELS.glob("pinned/*.toml
 
 @pytest.mark.parametrize("path", SHIPPED, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_every_shipped_file_is_a_mechanism(path):
-    """One class whatever the file; the backend by suffix (TOML legs: legs; the rest:
-    general) and the general backend's object behind it."""
+    """One class whatever the file; the backend: per leg for TOML legs and for the
+    Extended URDF and MJCF files in which a base–legs–platform machine is detected (the
+    legs taking the actuated values in the file's order, named as the file names
+    them), the general elimination for the others; the general backend's object behind
+    it."""
     mech = load_mechanism(path)
     assert isinstance(mech, Mechanism)
-    expected = "legs" if path.parent.name == "mechanisms" else "general"
+    per_leg = {"delta_loops.urdf", "five_bar.xml", "four_bar.urdf", "four_bar.xml"}
+    expected = "legs" if path.parent.name == "mechanisms" or path.name in per_leg \
+        else "general"
     assert mech.backend == expected
+    if path.suffix != ".toml":
+        assert mech.actuated == mech.general.actuated
     assert isinstance(mech.general, Linkage)
     assert mech.name == mech.general.name
     assert repr(mech).startswith("Mechanism(")
@@ -277,3 +284,30 @@ def test_a_stewart_assembly_away_from_home_round_trips_through_its_tree():
     assert mech.analyze(a.q).indices == pytest.approx(mech.analyze(a).indices, abs=1e-9)
     with pytest.raises(InputError):
         mech.legs_assembly(np.zeros(mech.model.tree.nq - 1))
+
+
+def test_per_leg_reading_takes_the_general_arguments():
+    """five_bar.xml is read per leg; it takes what a general-backend mechanism takes:
+    assemble(tree configuration that does not close) closes the loops nearest it, and
+    forward_kinematics(..., starts=) reaches a target the continuation from home stops
+    short of (a fold on the way: the other assembly mode), the motors at the target and
+    the loop closed, the same as the general backend's solution from the same starts
+    up to the branch (its closure residual and motor values)."""
+    from pkm_pin.errors import ForwardKinematicsError
+
+    mech = load_mechanism(MODELS / "loops" / "five_bar.xml")
+    assert mech.backend == "legs" and mech.actuated == ("mot1", "mot2")
+    near = np.asarray(mech.model.reference) + 0.05
+    a = mech.assemble(near)
+    assert max(a.closure_residuals.values()) < 1e-12
+    assert np.linalg.norm(a.q - near) < 0.1
+    np.testing.assert_allclose(a.q, mech.general.assemble(near).q, atol=1e-9)
+    target = [1.79, -2.33]
+    with pytest.raises(ForwardKinematicsError):
+        mech.forward_kinematics(target)
+    b = mech.forward_kinematics(target, starts=16)
+    np.testing.assert_allclose(b.q_actuated, target, atol=1e-9)
+    assert max(b.closure_residuals.values()) < 1e-10
+    np.testing.assert_allclose(mech.model.actuated_values(b.q), target, atol=1e-9)
+    with pytest.raises(ForwardKinematicsError):  # out of the motors' reach: still refused
+        mech.forward_kinematics([1.2, -0.9], starts=4)

@@ -257,8 +257,10 @@ def test_check_names_a_duplicate_closure_and_refuses_a_self_closure(tmp_path, ca
     assert ("warn  closure 'rocker_tipCcoupler_tip' repeats 'coupler_tipCrocker_tip': its "
             "rows are redundant") in out
     assert "DOF 1, idle DOF 0" in out and "redundant closure equations 4" in out
-    assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0
+    assert main(["check", str(LOOPS / "four_bar.urdf"), "--backend", "general"]) == 0
     assert "redundant closure equations 1" in capsys.readouterr().out
+    assert main(["check", str(LOOPS / "four_bar.urdf")]) == 0  # read per leg: its legs'
+    assert "redundant constraints 1" in capsys.readouterr().out
     yaml.write_text("closed_loop: [['coupler_tip', 'coupler_tip']]\ntype: ['3d']\n"
                     "name_mot: ['crank_joint']\n")
     assert main(["check", str(tmp_path / "four_bar.urdf")]) == 2

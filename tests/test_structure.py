@@ -31,7 +31,7 @@ def stewart(tmp_path_factory):
     tree's configuration at the TOML's home."""
     toml = pkm_pin.load_mechanism(STEWART)
     path = write_extended_urdf(toml, tmp_path_factory.mktemp("stewart"))
-    link = pkm_pin.load_mechanism(path)
+    link = pkm_pin.load_mechanism(path, backend="general")
     tree, q = link.model.tree, np.array(link.model.reference)
     for i, (leg, q_leg) in enumerate(zip(toml.legs, toml.home_assembly.leg_q)):
         for name, value in zip(leg.joint_names, q_leg):
@@ -238,6 +238,8 @@ def test_linkage_report_names_the_structure_and_the_backend(capsys):
     text = capsys.readouterr().out
     assert "structure          general linkage (not base–legs–platform: closure" in text
     assert main(["analyze", str(MODELS / "loops/delta_loops.urdf")]) == 0
+    assert "analysed per leg (seed 000's indices" in capsys.readouterr().out
+    assert main(["analyze", str(MODELS / "loops/delta_loops.urdf"), "--backend", "general"]) == 0
     assert "--backend legs analyses it per leg" in capsys.readouterr().out
 
 
@@ -323,11 +325,20 @@ def test_chain_urdf_round_trip_keeps_joints_axes_and_ranges():
 
 
 def test_default_backend_gives_the_machines_indices(stewart):
-    """The Extended URDF read by the default (general) backend: the characteristic
-    length is the legs' (legs_length, without building them), so at the TOML's home the
-    seed 000 indices are the TOML's to 1e-9 — the indices of the machine, not of the
-    tree the file wrote (issue 24's 0.993/0.958, 0.166/0.400 came from two lengths)."""
-    toml, link, q, _ = stewart
+    """The Extended URDF read by default is read per leg (a structure is detected and
+    its legs take the actuated values in the file's order): at the file's tree
+    configuration of the TOML's home, the TOML's indices to 1e-9, the actuated joints
+    named as the file names them. Read by the general backend, the characteristic
+    length is the legs' (legs_length, without building them), so the seed 000 indices
+    are the TOML's to 1e-9 too — the indices of the machine, not of the tree the file
+    wrote (issue 24's 0.993/0.958, 0.166/0.400 came from two lengths)."""
+    toml, link, q, path = stewart
+    default = pkm_pin.load_mechanism(path)
+    assert default.backend == "legs" and default.actuated == link.actuated
+    d = default.analyze(q)
+    np.testing.assert_allclose(d.assembly.q, q, atol=1e-9)
+    for key in ("type_I", "type_II", "condition_A"):
+        assert d.indices[key] == pytest.approx(toml.home_analysis.indices[key], rel=1e-9), key
     assert isinstance(link, Mechanism) and link.backend == "general"
     assert isinstance(link.general, Linkage)
     assert link.model.length == pytest.approx(toml.characteristic_length, rel=1e-12)
@@ -386,7 +397,7 @@ def test_calibration_through_the_general_backend(stewart):
 
 
 def test_both_facades_answer_the_same_names(stewart):
-    """The TOML Mechanism, its Extended URDF read as a Linkage (default) and through the
+    """The TOML Mechanism, its Extended URDF read by the general backend and through the
     legs backend answer the same names with the same values: the closure model, the
     actuated joints (six, in one order), the output frame, the characteristic length."""
     toml, link, _, path = stewart

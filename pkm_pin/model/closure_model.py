@@ -985,7 +985,7 @@ def from_mechanism(mech: Mechanism) -> ClosureModel:
     joint and frame names prefixed ``"legname/"``; then the platform, a free-flyer joint
     :data:`PLATFORM_JOINT` carrying the body frame :data:`PLATFORM`. One weld per leg
     (named after the leg) between its tip frame and the platform frame at
-    ``mech.anchors[i]``. Actuated: ``mech.actuated_names`` (``"leg/joint"``); output:
+    ``mech.anchors[i]``. Actuated: each leg's actuated joints as ``"leg/joint"``; output:
     :data:`PLATFORM`; length: ``mech.characteristic_length``. The configuration layout
     is the legs' configurations in order, then the platform's (:func:`configuration`).
     """
@@ -998,7 +998,8 @@ def from_mechanism(mech: Mechanism) -> ClosureModel:
     closures = tuple(Closure("weld", f"{leg.name}/{leg.tip}", PLATFORM, pin.SE3.Identity(),
                              anchor, name=leg.name)
                      for leg, anchor in zip(mech.legs, mech.anchors))
-    return ClosureModel(tree, closures, tuple(mech.actuated_names), PLATFORM, mech.name,
+    actuated = tuple(f"{leg.name}/{a}" for leg in mech.legs for a in leg.actuated)
+    return ClosureModel(tree, closures, actuated, PLATFORM, mech.name,
                         length=mech.characteristic_length)
 
 
