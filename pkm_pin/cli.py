@@ -711,6 +711,54 @@ def map_poses(mech, axes, ranges, n: int, at=None):
     return u, v, poses, held
 
 
+def _map_reading(args, mech) -> tuple:
+    """``(mechanism, per_leg)``: what ``map`` sweeps. A general-backend mechanism over
+    its actuated coordinates (``per_leg`` None). A per-leg one over pose coordinates
+    (``--axes``/``--plane``, default :func:`_default_axes`), or over actuated
+    coordinates (``--actuated``, ``--sub K``, or fewer than two independent pose
+    coordinates) through its tree (:func:`pkm_pin.io.general_reading`), ``per_leg``
+    then the mechanism whose own classes and indices the map gives."""
+    from .io import general_reading
+
+    if _is_linkage(mech):
+        return mech, None
+    actuated = args.actuated is not None or args.sub is not None
+    if not actuated and args.axes is None and args.plane is None and args.at is None \
+            and not args.fixed:
+        axes = _default_axes(mech)
+        if axes is None:
+            print(f"note       {mech.name} has fewer than 2 independent pose coordinates: "
+                  "mapped over its actuated coordinates")
+            actuated = True
+        elif axes != ("x", "y"):
+            args.axes = list(axes)
+    if not actuated:
+        return mech, None
+    if args.axes is not None or args.at is not None or args.plane is not None:
+        option = "--actuated" if args.actuated is not None else "--sub K"
+        raise InputError(f"{option} maps over actuated coordinates; --axes/--plane/--at "
+                         "over pose coordinates: give one or the other")
+    return general_reading(mech), mech  # over actuated coordinates: the whole tree
+
+
+def _default_axes(mech) -> tuple[str, str] | None:
+    """The pose coordinates a platform ``map`` varies when none is given: x and y where
+    they are independent coordinates of ``mech`` at home, else the first two independent
+    ones (x, z for a five-bar in the xz plane); ``None`` when it has fewer than two (a
+    four-bar: its map is over its actuated coordinates)."""
+    from .position import DependentCoordinates, coordinate_plan
+    from .solve import CoordinateSystem
+
+    try:
+        home = mech.home_assembly
+        coordinate_plan(mech, CoordinateSystem(mech, home.pose, home.leg_q), ["x", "y"])
+    except DependentCoordinates as e:
+        return tuple(e.independent[:2]) if len(e.independent) >= 2 else None
+    except PkmError:  # the map itself then says what is wrong
+        pass
+    return ("x", "y")
+
+
 def _map_axes_names(args) -> tuple[str, str]:
     """The two varied coordinates of a platform map: ``--axes``, or ``--plane`` (xy)."""
     if args.axes is not None and args.plane is not None:
@@ -727,18 +775,9 @@ def _map_axes_names(args) -> tuple[str, str]:
 def cmd_map(args) -> int:
     """Sweep a workspace slice over two pose coordinates (partial poses completed on the
     mechanism's motion); write PREFIX.npz and the two PNG maps."""
-    from .io import general_reading
     from .plots import save_maps
 
-    mech = _load(args)
-    per_leg = None
-    if not _is_linkage(mech) and (args.actuated is not None or args.sub is not None):
-        per_leg = mech
-        if args.axes is not None or args.at is not None or args.plane is not None:
-            option = "--actuated" if args.actuated is not None else "--sub K"
-            raise InputError(f"{option} maps over actuated coordinates; --axes/--plane/--at "
-                             "over pose coordinates: give one or the other")
-        mech = general_reading(mech)  # over actuated coordinates: the whole tree
+    mech, per_leg = _map_reading(args, _load(args))
     if _is_linkage(mech):
         if args.axes is not None or args.at is not None:
             raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "

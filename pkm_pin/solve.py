@@ -676,7 +676,9 @@ def start_configurations(leg, warm=None, count: int = 0, seed: int = 0) -> np.nd
     ``numpy.random.default_rng(seed)`` (:meth:`Leg.random_configuration`). The same
     arguments give the same starts."""
     lo, up = leg._bounds
-    middle = np.where(np.isfinite(lo) & np.isfinite(up), 0.5 * (lo + up), leg.neutral())
+    bounded = np.isfinite(lo) & np.isfinite(up)  # inf + (−inf) is nan: add only bounded
+    middle = np.where(bounded, 0.5 * (np.where(bounded, lo, 0.0) + np.where(bounded, up, 0.0)),
+                      leg.neutral())
     rng = np.random.default_rng(seed)
     rows = [] if warm is None else [leg.clip(np.asarray(warm, dtype=float))]
     rows += [leg.neutral(), middle] + [leg.random_configuration(rng) for _ in range(count)]

@@ -452,3 +452,20 @@ def test_workspace_of_one_submechanism(tmp_path, capsys):
                  "--out", str(tmp_path / "bad")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "numbered 0 to 1" in err[0]
+
+
+def test_map_default_of_a_per_leg_machine_follows_its_motion(tmp_path, capsys):
+    """map of a file read per leg with no coordinate given: the four-bar (1 DOF: no
+    two pose coordinates) is mapped over its crank, with a note saying so; Gepetto's
+    5bar_linkage_iso3d (moving in the xz plane) over x and z, its independent
+    coordinates, not x and y (y is a function of x there)."""
+    assert main(["map", str(FOUR_BAR), "--n", "3", "--out", str(tmp_path / "f")]) == 0
+    out = capsys.readouterr().out
+    assert "fewer than 2 independent pose coordinates: mapped over its actuated" in out
+    assert "crank_joint in [" in out
+    assert np.load(tmp_path / "f.npz")["q_actuated"].shape == (3, 1)
+    iso3d = Path(__file__).parent / "data" / "gepetto" / "5bar_linkage_iso3d" / "robot.urdf"
+    assert main(["map", str(iso3d), "--n", "2", "--out", str(tmp_path / "g")]) == 0
+    assert "slice      x in [" in capsys.readouterr().out
+    data = np.load(tmp_path / "g.npz")
+    assert [str(a) for a in data["axes"]] == ["x", "z"]

@@ -304,3 +304,24 @@ def test_stopping_rules_are_those_of_the_tolerances():
     assert all(float(x) == tolerances.NEWTON_STALL_RTOL for x in stall)
     for r in (0.0, 1e-6, 0.3, 2.0):
         assert solve.lm_damping(r) == tolerances.damping(r)
+
+
+def test_start_configurations_of_unbounded_joints_warn_nothing():
+    """A leg whose joints have no limits (Gepetto's 5bar_linkage_iso3d, read per leg:
+    its continuous joints): the middle of the limits is the neutral configuration there,
+    computed without numpy's 'invalid value' warning (inf + −inf), which would reach the
+    terminal of `pkm-pin workspace`."""
+    import warnings
+    from pathlib import Path
+
+    from pkm_pin import load_mechanism
+
+    path = Path(__file__).parent / "data" / "gepetto" / "5bar_linkage_iso3d" / "robot.urdf"
+    leg = next(leg for leg in load_mechanism(path).legs
+               if not np.isfinite(leg.model.lowerPositionLimit).any())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        starts = start_configurations(leg, count=3, seed=1)
+    assert starts.shape == (5, leg.nq) and np.isfinite(starts).all()
+    np.testing.assert_array_equal(starts[0], leg.neutral())  # no warm start: neutral,
+    np.testing.assert_array_equal(starts[1], leg.neutral())  # then the middle
