@@ -240,6 +240,30 @@ class Analysis(OutputMaps):
         return {"type_I": float(r.type_I[0]), "type_II": float(r.type_II[0]),
                 "condition_A": float(r.condition[0])}
 
+    @cached_property
+    def motion_indices(self) -> dict[str, float]:
+        """The general elimination's ``forward`` and ``inverse`` indices
+        (:func:`pkm_pin.screws.motion_indices`, docs/indices.md) of this machine's motions:
+        the pairs (actuated rates, platform twist) with the twist in the platform twist
+        system and ``A Δ t = B q̇_a``, rates over :attr:`Mechanism.actuated_scales`,
+        twists homogenised about :attr:`centre`. The same numbers as the general
+        elimination of the machine's tree (those do not depend on the representatives
+        of ``A``); not part of :attr:`indices`, which the engine computes for every pose
+        of a sweep."""
+        L, centre = self.length, self.centre
+        T = screws.homogenised_about(self.platform_twists, centre, L)
+        P_h = np.linalg.qr(T.T)[0].T if len(T) else np.zeros((0, 6))
+        A_h = screws.homogenised_about(self.A, centre, L) if len(self.A) else np.zeros((0, 6))
+        norms = np.linalg.norm(A_h, axis=1)
+        norms = np.where(norms > 0, norms, 1.0)
+        rates = np.diag(self.B) * self.mechanism.actuated_scales / (L * norms)
+        # row i: L |A_h,i| (A_h,i / |A_h,i|) Δ t_h = B_ii s_i q̇'_i, t_h = P_hᵀ y
+        S = np.hstack([(A_h / norms[:, None]) @ screws.DELTA @ P_h.T, -np.diag(rates)])
+        rank, _, _, Vt = screws.svd_rank(S, self.rtol)
+        N, d = Vt[rank:].T, P_h.shape[0]
+        _, _, forward, inverse = screws.motion_indices(N[d:], P_h.T @ N[:d], self.rtol)
+        return {"forward": forward, "inverse": inverse}
+
     @property
     def singularity(self) -> str:
         """``"none"``, ``"I"`` (B singular), ``"II"`` (A Δ singular), or ``"III"`` (both)."""

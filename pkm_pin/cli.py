@@ -1073,8 +1073,8 @@ def _per_leg_classes(mech, data: dict) -> None:
     actuated map by those of ``mech``'s per-leg analysis at each assembled grid point
     (its tree configuration read per leg, :meth:`Mechanism.analyze`), and add its
     ``type_I`` and ``type_II`` indices (nan where it does not assemble); the
-    ``forward`` and ``inverse`` indices stay the general elimination's
-    (docs/indices.md)."""
+    ``forward`` and ``inverse`` indices stay the general elimination's, which are its
+    own too (:attr:`Analysis.motion_indices`, docs/indices.md)."""
     ok = np.asarray(data["converged"], bool)
     cls = np.asarray(data["singularity"]).astype(object)
     extra = {k: np.full(ok.shape, np.nan) for k in ("condition", "type_I", "type_II")}

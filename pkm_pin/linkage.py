@@ -1998,21 +1998,10 @@ def _generalised(ns: NullSpace, Yh: np.ndarray, rtol: float):
     """Reduced maps ``X_r``, ``Y_r`` on the motions that move the actuators or the output
     (basis ``M`` of null coordinates), and the forward and inverse indices: the smallest
     singular values of the actuated and output blocks of the orthonormalised ``(X; Y)``."""
-    n = ns.X.shape[0]
-    S = np.vstack([ns.X, Yh])
-    if S.shape[1] == 0:
+    if ns.X.shape[1] == 0 and Yh.shape[1] == 0:
         return ns.X, Yh, ns.N, 1.0, 1.0
-    m, _, _, Vt = svd_rank(S, rtol)
-    M = ns.N @ Vt[:m].T
-    Xr, Yr = ns.X @ Vt[:m].T, Yh @ Vt[:m].T
-    if m == 0:
-        return Xr, Yr, M, 1.0, 1.0
-    Q, _ = np.linalg.qr(np.vstack([Xr, Yr]))
-    cx = np.linalg.svd(Q[:n], compute_uv=False) if n else np.zeros(0)
-    cy = np.linalg.svd(Q[n:], compute_uv=False)
-    forward = float(cx[m - 1]) if n >= m else 0.0
-    inverse = float(cy[m - 1]) if Yr.shape[0] >= m else 0.0
-    return Xr, Yr, M, forward, inverse
+    m, Vt, forward, inverse = screws.motion_indices(ns.X, Yh, rtol)
+    return ns.X @ Vt[:m].T, Yh @ Vt[:m].T, ns.N @ Vt[:m].T, forward, inverse
 
 
 def _actuation(model: ClosureModel, kin: TreeKinematics, loops: tuple, p: np.ndarray,

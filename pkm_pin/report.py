@@ -177,7 +177,9 @@ def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
     structure detected, the whole tree's configuration joint by joint, the mobility with
     its idle motions and generic ranks, the independent sub-mechanisms), with the numbers
     of the backend that reads the mechanism (``A``, ``B``, the bases, ``singularity``,
-    ``indices``, ``transmission``; :attr:`Mechanism.backend`); then ``backend``,
+    ``indices``, ``transmission``; :attr:`Mechanism.backend`; a per-leg reading's
+    ``indices`` end with its ``forward`` and ``inverse``, :attr:`Analysis.motion_indices`,
+    so both readings report the same five); then ``backend``,
     ``description``, ``length`` (the characteristic length), ``length_unit``, ``legs``
     (the legs' names of a mechanism read per leg, else ``[]``), ``actuated`` (the
     names in the order of ``q_actuated`` and of ``A``'s rows), ``grubler`` and
@@ -219,6 +221,8 @@ def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
     if per_leg:
         data.update(grubler=an.grubler, redundant_constraints=an.redundant_constraints,
                     constraint_singular=bool(an.constraint_singular))
+        motion = optional("motion_indices", lambda: an.motion_indices, failed) or {}
+        data["indices"].update({k: finite_or_none(v) for k, v in motion.items()})
     return data
 
 

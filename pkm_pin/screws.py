@@ -320,6 +320,37 @@ def _length(S: np.ndarray, length: float | None) -> float:
     return L
 
 
+def motion_indices(X: np.ndarray, Y: np.ndarray, rtol: float):
+    """The forward and inverse indices of a machine's motions (docs/indices.md): with the
+    columns of ``X`` (actuated rates, dimensionless: rad, or m over the characteristic
+    length) and ``Y`` (the output's homogenised twists) spanning its motions, those that
+    move neither removed (rank of ``(X; Y)`` by :func:`svd_rank`), ``forward = min |X z|
+    / |(X; Y) z|`` (0: the output moves with the actuators locked) and ``inverse = min
+    |Y z| / |(X; Y) z|`` (0: an actuator moves without moving the output): the smallest
+    singular values of the two blocks of an orthonormal basis of the motions. They do
+    not depend on the basis, so the general elimination (its null space) and the
+    per-leg engine (its platform twists and ``A Δ t = B q̇``) give the same numbers.
+
+    Returns:
+        ``(m, Vt, forward, inverse)``: the number of motions kept, the right singular
+        vectors of ``(X; Y)`` (its first ``m`` rows span them) and the two indices (1
+        when no motion is left).
+    """
+    n = X.shape[0]
+    S = np.vstack([X, Y])
+    if S.shape[1] == 0:
+        return 0, np.eye(0), 1.0, 1.0
+    m, _, _, Vt = svd_rank(S, rtol)
+    if m == 0:
+        return 0, Vt, 1.0, 1.0
+    Q, _ = np.linalg.qr(S @ Vt[:m].T)
+    cx = np.linalg.svd(Q[:n], compute_uv=False) if n else np.zeros(0)
+    cy = np.linalg.svd(Q[n:], compute_uv=False)
+    forward = float(cx[m - 1]) if n >= m else 0.0
+    inverse = float(cy[m - 1]) if Y.shape[0] >= m else 0.0
+    return m, Vt, forward, inverse
+
+
 def svd_rank(H, rtol: float) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     """``(rank, U, sv, Vt)``: numpy's SVD of the m × n matrix ``H`` (full matrices) and
     its rank, the number of singular values above ``rtol`` times the largest. The one

@@ -311,3 +311,28 @@ def test_per_leg_reading_takes_the_general_arguments():
     np.testing.assert_allclose(mech.model.actuated_values(b.q), target, atol=1e-9)
     with pytest.raises(ForwardKinematicsError):  # out of the motors' reach: still refused
         mech.forward_kinematics([1.2, -0.9], starts=4)
+
+
+@pytest.mark.parametrize("name", ["mechanisms/stewart.toml", "mechanisms/delta.toml",
+                                  "mechanisms/rpr3.toml", "loops/five_bar.xml",
+                                  "loops/four_bar.urdf", "loops/delta_loops.urdf"])
+def test_per_leg_motion_indices_are_the_general_eliminations(name):
+    """The per-leg Analysis's forward and inverse indices (from its platform twists and
+    A Δ t = B q̇_a) equal the general elimination's of the same tree configuration (from
+    the closure Jacobian's null space) to 1e-9, at home and away from it, although A's
+    representatives differ on the planar machines; the report of the per-leg reading
+    carries all five indices, as the general reading's does."""
+    from pkm_pin.report import report_data
+
+    mech = load_mechanism(MODELS / name)
+    assert mech.backend == "legs"
+    home = mech.home_assembly
+    away = mech.forward_kinematics(np.asarray(home.q_actuated) + 0.03)
+    for a in (home, away):
+        mine = mech.analyze(a).motion_indices
+        theirs = mech.general.analyze(mech.tree_configuration(a)).indices
+        for key in ("forward", "inverse"):
+            assert 0 < mine[key] <= 1
+            assert mine[key] == pytest.approx(theirs[key], abs=1e-9), key
+    data = report_data(mech, home)
+    assert list(data["indices"]) == ["type_I", "type_II", "condition_A", "forward", "inverse"]

@@ -118,7 +118,7 @@ def test_report_data_is_json_and_keeps_the_analysis_numbers(analyses):
     data = json.loads(json.dumps(report_data(an, plots=["a.png"])))
     assert data["dof"] == an.dof and data["motion_type"] == "1T2R"
     assert np.allclose(data["A"], an.A) and np.allclose(data["B"], an.B)
-    assert data["indices"] == pytest.approx(an.indices)
+    assert data["indices"] == pytest.approx({**an.indices, **an.motion_indices})
     assert data["plots"] == ["a.png"] and data["crosscheck"] is None
 
 
