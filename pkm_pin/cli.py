@@ -1042,7 +1042,7 @@ def _map_linkage(args, link, per_leg=None) -> int:
     swept = link.sweep(Q[order], guess=args.reference)
     data = {}
     for key in ("q_actuated", "converged", "q", "output_poses", "dof", "output_dof",
-                "singularity", "condition", "forward", "inverse"):
+                "singularity", "type_I", "type_II", "condition", "forward", "inverse"):
         a = getattr(swept, key)
         grid = np.empty_like(a)
         grid[order] = a

@@ -99,10 +99,12 @@ from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import (
     TreeSolution,
     iter_tree_starts,
+    pose_coordinates,
     solve_tree,
     solve_tree_starts,
     tree_starts,
 )
+from .sweep import SweepResult
 from .tolerances import (
     CLOSENESS_SINGULAR_TOL,
     CLOSURE_TOL,
@@ -1194,7 +1196,8 @@ class Linkage:
             try:
                 a = self.assemble(warm, q_actuated=qa, starts=0 if warm is not None else 16,
                                   tol=tol)
-            except AssemblyError:
+            except AssemblyError as e:
+                out.failures.append((i, str(e)))
                 continue
             warm = a.q
             an = self.analyze(a.q, about=about, generic=generic, nearby=0)
@@ -2066,59 +2069,39 @@ def _scaled_wrench(zeta_h: np.ndarray, p: np.ndarray, L: float, unit: float,
 
 
 # ========================================================================= sweep
-@dataclass(frozen=True, eq=False)
-class LinkageSweep:
-    """Results of :meth:`Linkage.sweep`, one row per actuated point (NaN / ``""`` where
-    it did not converge).
-
-    Attributes:
-        q_actuated: (N × actuated) the points asked for.
-        converged: (N,) whether the point was assembled.
-        q: (N × nq) configurations; output_poses: (N × 4 × 4) output placements.
-        dof, output_dof: (N,) as :class:`LinkageAnalysis` (-1 where not converged).
-        singularity: (N,) class strings; condition: (N,) ``condition_A``;
-        forward, inverse: (N,) the general indices.
-        lti, cti: (N,) the transmission indices (``sweep(..., transmission=True)``;
-            else nan).
-    """
-
-    q_actuated: np.ndarray
-    converged: np.ndarray
-    q: np.ndarray
-    output_poses: np.ndarray
-    dof: np.ndarray
-    output_dof: np.ndarray
-    singularity: np.ndarray
-    condition: np.ndarray
-    forward: np.ndarray
-    inverse: np.ndarray
-    lti: np.ndarray
-    cti: np.ndarray
+#: The results of :meth:`Linkage.sweep`: the one sweep result type
+#: (:class:`pkm_pin.sweep.SweepResult`), its points actuated values.
+LinkageSweep = SweepResult
 
 
 class _SweepRows:
     """Preallocated rows of a :class:`LinkageSweep`."""
+
+    _INDICES = ("type_I", "type_II", "condition_A", "forward", "inverse")
 
     def __init__(self, Q: np.ndarray, nq: int):
         n = self.n = len(Q)
         self.qa = Q
         self.ok = np.zeros(n, bool)
         self.q = np.full((n, nq), np.nan)
-        self.poses = np.full((n, 4, 4), np.nan)
+        self.poses = np.full((n, 6), np.nan)
         self.dof = np.full(n, -1)
         self.odof = np.full(n, -1)
         self.cls = np.full(n, "", dtype=object)
-        self.cond, self.fwd, self.inv = np.full(n, np.nan), np.full(n, np.nan), np.full(n, np.nan)
+        self.idx = {k: np.full(n, np.nan) for k in self._INDICES}
         self.lti, self.cti = np.full(n, np.nan), np.full(n, np.nan)
+        self.failures: list = []
 
     def record(self, i: int, a: LinkageAssembly, an: LinkageAnalysis) -> None:
         self.ok[i] = True
-        self.q[i], self.poses[i] = a.q, a.output_pose.homogeneous
+        self.q[i], self.poses[i] = a.q, pose_coordinates(a.output_pose)
         self.dof[i], self.odof[i], self.cls[i] = an.dof, an.output_dof, an.singularity
-        self.cond[i] = an.indices["condition_A"]
-        self.fwd[i], self.inv[i] = an.indices["forward"], an.indices["inverse"]
+        for k in self._INDICES:
+            self.idx[k][i] = an.indices[k]
 
-    def result(self) -> LinkageSweep:
-        return LinkageSweep(self.qa, self.ok, self.q, self.poses, self.dof,
-                            self.odof, self.cls.astype(str), self.cond, self.fwd, self.inv,
-                            self.lti, self.cti)
+    def result(self) -> SweepResult:
+        idx = self.idx
+        return SweepResult(self.poses, self.ok, self.dof, self.cls.astype(str),
+                           idx["type_I"], idx["type_II"], idx["condition_A"],
+                           np.full(self.n, np.nan), self.qa, self.failures, self.lti,
+                           self.cti, self.odof, idx["forward"], idx["inverse"], self.q)

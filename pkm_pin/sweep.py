@@ -48,12 +48,20 @@ from .twists import has_mimic, joint_lines, joint_twists, sweep_pass
 
 @dataclass
 class SweepResult:
-    """Per-pose results of :meth:`Mechanism.sweep` (arrays in the order of the poses).
+    """Per-point results of a sweep, whichever backend ran it (arrays in the order of
+    the points): :meth:`Mechanism.sweep` over platform poses (the per-leg engine), and
+    :meth:`pkm_pin.linkage.Linkage.sweep` over actuated values (the general
+    elimination, also ``LinkageSweep``). Both fill every field; what one backend does
+    not compute is nan (``det`` of a general sweep; ``forward``, ``inverse`` and ``q``
+    of a per-leg one, whose tree configurations are not built pose by pose).
 
     Attributes:
-        poses: (N, 6) x, y, z [m], roll, pitch, yaw [rad].
-        ok: (N,) whether the pose assembled.
-        dof: (N,) platform DOF (−1 where not assembled).
+        poses: (N, 6) x, y, z [m], roll, pitch, yaw [rad] of the output (nan where not
+            assembled); :attr:`output_poses` as (N, 4, 4) placements.
+        ok: (N,) whether the point assembled (:attr:`converged`).
+        dof: (N,) DOF (−1 where not assembled): the platform's for a per-leg sweep (its
+            ``output_dof`` too), the whole tree's (idle motions included) for a general
+            one, as the two analyses' ``dof``.
         singularity: (N,) "none", "I", "II", "III" ("" where not assembled).
         type_I, type_II, condition: (N,) dimensionless indices (nan where not assembled).
         det: (N,) signed determinant of ``A Δ`` on the home platform twist basis carried
@@ -64,6 +72,10 @@ class SweepResult:
         cti: (N,) constraint transmission index (the smallest leg's; 1 when no leg has
             a constraint it could lose; nan as ``lti``).
         failures: (index, reason) of every pose that did not assemble.
+        output_dof: (N,) the output's DOF (default ``dof``).
+        forward, inverse: (N,) the general indices (:func:`pkm_pin.screws.motion_indices`;
+            default nan).
+        q: (N, nq) the tree's configurations (a general sweep; default ``None``).
     """
 
     poses: np.ndarray
@@ -78,12 +90,31 @@ class SweepResult:
     failures: list = field(default_factory=list)
     lti: np.ndarray | None = None
     cti: np.ndarray | None = None
+    output_dof: np.ndarray | None = None
+    forward: np.ndarray | None = None
+    inverse: np.ndarray | None = None
+    q: np.ndarray | None = None
 
     def __post_init__(self):
-        if self.lti is None:
-            self.lti = np.full(len(self.ok), np.nan)
-        if self.cti is None:
-            self.cti = np.full(len(self.ok), np.nan)
+        for name in ("lti", "cti", "forward", "inverse"):
+            if getattr(self, name) is None:
+                setattr(self, name, np.full(len(self.ok), np.nan))
+        if self.output_dof is None:
+            self.output_dof = np.array(self.dof, copy=True)
+
+    @property
+    def converged(self) -> np.ndarray:
+        """(N,) whether the point assembled (:attr:`ok`)."""
+        return self.ok
+
+    @property
+    def output_poses(self) -> np.ndarray:
+        """(N, 4, 4) the output's placements (nan where not assembled)."""
+        out = np.full((len(self.poses), 4, 4), np.nan)
+        for i, x in enumerate(self.poses):
+            if np.isfinite(x).all():
+                out[i] = pin.SE3(pin.rpy.rpyToMatrix(*x[3:]), x[:3]).homogeneous
+        return out
 
     def unordered(self, order: np.ndarray) -> SweepResult:
         """This result of a sweep over ``poses[order]`` given back in the order of
@@ -106,10 +137,13 @@ class SweepResult:
         return type(self)(**out)
 
     def arrays(self) -> dict[str, np.ndarray]:
-        """Every array by name (for ``numpy.savez``)."""
-        return {k: getattr(self, k) for k in ("poses", "ok", "dof", "singularity", "type_I",
-                                              "type_II", "condition", "det", "q_actuated", "lti",
-                                              "cti")}
+        """Every array by name (for ``numpy.savez``; ``q`` when recorded)."""
+        names = ("poses", "ok", "dof", "output_dof", "singularity", "type_I", "type_II",
+                 "condition", "forward", "inverse", "det", "q_actuated", "lti", "cti")
+        out = {k: getattr(self, k) for k in names}
+        if self.q is not None:
+            out["q"] = self.q
+        return out
 
 
 def pose_array(poses) -> np.ndarray:

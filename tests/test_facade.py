@@ -14,6 +14,7 @@ import pickle
 from pathlib import Path
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 import pkm_pin
@@ -336,3 +337,37 @@ def test_per_leg_motion_indices_are_the_general_eliminations(name):
             assert mine[key] == pytest.approx(theirs[key], abs=1e-9), key
     data = report_data(mech, home)
     assert list(data["indices"]) == ["type_I", "type_II", "condition_A", "forward", "inverse"]
+
+
+def test_one_sweep_result_for_both_backends():
+    """Mechanism.sweep (poses, per leg) and the general sweep (actuated values) give the
+    one SweepResult: the same fields, each point's output pose (x, y, z, roll, pitch,
+    yaw and as a placement), classes and the five indices equal to the analyses' at that
+    point (1e-9), nan where one backend does not compute a number, and the failures
+    named."""
+    from pkm_pin.linkage import LinkageSweep
+    from pkm_pin.sweep import SweepResult
+
+    assert LinkageSweep is SweepResult
+    five = load_mechanism(FIVE_BAR)  # a point output: read by the general elimination
+    home = five.assemble()
+    Q = home.q_actuated + np.array([[0.0, 0.0], [0.05, -0.02], [2.5, 0.0]])  # last: apart
+    general = five.general.sweep(Q, home)
+    assert isinstance(general, SweepResult)
+    assert general.ok.tolist() == [True, True, False] and general.converged is general.ok
+    assert [i for i, _ in general.failures] == [2] and "loop" in general.failures[0][1]
+    for i in (0, 1):
+        an = five.general.analyze(general.q[i])
+        for key in ("type_I", "type_II", "forward", "inverse"):
+            assert getattr(general, key)[i] == pytest.approx(an.indices[key], rel=1e-9)
+        pose = five.general.assemble(general.q[i]).output_pose
+        np.testing.assert_allclose(general.output_poses[i], pose.homogeneous, atol=1e-12)
+        assert general.singularity[i] == an.singularity
+    assert np.isnan(general.det).all() and np.isnan(general.poses[2]).all()
+    stewart = load_mechanism(STEWART)
+    moved = stewart.home * pin.SE3(np.eye(3), np.array([0.0, 0.02, 0.01]))
+    legs = stewart.sweep([stewart.home, moved])
+    assert isinstance(legs, SweepResult) and legs.q is None
+    np.testing.assert_allclose(legs.output_poses[1], moved.homogeneous, atol=1e-12)
+    np.testing.assert_array_equal(legs.output_dof, legs.dof)
+    assert np.isnan(legs.forward).all() and set(legs.arrays()) >= set(general.arrays()) - {"q"}
