@@ -190,26 +190,6 @@ def _is_linkage(mech) -> bool:
     return mech.backend == "general"
 
 
-def _linkage_assembly(args, link):
-    """The linkage assembled as the options say: ``--q`` (forward kinematics), ``--pose``
-    (inverse kinematics of the output), ``--at`` (a partial output pose, the other
-    coordinates free), else from the reference configuration."""
-    from .assembly import as_pose
-
-    q, pose = getattr(args, "q", None), getattr(args, "pose", None)
-    if getattr(args, "at", None) is not None:
-        pose = _platform_pose(args)
-    if q is not None and pose is not None:
-        raise InputError("give --q (actuated values) or --pose / --at (output pose), not both")
-    if isinstance(pose, dict):
-        return link.inverse_kinematics(pose)
-    if q is not None:
-        return link.forward_kinematics(link.check_actuated(q, "--q"), guess=link.assemble())
-    if pose is not None:
-        return link.inverse_kinematics(as_pose(pose))
-    return link.assemble()
-
-
 def _pose_dict(pose) -> dict:
     import pinocchio as pin
 
@@ -267,15 +247,15 @@ def cmd_analyze(args) -> int:
 
 
 def _assembly(args, mech):
-    """The mechanism assembled as the options say: ``--q`` (forward kinematics from
-    home), ``--pose`` / ``--at`` (a full or partial output pose), else home."""
-    if _is_linkage(mech):  # a pose is the general backend's inverse kinematics
-        return _linkage_assembly(args, mech)
+    """The mechanism assembled as the options say, whichever backend reads it: ``--q``
+    (forward kinematics from home), ``--pose`` / ``--at`` (a full or partial output
+    pose: :meth:`Mechanism.assembly_at`), else home."""
     pose, q = _platform_pose(args), getattr(args, "q", None)
     if q is not None:
         if pose is not None:
-            raise InputError("give --q (actuated values) or --pose / --at, not both")
-        return mech.forward_kinematics(mech.check_actuated(q))
+            raise InputError("give --q (actuated values) or --pose / --at (output pose), "
+                             "not both")
+        return mech.forward_kinematics(mech.check_actuated(q, "--q"), mech.home_assembly)
     return mech.assembly_at(pose)
 
 

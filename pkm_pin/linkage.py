@@ -82,7 +82,7 @@ import pinocchio as pin
 from . import dynamics as _dynamics
 from . import general_kernel, screws
 from .analysis import classify
-from .assembly import Assembly
+from .assembly import Assembly, as_pose
 from .closure_gaps import Diagnosis, diagnose
 from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
 from .model.closure_model import (
@@ -541,6 +541,26 @@ class Linkage:
             return q_actuated
         return screws.as_vector(q_actuated, len(self.actuated), name, ", ".join(self.actuated))
 
+    def assembly_at(self, where=None) -> LinkageAssembly:
+        """What :meth:`pkm_pin.Mechanism.assembly_at` answers, on the tree: the home
+        assembly (``None``), a :class:`LinkageAssembly` as it is, the assembly nearest
+        a configuration of the tree (a 1-D vector of its ``nq`` numbers, ``nq`` ≠ 6:
+        :meth:`assemble`), or the assembly whose output reaches a pose
+        (:meth:`inverse_kinematics`: ``pin.SE3``, a 4×4 matrix, six numbers x, y, z,
+        roll, pitch, yaw, or a partial pose as a mapping)."""
+        if where is None:
+            return self.home_assembly
+        if isinstance(where, LinkageAssembly):
+            return where
+        if isinstance(where, Mapping):
+            return self.inverse_kinematics(where)
+        if not isinstance(where, pin.SE3):
+            shape = np.shape(where)
+            if len(shape) == 1 and shape[0] == self._model.nq != 6:
+                return self.assemble(where)
+            where = as_pose(where)
+        return self.inverse_kinematics(where)
+
     def _guess_q(self, guess) -> np.ndarray | None:
         if guess is None:
             return None
@@ -824,7 +844,8 @@ class Linkage:
                 rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL,
                 nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
         """:class:`LinkageAnalysis` of the output frame at the assembled ``q`` (or a
-        :class:`LinkageAssembly`; default :attr:`home_assembly`).
+        :class:`LinkageAssembly`; default :attr:`home_assembly`; a pose or partial pose
+        of the output: at :meth:`assembly_at` it).
 
         Args:
             about: ``"output"`` (homogenise about the output frame's origin: frame-
@@ -839,6 +860,9 @@ class Linkage:
         if about not in ("output", "world"):
             raise InputError(f"about must be 'output' or 'world', got {about!r}")
         q = self.home_assembly.q if q is None else q
+        if isinstance(q, (Mapping, pin.SE3)) or np.shape(q) in ((4, 4), (6,)) \
+                and self._model.nq != 6:
+            q = self.assembly_at(q)
         q = self._model.check_q(q.q if isinstance(q, LinkageAssembly) else q)
         return _analyse(self, q, about, generic, rtol, singular_tol, nearby)
 

@@ -371,3 +371,30 @@ def test_one_sweep_result_for_both_backends():
     np.testing.assert_allclose(legs.output_poses[1], moved.homogeneous, atol=1e-12)
     np.testing.assert_array_equal(legs.output_dof, legs.dof)
     assert np.isnan(legs.forward).all() and set(legs.arrays()) >= set(general.arrays()) - {"q"}
+
+
+def test_general_reading_takes_what_assembly_at_takes():
+    """A mechanism read by the general backend (Cassie's knee: multi-loop legs) answers
+    assembly_at and analyze as a per-leg one: None is home, a tree configuration is
+    assembled nearest it, a pose (SE3 or six numbers) by inverse kinematics of the
+    output, a partial pose with the given coordinate met; analyze at a pose equals
+    analyze at that assembly."""
+    from pkm_pin.linkage import LinkageAssembly
+
+    mech = load_mechanism(MODELS / "loops" / "cassie_knee.urdf")
+    assert mech.backend == "general"
+    home = mech.home_assembly
+    assert mech.assembly_at() is home and mech.assembly_at(home) is home
+    at_q = mech.assembly_at(np.asarray(home.q))
+    np.testing.assert_allclose(at_q.q, home.q, atol=1e-12)
+    moved = home.output_pose * pin.SE3(np.eye(3), np.array([0.0, 0.0, 0.005]))
+    at_pose = mech.assembly_at(moved)
+    assert isinstance(at_pose, LinkageAssembly) and max(at_pose.closure_residuals.values()) < 1e-10
+    six = np.r_[home.output_pose.translation, pin.rpy.matrixToRpy(home.output_pose.rotation)]
+    np.testing.assert_allclose(mech.assembly_at(six).output_pose.homogeneous,
+                               home.output_pose.homogeneous, atol=1e-9)
+    partial = mech.assembly_at({"z": -0.79})
+    assert partial.output_pose.translation[2] == pytest.approx(-0.79, abs=1e-10)
+    a, b = mech.analyze(moved), mech.analyze(at_pose)
+    np.testing.assert_allclose(a.A, b.A, atol=1e-12)
+    assert a.indices["type_II"] == pytest.approx(b.indices["type_II"], rel=1e-12)
