@@ -254,19 +254,29 @@ def forward_kinematics(mech, q_actuated, guess=None, *, steps: int | None = None
     try:
         return _continued(mech, target, start, steps, tol, inertia_tol, max_newton,
                           max_inertia, method)
-    except (ForwardKinematicsError, AssemblyError) as failure:
+    except (ForwardKinematicsError, AssemblyError):
         if starts is None:
             raise
-        general = mech.general
-        order = [list(general.actuated).index(name) for name in mech.actuated]
-        values = np.empty(len(order))
-        values[order] = target
-        try:
-            found = general.forward_kinematics(values, mech.tree_configuration(start),
-                                               starts=starts, seed=seed, tol=tol)
-        except PkmError:
-            raise failure from None
-        return mech.legs_assembly(found.q)
+        found = _tree_multistart(mech, target, start, starts, seed, tol)
+        if found is None:
+            raise
+        return found
+
+
+def _tree_multistart(mech, target: np.ndarray, start: Assembly, starts: int, seed: int,
+                     tol: float) -> Assembly | None:
+    """:func:`forward_kinematics` by the tree's multistart (``mech.general``, the actuated
+    values in its order, from ``start``'s tree configuration), read per leg; ``None``
+    when it fails too."""
+    general = mech.general
+    values = np.empty(len(target))
+    values[[list(general.actuated).index(name) for name in mech.actuated]] = target
+    try:
+        found = general.forward_kinematics(values, mech.tree_configuration(start),
+                                           starts=starts, seed=seed, tol=tol)
+    except PkmError:
+        return None
+    return mech.legs_assembly(found.q)
 
 
 def _continued(mech, target: np.ndarray, start: Assembly, steps, tol: float,
