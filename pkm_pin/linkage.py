@@ -494,18 +494,82 @@ class Linkage:
             perturb=lambda link, errors: Linkage(perturb(link.model, errors)))
         return calibrate(self, samples, parameters, geometry=geometry, **options)
 
-    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0
+    def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0,
+                               patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL
                                ) -> list[LinkageAssembly]:
-        """Every working mode at the output ``pose``: one assembly per distinct vector of
-        actuated values, found leg by leg (:meth:`Mechanism.inverse_kinematics_all` of
-        :attr:`legs_mechanism`), as configurations of this tree.
+        """Every working mode at the output ``pose`` (``pin.SE3``), as configurations of
+        this tree: for a base–legs–platform machine, one assembly per distinct vector of
+        actuated values found leg by leg (:meth:`Mechanism.inverse_kinematics_all` of
+        :attr:`legs_mechanism`); for any other linkage, a multistart of the tree solver
+        with the output at ``pose`` (:meth:`_inverse_multistart`: batches of ``starts``
+        configurations within the joint limits, home's first, stopped after ``patience``
+        batches find no new mode; two assemblies are one mode when every joint origin
+        and the output agree, as :meth:`forward_kinematics_all` decides), nearest home
+        first. A multistart proves nothing: a mode no start falls into is not listed.
 
         Raises:
-            InputError: not a base–legs–platform machine (the reason).
+            AssemblyError: no start reaches the pose (:class:`LoopClosureError`), or the
+                assemblies at the pose do not settle into modes (a continuum).
         """
-        mech = self._legs("every working mode of a pose")
-        return [self.assemble(mech.source_configuration(a), starts=0)
-                for a in mech.inverse_kinematics_all(pose, starts=starts, seed=seed)]
+        if self.platform_structure[0] is not None:
+            try:
+                mech = self._legs("every working mode of a pose")
+            except (InputError, AssemblyError):
+                mech = None
+            if mech is not None:
+                return [self.assemble(mech.source_configuration(a), starts=0)
+                        for a in mech.inverse_kinematics_all(pose, starts=starts, seed=seed)]
+        return self._inverse_multistart(pose, starts, seed, patience, tol)
+
+    def _inverse_multistart(self, pose, starts: int, seed: int, patience: int,
+                            tol: float) -> list[LinkageAssembly]:
+        """:meth:`inverse_kinematics_all` of a linkage without legs to read: the tree
+        solver with the output's pose rows (the components its twist system at home
+        moves along, as :meth:`inverse_kinematics`) from batches of starts. Of the
+        assemblies that meet those rows, those whose whole output pose is nearest
+        ``pose`` are kept (a lower-mobility output meets its rows elsewhere too, with
+        other components imposed: another pose, not another working mode; a point
+        output by its position alone)."""
+        if not isinstance(pose, pin.SE3) or not np.isfinite(pose.homogeneous).all():
+            raise InputError(f"pose must be a finite pinocchio.SE3, got {type(pose).__name__}")
+        model, home = self._model, self.home_assembly
+        rows = pose_rows(model, model.kinematics(home.q))
+        found, signatures, batch, quiet, best = [], [], 0, 0, None
+        while quiet < patience:
+            if batch >= MODES_MAX_BATCHES or len(found) > MODES_MAX:
+                raise AssemblyError("output pose", float("nan"), (
+                    f"the assemblies of {self.name!r} at this output pose do not settle "
+                    f"into working modes: {len(found)} distinct ones after {batch} batches "
+                    "(a continuum: the actuators move with the output held); "
+                    "inverse_kinematics gives the one nearest a guess"))
+            new = False
+            for q0 in tree_starts(model, home.q if batch == 0 else None, count=starts,
+                                  seed=seed + batch):
+                sol = solve_tree(model, q0, pose=pose, pose_rows=rows, tol=tol)
+                if not sol.converged:
+                    best = sol if best is None or sol.residual < best.residual else best
+                    continue
+                sig = self._signature(sol.q)
+                if any(np.abs(s - sig).max() <= SAME_CONFIGURATION_TOL for s in signatures):
+                    continue
+                signatures.append(sig)
+                found.append(self._assembly(sol, sol.iterations))
+                new = True
+            batch += 1
+            quiet = 0 if new else quiet + 1
+        if not found:
+            raise self._failure(best, batch * (starts + 3), None, "output pose")
+        L = model.length
+        if model.output_point:  # a point: its position alone
+            off = [float(np.linalg.norm(a.output_pose.translation - pose.translation)) / L
+                   for a in found]
+        else:
+            off = [float(np.linalg.norm(screws.homogenise(screws.from_pinocchio(
+                pin.log6(pose.actInv(a.output_pose))), L))) for a in found]
+        found = [a for a, e in zip(found, off) if e <= min(off) + SAME_CONFIGURATION_TOL]
+        ref = self._signature(home.q)
+        found.sort(key=lambda a: float(np.linalg.norm(self._signature(a.q) - ref)))
+        return found
 
     @cached_property
     def home_assembly(self) -> LinkageAssembly:

@@ -398,3 +398,35 @@ def test_general_reading_takes_what_assembly_at_takes():
     a, b = mech.analyze(moved), mech.analyze(at_pose)
     np.testing.assert_allclose(a.A, b.A, atol=1e-12)
     assert a.indices["type_II"] == pytest.approx(b.indices["type_II"], rel=1e-12)
+
+
+def test_every_working_mode_of_a_linkage_without_legs():
+    """inverse_kinematics_all on the general backend where no legs can be read. The
+    five-bar with a point output: each motor's crank reaches the point in two ways, so
+    the modes are the four combinations of the two cranks' two angles (the home's
+    first), each closing the loop with the point at the target (1e-9). Cassie's knee
+    (a 2-DOF foot): every mode reaches the whole foot pose (1e-9), home's first; the
+    assemblies that meet the targeted components with another foot pose are not
+    listed."""
+    five = load_mechanism(FIVE_BAR)
+    assert five.backend == "general" and five.model.output_point
+    home = five.home_assembly
+    modes = five.inverse_kinematics_all(home.output_pose)
+    qa = np.array([m.q_actuated for m in modes])
+    assert len(modes) == 4 and np.allclose(qa[0], home.q_actuated, atol=1e-9)
+    first, second = (np.unique(np.round(qa[:, k], 6)) for k in (0, 1))
+    assert len(first) == len(second) == 2
+    assert {tuple(np.round(x, 6)) for x in qa} == {(a, b) for a in first for b in second}
+    for m in modes:
+        assert max(m.closure_residuals.values()) < 1e-10
+        np.testing.assert_allclose(m.output_pose.translation, home.output_pose.translation,
+                                   atol=1e-9)
+    knee = load_mechanism(MODELS / "loops" / "cassie_knee.urdf")
+    target = knee.home_assembly.output_pose
+    modes = knee.inverse_kinematics_all(target)
+    assert len(modes) >= 2
+    np.testing.assert_allclose(modes[0].q, knee.home_assembly.q, atol=1e-9)
+    for m in modes:
+        np.testing.assert_allclose(m.output_pose.homogeneous, target.homogeneous, atol=1e-9)
+    assert min(np.abs(a.q_actuated - b.q_actuated).max() for a, b in
+               zip(modes, modes[1:])) > 1e-3
