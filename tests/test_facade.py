@@ -430,3 +430,32 @@ def test_every_working_mode_of_a_linkage_without_legs():
         np.testing.assert_allclose(m.output_pose.homogeneous, target.homogeneous, atol=1e-9)
     assert min(np.abs(a.q_actuated - b.q_actuated).max() for a, b in
                zip(modes, modes[1:])) > 1e-3
+
+
+SERIAL_ARM = """<mujoco model="arm">
+  <worldbody>
+    <body name="upper">
+      <joint name="shoulder" type="hinge" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+      <body name="fore" pos="0.3 0 0">
+        <joint name="elbow" type="hinge" axis="0 0 1"/>
+        <geom type="capsule" fromto="0 0 0 0.25 0 0" size="0.02"/>
+      </body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="shoulder"/><motor joint="elbow"/></actuator>
+</mujoco>
+"""
+
+
+def test_a_serial_tree_is_not_read_per_leg(tmp_path):
+    """An MJCF arm without closures: detection sees one 'leg' (the whole tree to the
+    output), but a serial tree is not a base–legs–platform machine, so the default
+    reading stays the general elimination (2 DOF, the planar 2R arm's motion)."""
+    path = tmp_path / "arm.xml"
+    path.write_text(SERIAL_ARM)
+    arm = load_mechanism(path)
+    assert not arm.model.closures and arm.general.platform_structure[0] is not None
+    assert arm.backend == "general"
+    an = arm.analyze()
+    assert an.dof == 2 and an.motion_type == "1T1R"
