@@ -240,6 +240,35 @@ class Leg(SerialChain):
         return float(L)
 
     @cached_property
+    def reach(self) -> tuple[float, float]:
+        """``(r_min, r_max)``: bounds of the distance between the root's origin and the
+        tip frame's origin over every configuration within the limits (the triangle
+        inequality over the offsets on the path to the tip, a prismatic joint adding its
+        stroke; with one prismatic joint whose stroke keeps a sign, ``r_min`` is that
+        stroke's least length less every offset). ``(0, inf)`` when a joint on the path
+        is not a revolute, continuous, spherical or bounded prismatic joint (a mimic
+        joint, a free flyer …): no bound is claimed. A pose whose tip target lies
+        outside them cannot be reached, whatever a solver would do."""
+        m = self.model
+        path = [j for j in m.supports[m.frames[self.tip_id].parentJoint] if j > 0]
+        offsets = float(np.linalg.norm(m.frames[self.tip_id].placement.translation))
+        strokes = []
+        for j in path:
+            offsets += float(np.linalg.norm(m.jointPlacements[j].translation))
+            name = m.joints[j].shortname()
+            if j in self._prismatic_joints:
+                lo, up = self.lower[m.joints[j].idx_q], self.upper[m.joints[j].idx_q]
+                if not (np.isfinite(lo) and np.isfinite(up)):
+                    return 0.0, np.inf
+                strokes.append((0.0 if lo <= 0.0 <= up else min(abs(lo), abs(up)),
+                                max(abs(lo), abs(up))))
+            elif "Mimic" in name or not name.startswith(("JointModelR", "JointModelSpherical")):
+                return 0.0, np.inf
+        r_max = offsets + sum(hi for _, hi in strokes)
+        r_min = max(0.0, strokes[0][0] - offsets) if len(strokes) == 1 else 0.0
+        return float(r_min), float(r_max)
+
+    @cached_property
     def _prismatic_joints(self) -> list[int]:
         """Joint indices of the 1-DOF prismatic joints of the chain (aligned or not;
         mimicking joints excluded)."""

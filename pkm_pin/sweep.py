@@ -41,7 +41,7 @@ from .analysis import SINGULAR_TOL, classify, layout_of
 from .errors import AssemblyError, InputError
 from .screws import as_float_array, as_fraction
 from .solve import pose_coordinates
-from .tolerances import RANK_RTOL
+from .tolerances import RANK_RTOL, REACH_MARGIN
 from .transmission import sweep_cti, sweep_lti
 from .twists import has_mimic, joint_lines, joint_twists, sweep_pass
 
@@ -238,6 +238,27 @@ def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
     return np.arange(len(X)) if _steps(X, length).sum() <= _steps(X[serp], length).sum() else serp
 
 
+def out_of_reach(legs, Ts: np.ndarray) -> tuple[np.ndarray, list]:
+    """``(ok, failures)`` of the poses whose tip targets ``Ts`` (legs × N × 4 × 4,
+    world) some leg cannot reach at all: the distance from its base to the target lies
+    outside the leg's :attr:`~pkm_pin.leg.Leg.reach` (a margin of
+    :data:`~pkm_pin.tolerances.REACH_MARGIN` of it left to the solver), ``ok`` false and
+    the reason recorded; the other poses ``ok``."""
+    ok, failures = np.ones(Ts.shape[1], bool), []
+    for leg, targets in zip(legs, Ts):
+        r_min, r_max = leg.reach
+        if r_min == 0.0 and not np.isfinite(r_max):
+            continue
+        d = np.linalg.norm(targets[:, :3, 3] - leg.base.translation, axis=1)
+        margin = REACH_MARGIN * r_max
+        for i in np.flatnonzero(ok & ((d > r_max + margin) | (d < r_min - margin))):
+            failures.append((int(i), f"leg {leg.name!r} cannot reach the pose: its tip "
+                             f"would be {d[i]:.6g} from its base, outside its reach "
+                             f"[{r_min:.6g}, {r_max:.6g}] (the joint offsets and strokes)"))
+            ok[i] = False
+    return ok, failures
+
+
 def evaluate_chunk(mech, X: np.ndarray, reference: np.ndarray, rtol: float,
                    singular_tol: float, progress=None, restarts: int = 4,
                    transmission: bool = False) -> dict:
@@ -292,16 +313,24 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
     home = mech.home_assembly
     # 1. legs along the path, compiled; a target a leg misses is solved again from the
     #    restart recipe (home, neutral, mid-limits, random starts)
-    Qs, failures = [], []
-    ok = np.ones(N, bool)
+    Qs = []
     Ts = np.empty((len(legs), N, 4, 4))  # where each leg's tip must be
     anchor_targets(poses, kernel.anchors, Ts)
+    ok, failures = out_of_reach(legs, Ts)  # no solver spends its budget on those
+    # the runs of poses between them, each tracked from home (as a miss is solved again)
+    runs = np.split(np.flatnonzero(ok), np.flatnonzero(np.diff(np.flatnonzero(ok)) > 1) + 1)
     for leg, lk, targets, q_home in zip(legs, kernel.legs, Ts, home.leg_q):
-        Q = np.empty((N, leg.nq))
-        res = np.empty(N)
-        # a last Newton step taken from a residual below TRUST is checked by Pinocchio
-        misses = track(lk.chain, targets, q_home.astype(float), along, SWEEP_TOL, 50,
-                       TRUST, Q, res)
+        Q = np.full((N, leg.nq), np.nan)
+        res = np.full(N, np.inf)
+        misses = 0
+        for run in (r for r in runs if len(r)):
+            Qr, rr = np.empty((len(run), leg.nq)), np.empty(len(run))
+            # a last Newton step taken from a residual below TRUST is checked by Pinocchio
+            steps = along[run]
+            steps[0] = False  # the run's first pose starts from home
+            misses += track(lk.chain, np.ascontiguousarray(targets[run]),
+                            q_home.astype(float), steps, SWEEP_TOL, 50, TRUST, Qr, rr)
+            Q[run], res[run] = Qr, rr
         # a miss: neither converged (0 ≤ r ≤ tol) nor trusted (r < 0), as track counts
         miss = np.flatnonzero(~(res <= SWEEP_TOL) & ok) if misses else ()
         if len(miss):
