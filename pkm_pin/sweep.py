@@ -238,19 +238,20 @@ def visiting_order(X: np.ndarray, length: float) -> np.ndarray:
     return np.arange(len(X)) if _steps(X, length).sum() <= _steps(X[serp], length).sum() else serp
 
 
-def out_of_reach(legs, Ts: np.ndarray) -> tuple[np.ndarray, list]:
+def out_of_reach(legs, Ts: np.ndarray, length: float) -> tuple[np.ndarray, list]:
     """``(ok, failures)`` of the poses whose tip targets ``Ts`` (legs × N × 4 × 4,
     world) some leg cannot reach at all: the distance from its base to the target lies
-    outside the leg's :attr:`~pkm_pin.leg.Leg.reach` (a margin of
-    :data:`~pkm_pin.tolerances.REACH_MARGIN` of it left to the solver), ``ok`` false and
-    the reason recorded; the other poses ``ok``."""
+    outside the leg's :attr:`~pkm_pin.leg.Leg.reach` by more than
+    :data:`~pkm_pin.tolerances.REACH_MARGIN` of the reach plus the characteristic
+    ``length`` (a leg whose joints all meet at one point reaches that point alone, to
+    rounding), ``ok`` false and the reason recorded; the other poses ``ok``."""
     ok, failures = np.ones(Ts.shape[1], bool), []
     for leg, targets in zip(legs, Ts):
         r_min, r_max = leg.reach
         if r_min == 0.0 and not np.isfinite(r_max):
             continue
         d = np.linalg.norm(targets[:, :3, 3] - leg.base.translation, axis=1)
-        margin = REACH_MARGIN * r_max
+        margin = REACH_MARGIN * (r_max + length)
         for i in np.flatnonzero(ok & ((d > r_max + margin) | (d < r_min - margin))):
             failures.append((int(i), f"leg {leg.name!r} cannot reach the pose: its tip "
                              f"would be {d[i]:.6g} from its base, outside its reach "
@@ -316,7 +317,7 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
     Qs = []
     Ts = np.empty((len(legs), N, 4, 4))  # where each leg's tip must be
     anchor_targets(poses, kernel.anchors, Ts)
-    ok, failures = out_of_reach(legs, Ts)  # no solver spends its budget on those
+    ok, failures = out_of_reach(legs, Ts, mech.characteristic_length)  # not solved
     # the runs of poses between them, each tracked from home (as a miss is solved again)
     runs = np.split(np.flatnonzero(ok), np.flatnonzero(np.diff(np.flatnonzero(ok)) > 1) + 1)
     for leg, lk, targets, q_home in zip(legs, kernel.legs, Ts, home.leg_q):

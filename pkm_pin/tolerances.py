@@ -276,7 +276,7 @@ ALIASES = {
 }
 
 #: Relative margin of the reach test of a sweep (:func:`pkm_pin.sweep.out_of_reach`): a
-#: pose is refused without a solve only when a leg's tip target lies farther than its
-#: :attr:`~pkm_pin.leg.Leg.reach` by more than this fraction of the largest reach
-#: (rounding of the bound never refuses a pose the solver would reach).
+#: pose is refused without a solve only when a leg's tip target lies outside its
+#: :attr:`~pkm_pin.leg.Leg.reach` by more than this fraction of the reach plus the
+#: characteristic length (rounding never refuses a pose the solver would reach).
 REACH_MARGIN = 1e-9

@@ -19,6 +19,7 @@ import bench_fk  # noqa: E402
 import bench_general_fk  # noqa: E402
 import bench_linkage  # noqa: E402
 import bench_one_core  # noqa: E402
+import bench_reach  # noqa: E402
 import equivalence_table  # noqa: E402
 
 pytestmark = pytest.mark.benchmark
@@ -108,3 +109,13 @@ def test_bench_dynamics_reports_both_ratios(capsys):
     out = capsys.readouterr().out
     assert "inverse_dynamics / hand-written" in out and "single calls / batch" in out
     assert "velocity / acceleration step: before" in out and "a whole study" in out
+
+
+def test_bench_reach_times_both_and_keeps_the_reachable_mask(capsys):
+    """bench_reach.main times the 6-UPS workspace with and without the sweep's reach
+    test (a 5³ grid, one round): both positive, the same reachable mask, some poses
+    refused without a solve, the ratio printed."""
+    figures = bench_reach.main(n=5, rounds=1)
+    assert figures["with"] > 0 and figures["without"] > 0
+    assert figures["same"] and figures["refused"] > 0
+    assert "ratio x" in capsys.readouterr().out

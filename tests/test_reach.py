@@ -15,11 +15,12 @@ from pkm_pin import load_mechanism, sweep
 MECHANISMS = Path(__file__).resolve().parents[1] / "models" / "mechanisms"
 
 
-@pytest.mark.parametrize("name", ["stewart", "rpr3", "rrr3", "upu3", "rps3", "delta"])
+@pytest.mark.parametrize("name", ["stewart", "rpr3", "rrr3", "upu3", "rps3", "delta", "agile_eye"])
 def test_reach_bounds_every_configuration(name):
     """At 400 random configurations within the limits, every leg's tip stays within
     its reach from its root; the 6-UPS leg (no offsets, one stroke) reaches exactly its
-    stroke [0.353, 2.353]; a leg with mimic joints claims no bound."""
+    stroke [0.353, 2.353]; the agile eye's legs (every axis through one point) reach
+    that point alone; a leg with mimic joints claims no bound."""
     mech = load_mechanism(MECHANISMS / f"{name}.toml")
     rng = np.random.default_rng(3)
     for leg in mech.legs:
@@ -34,6 +35,8 @@ def test_reach_bounds_every_configuration(name):
             pin.framesForwardKinematics(leg.model, data, q)
             d = np.linalg.norm(data.oMf[leg.tip_id].translation)
             assert r_min - 1e-12 <= d <= r_max + 1e-12
+    if name == "agile_eye":
+        assert all(leg.reach == (0.0, 0.0) for leg in mech.legs)
     if name == "stewart":
         lo, up = mech.legs[0].lower, mech.legs[0].upper
         prismatic = mech.legs[0].model.joints[mech.legs[0]._prismatic_joints[0]].idx_q
@@ -53,8 +56,8 @@ def test_reach_test_keeps_the_workspace_on_homes_working_mode(name, monkeypatch)
     with_test = mech.workspace(n=8)
     refused, original = [], sweep.out_of_reach
 
-    def solve_them_all(legs, Ts):
-        refused.extend(original(legs, Ts)[1])  # what the test would have refused
+    def solve_them_all(legs, Ts, length):
+        refused.extend(original(legs, Ts, length)[1])  # what the test would have refused
         return np.ones(Ts.shape[1], bool), []
 
     monkeypatch.setattr(sweep, "out_of_reach", solve_them_all)

@@ -1,0 +1,66 @@
+"""The sweep's reach test on a workspace: the shipped 6-UPS's reachable,
+singularity-free and good-transmission workspaces over x, y, z (default box: home ± the
+characteristic length), with the test (poses a leg cannot reach refused without a solve,
+:func:`pkm_pin.sweep.out_of_reach`) and without it (every pose solved), in the same
+run, best of interleaved rounds.
+
+Prints both times, their ratio, the share of the unreachable poses the test refuses,
+and whether the reachable masks are the same (they must be).
+
+Run: ``python benchmarks/bench_reach.py [n] [rounds]`` (default a 20³ grid, 2 rounds).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from pkm_pin import load_mechanism, sweep
+
+STEWART = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "stewart.toml"
+
+
+def main(n: int = 20, rounds: int = 2, name: str = "stewart") -> dict:
+    """Time the workspace with and without the reach test; return the figures."""
+    mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
+    mech.workspace(n=3)  # compile and cache before timing
+    original, refused = sweep.out_of_reach, []
+
+    def solve_them_all(legs, Ts, length):
+        refused.extend(original(legs, Ts, length)[1])
+        return np.ones(Ts.shape[1], bool), []
+
+    best = {"with": np.inf, "without": np.inf}
+    for _ in range(rounds):
+        for key in ("with", "without"):
+            sweep.out_of_reach = original if key == "with" else solve_them_all
+            refused.clear()
+            try:
+                t = time.perf_counter()
+                ws = mech.workspace(n=n)
+                best[key] = min(best[key], time.perf_counter() - t)
+            finally:
+                sweep.out_of_reach = original
+            if key == "with":
+                reach_with = ws.masks["reachable"]
+            else:
+                reach_without, caught = ws.masks["reachable"], len(refused)
+    unreachable = int((~reach_without).sum())
+    same = bool(np.array_equal(reach_with, reach_without))
+    print(f"{name} workspace, {n}^3 poses (x, y, z; transmission and boundary refinement "
+          f"included), best of {rounds}:")
+    print(f"  without the reach test  {best['without']:8.2f} s")
+    ratio = best["with"] / best["without"]
+    print(f"  with the reach test     {best['with']:8.2f} s   ratio x{ratio:.2f}")
+    print(f"  refused without a solve {caught} poses of the grid and its refinement "
+          f"({unreachable} grid poses unreachable); same reachable mask: {same}")
+    return {"with": best["with"], "without": best["without"], "same": same,
+            "refused": caught}
+
+
+if __name__ == "__main__":
+    args = [int(a) for a in sys.argv[1:3]]
+    main(*args)
