@@ -52,8 +52,9 @@ class SweepResult:
     the points): :meth:`Mechanism.sweep` over platform poses (the per-leg engine), and
     :meth:`pkm_pin.linkage.Linkage.sweep` over actuated values (the general
     elimination, also ``LinkageSweep``). Both fill every field; what one backend does
-    not compute is nan (``det`` of a general sweep; ``forward``, ``inverse`` and ``q``
-    of a per-leg one, whose tree configurations are not built pose by pose).
+    not compute is nan (``det`` of a general sweep; ``forward`` and ``inverse`` of a
+    per-leg one), and a per-leg sweep's ``q`` is ``None`` (its tree configurations are
+    not built pose by pose).
 
     Attributes:
         poses: (N, 6) x, y, z [m], roll, pitch, yaw [rad] of the output (nan where not
