@@ -240,6 +240,12 @@ class Analysis(OutputMaps):
         return {"type_I": float(r.type_I[0]), "type_II": float(r.type_II[0]),
                 "condition_A": float(r.condition[0])}
 
+    @property
+    def q(self) -> np.ndarray:
+        """The configuration of the mechanism's tree at this analysis
+        (:attr:`~pkm_pin.assembly.Assembly.q`), as a general analysis's ``q``."""
+        return self.assembly.q
+
     @cached_property
     def motion_indices(self) -> dict[str, float]:
         """The general elimination's ``forward`` and ``inverse`` indices

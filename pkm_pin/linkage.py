@@ -1917,6 +1917,12 @@ class LinkageAnalysis(OutputMaps):
         return self.reference_point
 
     @property
+    def motion_indices(self) -> dict[str, float]:
+        """The ``forward`` and ``inverse`` indices (:func:`pkm_pin.screws.motion_indices`),
+        as :attr:`pkm_pin.analysis.Analysis.motion_indices` names them."""
+        return {"forward": self.indices["forward"], "inverse": self.indices["inverse"]}
+
+    @property
     def _twist_dim(self) -> int:
         return self.output_dof
 

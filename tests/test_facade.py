@@ -459,3 +459,17 @@ def test_a_serial_tree_is_not_read_per_leg(tmp_path):
     assert arm.backend == "general"
     an = arm.analyze()
     assert an.dof == 2 and an.motion_type == "1T1R"
+
+
+def test_both_analyses_answer_q_and_motion_indices():
+    """The per-leg Analysis gives its tree configuration as q (that of its assembly),
+    and the general LinkageAnalysis its forward and inverse indices as motion_indices,
+    so code written against one reads the other."""
+    legs = load_mechanism(STEWART)
+    an = legs.analyze()
+    np.testing.assert_array_equal(an.q, legs.home_assembly.q)
+    general = legs.general.analyze(an.q)
+    np.testing.assert_array_equal(general.q, an.q)
+    assert general.motion_indices == {k: general.indices[k] for k in ("forward", "inverse")}
+    for key, value in an.motion_indices.items():
+        assert value == pytest.approx(general.motion_indices[key], abs=1e-9)
