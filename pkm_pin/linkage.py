@@ -1272,18 +1272,31 @@ class Linkage:
         branch of ``guess``). A point that does not close is recorded as not converged
         (NaN results) and the next starts again from the last good one. With
         ``transmission``, the ``lti`` and ``cti`` columns too (:meth:`transmission`:
-        a few ms a point; nan otherwise)."""
-        Q = screws.as_float_array(q_actuated, "q_actuated")
-        if Q.ndim != 2 or Q.shape[1] != len(self.actuated):
-            raise InputError(f"q_actuated must have shape (N, {len(self.actuated)}) "
-                             f"({', '.join(self.actuated)}), got {Q.shape}")
+        a few ms a point; nan otherwise).
+
+        Poses instead of actuated values (a sequence of ``pin.SE3`` or of partial poses,
+        mappings of some of x, y, z, roll, pitch, yaw, as :meth:`Mechanism.sweep` takes
+        them): the output's inverse kinematics at each (:meth:`assembly_at`), warm-started
+        from the previous assembly the same way; ``q_actuated`` of the result are then
+        the values found."""
+        poses = _poses_of(q_actuated)
+        if poses is None:
+            Q = screws.as_float_array(q_actuated, "q_actuated")
+            if Q.ndim != 2 or Q.shape[1] != len(self.actuated):
+                raise InputError(f"q_actuated must have shape (N, {len(self.actuated)}) "
+                                 f"({', '.join(self.actuated)}), or give poses (pin.SE3 or "
+                                 f"mappings of pose coordinates), got {Q.shape}")
+        else:
+            Q = np.full((len(poses), len(self.actuated)), np.nan)
         warm = self._guess_q(guess)
         out = _SweepRows(Q, self._model.nq)
         generic = None
-        for i, qa in enumerate(Q):
+        for i in range(len(Q)):
             try:
-                a = self.assemble(warm, q_actuated=qa, starts=0 if warm is not None else 16,
-                                  tol=tol)
+                starts = 0 if warm is not None else 16
+                a = self.assemble(warm, q_actuated=Q[i], starts=starts, tol=tol) \
+                    if poses is None else \
+                    self.inverse_kinematics(poses[i], warm, starts=starts, tol=tol)
             except AssemblyError as e:
                 out.failures.append((i, str(e)))
                 continue
@@ -1291,10 +1304,23 @@ class Linkage:
             an = self.analyze(a.q, about=about, generic=generic, nearby=0)
             generic = generic or an
             out.record(i, a, an)
+            if poses is not None:
+                Q[i] = a.q_actuated
             if transmission:
                 tr = self.transmission(a, analysis=an if about == "output" else None)
                 out.lti[i], out.cti[i] = tr.lti, tr.cti
         return out.result()
+
+
+def _poses_of(points) -> list | None:
+    """``points`` as a list of poses when it is a non-empty sequence of ``pin.SE3`` or
+    of mappings (partial poses), else ``None`` (actuated values)."""
+    if isinstance(points, (np.ndarray, pin.SE3, Mapping)) or not isinstance(
+            points, (list, tuple)) or not points:
+        return None
+    if all(isinstance(p, (pin.SE3, Mapping)) for p in points):
+        return list(points)
+    return None
 
 
 # ====================================================================== structure

@@ -473,3 +473,28 @@ def test_both_analyses_answer_q_and_motion_indices():
     assert general.motion_indices == {k: general.indices[k] for k in ("forward", "inverse")}
     for key, value in an.motion_indices.items():
         assert value == pytest.approx(general.motion_indices[key], abs=1e-9)
+
+
+def test_general_sweep_takes_poses_as_the_per_leg_one_does():
+    """Linkage.sweep over poses (pin.SE3, or partial poses) as Mechanism.sweep takes
+    them: the five-bar's point along a line, each point where asked (1e-9), its
+    analysis that of the assembly found and its actuated values recorded; a pose out of
+    reach recorded as a failure with its reason; Cassie's knee along partial poses {z}
+    reaches the heights asked."""
+    five = load_mechanism(FIVE_BAR)
+    home = five.home_assembly.output_pose
+    line = [home * pin.SE3(np.eye(3), np.array([dx, 0.0, 0.0])) for dx in (0.0, 0.01, 0.02)]
+    swept = five.sweep(line + [home * pin.SE3(np.eye(3), np.array([5.0, 0.0, 0.0]))])
+    assert swept.ok.tolist() == [True, True, True, False] and swept.failures[0][0] == 3
+    for i, pose in enumerate(line):
+        np.testing.assert_allclose(swept.poses[i, :3], pose.translation, atol=1e-9)
+        an = five.general.analyze(swept.q[i])
+        assert swept.forward[i] == pytest.approx(an.indices["forward"], rel=1e-9)
+        np.testing.assert_allclose(swept.q_actuated[i], five.model.actuated_values(swept.q[i]),
+                                   atol=1e-12)
+    assert np.isnan(swept.q_actuated[3]).all()
+    knee = load_mechanism(MODELS / "loops" / "cassie_knee.urdf")
+    heights = [-0.79, -0.788, -0.786]
+    partial = knee.sweep([{"z": z} for z in heights])
+    assert partial.ok.all()
+    np.testing.assert_allclose(partial.poses[:, 2], heights, atol=1e-9)
