@@ -84,7 +84,13 @@ from . import general_kernel, screws
 from .analysis import classify
 from .assembly import Assembly, as_pose
 from .closure_gaps import Diagnosis, diagnose
-from .errors import AssemblyError, ForwardKinematicsError, InputError, SingularityError
+from .errors import (
+    AssemblyError,
+    ForwardKinematicsError,
+    InputError,
+    PkmError,
+    SingularityError,
+)
 from .model.closure_model import (
     ClosureModel,
     NullSpace,
@@ -534,42 +540,30 @@ class Linkage:
             raise InputError(f"pose must be a finite pinocchio.SE3, got {type(pose).__name__}")
         model, home = self._model, self.home_assembly
         rows = pose_rows(model, model.kinematics(home.q))
-        found, signatures, batch, quiet, best = [], [], 0, 0, None
-        while quiet < patience:
-            if batch >= MODES_MAX_BATCHES or len(found) > MODES_MAX:
-                raise AssemblyError("output pose", float("nan"), (
-                    f"the assemblies of {self.name!r} at this output pose do not settle "
-                    f"into working modes: {len(found)} distinct ones after {batch} batches "
-                    "(a continuum: the actuators move with the output held); "
-                    "inverse_kinematics gives the one nearest a guess"))
-            new = False
-            for q0 in tree_starts(model, home.q if batch == 0 else None, count=starts,
-                                  seed=seed + batch):
-                sol = solve_tree(model, q0, pose=pose, pose_rows=rows, tol=tol)
-                if not sol.converged:
-                    best = sol if best is None or sol.residual < best.residual else best
-                    continue
-                sig = self._signature(sol.q)
-                if any(np.abs(s - sig).max() <= SAME_CONFIGURATION_TOL for s in signatures):
-                    continue
-                signatures.append(sig)
-                found.append(self._assembly(sol, sol.iterations))
-                new = True
-            batch += 1
-            quiet = 0 if new else quiet + 1
-        if not found:
-            raise self._failure(best, batch * (starts + 3), None, "output pose")
-        L = model.length
+
+        def too_many(n: int, tried: int) -> PkmError:
+            return AssemblyError("output pose", float("nan"), (
+                f"the assemblies of {self.name!r} at this output pose do not settle into "
+                f"working modes: {n} distinct ones after {tried} starts (a continuum: the "
+                "actuators move with the output held); inverse_kinematics gives the one "
+                "nearest a guess"))
+
+        run = self._multistart(
+            lambda q0: solve_tree(model, q0, pose=pose, pose_rows=rows, tol=tol), home.q,
+            starts, seed, patience, too_many)
+        if not run.found:
+            raise self._failure(run.best, run.tried, None, "output pose")
+        found, L = run.found, model.length
         if model.output_point:  # a point: its position alone
             off = [float(np.linalg.norm(a.output_pose.translation - pose.translation)) / L
                    for a in found]
         else:
             off = [float(np.linalg.norm(screws.homogenise(screws.from_pinocchio(
                 pin.log6(pose.actInv(a.output_pose))), L))) for a in found]
-        found = [a for a, e in zip(found, off) if e <= min(off) + SAME_CONFIGURATION_TOL]
-        ref = self._signature(home.q)
-        found.sort(key=lambda a: float(np.linalg.norm(self._signature(a.q) - ref)))
-        return found
+        keep = [k for k, e in enumerate(off) if e <= min(off) + SAME_CONFIGURATION_TOL]
+        run.found = [run.found[k] for k in keep]
+        run.signatures = [run.signatures[k] for k in keep]
+        return run.nearest(self._signature(home.q))
 
     @cached_property
     def home_assembly(self) -> LinkageAssembly:
@@ -984,44 +978,63 @@ class Linkage:
         t0 = perf_counter()
         target = self.check_actuated(q_actuated)
         model = self._model
-        found, signatures, batch, quiet, tried = [], np.zeros((0, 0)), 0, 0, 0
-        while quiet < patience:
-            if batch >= MODES_MAX_BATCHES or len(found) > MODES_MAX:
-                raise ForwardKinematicsError(
-                    f"the assemblies of {self.name!r} at the actuated values "
-                    f"{np.round(target, 6)} do not settle into modes: {len(found)} distinct "
-                    f"ones after {tried} starts, new ones still appearing (a continuum: "
-                    "see mobility()'s idle motions); forward_kinematics gives the one "
-                    "nearest a guess")
-            rows = tree_starts(model, None if batch else model.reference, count=starts,
-                               seed=seed + batch)
-            new = False
-            for q0 in rows:
-                tried += 1
-                sol = solve_tree(model, q0, targets=target, tol=tol)
-                if not sol.converged:
-                    continue
-                sig = self._signature(sol.q)
-                if not found:
-                    self._refuse_continuum(sol.q)
-                    signatures = sig[None, :]
-                elif (np.abs(signatures - sig).max(axis=1) > SAME_CONFIGURATION_TOL).all():
-                    signatures = np.vstack([signatures, sig])
-                else:
-                    continue
-                found.append(self._assembly(sol, sol.iterations))
-                new = True
-            batch += 1
-            quiet = 0 if new else quiet + 1
-        if not found:
+
+        def too_many(n: int, tried: int) -> PkmError:
+            return ForwardKinematicsError(
+                f"the assemblies of {self.name!r} at the actuated values "
+                f"{np.round(target, 6)} do not settle into modes: {n} distinct ones after "
+                f"{tried} starts, new ones still appearing (a continuum: see mobility()'s "
+                "idle motions); forward_kinematics gives the one nearest a guess")
+
+        run = self._multistart(lambda q0: solve_tree(model, q0, targets=target, tol=tol),
+                               model.reference, starts, seed, patience, too_many,
+                               first=self._refuse_continuum)
+        if not run.found:
             raise ForwardKinematicsError(
                 f"no assembly of {self.name!r} at the actuated values {np.round(target, 6)}: "
-                f"none of {tried} starts closed the loops (not proven: a multistart)")
-        ref = self._signature(model.reference)
-        found.sort(key=lambda a: float(np.linalg.norm(self._signature(a.q) - ref)))
+                f"none of {run.tried} starts closed the loops (not proven: a multistart)")
+        found = run.nearest(self._signature(model.reference))
         return AssemblyModes(found, False, "multistart",
-                             {"starts": tried, "batches": batch, "modes": len(found)},
+                             {"starts": run.tried, "batches": run.batches, "modes": len(found)},
                              perf_counter() - t0)
+
+    def _multistart(self, solve: Callable, warm, starts: int, seed: int, patience: int,
+                    too_many: Callable, first: Callable | None = None) -> _Multistart:
+        """The multistart of :meth:`forward_kinematics_all` and
+        :meth:`inverse_kinematics_all`: ``solve(q0)`` (a :class:`TreeSolution`) from
+        batches of :func:`~pkm_pin.solve.tree_starts` (``warm`` first, ``starts`` random
+        configurations within the limits, seed ``seed + batch``) until ``patience``
+        batches in a row find no new assembly; two assemblies are one when every joint
+        origin and the output agree (:meth:`_signature`, to
+        :data:`~pkm_pin.tolerances.SAME_CONFIGURATION_TOL`). ``first(q)`` checks the
+        first assembly found (it may raise); ``too_many(n, tried)`` is the error raised
+        after :data:`~pkm_pin.tolerances.MODES_MAX_BATCHES` batches or
+        :data:`~pkm_pin.tolerances.MODES_MAX` assemblies (a continuum)."""
+        run = _Multistart([], [], 0, 0, None)
+        quiet = 0
+        while quiet < patience:
+            if run.batches >= MODES_MAX_BATCHES or len(run.found) > MODES_MAX:
+                raise too_many(len(run.found), run.tried)
+            new = False
+            for q0 in tree_starts(self._model, None if run.batches else warm, count=starts,
+                                  seed=seed + run.batches):
+                run.tried += 1
+                sol = solve(q0)
+                if not sol.converged:
+                    if run.best is None or sol.residual < run.best.residual:
+                        run.best = sol
+                    continue
+                sig = self._signature(sol.q)
+                if any(np.abs(s - sig).max() <= SAME_CONFIGURATION_TOL for s in run.signatures):
+                    continue
+                if not run.found and first is not None:
+                    first(sol.q)
+                run.signatures.append(sig)
+                run.found.append(self._assembly(sol, sol.iterations))
+                new = True
+            run.batches += 1
+            quiet = 0 if new else quiet + 1
+        return run
 
     def _refuse_continuum(self, q) -> None:
         """A :class:`ForwardKinematicsError` where the assembled ``q`` moves with every
@@ -1310,6 +1323,26 @@ class Linkage:
                 tr = self.transmission(a, analysis=an if about == "output" else None)
                 out.lti[i], out.cti[i] = tr.lti, tr.cti
         return out.result()
+
+
+@dataclass
+class _Multistart:
+    """What :meth:`Linkage._multistart` found: the distinct assemblies and their
+    signatures, the starts tried, the batches run, the best solution that did not
+    converge (``None`` when every one did)."""
+
+    found: list
+    signatures: list
+    tried: int
+    batches: int
+    best: TreeSolution | None
+
+    def nearest(self, reference: np.ndarray) -> list:
+        """The assemblies found, the one whose signature is nearest ``reference``
+        first."""
+        order = np.argsort([np.linalg.norm(s - reference) for s in self.signatures],
+                           kind="stable")
+        return [self.found[k] for k in order]
 
 
 def _poses_of(points) -> list | None:
