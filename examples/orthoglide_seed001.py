@@ -23,7 +23,7 @@ if __name__ == "__main__":
 
     # Inverse and forward kinematics: eq. (3) and (6)-(14) against the Pinocchio path
     p = np.array([0.05, -0.03, 0.02])
-    rho = mech.inverse_kinematics(pin.SE3(np.eye(3), p))
+    rho = mech.inverse_kinematics(pin.SE3(np.eye(3), p)).q_actuated
     print("rho (Pinocchio) =", rho, " eq. (3):", og.inverse_kinematics(p, params))
     a = mech.forward_kinematics(rho)
     both = og.forward_kinematics_both(rho, params)

@@ -28,7 +28,7 @@ for n in (1, 2, 4, 8, 16):
 rpr = MECHANISMS["rpr3"]().build()
 P2 = rpr3_type2_pose()
 pose = pin.SE3(P2.rotation, P2.translation + np.array([0.05, 0.0, 0.0]))
-qa = rpr.inverse_kinematics(pose)
+qa = rpr.inverse_kinematics(pose).q_actuated
 for tol in (1e-2, 0.035):
     a = rpr.forward_kinematics(qa, inertia_tol=tol)
     print(f"3-RPR beyond the type II pose, inertia_tol {tol}: inertia moves "

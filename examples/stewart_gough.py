@@ -19,7 +19,7 @@ if __name__ == "__main__":
 
     # Forward kinematics from leg lengths (screw continuation + Newton)
     target = screws.exp(np.array([0.05, -0.03, 0.02, 0.04, 0.0, 0.03])) * mech.home
-    lengths = mech.inverse_kinematics(target)
+    lengths = mech.inverse_kinematics(target).q_actuated
     fk = mech.forward_kinematics(lengths)
     print("FK pose error:", np.linalg.norm((fk.pose.inverse() * target).translation))
     print("steps, Newton iterations:", fk.info["steps"], fk.info["newton_iterations"])

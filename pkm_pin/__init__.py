@@ -11,7 +11,7 @@ install_notice()  # a compilation of pkm_pin's numba code that lasts says so on 
 install_stamp()  # its cached machine code is stale once a module compiled into it changes
 
 from . import position, screws  # noqa: E402
-from .analysis import Analysis  # noqa: E402
+from .analysis import Analysis, LegsAnalysis, TreeAnalysis  # noqa: E402
 from .calibration import CalibrationResult, calibrate  # noqa: E402
 from .errors import (  # noqa: E402
     AssemblyError,
@@ -30,7 +30,9 @@ from .leg import Leg, LegSolution  # noqa: E402
 from .mechanism import Assembly, Mechanism  # noqa: E402
 from .sensitivity import Sensitivity  # noqa: E402
 from .sweep import SweepResult  # noqa: E402
+from .transmission import Transmission  # noqa: E402
 from .view import view  # noqa: E402
+from .workspace import Workspace  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -45,6 +47,7 @@ __all__ = [
     "InvalidAssembly",
     "JointNotFound",
     "Leg",
+    "LegsAnalysis",
     "LegSolution",
     "Mechanism",
     "MechanismFileError",
@@ -52,7 +55,10 @@ __all__ = [
     "Sensitivity",
     "SingularityError",
     "SweepResult",
+    "Transmission",
+    "TreeAnalysis",
     "UrdfError",
+    "Workspace",
     "__version__",
     "calibrate",
     "load_mechanism",

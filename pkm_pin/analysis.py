@@ -27,16 +27,17 @@ that ``B_ii >= 0``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
 
 from . import engine, screws
 from .assembly import checked_twists
-from .errors import InputError, SingularityError
+from .errors import InputError, PkmError, SingularityError
 from .output_maps import OutputMaps
-from .tolerances import CLOSENESS_SINGULAR_TOL, ROTATION_COUNT_TOL
+from .screws import from_homogenised, homogenised_about
+from .tolerances import CLOSENESS_SINGULAR_TOL, ROTATION_COUNT_TOL, SPAN_RTOL
 from .transmission import (
     Transmission,
     constraint_transmission,
@@ -64,7 +65,45 @@ class LegScrews:
 
 
 class Analysis(OutputMaps):
-    """Mobility, Jacobians and singularity classes of a mechanism at an assembly.
+    """The screw analysis of a mechanism at one assembly, whichever backend reads it:
+    the one result type of :meth:`Mechanism.analyze` (docs/indices.md defines each
+    number once).
+
+    ``Analysis(assembly, **options)`` analyses an :class:`~pkm_pin.assembly.Assembly`
+    with the backend that made it: the per-leg engine (:class:`LegsAnalysis`) where it
+    has a per-leg view, the general elimination of the tree (:class:`TreeAnalysis`,
+    ``assembly.mechanism.analyze``) where it has not. Both answer the same names:
+
+    * the motion: ``q`` (the tree's configuration), ``mobility``, ``dof``, ``idle_dof``,
+      ``output_dof``, ``translations``, ``motion_type``, ``grubler``,
+      ``redundant_constraints``, ``platform_twists``, ``constraint_wrenches``;
+    * the actuation: ``A`` (= ``actuation_wrenches``), ``B`` of ``A Δ t = B q̇_a``,
+      ``actuated_twists``, ``joint_twists``;
+    * the singularities: ``indices`` (``type_I``, ``type_II``, ``condition_A``),
+      ``motion_indices`` (``forward``, ``inverse``), ``singularity``,
+      ``constraint_singular``;
+    * the maps and studies: ``forward_velocity``, ``inverse_velocity``, ``transmission``,
+      the statics and ellipsoids of :class:`~pkm_pin.output_maps.OutputMaps`;
+    * where they come from: ``mechanism``, ``assembly``, ``rtol``, ``singular_tol``,
+      ``length``, ``centre`` (= ``reference_point``, the point every decision is
+      homogenised about).
+
+    What only legs have (``legs``, ``leg_constraint_wrenches``, and ``passive_rates`` of
+    a platform twist, per leg) a general analysis refuses with the reason.
+
+    Conventions: twists ``(ω; v_O)`` and wrenches ``(f; m_O)`` axis-first about the
+    world origin.
+    """
+
+    def __new__(cls, assembly=None, *args, **kwargs):
+        if cls is Analysis:
+            cls = TreeAnalysis if getattr(assembly, "leg_q", ()) is None else LegsAnalysis
+        return super().__new__(cls)
+
+
+class LegsAnalysis(Analysis):
+    """The per-leg engine's :class:`Analysis`: mobility, Jacobians and singularity
+    classes of a base–legs–platform mechanism at an assembly with a per-leg view.
 
     The screw algebra is the analysis engine (:mod:`pkm_pin.engine`) at one pose: the
     same compiled code that :meth:`Mechanism.sweep` runs over many poses.
@@ -98,6 +137,16 @@ class Analysis(OutputMaps):
         self.centre = assembly.pose.translation.copy()
         self._results = engine.analyse(self.joint_twists[None], layout,
                                        centres=self.centre[None])
+
+    @property
+    def reference_point(self) -> np.ndarray:
+        """The point every decision is homogenised about [m]: :attr:`centre`."""
+        return self.centre
+
+    @property
+    def actuated_prismatic(self) -> np.ndarray:
+        """Whether each actuated joint is prismatic (its rate in m/s)."""
+        return self._actuated_prismatic
 
     # ------------------------------------------------ hooks of OutputMaps
     @property
@@ -377,6 +426,289 @@ class Analysis(OutputMaps):
             qd, *_ = np.linalg.lstsq(ls.jacobian, t, rcond=None)
             out.append(qd)
         return out
+
+
+@dataclass(frozen=True)
+class Mobility:
+    """Mobility of a linkage at a configuration (:meth:`Linkage.mobility`).
+
+    Attributes:
+        dof: ``nv − rank J_c``: dimension of the tree's motions the closures allow.
+        redundant_constraints: ``rows − rank J_c``: closure rows counted more than once.
+        idle_dof: Dimension of the motions left when every actuated joint is locked.
+        idle_motions: One sentence per idle motion (a basis of them).
+        independent_actuators: The actuated joints that can be driven independently
+            (the first maximal independent set, in actuated order).
+        grubler: Grübler–Kutzbach count ``Σ joint nv − Σ closure rows``.
+        rank: ``rank J_c`` here.
+        generic_dof, generic_idle_dof: ``dof`` and ``idle_dof`` at generic
+            configurations: the largest ranks of ``J_c`` and of ``J_c`` with the
+            actuated rows among this configuration and
+            :data:`~pkm_pin.tolerances.NEARBY_SAMPLES` nearby ones on the closure
+            manifold (a step along the allowed motions, and off the representation
+            singularities, projected back by the tree solver; seeded); ``None``: not
+            sampled (``nearby=0``).
+        singular: Whether a rank here is below the generic one (``None``: not decided).
+        representation: Representation singularities here, one sentence each (three
+            revolutes at a gimbal lock, a joint exactly at a limit).
+    """
+
+    dof: int
+    redundant_constraints: int
+    idle_dof: int
+    idle_motions: tuple
+    independent_actuators: tuple
+    grubler: int
+    rank: int | None = None
+    generic_dof: int | None = None
+    generic_idle_dof: int | None = None
+    singular: bool | None = None
+    representation: tuple = ()
+
+    @property
+    def singular_words(self) -> str:
+        """One sentence on a singular configuration (its ranks against the generic ones
+        and the representation singularities); ``""`` when it is not singular."""
+        if not self.singular:
+            return ""
+        nv = self.dof + self.rank
+        locked, generic_locked = nv - self.idle_dof, nv - self.generic_idle_dof
+        text = (f"singular configuration: DOF {self.dof}, idle DOF {self.idle_dof} here, "
+                f"{self.generic_dof} and {self.generic_idle_dof} at nearby configurations "
+                f"on the closure manifold (closure Jacobian rank {self.rank}, generic "
+                f"{nv - self.generic_dof}; with the actuated joints locked {locked}, "
+                f"generic {generic_locked})")
+        if self.representation:
+            text += "; representation singularity: " + "; ".join(self.representation)
+        return text
+
+
+@dataclass(frozen=True, eq=False, init=False)
+class TreeAnalysis(Analysis):
+    """The general elimination's :class:`Analysis`: the output frame of a mechanism read
+    over its whole tree at one configuration (:meth:`pkm_pin.linkage.Linkage.analyze`;
+    ``TreeAnalysis(assembly, **options)`` is ``assembly.mechanism.analyze(assembly,
+    **options)``).
+
+    Screws are axis-first about the world origin; ``reference_point`` [m] is the point
+    they are homogenised about for every decision (output origin or world origin).
+
+    Attributes:
+        q: The configuration analysed.
+        mobility: The :class:`Mobility` (``dof``, ``idle_dof`` … are also attributes).
+        output_dof: Dimension of the output frame's twist system.
+        translations: Pure translations among them (motion type ``"2T1R"`` …).
+        platform_twists: (output_dof × 6) basis of the output twists, orthonormal once
+            homogenised about ``reference_point``.
+        constraint_wrenches: ((6 − output_dof) × 6) basis of the wrenches reciprocal to
+            them, orthonormal once homogenised about ``reference_point``.
+        A: (actuated × 6) actuation wrenches (unit force, or unit moment).
+        B: (actuated × actuated) diagonal, ``A Δ t = B q̇_a`` for every admissible ``t``.
+        indices: ``type_I``, ``type_II``, ``condition_A`` (seed 000's), ``forward``,
+            ``inverse`` (module docstring).
+        singularity: ``"none"``, ``"I"``, ``"II"`` or ``"III"``.
+        constraint_singular: Whether ``dof`` or ``output_dof`` differs from the generic
+            analysis given (``None`` without one).
+        mechanism: The general backend that analysed it
+            (:class:`~pkm_pin.linkage.Linkage`).
+        rtol: Relative tolerance of its rank decisions.
+        about: ``"output"`` or ``"world"``: where :attr:`reference_point` is.
+    """
+
+    q: np.ndarray = field(repr=False)
+    mobility: Mobility
+    output_dof: int
+    translations: int
+    platform_twists: np.ndarray = field(repr=False)
+    constraint_wrenches: np.ndarray = field(repr=False)
+    A: np.ndarray = field(repr=False)
+    B: np.ndarray = field(repr=False)
+    indices: dict
+    singularity: str
+    constraint_singular: bool | None
+    reference_point: np.ndarray = field(repr=False)
+    length: float
+    singular_tol: float
+    _maps: tuple = field(repr=False)
+    #: Whether each actuated joint is prismatic (its rate in m/s).
+    actuated_prismatic: np.ndarray = field(repr=False)
+    mechanism: object = field(repr=False)
+    rtol: float = field(repr=False)
+    about: str = field(repr=False)
+
+    def __init__(self, assembly, **options):
+        done = assembly.mechanism.analyze(assembly, **options)
+        self.__dict__.update(done.__dict__)
+        self.__dict__["assembly"] = assembly
+
+    @classmethod
+    def of_values(cls, **values) -> TreeAnalysis:
+        """The analysis with every field given (no checks: what
+        :meth:`~pkm_pin.linkage.Linkage.analyze` computed)."""
+        out = object.__new__(cls)
+        out.__dict__.update(values)
+        return out
+
+    # ------------------------------------------------ the names only legs had
+    @cached_property
+    def assembly(self):
+        """The :class:`~pkm_pin.assembly.Assembly` analysed (of the general backend)."""
+        return self.mechanism.assembly_at(self.q)
+
+    @property
+    def actuation_wrenches(self) -> np.ndarray:
+        """Actuation wrenches (n × 6), one per actuated joint: the rows of :attr:`A`."""
+        return self.A
+
+    @cached_property
+    def joint_twists(self) -> np.ndarray:
+        """(nv × 6) row k: the axis-first twist ``(ω; v_O)`` about the world origin of
+        the tree's velocity coordinate k (per unit rate)."""
+        return self.mechanism.model.kinematics(self.q).joint_twists
+
+    @property
+    def actuated_twists(self) -> np.ndarray:
+        """Twists (n × 6) of the actuated joints, in actuated-coordinate order."""
+        return self.joint_twists[list(self.mechanism.model.actuated_v)]
+
+    @cached_property
+    def transmission(self):
+        """Motion/force transmission indices ITI, OTI, LTI and CTI of the actuators'
+        sides of the loops (:meth:`pkm_pin.linkage.Linkage.transmission`)."""
+        return self.mechanism.transmission(
+            self.q, analysis=self if self.about == "output" else None)
+
+    @property
+    def legs(self):
+        """Refused: a mechanism read over its tree has no legs."""
+        raise _no_legs("legs")
+
+    @property
+    def leg_constraint_wrenches(self):
+        """Refused: a mechanism read over its tree has no legs."""
+        raise _no_legs("leg_constraint_wrenches")
+
+    # ------------------------------------------------ hooks of OutputMaps
+    @property
+    def centre(self) -> np.ndarray:
+        """The point every decision is homogenised about (:attr:`reference_point`)."""
+        return self.reference_point
+
+    @property
+    def motion_indices(self) -> dict[str, float]:
+        """The ``forward`` and ``inverse`` indices (:func:`pkm_pin.screws.motion_indices`),
+        as :attr:`pkm_pin.analysis.Analysis.motion_indices` names them."""
+        return {"forward": self.indices["forward"], "inverse": self.indices["inverse"]}
+
+    @property
+    def _twist_dim(self) -> int:
+        return self.output_dof
+
+    @property
+    def _actuated_prismatic(self) -> np.ndarray:
+        return self.actuated_prismatic
+
+    @property
+    def _closeness(self) -> tuple[float, float]:
+        """Seed 000's indices and the generalised ones together, as :attr:`singularity`
+        reads them."""
+        idx = self.indices
+        return (float(np.nanmin([idx["type_I"], idx["inverse"]])),
+                float(np.nanmin([idx["type_II"], idx["forward"]])))
+
+    @property
+    def dof(self) -> int:
+        """``nv − rank J_c`` (:attr:`Mobility.dof`)."""
+        return self.mobility.dof
+
+    @property
+    def idle_dof(self) -> int:
+        """:attr:`Mobility.idle_dof`."""
+        return self.mobility.idle_dof
+
+    @property
+    def redundant_constraints(self) -> int:
+        """:attr:`Mobility.redundant_constraints`."""
+        return self.mobility.redundant_constraints
+
+    @property
+    def grubler(self) -> int:
+        """Grübler–Kutzbach count of the tree and its closures (:attr:`Mobility.grubler`;
+        a per-leg :class:`~pkm_pin.analysis.Analysis` answers the same name)."""
+        return self.mobility.grubler
+
+    @property
+    def motion_type(self) -> str:
+        """``"3T"``, ``"1T2R"``, ``"3T3R"`` … of the output; ``"0"`` when it is rigid."""
+        t, r = self.translations, self.output_dof - self.translations
+        return (f"{t}T" if t else "") + (f"{r}R" if r else "") or "0"
+
+    # ------------------------------------------------------------- velocities
+    def _contains(self, t: np.ndarray) -> bool:
+        P = homogenised_about(self.platform_twists, self.reference_point, self.length)
+        th = homogenised_about(t[None], self.reference_point, self.length)[0]
+        out = th - (th @ P.T) @ P if P.size else th
+        return np.linalg.norm(out) <= SPAN_RTOL * max(np.linalg.norm(th), 1e-300)
+
+    def passive_rates(self, qdot_actuated) -> np.ndarray:
+        """Velocity ``v`` (nv,) of the whole tree for the actuated rates [rad/s or m/s]
+        (internal motions that move neither the actuators nor the output: none).
+
+        Raises:
+            SingularityError: the actuators do not determine the motion (type II).
+            InputError: wrong length, or rates incompatible with redundant actuation.
+        """
+        Xr, Yr, M, U, act = self._maps
+        qd = screws.as_vector(qdot_actuated, Xr.shape[0], "qdot_actuated")
+        if self.indices["forward"] < self.singular_tol:
+            raise SingularityError(
+                f"forward velocity undefined: forward index {self.indices['forward']:.3g} "
+                f"< {self.singular_tol:g} (the actuators do not determine the motion)",
+                "forward", self.indices["forward"])
+        rhs = qd / U[act]
+        z, *_ = np.linalg.lstsq(Xr, rhs, rcond=None)
+        if np.linalg.norm(Xr @ z - rhs) > 1e-9 * max(1.0, np.linalg.norm(rhs)):
+            raise InputError("these actuated rates are incompatible (redundant actuation)")
+        return U * (M @ z)
+
+    def forward_velocity(self, qdot_actuated) -> np.ndarray:
+        """Output twist (6,) axis-first about the world origin from the actuated rates."""
+        Xr, Yr, M, U, act = self._maps
+        v = self.passive_rates(qdot_actuated)
+        return from_homogenised(Yr @ np.linalg.lstsq(Xr, v[act] / U[act], rcond=None)[0],
+                                self.reference_point, self.length)[0]
+
+    def inverse_velocity(self, twist) -> np.ndarray:
+        """Actuated rates producing the output twist ``twist`` (axis-first, world origin).
+
+        Raises:
+            InputError: the twist is not a motion of the output here.
+            SingularityError: an actuator moves without moving the output (type I).
+        """
+        t = screws.as_vector(twist, 6, "twist", noun="components")
+        if not self._contains(t):
+            raise InputError(f"twist {np.round(t, 6)} is not a motion of the output here "
+                             f"(motion type {self.motion_type})")
+        if self.indices["inverse"] < self.singular_tol:
+            raise SingularityError(
+                f"inverse velocity undefined: inverse index {self.indices['inverse']:.3g} "
+                f"< {self.singular_tol:g}", "inverse", self.indices["inverse"])
+        Xr, Yr, M, U, act = self._maps
+        th = homogenised_about(t[None], self.reference_point, self.length)[0]
+        z, *_ = np.linalg.lstsq(Yr, th, rcond=None)
+        return U[act] * (Xr @ z)
+
+
+
+#: The general backend's name of :class:`TreeAnalysis`.
+LinkageAnalysis = TreeAnalysis
+
+
+def _no_legs(name: str) -> PkmError:
+    """Why a general analysis has no ``name``."""
+    return PkmError(f"{name}: this analysis is the general elimination over the tree, "
+                    "which reads no legs; where a base–legs–platform machine is detected "
+                    "in the model, mech.legs_mechanism.analyze(...) reads it per leg")
 
 
 def classify(type_I, type_II, tol: float = SINGULAR_TOL):

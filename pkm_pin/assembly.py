@@ -1,7 +1,8 @@
 """Assemblies of a mechanism and the platform poses they are built from.
 
-An :class:`Assembly` is one solution of a mechanism's closure equations: the platform
-pose and one configuration per leg. :func:`placement` and :func:`as_pose` turn the
+An :class:`Assembly` is one solution of a mechanism's closure equations, whichever
+backend found it: the tree's configuration and the output pose, with one configuration
+per leg where the mechanism is read per leg. :func:`placement` and :func:`as_pose` turn the
 forms a pose is given in (``pin.SE3``, a 4×4 matrix, x, y, z, roll, pitch, yaw) into a
 ``pin.SE3``.
 
@@ -12,7 +13,6 @@ sweep and calibration build their results from it without importing
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -23,7 +23,7 @@ from .screws import as_float_array
 from .tolerances import ASSEMBLY_CHECK_RTOL, JOINT_LIMIT_SLACK, ROTATION_MATRIX_ATOL
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .mechanism import Mechanism
+    pass
 
 
 def placement(xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0)) -> pin.SE3:
@@ -63,46 +63,83 @@ def as_pose(pose) -> pin.SE3:
     )
 
 
-@dataclass
 class Assembly:
-    """One assembled configuration of a mechanism.
+    """One assembled configuration of a mechanism, whichever backend reads it: the
+    configuration of the mechanism's whole Pinocchio tree (:attr:`q`), the output frame's
+    placement (:attr:`pose`), and, where the mechanism is read per leg, one configuration
+    per leg (:attr:`leg_q`).
+
+    Made by the mechanism (``assemble``, ``forward_kinematics``, ``assembly_at`` …), not
+    by hand, except as a guess (``Assembly(mech, pose, leg_q)``, checked before it is
+    analysed: :func:`checked_twists`). Not meant to be modified in place.
 
     Attributes:
-        mechanism: The mechanism.
-        pose: Platform placement in the world (``pin.SE3``).
-        leg_q: One configuration per leg (legs in mechanism order).
-        residual: Largest relative closure error over the legs (see :meth:`Leg.solve`).
-        info: Free-form details from the solver that produced it (steps, iterations…).
+        mechanism: What made it: the per-leg :class:`~pkm_pin.Mechanism`, or the general
+            backend (:class:`~pkm_pin.linkage.Linkage`, ``mechanism.general``) that solved
+            the tree.
+        pose: World placement of the output (platform) frame (``pin.SE3``).
+        leg_q: The per-leg view: one configuration per leg (legs in mechanism order), or
+            ``None`` for an assembly of the general backend (no legs read).
+        residual: Largest residual of the solve (closures, targets; dimensionless).
+        info: Free-form details from the solver that made it (``"iterations"`` …).
         joint_twists: The legs' joint twists at ``leg_q`` (nv × 6 rows, axis-first,
             world origin), from the Pinocchio pass that verified the closure, or None
-            (then :class:`~pkm_pin.Analysis` computes them). Valid for ``leg_q`` as
-            made: an assembly is not meant to be modified in place.
+            (then the analysis computes them).
     """
 
-    mechanism: Mechanism
-    pose: pin.SE3
-    leg_q: list[np.ndarray]
-    residual: float = 0.0
-    info: dict = field(default_factory=dict)
-    joint_twists: np.ndarray | None = field(default=None, repr=False, compare=False)
+    def __init__(self, mechanism, pose: pin.SE3, leg_q: list | None = None,
+                 residual: float = 0.0, info: dict | None = None,
+                 joint_twists: np.ndarray | None = None):
+        self.mechanism = mechanism
+        self.pose = pose
+        self.leg_q = leg_q
+        self.residual = residual
+        self.info = {} if info is None else info
+        self.joint_twists = joint_twists
+
+    @classmethod
+    def of_tree(cls, mechanism, q: np.ndarray, residual: float, iterations: int,
+                closure_residuals: dict, q_actuated: np.ndarray, pose: pin.SE3) -> Assembly:
+        """An assembly of the general backend ``mechanism`` at the tree configuration
+        ``q``, every value given (no per-leg view; one dict update, no checks: ~1 µs of a
+        warm forward kinematics)."""
+        out = cls.__new__(cls)
+        out.__dict__.update(mechanism=mechanism, pose=pose, leg_q=None, residual=residual,
+                            info={"iterations": iterations}, joint_twists=None, _tree_q=q,
+                            _q_actuated=q_actuated, _closure_residuals=closure_residuals)
+        return out
+
+    def __repr__(self) -> str:
+        reading = "per leg" if self.leg_q is not None else "general"
+        return (f"Assembly({getattr(self.mechanism, 'name', '')!r}, {reading}, "
+                f"residual={self.residual:.3g})")
 
     @property
-    def q_actuated(self) -> np.ndarray:
-        """Actuated coordinates: legs in mechanism order, each in its ``actuated`` order."""
-        return np.concatenate(
-            [q[leg.actuated_q] for leg, q in zip(self.mechanism.legs, self.leg_q)]
-        ) if self.leg_q else np.zeros(0)
+    def per_leg(self) -> bool:
+        """Whether it has a per-leg view (:attr:`leg_q`)."""
+        return self.leg_q is not None
 
-    # ---- the tree's view: what a general linkage's assembly answers, under the same names
     @property
     def q(self) -> np.ndarray:
         """Configuration of the mechanism's whole Pinocchio tree (``mechanism.model.tree``,
-        its joint order; :meth:`Mechanism.tree_configuration`): the order in which
-        :meth:`Mechanism.inverse_dynamics` and the general backend take ``q``. Computed
-        from the legs and the pose once, then kept."""
+        its joint order; for a per-leg one :meth:`Mechanism.tree_configuration`, computed
+        from the legs and the pose once, then kept): the order in which the general
+        backend and :meth:`Mechanism.inverse_dynamics` take ``q``."""
         q = self.__dict__.get("_tree_q")
         if q is None:
             q = self.__dict__["_tree_q"] = self.mechanism.tree_configuration(self)
+        return q
+
+    @property
+    def q_actuated(self) -> np.ndarray:
+        """Actuated coordinates [rad or m], in the mechanism's actuated order (per leg:
+        legs in mechanism order, each in its ``actuated`` order; general: the model's,
+        NaN where an actuated joint has no single value)."""
+        q = self.__dict__.get("_q_actuated")
+        if q is None:
+            q = np.concatenate([q[leg.actuated_q] for leg, q in
+                                zip(self.mechanism.legs, self.leg_q)]) \
+                if self.leg_q else np.zeros(0)
         return q
 
     @property
@@ -111,10 +148,23 @@ class Assembly:
         return self.pose
 
     @property
+    def iterations(self) -> int:
+        """Newton steps the solve spent, all restarts included (0: not recorded)."""
+        return int(self.info.get("iterations", 0))
+
+    @property
     def closure_residuals(self) -> dict:
         """Norm of each closure's residual rows at :attr:`q`, by closure name (the
-        closures of ``mechanism.model``: a TOML machine's welds, a file's own closures)."""
-        return self.mechanism.general.residuals_at(self.q)
+        closures of the mechanism's model: a TOML machine's welds, a file's own
+        closures; dimensionless)."""
+        r = self.__dict__.get("_closure_residuals")
+        if r is None:
+            r = self.mechanism.general.residuals_at(self.q)
+        return r
+
+
+#: The general backend's name of :class:`Assembly` (one type for both backends).
+LinkageAssembly = Assembly
 
 
 def checked_twists(assembly: Assembly, tol: float = ASSEMBLY_CHECK_RTOL) -> np.ndarray:
@@ -129,6 +179,9 @@ def checked_twists(assembly: Assembly, tol: float = ASSEMBLY_CHECK_RTOL) -> np.n
     from .twists import verified_twists
 
     mech = assembly.mechanism
+    if assembly.leg_q is None:
+        raise InvalidAssembly("the assembly has no per-leg view (the general backend made "
+                              "it); read it per leg with Mechanism.assembly_at(assembly)")
     leg_q = list(assembly.leg_q)
     if len(leg_q) != len(mech.legs):
         raise InvalidAssembly(f"the assembly has {len(leg_q)} leg configurations for the "
@@ -151,4 +204,4 @@ def checked_twists(assembly: Assembly, tol: float = ASSEMBLY_CHECK_RTOL) -> np.n
     return J
 
 
-__all__ = ["Assembly", "as_pose", "checked_twists", "placement"]
+__all__ = ["Assembly", "LinkageAssembly", "as_pose", "checked_twists", "placement"]

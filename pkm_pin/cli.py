@@ -265,7 +265,7 @@ def cmd_check(args) -> int:
     (closures, idle motions, duplicate closures, the output choice, the independent
     sub-mechanisms), the numbers of the backend that reads it, and the per-leg engine's
     cross-check with the papers' formulas where they exist."""
-    from .analysis import Analysis
+    from .analysis import LegsAnalysis
     from .crosscheck import crosscheck
     from .io import load_mechanism
     from .linkage import LoopClosureError
@@ -320,7 +320,7 @@ def cmd_check(args) -> int:
     elif an.singularity != "none":
         warnings.append(f"the reference assembly is a type {an.singularity} singularity "
                         f"({_indices_words(an.indices)})")
-    checks = crosscheck(an) if isinstance(an, Analysis) else None
+    checks = crosscheck(an) if isinstance(an, LegsAnalysis) else None
     if checks is not None:
         worst = max(checks.values())
         if worst > CROSSCHECK_TOL:

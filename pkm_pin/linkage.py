@@ -73,7 +73,7 @@ from __future__ import annotations
 import copy
 import math
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
@@ -81,15 +81,14 @@ import pinocchio as pin
 
 from . import dynamics as _dynamics
 from . import general_kernel, screws
-from .analysis import classify
-from .assembly import Assembly, as_pose
+from .analysis import LinkageAnalysis, Mobility, TreeAnalysis, classify
+from .assembly import Assembly, LinkageAssembly, as_pose
 from .closure_gaps import Diagnosis, diagnose
 from .errors import (
     AssemblyError,
     ForwardKinematicsError,
     InputError,
     PkmError,
-    SingularityError,
 )
 from .model.closure_model import (
     ClosureModel,
@@ -100,7 +99,6 @@ from .model.closure_model import (
     sparse_basis,
 )
 from .model.structure import detect_platform, legs_length
-from .output_maps import OutputMaps
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import (
     TreeSolution,
@@ -128,7 +126,6 @@ from .tolerances import (
     RANK_RTOL,
     ROTATION_COUNT_TOL,
     SAME_CONFIGURATION_TOL,
-    SPAN_RTOL,
 )
 
 __all__ = ["Linkage", "LinkageAnalysis", "LinkageAssembly", "LinkageSweep", "LoopClosureError",
@@ -196,89 +193,6 @@ class _Continuation:
     q_actuated: np.ndarray | None = field(default=None, repr=False)
     t_fold: float = math.inf
     fold: bool = False
-
-
-@dataclass(frozen=True, eq=False)
-class LinkageAssembly:
-    """An assembled configuration of a linkage.
-
-    Attributes:
-        q: Configuration of the whole tree (nq,), in the tree's joint order.
-        residual: Largest residual of the solve (closures, actuated targets, output
-            pose target; dimensionless).
-        iterations: Newton steps spent, all restarts included.
-        closure_residuals: Norm of each closure's residual rows, by closure name.
-        q_actuated: Values of the actuated joints [rad or m].
-        output_pose: World placement of the output frame.
-    """
-
-    q: np.ndarray = field(repr=False)
-    residual: float
-    iterations: int
-    closure_residuals: dict
-    q_actuated: np.ndarray
-    output_pose: pin.SE3 = field(repr=False)
-
-    @property
-    def pose(self) -> pin.SE3:
-        """The output frame's world placement (:attr:`output_pose`; the name a platform
-        mechanism's :class:`~pkm_pin.assembly.Assembly` gives it)."""
-        return self.output_pose
-
-
-@dataclass(frozen=True)
-class Mobility:
-    """Mobility of a linkage at a configuration (:meth:`Linkage.mobility`).
-
-    Attributes:
-        dof: ``nv − rank J_c``: dimension of the tree's motions the closures allow.
-        redundant_constraints: ``rows − rank J_c``: closure rows counted more than once.
-        idle_dof: Dimension of the motions left when every actuated joint is locked.
-        idle_motions: One sentence per idle motion (a basis of them).
-        independent_actuators: The actuated joints that can be driven independently
-            (the first maximal independent set, in actuated order).
-        grubler: Grübler–Kutzbach count ``Σ joint nv − Σ closure rows``.
-        rank: ``rank J_c`` here.
-        generic_dof, generic_idle_dof: ``dof`` and ``idle_dof`` at generic
-            configurations: the largest ranks of ``J_c`` and of ``J_c`` with the
-            actuated rows among this configuration and
-            :data:`~pkm_pin.tolerances.NEARBY_SAMPLES` nearby ones on the closure
-            manifold (a step along the allowed motions, and off the representation
-            singularities, projected back by the tree solver; seeded); ``None``: not
-            sampled (``nearby=0``).
-        singular: Whether a rank here is below the generic one (``None``: not decided).
-        representation: Representation singularities here, one sentence each (three
-            revolutes at a gimbal lock, a joint exactly at a limit).
-    """
-
-    dof: int
-    redundant_constraints: int
-    idle_dof: int
-    idle_motions: tuple
-    independent_actuators: tuple
-    grubler: int
-    rank: int | None = None
-    generic_dof: int | None = None
-    generic_idle_dof: int | None = None
-    singular: bool | None = None
-    representation: tuple = ()
-
-    @property
-    def singular_words(self) -> str:
-        """One sentence on a singular configuration (its ranks against the generic ones
-        and the representation singularities); ``""`` when it is not singular."""
-        if not self.singular:
-            return ""
-        nv = self.dof + self.rank
-        locked, generic_locked = nv - self.idle_dof, nv - self.generic_idle_dof
-        text = (f"singular configuration: DOF {self.dof}, idle DOF {self.idle_dof} here, "
-                f"{self.generic_dof} and {self.generic_idle_dof} at nearby configurations "
-                f"on the closure manifold (closure Jacobian rank {self.rank}, generic "
-                f"{nv - self.generic_dof}; with the actuated joints locked {locked}, "
-                f"generic {generic_locked})")
-        if self.representation:
-            text += "; representation singularity: " + "; ".join(self.representation)
-        return text
 
 
 class Linkage:
@@ -356,7 +270,7 @@ class Linkage:
         return self._model.actuated
 
     # The names every mechanism answers (a Mechanism has the same).
-    def tree_configuration(self, assembly: LinkageAssembly | None = None) -> np.ndarray:
+    def tree_configuration(self, assembly: Assembly | None = None) -> np.ndarray:
         """The configuration of :attr:`model`'s tree at ``assembly`` (default home)."""
         return (self.home_assembly if assembly is None else assembly).q.copy()
 
@@ -432,7 +346,7 @@ class Linkage:
 
     def legs_assembly(self, q=None) -> Assembly:
         """The assembly of :attr:`legs_mechanism` at the tree configuration ``q`` (a
-        :class:`LinkageAssembly` or q; default home): the same pose, each leg's joints
+        :class:`Assembly` or q; default home): the same pose, each leg's joints
         from ``q``."""
         mech = self._legs("a per-leg assembly")
         q = self.home_assembly.q if q is None else self._guess_q(q)
@@ -447,7 +361,7 @@ class Linkage:
 
     def sensitivity(self, q=None, parameters=None):
         """Sensitivity of the output pose to geometric errors at ``q`` (a
-        :class:`LinkageAssembly` or the tree's configuration; default home), actuated
+        :class:`Assembly` or the tree's configuration; default home), actuated
         joints held: a :class:`~pkm_pin.sensitivity.Sensitivity`.
 
         A base–legs–platform machine is read leg by leg through :attr:`legs_mechanism`
@@ -470,12 +384,12 @@ class Linkage:
     def tree_sensitivity(self, q=None, parameters=None):
         """Sensitivity of the output to the geometric errors of the tree and closures
         (:func:`pkm_pin.tree_sensitivity.sensitivity`) at ``q`` (a
-        :class:`LinkageAssembly` or the tree's configuration; default home)."""
+        :class:`Assembly` or the tree's configuration; default home)."""
         from .tree_sensitivity import sensitivity
 
         if q is None:
             q = self.home_assembly
-        assembly = q if isinstance(q, LinkageAssembly) else self._at(self._guess_q(q))
+        assembly = q if isinstance(q, Assembly) else self._at(self._guess_q(q))
         return sensitivity(self._model, assembly.q, parameters, assembly=assembly)
 
     def calibrate(self, samples, parameters, **options):
@@ -502,7 +416,7 @@ class Linkage:
 
     def inverse_kinematics_all(self, pose, *, starts: int = 16, seed: int = 0,
                                patience: int = MODES_PATIENCE, tol: float = CLOSURE_TOL
-                               ) -> list[LinkageAssembly]:
+                               ) -> list[Assembly]:
         """Every working mode at the output ``pose`` (``pin.SE3``), as configurations of
         this tree: for a base–legs–platform machine, one assembly per distinct vector of
         actuated values found leg by leg (:meth:`Mechanism.inverse_kinematics_all` of
@@ -528,7 +442,7 @@ class Linkage:
         return self._inverse_multistart(pose, starts, seed, patience, tol)
 
     def _inverse_multistart(self, pose, starts: int, seed: int, patience: int,
-                            tol: float) -> list[LinkageAssembly]:
+                            tol: float) -> list[Assembly]:
         """:meth:`inverse_kinematics_all` of a linkage without legs to read: the tree
         solver with the output's pose rows (the components its twist system at home
         moves along, as :meth:`inverse_kinematics`) from batches of starts. Of the
@@ -566,7 +480,7 @@ class Linkage:
         return run.nearest(self._signature(home.q))
 
     @cached_property
-    def home_assembly(self) -> LinkageAssembly:
+    def home_assembly(self) -> Assembly:
         """The assembly from the model's reference (the file's ``q = 0`` or MJCF
         ``qpos0``: its intended working mode), :meth:`assemble` with no guess (cached)."""
         return self.assemble()
@@ -599,16 +513,16 @@ class Linkage:
             return q_actuated
         return screws.as_vector(q_actuated, len(self.actuated), name, ", ".join(self.actuated))
 
-    def assembly_at(self, where=None) -> LinkageAssembly:
+    def assembly_at(self, where=None) -> Assembly:
         """What :meth:`pkm_pin.Mechanism.assembly_at` answers, on the tree: the home
-        assembly (``None``), a :class:`LinkageAssembly` as it is, the assembly nearest
+        assembly (``None``), a :class:`Assembly` as it is, the assembly nearest
         a configuration of the tree (a 1-D vector of its ``nq`` numbers, ``nq`` ≠ 6:
         :meth:`assemble`), or the assembly whose output reaches a pose
         (:meth:`inverse_kinematics`: ``pin.SE3``, a 4×4 matrix, six numbers x, y, z,
         roll, pitch, yaw, or a partial pose as a mapping)."""
         if where is None:
             return self.home_assembly
-        if isinstance(where, LinkageAssembly):
+        if isinstance(where, Assembly):
             return where
         if isinstance(where, Mapping):
             return self.inverse_kinematics(where)
@@ -622,18 +536,18 @@ class Linkage:
     def _guess_q(self, guess) -> np.ndarray | None:
         if guess is None:
             return None
-        if isinstance(guess, LinkageAssembly):
+        if isinstance(guess, Assembly):
             return guess.q
         return self._model.check_q(guess)
 
     # ------------------------------------------------------------ assembly
     def assemble(self, guess=None, *, q_actuated=None, starts: int = 16, seed: int = 0,
                  tol: float = CLOSURE_TOL, max_iter: int = 100,
-                 continuation: bool = False) -> LinkageAssembly:
+                 continuation: bool = False) -> Assembly:
         """Close every loop (and, with ``q_actuated``, pin the actuated joints).
 
         Starts (:func:`pkm_pin.solve.tree_starts`): ``guess`` (a configuration or a
-        :class:`LinkageAssembly`), ``model.reference``, neutral, the middle of the limits
+        :class:`Assembly`), ``model.reference``, neutral, the middle of the limits
         and ``starts`` random configurations within the limits (``seed``). A converged
         warm start is kept; otherwise the converged solution nearest ``guess`` (default
         the reference) is. With ``continuation`` (:meth:`forward_kinematics`),
@@ -816,9 +730,9 @@ class Linkage:
                     if final.converged else None
         return None
 
-    def reached(self, error: LoopClosureError) -> LinkageAssembly:
+    def reached(self, error: LoopClosureError) -> Assembly:
         """The best configuration a failed assembly reached (``error.q``) as a
-        :class:`LinkageAssembly` whose loops do not all close (its ``residual`` is the
+        :class:`Assembly` whose loops do not all close (its ``residual`` is the
         largest closure residual there): what ``pkm-pin view`` draws for a file that does
         not assemble.
 
@@ -832,20 +746,20 @@ class Linkage:
 
     def residuals_at(self, q) -> dict:
         """Norm of each closure's residual rows at the tree configuration ``q``, by
-        closure name (dimensionless, as :attr:`LinkageAssembly.closure_residuals`)."""
+        closure name (dimensionless, as :attr:`Assembly.closure_residuals`)."""
         return self._at(self._model.check_q(q)).closure_residuals
 
-    def _at(self, q: np.ndarray) -> LinkageAssembly:
-        """The configuration ``q`` as a :class:`LinkageAssembly` (its ``residual``: the
+    def _at(self, q: np.ndarray) -> Assembly:
+        """The configuration ``q`` as a :class:`Assembly` (its ``residual``: the
         largest closure residual there; no solve)."""
         model = self._model
         kin = model.kinematics(q)
         norms = model.closure_norms(kin.residual)
-        return LinkageAssembly(q.copy(), float(norms.max(initial=0.0)), 0,
-                               dict(zip(self._closure_names, norms.tolist())),
-                               _actuated_or_nan(model, q), kin.output_placement)
+        return Assembly.of_tree(self, q.copy(), float(norms.max(initial=0.0)), 0,
+                                dict(zip(self._closure_names, norms.tolist())),
+                                _actuated_or_nan(model, q), kin.output_placement)
 
-    def _assembly(self, sol, iterations: int) -> LinkageAssembly:
+    def _assembly(self, sol, iterations: int) -> Assembly:
         """The assembly at a converged :class:`~pkm_pin.solve.TreeSolution` (its last
         Pinocchio pass, when it was at ``sol.q``)."""
         model, q = self._model, sol.q
@@ -854,8 +768,8 @@ class Linkage:
             kin = model.kinematics(q)
             norms, oMo = model.closure_norms(kin.residual), kin.output_placement
         names = dict(zip(self._closure_names, norms.tolist()))
-        return _new_assembly(q.copy(), float(sol.residual), int(iterations), names,
-                             _actuated_or_nan(model, q), oMo)
+        return Assembly.of_tree(self, q.copy(), float(sol.residual), int(iterations), names,
+                                _actuated_or_nan(model, q), oMo)
 
     def _failure(self, sol, n_starts: int, targets, what: str = "", tol: float = CLOSURE_TOL,
                  path: _Continuation | None = None) -> LoopClosureError:
@@ -889,11 +803,11 @@ class Linkage:
     def mobility(self, q=None, rtol: float = RANK_RTOL, *, nearby: int = NEARBY_SAMPLES,
                  seed: int = 0) -> Mobility:
         """:class:`Mobility` at the configuration ``q`` (assembled, or a
-        :class:`LinkageAssembly`; default :attr:`home_assembly`), its ranks compared with
+        :class:`Assembly`; default :attr:`home_assembly`), its ranks compared with
         those at ``nearby`` configurations on the closure manifold (``0``: not compared;
         ``seed``: of their random steps)."""
         q = self.home_assembly.q if q is None else q
-        q = q.q if isinstance(q, LinkageAssembly) else q
+        q = q.q if isinstance(q, Assembly) else q
         kin = self._model.kinematics(q)
         return _mobility(self, kin, NullSpace(self._model, kin, rtol), rtol, nearby, seed)
 
@@ -902,7 +816,7 @@ class Linkage:
                 rtol: float = RANK_RTOL, singular_tol: float = CLOSENESS_SINGULAR_TOL,
                 nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
         """:class:`LinkageAnalysis` of the output frame at the assembled ``q`` (or a
-        :class:`LinkageAssembly`; default :attr:`home_assembly`; a pose or partial pose
+        :class:`Assembly`; default :attr:`home_assembly`; a pose or partial pose
         of the output: at :meth:`assembly_at` it).
 
         Args:
@@ -921,14 +835,14 @@ class Linkage:
         if isinstance(q, (Mapping, pin.SE3)) or np.shape(q) in ((4, 4), (6,)) \
                 and self._model.nq != 6:
             q = self.assembly_at(q)
-        q = self._model.check_q(q.q if isinstance(q, LinkageAssembly) else q)
+        q = self._model.check_q(q.q if isinstance(q, Assembly) else q)
         return _analyse(self, q, about, generic, rtol, singular_tol, nearby)
 
     # ---------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, starts: int = 16, seed: int = 0,
-                           tol: float = CLOSURE_TOL) -> LinkageAssembly:
+                           tol: float = CLOSURE_TOL) -> Assembly:
         """Every joint and the output pose from the actuated values [rad or m]: the
-        branch nearest ``guess`` (a configuration or :class:`LinkageAssembly`; default
+        branch nearest ``guess`` (a configuration or :class:`Assembly`; default
         the reference configuration). Where the direct solve from ``guess`` fails, the
         guess's branch is continued along the straight path of actuated values before
         the other starts are tried (:meth:`assemble`); values beyond a fold of that
@@ -954,7 +868,7 @@ class Linkage:
         otherwise) or ``"auto"`` (the homotopy where it applies, else the multistart).
 
         Returns:
-            :class:`~pkm_pin.modes.AssemblyModes` of :class:`LinkageAssembly`, nearest
+            :class:`~pkm_pin.modes.AssemblyModes` of :class:`Assembly`, nearest
             the reference first; ``complete=False`` for a multistart (it proves nothing).
 
         Raises:
@@ -1079,7 +993,7 @@ class Linkage:
 
     def transmission(self, q=None, *, analysis: LinkageAnalysis | None = None):
         """Motion/force transmission indices of the linkage at ``q`` (a configuration or
-        :class:`LinkageAssembly`; default :attr:`home_assembly`;
+        :class:`Assembly`; default :attr:`home_assembly`;
         :mod:`pkm_pin.transmission`, Wang, Wu & Liu 2010): each actuator's side of its
         loops is its "leg". ``analysis``: :meth:`analyze` of the same ``q`` about the
         output, when the caller has made it (not made again).
@@ -1114,7 +1028,7 @@ class Linkage:
         from .transmission import Transmission, transmission_indices
 
         q = self.home_assembly.q if q is None else q
-        q = q.q if isinstance(q, LinkageAssembly) else self._model.check_q(q)
+        q = q.q if isinstance(q, Assembly) else self._model.check_q(q)
         model, kin = self._model, self._model.kinematics(q)
         an = analysis
         if an is None:
@@ -1188,7 +1102,7 @@ class Linkage:
                                         * self._model.length]) / self._model.length
 
     def inverse_kinematics(self, pose, guess=None, *, starts: int = 16, seed: int = 0,
-                           tol: float = CLOSURE_TOL) -> LinkageAssembly:
+                           tol: float = CLOSURE_TOL) -> Assembly:
         """The assembly whose output frame reaches ``pose`` (``pin.SE3``, world).
 
         When the output has 6 DOF the whole pose is targeted. Otherwise only the
@@ -1224,7 +1138,7 @@ class Linkage:
         return self._assembly(sol, iterations + home.iterations)
 
     def _partial_pose(self, pose: Mapping, guess, *, starts: int, seed: int, tol: float
-                      ) -> LinkageAssembly:
+                      ) -> Assembly:
         """A partial output pose on the whole tree (:meth:`inverse_kinematics`)."""
         from .output_driver import partial_pose
 
@@ -1372,18 +1286,6 @@ def _loops_of_actuators(model: ClosureModel) -> tuple:
                 loops.append(k)
         out.append(tuple(loops))
     return tuple(out)
-
-
-_ASSEMBLY_FIELDS = tuple(f.name for f in fields(LinkageAssembly))
-
-
-def _new_assembly(*values) -> LinkageAssembly:
-    """``LinkageAssembly(*values)`` (every field given) without the frozen dataclass's
-    ``__init__`` (one ``object.__setattr__`` a field: ~1 µs of a warm forward
-    kinematics)."""
-    out = object.__new__(LinkageAssembly)
-    out.__dict__.update(zip(_ASSEMBLY_FIELDS, values))
-    return out
 
 
 def _actuated_or_nan(model: ClosureModel, q: np.ndarray) -> np.ndarray:
@@ -1925,161 +1827,6 @@ def _machine_length(model: ClosureModel) -> ClosureModel:
 
 
 # ====================================================================== analysis
-@dataclass(frozen=True, eq=False)
-class LinkageAnalysis(OutputMaps):
-    """The output frame of a linkage at one configuration (:meth:`Linkage.analyze`).
-
-    Screws are axis-first about the world origin; ``reference_point`` [m] is the point
-    they are homogenised about for every decision (output origin or world origin).
-
-    Attributes:
-        q: The configuration analysed.
-        mobility: The :class:`Mobility` (``dof``, ``idle_dof`` … are also attributes).
-        output_dof: Dimension of the output frame's twist system.
-        translations: Pure translations among them (motion type ``"2T1R"`` …).
-        platform_twists: (output_dof × 6) basis of the output twists, orthonormal once
-            homogenised about ``reference_point``.
-        constraint_wrenches: ((6 − output_dof) × 6) basis of the wrenches reciprocal to
-            them, orthonormal once homogenised about ``reference_point``.
-        A: (actuated × 6) actuation wrenches (unit force, or unit moment).
-        B: (actuated × actuated) diagonal, ``A Δ t = B q̇_a`` for every admissible ``t``.
-        indices: ``type_I``, ``type_II``, ``condition_A`` (seed 000's), ``forward``,
-            ``inverse`` (module docstring).
-        singularity: ``"none"``, ``"I"``, ``"II"`` or ``"III"``.
-        constraint_singular: Whether ``dof`` or ``output_dof`` differs from the generic
-            analysis given (``None`` without one).
-    """
-
-    q: np.ndarray = field(repr=False)
-    mobility: Mobility
-    output_dof: int
-    translations: int
-    platform_twists: np.ndarray = field(repr=False)
-    constraint_wrenches: np.ndarray = field(repr=False)
-    A: np.ndarray = field(repr=False)
-    B: np.ndarray = field(repr=False)
-    indices: dict
-    singularity: str
-    constraint_singular: bool | None
-    reference_point: np.ndarray = field(repr=False)
-    length: float
-    singular_tol: float
-    _maps: tuple = field(repr=False)
-    #: Whether each actuated joint is prismatic (its rate in m/s).
-    actuated_prismatic: np.ndarray = field(default_factory=lambda: np.zeros(0, bool),
-                                           repr=False)
-
-    # ------------------------------------------------ hooks of OutputMaps
-    @property
-    def centre(self) -> np.ndarray:
-        """The point every decision is homogenised about (:attr:`reference_point`)."""
-        return self.reference_point
-
-    @property
-    def motion_indices(self) -> dict[str, float]:
-        """The ``forward`` and ``inverse`` indices (:func:`pkm_pin.screws.motion_indices`),
-        as :attr:`pkm_pin.analysis.Analysis.motion_indices` names them."""
-        return {"forward": self.indices["forward"], "inverse": self.indices["inverse"]}
-
-    @property
-    def _twist_dim(self) -> int:
-        return self.output_dof
-
-    @property
-    def _actuated_prismatic(self) -> np.ndarray:
-        return self.actuated_prismatic
-
-    @property
-    def _closeness(self) -> tuple[float, float]:
-        """Seed 000's indices and the generalised ones together, as :attr:`singularity`
-        reads them."""
-        idx = self.indices
-        return (float(np.nanmin([idx["type_I"], idx["inverse"]])),
-                float(np.nanmin([idx["type_II"], idx["forward"]])))
-
-    @property
-    def dof(self) -> int:
-        """``nv − rank J_c`` (:attr:`Mobility.dof`)."""
-        return self.mobility.dof
-
-    @property
-    def idle_dof(self) -> int:
-        """:attr:`Mobility.idle_dof`."""
-        return self.mobility.idle_dof
-
-    @property
-    def redundant_constraints(self) -> int:
-        """:attr:`Mobility.redundant_constraints`."""
-        return self.mobility.redundant_constraints
-
-    @property
-    def grubler(self) -> int:
-        """Grübler–Kutzbach count of the tree and its closures (:attr:`Mobility.grubler`;
-        a per-leg :class:`~pkm_pin.analysis.Analysis` answers the same name)."""
-        return self.mobility.grubler
-
-    @property
-    def motion_type(self) -> str:
-        """``"3T"``, ``"1T2R"``, ``"3T3R"`` … of the output; ``"0"`` when it is rigid."""
-        t, r = self.translations, self.output_dof - self.translations
-        return (f"{t}T" if t else "") + (f"{r}R" if r else "") or "0"
-
-    # ------------------------------------------------------------- velocities
-    def _contains(self, t: np.ndarray) -> bool:
-        P = homogenised_about(self.platform_twists, self.reference_point, self.length)
-        th = homogenised_about(t[None], self.reference_point, self.length)[0]
-        out = th - (th @ P.T) @ P if P.size else th
-        return np.linalg.norm(out) <= SPAN_RTOL * max(np.linalg.norm(th), 1e-300)
-
-    def passive_rates(self, qdot_actuated) -> np.ndarray:
-        """Velocity ``v`` (nv,) of the whole tree for the actuated rates [rad/s or m/s]
-        (internal motions that move neither the actuators nor the output: none).
-
-        Raises:
-            SingularityError: the actuators do not determine the motion (type II).
-            InputError: wrong length, or rates incompatible with redundant actuation.
-        """
-        Xr, Yr, M, U, act = self._maps
-        qd = screws.as_vector(qdot_actuated, Xr.shape[0], "qdot_actuated")
-        if self.indices["forward"] < self.singular_tol:
-            raise SingularityError(
-                f"forward velocity undefined: forward index {self.indices['forward']:.3g} "
-                f"< {self.singular_tol:g} (the actuators do not determine the motion)",
-                "forward", self.indices["forward"])
-        rhs = qd / U[act]
-        z, *_ = np.linalg.lstsq(Xr, rhs, rcond=None)
-        if np.linalg.norm(Xr @ z - rhs) > 1e-9 * max(1.0, np.linalg.norm(rhs)):
-            raise InputError("these actuated rates are incompatible (redundant actuation)")
-        return U * (M @ z)
-
-    def forward_velocity(self, qdot_actuated) -> np.ndarray:
-        """Output twist (6,) axis-first about the world origin from the actuated rates."""
-        Xr, Yr, M, U, act = self._maps
-        v = self.passive_rates(qdot_actuated)
-        return from_homogenised(Yr @ np.linalg.lstsq(Xr, v[act] / U[act], rcond=None)[0],
-                                self.reference_point, self.length)[0]
-
-    def inverse_velocity(self, twist) -> np.ndarray:
-        """Actuated rates producing the output twist ``twist`` (axis-first, world origin).
-
-        Raises:
-            InputError: the twist is not a motion of the output here.
-            SingularityError: an actuator moves without moving the output (type I).
-        """
-        t = screws.as_vector(twist, 6, "twist", noun="components")
-        if not self._contains(t):
-            raise InputError(f"twist {np.round(t, 6)} is not a motion of the output here "
-                             f"(motion type {self.motion_type})")
-        if self.indices["inverse"] < self.singular_tol:
-            raise SingularityError(
-                f"inverse velocity undefined: inverse index {self.indices['inverse']:.3g} "
-                f"< {self.singular_tol:g}", "inverse", self.indices["inverse"])
-        Xr, Yr, M, U, act = self._maps
-        th = homogenised_about(t[None], self.reference_point, self.length)[0]
-        z, *_ = np.linalg.lstsq(Yr, th, rcond=None)
-        return U[act] * (Xr @ z)
-
-
 def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
              singular_tol: float, nearby: int = NEARBY_SAMPLES) -> LinkageAnalysis:
     """The analysis at the checked ``q``: its numbers from the compiled path
@@ -2098,11 +1845,13 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
     d = core.d
     csing = None if generic is None else bool(mob.dof != generic.dof
                                               or d != generic.output_dof)
-    return LinkageAnalysis(core.kin.q, mob, d, d - core.rotations, core.twists,
-                           core.wrenches, core.A, core.B, idx, singularity, csing, core.p,
-                           model.length, singular_tol,
-                           (core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
-                           core.translating)
+    return TreeAnalysis.of_values(
+        q=core.kin.q, mobility=mob, output_dof=d, translations=d - core.rotations,
+        platform_twists=core.twists, constraint_wrenches=core.wrenches, A=core.A, B=core.B,
+        indices=idx, singularity=singularity, constraint_singular=csing,
+        reference_point=core.p, length=model.length, singular_tol=singular_tol,
+        _maps=(core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
+        actuated_prismatic=core.translating, mechanism=link, rtol=rtol, about=about)
 
 
 def _smaller(a: float, b: float) -> float:
@@ -2245,7 +1994,7 @@ class _SweepRows:
         self.lti, self.cti = np.full(n, np.nan), np.full(n, np.nan)
         self.failures: list = []
 
-    def record(self, i: int, a: LinkageAssembly, an: LinkageAnalysis) -> None:
+    def record(self, i: int, a: Assembly, an: LinkageAnalysis) -> None:
         self.ok[i] = True
         self.q[i], self.poses[i] = a.q, pose_coordinates(a.output_pose)
         self.dof[i], self.odof[i], self.cls[i] = an.dof, an.output_dof, an.singularity

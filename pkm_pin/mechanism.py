@@ -612,7 +612,7 @@ class Mechanism:
                 return list(self.home_assembly.leg_q)
             return list(self.home_q) if self.home_q is not None else [None] * len(self.legs)
         if isinstance(guess, Assembly):
-            return list(guess.leg_q)
+            return list(self._per_leg(guess).leg_q)
         guess = list(guess)
         if len(guess) != len(self.legs):
             raise InputError(f"guess has {len(guess)} leg configurations for {len(self.legs)} legs")
@@ -632,10 +632,16 @@ class Mechanism:
         if pose_or_assembly is None:
             return self.home_assembly
         if isinstance(pose_or_assembly, Assembly):
-            return pose_or_assembly
+            return self._per_leg(pose_or_assembly)
         if self._is_tree_configuration(pose_or_assembly):
             return self.legs_assembly(pose_or_assembly)
         return self.assemble(pose_or_assembly)
+
+    def _per_leg(self, assembly: Assembly) -> Assembly:
+        """``assembly`` with its per-leg view: as it is when it has one, else (one the
+        general backend made, of this mechanism's tree) read per leg
+        (:meth:`legs_assembly` at its :attr:`Assembly.q`)."""
+        return assembly if assembly.leg_q is not None else self.legs_assembly(assembly.q)
 
     def _is_tree_configuration(self, x) -> bool:
         """Whether ``x`` is a configuration of :attr:`model`'s tree (a 1-D vector of its
@@ -677,9 +683,9 @@ class Mechanism:
         return position.forward_kinematics_all(self, q_actuated, starts=starts, seed=seed,
                                                tol=tol, max_iter=max_iter, method=method)
 
-    def inverse_kinematics(self, pose, guess=None) -> np.ndarray:
-        """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
-        default home).
+    def inverse_kinematics(self, pose, guess=None) -> Assembly:
+        """The :class:`Assembly` at ``pose`` (legs on the working mode of ``guess``,
+        default home); its ``q_actuated`` are the actuated coordinates.
 
         See :func:`pkm_pin.position.inverse_kinematics`.
         """
@@ -773,6 +779,8 @@ class Mechanism:
         :class:`~pkm_pin.linkage.Linkage` too), so the dynamics and studies that work on
         the tree ask no question about the kind of mechanism."""
         assembly = self.home_assembly if assembly is None else assembly
+        if assembly.leg_q is None:  # the general backend's: the tree's q is what it holds
+            return assembly.q
         if self.source_model is not None:
             return self.source_configuration(assembly)
         from .model import configuration as configuration_of

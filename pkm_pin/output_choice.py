@@ -49,12 +49,13 @@ from __future__ import annotations
 
 import heapq
 import re
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from . import screws
+from .assembly import Assembly
 from .errors import PkmError
 from .model.closure_model import ClosureModel, NullSpace
 from .tolerances import RANK_RTOL
@@ -259,7 +260,9 @@ def designer_output(link):
         return link
     chosen = type(link)(link.model, output=choice.frame)
     pose = chosen.model.kinematics(assembly.q).output_placement
-    chosen.__dict__["home_assembly"] = replace(assembly, output_pose=pose)  # cached_property
+    chosen.__dict__["home_assembly"] = Assembly.of_tree(  # a cached_property
+        chosen, assembly.q, assembly.residual, assembly.iterations,
+        assembly.closure_residuals, assembly.q_actuated, pose)
     return chosen
 
 

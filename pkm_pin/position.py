@@ -641,9 +641,10 @@ def forward_kinematics_all(mech, q_actuated, *, starts: int = 32, seed: int = 0,
 
 
 # ================================================================ inverse problem
-def inverse_kinematics(mech, pose, guess=None) -> np.ndarray:
-    """Actuated coordinates at ``pose`` (legs on the working mode of ``guess``,
-    default home): those of ``mech.assemble(pose, guess)``. ``pose`` may be partial (a
+def inverse_kinematics(mech, pose, guess=None) -> Assembly:
+    """The assembly at ``pose`` (legs on the working mode of ``guess``, default home):
+    ``mech.assemble(pose, guess)``, whose ``q_actuated`` are the actuated coordinates (an
+    :class:`Assembly`, as every backend's inverse kinematics gives). ``pose`` may be partial (a
     mapping of independent coordinates, :func:`complete_pose`), and a full pose off a
     lower-mobility mechanism's motion by at most
     :data:`~pkm_pin.tolerances.POSE_PROJECTION_TOL` is projected onto it.
@@ -654,7 +655,7 @@ def inverse_kinematics(mech, pose, guess=None) -> np.ndarray:
         DependentCoordinates, ForwardKinematicsError: a partial pose that is not made of
             independent coordinates, or cannot be completed.
     """
-    return mech.assemble(pose, guess).q_actuated
+    return mech.assemble(pose, guess)
 
 
 def inverse_kinematics_all(mech, pose, *, starts: int = 16, seed: int = 0,
@@ -899,6 +900,7 @@ def _start_state(mech, guess) -> tuple[pin.SE3, list]:
     :class:`Assembly`, a pose (assembled first), leg configurations (at the home pose),
     or ``None`` (the home assembly once known, else the home pose with ``home_q``)."""
     if isinstance(guess, Assembly):
+        guess = mech._per_leg(guess)
         return guess.pose, [q.copy() for q in guess.leg_q]
     if guess is None and "home_assembly" not in mech.__dict__:
         starts = mech.leg_starts(None)

@@ -190,16 +190,16 @@ def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
     ``failed_sections`` (section → error, for the optional sections that failed:
     :func:`optional`).
     """
-    from .analysis import Analysis
+    from .analysis import LegsAnalysis
     from .crosscheck import crosscheck
 
-    if isinstance(subject, Analysis):
+    if isinstance(subject, LegsAnalysis):
         mech, assembly, analysis = subject.mechanism, subject.assembly, subject
     else:
         mech = subject
         assembly = mech.home_assembly if assembly is None else assembly
     an = mech.analyze(assembly) if analysis is None else analysis
-    per_leg = isinstance(an, Analysis)
+    per_leg = isinstance(an, LegsAnalysis)
     data = linkage_report_data(mech.general, assembly, an, plots,
                                transmission=(lambda: an.transmission) if per_leg else None)
     failed = data["failed_sections"]

@@ -185,9 +185,9 @@ def _assembly_of(mech: Mechanism, pose_or_assembly) -> Assembly:
     if pose_or_assembly is None:
         return mech.home_assembly
     if isinstance(pose_or_assembly, Assembly):
-        if pose_or_assembly.mechanism is not mech:
+        if pose_or_assembly.mechanism not in (mech, mech.__dict__.get("general")):
             raise InputError("the assembly given belongs to another mechanism")
-        return pose_or_assembly
+        return mech._per_leg(pose_or_assembly)
     return mech.assemble(as_pose(pose_or_assembly))
 
 

@@ -49,7 +49,7 @@ def test_fk_of_ik_is_identity(name):
         else:
             pose = screws.exp(random_platform_twist(m, home, rng, 0.15, 0.1 * L)) * home.pose
         target = m.assemble(pose)
-        qa = m.inverse_kinematics(pose)
+        qa = m.inverse_kinematics(pose).q_actuated
         np.testing.assert_allclose(qa, target.q_actuated)
         if curved:
             guess = m.forward_kinematics(qa + 0.04 * scales * np.sign(rng.normal(size=3)))
@@ -123,7 +123,7 @@ def test_motion_by_inertia_crosses_rpr3_type2_pose():
     m = mech("rpr3")
     P2 = rpr3_type2_pose()
     pose = pin.SE3(P2.rotation, P2.translation + np.array([0.05, 0.0, 0.0]))
-    qa = m.inverse_kinematics(pose)
+    qa = m.inverse_kinematics(pose).q_actuated
     L = m.characteristic_length
     plain = m.forward_kinematics(qa)
     assert plain.info["inertia"] is False
@@ -140,7 +140,7 @@ def test_fk_all_rpr3_beyond_type2_pose():
     m = mech("rpr3")
     P2 = rpr3_type2_pose()
     pose = pin.SE3(P2.rotation, P2.translation + np.array([0.05, 0.0, 0.0]))
-    qa = m.inverse_kinematics(pose)
+    qa = m.inverse_kinematics(pose).q_actuated
     # 32 starts (the default): 8 found a single mode with numpy 2.4's SVD basis
     modes = m.forward_kinematics_all(qa)
     assert len(modes) >= 2

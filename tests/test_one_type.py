@@ -1,0 +1,172 @@
+"""One result type per concept (issue 24): every mechanism's assemblies are
+:class:`pkm_pin.Assembly` and its analyses :class:`pkm_pin.Analysis`, whichever backend
+reads it. The per-leg engine and the general elimination answer the same names with the
+same numbers for the same machine; an assembly made by one backend is taken by the
+other; what only legs have is refused in a sentence."""
+
+from __future__ import annotations
+
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import pkm_pin
+from pkm_pin import Analysis, Assembly, LegsAnalysis, TreeAnalysis
+
+MODELS = Path(__file__).resolve().parents[1] / "models"
+SHIPPED = sorted(str(p.relative_to(MODELS)) for p in
+                 [*MODELS.glob("loops/*.urdf"), *MODELS.glob("loops/*.xml"),
+                  *MODELS.glob("pinned/*.toml"), *MODELS.glob("mechanisms/*.toml")])
+
+#: The names every analysis answers (Analysis's docstring).
+ANALYSIS_NAMES = ("q", "mobility", "dof", "idle_dof", "output_dof", "translations",
+                  "motion_type", "grubler", "redundant_constraints", "platform_twists",
+                  "constraint_wrenches", "A", "actuation_wrenches", "B", "actuated_twists",
+                  "joint_twists", "indices", "motion_indices", "singularity",
+                  "constraint_singular", "transmission", "mechanism", "assembly", "rtol",
+                  "singular_tol", "length", "centre", "reference_point",
+                  "actuated_prismatic")
+#: The names every assembly answers.
+ASSEMBLY_NAMES = ("mechanism", "pose", "output_pose", "q", "q_actuated", "leg_q",
+                  "residual", "iterations", "closure_residuals", "info", "per_leg")
+
+
+def _load(name: str, backend: str | None = None):
+    return pkm_pin.load_mechanism(MODELS / name, backend=backend)
+
+
+@pytest.mark.parametrize("name", SHIPPED)
+def test_every_shipped_mechanism_answers_one_assembly_and_one_analysis_type(name):
+    """Home assembly and analysis of every shipped file, read by its default backend and
+    by the general one, are an Assembly and an Analysis that answer every name; the
+    assembly's q is a configuration of the mechanism's tree whose closures close."""
+    for backend in (None, "general"):
+        mech = _load(name, backend)
+        asm, an = mech.home_assembly, mech.analyze()
+        assert type(asm) is Assembly
+        assert isinstance(an, Analysis)
+        assert isinstance(an, LegsAnalysis if asm.per_leg else TreeAnalysis)
+        assert asm.per_leg == (mech.backend == "legs")
+        for n in ASSEMBLY_NAMES:
+            getattr(asm, n)
+        for n in ANALYSIS_NAMES:
+            getattr(an, n)
+        assert asm.q.shape == (mech.model.tree.nq,)
+        assert max(asm.closure_residuals.values(), default=0.0) < 1e-8
+        assert asm.output_pose.isApprox(asm.pose)
+        np.testing.assert_allclose(an.actuation_wrenches, an.A)
+        assert an.actuated_twists.shape == (len(mech.actuated_names), 6)
+        np.testing.assert_allclose(an.reference_point, an.centre)
+
+
+@pytest.mark.parametrize("name", ["mechanisms/stewart.toml", "loops/delta_loops.urdf",
+                                  "mechanisms/rpr3.toml"])
+def test_both_backends_give_the_same_numbers_under_the_same_names(name):
+    """The same machine read per leg and over its tree: actuated twists, A and B up to
+    the sign of each row, indices, motion indices and the tree's q agree to 1e-9; the
+    actuated values agree exactly as named."""
+    legs, general = _load(name, "legs"), _load(name, "general")
+    la, ga = legs.analyze(), general.analyze()
+    np.testing.assert_allclose(la.q, ga.q, atol=1e-9)
+    np.testing.assert_allclose(la.actuated_twists, ga.actuated_twists, atol=1e-9)
+    for key in ("type_I", "type_II", "condition_A"):
+        assert la.indices[key] == pytest.approx(ga.indices[key], rel=1e-9)
+    for key in ("forward", "inverse"):
+        assert la.motion_indices[key] == pytest.approx(ga.motion_indices[key], rel=1e-9)
+    assert (la.dof, la.output_dof, la.motion_type) == (ga.output_dof, ga.output_dof,
+                                                        ga.motion_type)
+    np.testing.assert_allclose(legs.home_assembly.q_actuated, general.home_assembly.q_actuated,
+                               atol=1e-12)
+
+
+def test_an_assembly_of_either_backend_is_taken_by_the_other():
+    """A general assembly given to a per-leg mechanism is read per leg at its q (pose and
+    analysis as the per-leg assembly's there); a per-leg assembly given to the general
+    backend is read at its tree configuration; Analysis(assembly) picks the backend that
+    made the assembly."""
+    mech = _load("loops/delta_loops.urdf")
+    assert mech.backend == "legs"
+    q_a = mech.home_assembly.q_actuated + np.array([0.05, -0.03, 0.02])
+    per_leg = mech.forward_kinematics(q_a)
+    general = mech.general.forward_kinematics(q_a, mech.general.assembly_at(per_leg.q))
+    assert not general.per_leg and general.mechanism is mech.general
+    read = mech.assembly_at(general)
+    assert read.per_leg
+    assert read.pose.isApprox(per_leg.pose, 1e-9)
+    np.testing.assert_allclose(read.q_actuated, q_a, atol=1e-9)
+    for key, value in mech.analyze(general).indices.items():
+        assert value == pytest.approx(mech.analyze(per_leg).indices[key], rel=1e-7)
+    back = mech.general.analyze(per_leg)
+    np.testing.assert_allclose(back.q, per_leg.q, atol=1e-12)
+    assert type(Analysis(per_leg)) is LegsAnalysis
+    assert type(Analysis(general)) is TreeAnalysis
+    assert Analysis(general).indices["type_II"] == pytest.approx(back.indices["type_II"],
+                                                                 rel=1e-7)
+    # a guess of the other backend warm-starts the per-leg solver
+    again = mech.forward_kinematics(q_a, guess=general)
+    assert again.pose.isApprox(per_leg.pose, 1e-9)
+
+
+def test_general_assembly_and_analysis_pickle_and_keep_their_numbers():
+    """Both result types cross a process boundary (pickle) with their numbers."""
+    mech = _load("loops/five_bar.urdf")
+    asm, an = mech.home_assembly, mech.analyze()
+    asm2, an2 = pickle.loads(pickle.dumps(asm)), pickle.loads(pickle.dumps(an))
+    assert type(asm2) is Assembly and type(an2) is TreeAnalysis
+    np.testing.assert_array_equal(asm2.q, asm.q)
+    assert asm2.iterations == asm.iterations
+    assert an2.indices == an.indices
+    np.testing.assert_array_equal(an2.forward_velocity([0.1, -0.2]),
+                                  an.forward_velocity([0.1, -0.2]))
+
+
+def test_general_joint_twists_are_the_finite_difference_of_the_output_motion():
+    """TreeAnalysis.joint_twists: for a random tree velocity v, the output body's twist
+    Σ_k∈support J_k v_k (axis-first, world origin) matches the central difference of its
+    placement along v."""
+    mech = _load("loops/five_bar.urdf")
+    an = mech.analyze()
+    model, q = mech.model, an.q
+    tree = model.tree
+    data = tree.createData()
+    frame = tree.getFrameId(model.output)
+    rng = np.random.default_rng(5)
+    v = rng.normal(size=tree.nv)
+    support = [j for j in tree.supports[tree.frames[frame].parentJoint] if j > 0]
+    cols = [c for j in support for c in range(tree.joints[j].idx_v,
+                                              tree.joints[j].idx_v + tree.joints[j].nv)]
+    mask = np.zeros(tree.nv)
+    mask[cols] = 1.0
+    twist = an.joint_twists.T @ (v * mask)
+    h = 1e-6
+
+    def placement(dq):
+        pin.framesForwardKinematics(tree, data, pin.integrate(tree, q, dq))
+        return data.oMf[frame].copy()
+
+    plus, minus = placement(h * v * mask), placement(-h * v * mask)
+    # world twist (ω; v_O) of M(t): log of M+ M-⁻¹ over 2h, linear part about the origin
+    m = pin.log6(plus * minus.inverse()).vector / (2 * h)
+    fd = np.concatenate([m[3:], m[:3]])
+    np.testing.assert_allclose(twist, fd, atol=1e-6 * max(1.0, np.abs(fd).max()))
+
+
+def test_general_analysis_refuses_what_only_legs_have_in_a_sentence():
+    """legs and leg_constraint_wrenches of a mechanism read over its tree: a PkmError
+    naming the attribute and where the per-leg reading is."""
+    an = _load("loops/five_bar.urdf").analyze()
+    for name in ("legs", "leg_constraint_wrenches"):
+        with pytest.raises(pkm_pin.PkmError, match=f"{name}: .*reads no legs"):
+            getattr(an, name)
+
+
+def test_a_per_leg_assembly_without_its_view_is_refused_by_the_engine():
+    """An Assembly with no per-leg view analysed by the per-leg engine directly
+    (LegsAnalysis) says how to read it per leg."""
+    mech = _load("mechanisms/stewart.toml")
+    general = mech.general.home_assembly
+    with pytest.raises(pkm_pin.InvalidAssembly, match="no per-leg view"):
+        LegsAnalysis(Assembly(mech, general.pose, None))
