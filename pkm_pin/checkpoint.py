@@ -17,7 +17,10 @@ and renamed over the final name: a reader never sees a truncated file):
   of a resume are those of the first run), ``S.done`` (per pose), the sweep's per-pose
   arrays ``S.ok``, ``S.dof``, ``S.type_I``, ``S.type_II``, ``S.condition``, ``S.det``,
   ``S.q_actuated``, ``S.lti``, ``S.cti`` (the caller's pose order; meaningful where
-  ``done``), ``S.failure_index`` and ``S.failure_reason``.
+  ``done``), ``S.failure_index`` and ``S.failure_reason``; a general mechanism's
+  workspace keeps its cells' ``S.ok``, ``S.singularity``, ``S.det``, ``S.lti``,
+  ``S.cti`` and ``S.dof`` instead (stage ``cells``, over the cells its continuation
+  reached).
 
 A chunk is recorded whole or not at all, and each chunk is evaluated from the same poses
 whether or not the run was interrupted (every chunk warm-starts from home), so a resumed
@@ -395,6 +398,9 @@ class _Stage:
         self.failures: dict[int, str] = {}
         self.fingerprint = ""
         self.chunks_recorded = 0
+        #: The per-pose arrays kept (a sweep's :data:`SWEEP_FIELDS`, or the keys of
+        #: the ``empty`` arrays the stage began with).
+        self.fields: tuple[str, ...] = SWEEP_FIELDS
 
     def begin(self, X: np.ndarray, chunks: list, options: Mapping,
               empty: dict[str, np.ndarray]) -> list:
@@ -408,6 +414,7 @@ class _Stage:
                                                      .tobytes()).hexdigest()
                              if chunks else ""}).encode())
         self.fingerprint = h.hexdigest()
+        self.fields = tuple(empty)
         N = len(X)
         saved = self.cp._saved
         key = f"{self.name}.fingerprint"
@@ -420,14 +427,14 @@ class _Stage:
                 raise InputError(f"--resume {self.cp.prefix}: the {self.name} of "
                                  f"{self.cp.path} were computed from other poses or options")
             self.done = saved[f"{self.name}.done"].astype(bool).copy()
-            for f in SWEEP_FIELDS:
+            for f in self.fields:
                 self.values[f] = saved[f"{self.name}.{f}"].copy()
             self.failures = {int(i): str(r) for i, r in
                              zip(saved[f"{self.name}.failure_index"],
                                  saved[f"{self.name}.failure_reason"])}
             for k, c in enumerate(chunks):
                 if self.done[c].all():
-                    part = {f: self.values[f][c] for f in SWEEP_FIELDS}
+                    part = {f: self.values[f][c] for f in self.fields}
                     part["failures"] = [(i, self.failures[int(g)]) for i, g in enumerate(c)
                                         if int(g) in self.failures]
                     parts[k] = part
@@ -437,7 +444,7 @@ class _Stage:
     def record(self, idx: np.ndarray, part: Mapping, check: bool = True) -> None:
         """A chunk's results (poses ``idx``): kept, then written when due
         (:meth:`Checkpoint._recorded`; ``check``: then stop if a signal asked to)."""
-        for f in SWEEP_FIELDS:
+        for f in self.fields:
             self.values[f][idx] = part[f]
         for i, reason in part["failures"]:
             self.failures[int(idx[i])] = reason
@@ -459,7 +466,7 @@ class _Stage:
                f"{self.name}.failure_index": np.array(idx, dtype=np.int64),
                f"{self.name}.failure_reason": np.array([self.failures[i] for i in idx],
                                                        dtype=str)}
-        out.update({f"{self.name}.{f}": self.values[f] for f in SWEEP_FIELDS})
+        out.update({f"{self.name}.{f}": self.values[f] for f in self.fields})
         return out
 
 

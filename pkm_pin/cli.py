@@ -1320,20 +1320,21 @@ def cmd_workspace(args) -> int:
     options = dict(bounds=bounds, n=args.n, kinds=args.kind, progress=not args.quiet)
     if args.sobol is not None:
         options.update(sampling="sobol", samples=args.sobol)
-    if _is_linkage(mech):
-        if args.at or args.jobs > 1 or args.resume:
-            raise InputError("--at/--jobs/--resume are for platform mechanisms (a linkage's "
-                             "workspace grows from cell to cell and is not checkpointed)")
-    else:
-        options.update(at=at_values(args.at), chunk_size=args.chunk_size)
-        options.update(checkpoint=Checkpoint(prefix, resume=args.resume is not None,
-                                             keep=True, identity=_mechanism_identity(args)))
+    if args.at:
+        if _is_linkage(mech):
+            raise InputError("--at holds pose coordinates of a machine read per leg; a "
+                             "general mechanism's workspace holds its other coordinates "
+                             "at the reference assembly's (its fixed line says which)")
+        options.update(at=at_values(args.at))
+    options.update(chunk_size=args.chunk_size, checkpoint=Checkpoint(
+        prefix, resume=args.resume is not None, keep=True,
+        identity=_mechanism_identity(args)))
     executor = None
-    if not _is_linkage(mech) and args.jobs > 1:
+    if args.jobs > 1:
         from concurrent.futures import ProcessPoolExecutor
 
         executor = ProcessPoolExecutor(args.jobs)
-        options.update(executor=executor, chunk_size=args.chunk_size)
+        options.update(executor=executor)
     try:
         with graceful_stop(_stopping):
             ws = mech.workspace(coords, **options)

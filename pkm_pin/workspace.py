@@ -52,11 +52,12 @@ restarts where they fail: the workspace found is the one connected to home.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from collections import deque
 from collections.abc import Mapping, Sequence
-from concurrent.futures import Executor
+from concurrent.futures import Executor, as_completed
 from dataclasses import dataclass, field, replace
 from typing import NamedTuple
 
@@ -871,7 +872,9 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
                       samples: int | None = None, seed: int = 0,
                       kinds: Sequence[str] | None = None, threshold: float | None = None,
                       centre=None, max_iter: int = 10, progress: bool = False,
-                      subsamples: int | None = None) -> Workspace:
+                      subsamples: int | None = None, executor: Executor | None = None,
+                      chunk_size: int = 2000, checkpoint=None,
+                      resume: bool = False) -> Workspace:
     """The reachable, singularity-free and good-transmission workspaces of a general
     linkage (module docstring), on a grid, on the working mode of the reference
     assembly.
@@ -899,6 +902,16 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
             inside when it is followed (continuation) from the configuration of its
             cell, or of the nearest solved neighbour (diagonals included); the other
             kinds' volumes are cell counts.
+        executor, chunk_size: The analyses of the cells reached (the costly part: the
+            classes, the carried determinant, the transmission) in chunks of
+            ``chunk_size`` cells, on ``executor`` when given (processes: the linkage is
+            pickled to them); the continuation that reaches the cells is sequential.
+        checkpoint, resume: As :func:`workspace`: each chunk of cell analyses is
+            recorded (stage ``cells``) and an interrupt writes what is done and raises
+            :class:`~pkm_pin.checkpoint.Interrupted`; a resume follows the cells again
+            (deterministic, a small part of the time) and analyses only the chunks not
+            done; the result is identical, bit for bit, to an uninterrupted run. An
+            interrupt before the analyses begin stops at once.
     """
     from .transmission import GOOD_LTI
 
@@ -916,6 +929,15 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
                          f"bounds {dom.bounds.tolist()}: a linkage's workspace grows from it")
     solve_at = _linkage_solver(link, ref, dom, max_iter)
     follow = _continuation(link, dom, solve_at)
+    sub = _default_subsamples(1 if subsamples is None else subsamples, len(dom.coords))
+    if int(chunk_size) < 1:
+        raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
+    cp = _begin_checkpoint(checkpoint, resume, {
+        "study": "linkage workspace", "mechanism": link.name, "coords": list(dom.coords),
+        "bounds": dom.bounds, "n": np.broadcast_to(np.asarray(n), (len(dom.coords),)).tolist(),
+        "kinds": list(kinds), "threshold": threshold, "max_iter": int(max_iter),
+        "chunk_size": int(chunk_size), "subsamples": sub}, int(np.prod(shape)),
+        len(link.actuated))
     t1 = time.perf_counter()
     q_start = _first_configuration(link.model, ref, dom.home,
                                    points[np.ravel_multi_index(start, shape)], solve_at,
@@ -924,15 +946,17 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
               follow, progress)
     home_an = link.analyze(ref.q)
     values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds,
-                             home_an)
+                             home_an, executor, int(chunk_size), cp and cp.stage("cells"))
     t2 = time.perf_counter()
     home_det = _carried_det(home_an, home_an.platform_twists)
-    sub = _default_subsamples(1 if subsamples is None else subsamples, len(dom.coords))
-    return _finish(link.name, dom.coords, dom.units, dom.bounds, "grid", axes, shape, points,
-                   dom.fixed, dom.home, values, home_an.dof, home_det, kinds, threshold,
-                   centre, dom.method, t0, t1, t2, int((~values["ok"]).sum()), sub,
-                   (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
-                                                                       sub, follow)}))
+    ws = _finish(link.name, dom.coords, dom.units, dom.bounds, "grid", axes, shape, points,
+                 dom.fixed, dom.home, values, home_an.dof, home_det, kinds, threshold,
+                 centre, dom.method, t0, t1, t2, int((~values["ok"]).sum()), sub,
+                 (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
+                                                                     sub, follow)}))
+    if cp is not None:
+        cp.finish()
+    return ws
 
 
 class _LinkageDomain(NamedTuple):
@@ -1246,36 +1270,89 @@ def _carried_det(an, P0_world: np.ndarray) -> float:
     return float(np.linalg.det(A @ (carried @ screws.DELTA).T))
 
 
-def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, generic
+def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, generic,
+                    executor: Executor | None = None, chunk_size: int = 2000, stage=None
                     ) -> dict:
     """The per-cell arrays of a linkage workspace (analyses only with ``analyse``, the
     LTI and CTI of :meth:`Linkage.transmission` with ``transmission``); ``q``: each cell's
     configuration (nan rows where not solved); ``generic``: the reference assembly's
-    analysis."""
-    N = int(np.prod(shape))
-    ok = np.zeros(N, bool)
-    cls = np.full(N, "", dtype="<U4")
-    det, dof, lti = np.full(N, np.nan), np.full(N, -1), np.full(N, np.nan)
-    cti = np.full(N, np.nan)
-    q_all = np.full((N, link.model.nq), np.nan)
-    for i, q in Q.items():
-        ok[i] = True
-        q_all[i] = q
+    analysis. The cells reached are analysed in chunks of ``chunk_size`` (in cell order;
+    on ``executor`` when given), each recorded in the checkpoint ``stage`` when given
+    (the chunks it holds already are not analysed again)."""
+    N, nq = int(np.prod(shape)), link.model.nq
+    cells = np.array(sorted(Q), dtype=np.int64)
+    qs = np.array([Q[int(i)] for i in cells], dtype=float).reshape(len(cells), nq)
+    chunks = [np.arange(a, min(a + chunk_size, len(cells)))
+              for a in range(0, len(cells), chunk_size)]
+    parts: list = [None] * len(chunks)
+    if stage is not None:
+        parts = stage.begin(np.hstack([cells[:, None].astype(float), qs]), chunks,
+                            {"analyse": analyse, "transmission": transmission},
+                            _cells_unanalysed(len(cells)))
+    todo = [k for k, p in enumerate(parts) if p is None]
+    running = stage.cp.running() if stage is not None else contextlib.nullcontext()
+    try:
+        with running:
+            if executor is None:
+                for k in todo:
+                    parts[k] = _linkage_chunk(link, qs[chunks[k]], analyse, transmission,
+                                              generic)
+                    if stage is not None:
+                        stage.record(chunks[k], parts[k])
+            else:
+                futures = {executor.submit(_linkage_chunk, link, qs[chunks[k]], analyse,
+                                           transmission, generic): k for k in todo}
+                for f in as_completed(futures):
+                    k = futures[f]
+                    parts[k] = f.result()
+                    if stage is not None:
+                        stage.record(chunks[k], parts[k])
+    except BaseException as e:  # Ctrl-C, SIGTERM, a failed chunk: keep the chunks done
+        if stage is not None:
+            stage.cp.interrupted(e)
+        raise
+    if stage is not None:
+        stage.end()
+    out = {"ok": np.zeros(N, bool), "singularity": np.full(N, "", dtype="<U4"),
+           "det": np.full(N, np.nan), "lti": np.full(N, np.nan), "cti": np.full(N, np.nan),
+           "dof": np.full(N, -1)}
+    for c, part in zip(chunks, parts):
+        for key, column in out.items():
+            column[cells[c]] = part[key]
+    q_all = np.full((N, nq), np.nan)
+    q_all[cells] = qs
+    out = {key: column.reshape(shape) for key, column in out.items()}
+    out["q"] = q_all.reshape(tuple(shape) + (nq,))
+    return out
+
+
+def _cells_unanalysed(M: int) -> dict:
+    """The per-cell arrays of M reached cells not analysed yet."""
+    return {"ok": np.zeros(M, bool), "singularity": np.full(M, "", dtype="<U4"),
+            "det": np.full(M, np.nan), "lti": np.full(M, np.nan), "cti": np.full(M, np.nan),
+            "dof": np.full(M, -1)}
+
+
+def _linkage_chunk(link, qs: np.ndarray, analyse: bool, transmission: bool, generic
+                   ) -> dict:
+    """The per-cell arrays of the configurations ``qs`` of reached cells (a pure task:
+    the same result wherever and whenever it runs)."""
+    part = _cells_unanalysed(len(qs))
+    part["ok"][:] = True
+    for i, q in enumerate(qs):
         an = link.analyze(q, generic=generic, nearby=0) if analyse else None
         if transmission:  # from the cell's analysis when made (not made twice)
             tr = link.transmission(q, analysis=an)
-            lti[i], cti[i] = tr.lti, tr.cti
+            part["lti"][i], part["cti"][i] = tr.lti, tr.cti
         if not analyse:
-            cls[i] = "none"
-            dof[i] = generic.dof
+            part["singularity"][i] = "none"
+            part["dof"][i] = generic.dof
             continue
-        cls[i] = an.singularity if not an.constraint_singular else "III"
-        dof[i] = an.dof
-        det[i] = _carried_det(an, generic.platform_twists)
-    return {"ok": ok.reshape(shape), "singularity": cls.reshape(shape),
-            "det": det.reshape(shape), "lti": lti.reshape(shape),
-            "cti": cti.reshape(shape), "dof": dof.reshape(shape),
-            "q": q_all.reshape(tuple(shape) + (link.model.nq,))}
+        part["singularity"][i] = an.singularity if not an.constraint_singular else "III"
+        part["dof"][i] = an.dof
+        part["det"][i] = _carried_det(an, generic.platform_twists)
+    part["failures"] = []
+    return part
 
 
 __all__ = ["COORDINATES", "KINDS", "KIND_COLOURS", "Inscribed", "Volume", "Workspace",

@@ -184,7 +184,10 @@ def _run_until_partial(argv: list[str], partial: Path, signum: int):
     (signal.SIGINT, ["workspace", "stewart", "--coords", "x", "y", "z", "--n", "16",
                      "--chunk-size", "200"]),
     (signal.SIGTERM, ["map", "stewart", "--axes", "x", "y", "--n", "70",
-                      "--chunk-size", "200"])])
+                      "--chunk-size", "200"]),
+    # a general mechanism's workspace: its cell analyses are checkpointed too
+    (signal.SIGINT, ["workspace", str(ROOT / "models" / "loops" / "five_bar.urdf"), "--n",
+                     "40", "--chunk-size", "40"])])
 def test_the_cli_signalled_after_its_first_chunk_resumes_to_identical_arrays(
         tmp_path, capsys, signum, command):
     """pkm-pin sent SIGINT (workspace) or SIGTERM (map) after its first chunk is written
@@ -269,3 +272,88 @@ def test_a_full_disk_during_the_run_is_one_error_and_keeps_the_last_file(tmp_pat
     with np.load(tmp_path / "ws.partial.npz") as z:
         assert z["cells.done"].sum() == 30
     assert cli.main(argv[:-2] + ["--resume", str(tmp_path / "ws")]) == 0
+
+
+# ------------------------------------------------- a general mechanism's workspace
+#: A general (tree) mechanism's small study: the five-bar's point over a 12 × 12 grid in
+#: chunks of 20 reached cells (62 cells reached: 4 chunks).
+FIVE_BAR = ROOT / "models" / "loops" / "five_bar.urdf"
+LINKAGE_STUDY = dict(n=12, chunk_size=20)
+
+
+@pytest.fixture(scope="module")
+def five_bar():
+    """The five-bar (read by the general backend) and its uninterrupted small workspace."""
+    import pkm_pin
+
+    mech = pkm_pin.load_mechanism(FIVE_BAR)
+    assert mech.backend == "general"
+    return mech, mech.workspace(**LINKAGE_STUDY)
+
+
+def test_a_general_workspace_interrupted_then_resumed_gives_identical_arrays(five_bar,
+                                                                            tmp_path):
+    """The general workspace's cell analyses are checkpointed as a platform's are: a
+    KeyboardInterrupt after two chunks keeps them (40 of the 62 reached cells in the
+    partial file), the resume analyses the rest and ends with the uninterrupted run's
+    arrays, bit for bit, and removes the partial file; a resume with another grid is
+    refused, naming what differs."""
+    mech, ref = five_bar
+    assert ref.counts["reachable"] == 62
+    prefix = tmp_path / "ws"
+    with pytest.raises(Interrupted) as info:
+        mech.workspace(**LINKAGE_STUDY, checkpoint=Checkpoint(prefix,
+                                                              on_chunk=_stop_at("cells", 2)))
+    assert info.value.checkpoint.summary() == "40 of 62 cells done"
+    with np.load(tmp_path / "ws.partial.npz") as z:
+        assert int(z["cells.done"].sum()) == 40
+        assert set(z["cells.singularity"][z["cells.done"]]) <= {"none", "I", "II", "III"}
+    with pytest.raises(InputError, match="another study.*n"):
+        mech.workspace(n=11, chunk_size=20, checkpoint=prefix, resume=True)
+    ws = mech.workspace(**LINKAGE_STUDY, checkpoint=prefix, resume=True)
+    _assert_same_workspace(ws, ref)
+    assert not (tmp_path / "ws.partial.npz").exists()
+
+
+def test_a_general_workspace_on_processes_gives_the_same_arrays(five_bar):
+    """The cell analyses of a general workspace on a process pool (the linkage pickled to
+    the workers, chunks gathered as they finish) give the sequential run's arrays."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    mech, ref = five_bar
+    with ProcessPoolExecutor(2) as executor:
+        ws = mech.workspace(**LINKAGE_STUDY, executor=executor)
+    _assert_same_workspace(ws, ref)
+
+
+def test_the_cli_workspace_of_a_general_mechanism_takes_jobs(tmp_path, capsys):
+    """pkm-pin workspace on a general mechanism: --jobs 2 gives the plain run's volumes
+    (the signalled run resumed: above); a partial file of the API's study is not the
+    CLI's (its identity holds the file); --at, which holds pose coordinates of a machine
+    read per leg, is refused in one line saying where the other coordinates are held."""
+    base = ["workspace", str(FIVE_BAR), "--n", "12", "--chunk-size", "20", "--quiet",
+            "--json"]
+    assert cli.main(base + ["--out", str(tmp_path / "plain")]) == 0
+    plain = capsys.readouterr().out
+    assert cli.main(base + ["--jobs", "2", "--out", str(tmp_path / "jobs")]) == 0
+    assert _volumes(capsys.readouterr().out) == _volumes(plain)
+    import pkm_pin
+
+    with pytest.raises(Interrupted):
+        pkm_pin.load_mechanism(FIVE_BAR).workspace(**LINKAGE_STUDY, checkpoint=Checkpoint(
+            tmp_path / "cut", on_chunk=_stop_at("cells", 1), keep=True))
+    assert (tmp_path / "cut.partial.npz").exists()
+    assert cli.main(base + ["--out", str(tmp_path / "cut"), "--resume",
+                            str(tmp_path / "cut")]) == 2  # another study: the CLI's identity
+    err = capsys.readouterr().err
+    assert "another study" in err and err.count("\n") == 1
+    assert cli.main(base + ["--at", "z=0", "--out", str(tmp_path / "at")]) == 2
+    err = capsys.readouterr().err
+    assert "--at holds pose coordinates of a machine read per leg" in err
+
+
+def _volumes(text: str) -> dict:
+    import json
+
+    data = json.loads(text)
+    return {k: v for k, v in data["volumes"].items()}
