@@ -7,7 +7,14 @@ run, best of interleaved rounds.
 Prints both times, their ratio, the share of the unreachable poses the test refuses,
 and whether the reachable masks are the same (they must be).
 
-Run: ``python benchmarks/bench_reach.py [n] [rounds]`` (default a 20³ grid, 2 rounds).
+Then the same for the partial poses of lower-mobility machines (:func:`partial`: the
+shipped 3-RPS and 3-PRS over their default coordinates z, roll, pitch, each cell's
+parasitic coordinates completed): with and without the completion's limit stop (a
+completion whose Newton stops with a joint on its limit is not continued,
+``position._against_a_limit``); every mask must be the same.
+
+Run: ``python benchmarks/bench_reach.py [n] [rounds]`` (default a 20³ grid, 2 rounds;
+the partial poses on a 9³ grid).
 """
 
 from __future__ import annotations
@@ -18,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pkm_pin import load_mechanism, sweep
+from pkm_pin import load_mechanism, position, sweep
 
 STEWART = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "stewart.toml"
 
@@ -61,6 +68,36 @@ def main(n: int = 20, rounds: int = 2, name: str = "stewart") -> dict:
             "refused": caught}
 
 
+def partial(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> dict:
+    """Time the workspaces over partial poses with and without the completion's limit
+    stop; return {name: figures}."""
+    original = position._against_a_limit
+    out = {}
+    for name in names:
+        mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
+        mech.workspace(n=2)  # compile and cache before timing
+        best, masks = {"with": np.inf, "without": np.inf}, {}
+        for _ in range(rounds):
+            for key in ("with", "without"):
+                position._against_a_limit = original if key == "with" else \
+                    (lambda mech, leg_q: False)
+                try:
+                    t = time.perf_counter()
+                    ws = mech.workspace(n=n)
+                    best[key] = min(best[key], time.perf_counter() - t)
+                finally:
+                    position._against_a_limit = original
+                masks[key] = ws.masks
+        same = all(np.array_equal(masks["with"][k], masks["without"][k]) for k in masks["with"])
+        ratio = best["with"] / best["without"]
+        print(f"{mech.name} workspace over {', '.join(ws.coords)} (partial poses completed), "
+              f"{n}^3 cells, best of {rounds}: without the limit stop {best['without']:.2f} s, "
+              f"with it {best['with']:.2f} s, ratio x{ratio:.2f}; same masks: {same}")
+        out[name] = {"with": best["with"], "without": best["without"], "same": same}
+    return out
+
+
 if __name__ == "__main__":
     args = [int(a) for a in sys.argv[1:3]]
     main(*args)
+    partial(rounds=args[1] if len(args) > 1 else 1)

@@ -304,6 +304,12 @@ class Leg(SerialChain):
         lo, up = self._bounds
         return bool(np.all(q >= lo - tol) and np.all(q <= up + tol))
 
+    def at_a_limit(self, q: np.ndarray) -> bool:
+        """Whether a joint of ``q`` sits exactly at a bound of its limits (where
+        :meth:`clip` puts a joint that a solver's step would take beyond it)."""
+        lo, up = self._bounds
+        return bool(np.any((q <= lo) | (q >= up)))
+
     def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
         """A configuration drawn uniformly inside the limits (infinite limits: ±π)."""
         lo, up = self._bounds

@@ -119,3 +119,11 @@ def test_bench_reach_times_both_and_keeps_the_reachable_mask(capsys):
     assert figures["with"] > 0 and figures["without"] > 0
     assert figures["same"] and figures["refused"] > 0
     assert "ratio x" in capsys.readouterr().out
+
+
+def test_bench_reach_times_partial_poses_with_and_without_the_limit_stop(capsys):
+    """bench_reach.partial times the 3-PRS workspace over partial poses (a 4³ grid) with
+    and without the completion's limit stop: both positive, the same masks."""
+    figures = bench_reach.partial(n=4, names=("prs3",))["prs3"]
+    assert figures["with"] > 0 and figures["without"] > 0 and figures["same"]
+    assert "same masks: True" in capsys.readouterr().out

@@ -106,6 +106,39 @@ def test_unreachable_partial_pose_raises(rps3):
         rps3.complete_pose(z=5.0, roll=0.0, pitch=0.0)
 
 
+def test_a_completion_stopped_against_a_limit_is_not_continued(rps3, monkeypatch):
+    """Newton stopped with a joint on its limit (a leg's stroke exhausted) is not
+    continued: one solve instead of 1 + 4 + 16 steps, and the same error; a workspace over
+    partial poses (5³) gets the same masks with and without the stop."""
+    from pkm_pin import position
+    from pkm_pin.errors import ForwardKinematicsError
+
+    calls = []
+    solve = position.solve_coordinates
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return solve(*args, **kwargs)
+
+    monkeypatch.setattr(position, "solve_coordinates", counted)
+    z = rps3.home.translation[2]
+    beyond = dict(z=z + 3 * rps3.characteristic_length, roll=0.0, pitch=0.0)
+    with pytest.raises(ForwardKinematicsError, match="cannot be completed") as stopped:
+        rps3.complete_pose(**beyond)
+    assert len(calls) == 1
+    with_stop = rps3.workspace(n=5)
+    monkeypatch.setattr(position, "_against_a_limit", lambda mech, leg_q: False)
+    calls.clear()
+    with pytest.raises(ForwardKinematicsError, match="cannot be completed") as continued:
+        rps3.complete_pose(**beyond)
+    assert len(calls) > 5
+    assert str(stopped.value).split(":")[0] == str(continued.value).split(":")[0]
+    without = rps3.workspace(n=5)
+    assert with_stop.counts == without.counts
+    for kind, mask in without.masks.items():
+        assert np.array_equal(with_stop.masks[kind], mask), kind
+
+
 def test_printed_precision_pose_is_projected(rps3):
     """A full pose printed at 6 significant digits is projected onto the manifold (the
     difference is reported, below the tolerance); one 1e-3 off is refused."""
