@@ -82,14 +82,16 @@ class Analysis(OutputMaps):
     * the singularities: ``indices`` (``type_I``, ``type_II``, ``condition_A``),
       ``motion_indices`` (``forward``, ``inverse``), ``singularity``,
       ``constraint_singular``;
-    * the maps and studies: ``forward_velocity``, ``inverse_velocity``, ``transmission``,
+    * the maps and studies: ``forward_velocity``, ``inverse_velocity``, ``joint_rates``,
+      ``transmission``,
       the statics and ellipsoids of :class:`~pkm_pin.output_maps.OutputMaps`;
     * where they come from: ``mechanism``, ``assembly``, ``rtol``, ``singular_tol``,
       ``length``, ``centre`` (= ``reference_point``, the point every decision is
       homogenised about).
 
-    What only legs have (``legs``, ``leg_constraint_wrenches``, and ``passive_rates`` of
-    a platform twist, per leg) a general analysis refuses with the reason.
+    ``joint_rates(q̇_a)`` gives the rates of every joint of the tree. What only legs have
+    (``legs``, ``leg_constraint_wrenches``, and ``passive_rates``: each leg's joint rates
+    for a platform twist) a general analysis refuses with the reason.
 
     Conventions: twists ``(ω; v_O)`` and wrenches ``(f; m_O)`` axis-first about the
     world origin.
@@ -416,6 +418,13 @@ class LegsAnalysis(Analysis):
         leg_cti = constraint_transmission(A, C, points, L, self.rtol, generic)
         return Transmission.of(iti, oti, leg_cti, lay.act_leg, [leg.name for leg in mech.legs])
 
+    def joint_rates(self, qdot_actuated) -> np.ndarray:
+        """Velocity ``v`` (nv,) of the mechanism's whole tree (``mechanism.model.tree``,
+        the order of :attr:`q`) for the actuated rates [rad/s or m/s]: the general
+        elimination's at this configuration (:meth:`TreeAnalysis.joint_rates`), so both
+        analyses of one machine give the same rates."""
+        return self.mechanism.general.analyze(self.q, nearby=0).joint_rates(qdot_actuated)
+
     def passive_rates(self, twist) -> list[np.ndarray]:
         """Every leg's joint rates (all joints, velocity order) for a platform twist."""
         t = self._check_twist(twist)
@@ -650,7 +659,13 @@ class TreeAnalysis(Analysis):
         out = th - (th @ P.T) @ P if P.size else th
         return np.linalg.norm(out) <= SPAN_RTOL * max(np.linalg.norm(th), 1e-300)
 
-    def passive_rates(self, qdot_actuated) -> np.ndarray:
+    def passive_rates(self, twist):
+        """Refused: each leg's joint rates for an output twist need legs
+        (:meth:`joint_rates` of :meth:`inverse_velocity` gives the tree's)."""
+        raise _no_legs("passive_rates",
+                       "joint_rates(inverse_velocity(twist)) gives the tree's joint rates")
+
+    def joint_rates(self, qdot_actuated) -> np.ndarray:
         """Velocity ``v`` (nv,) of the whole tree for the actuated rates [rad/s or m/s]
         (internal motions that move neither the actuators nor the output: none).
 
@@ -674,7 +689,7 @@ class TreeAnalysis(Analysis):
     def forward_velocity(self, qdot_actuated) -> np.ndarray:
         """Output twist (6,) axis-first about the world origin from the actuated rates."""
         Xr, Yr, M, U, act = self._maps
-        v = self.passive_rates(qdot_actuated)
+        v = self.joint_rates(qdot_actuated)
         return from_homogenised(Yr @ np.linalg.lstsq(Xr, v[act] / U[act], rcond=None)[0],
                                 self.reference_point, self.length)[0]
 
@@ -704,11 +719,12 @@ class TreeAnalysis(Analysis):
 LinkageAnalysis = TreeAnalysis
 
 
-def _no_legs(name: str) -> PkmError:
-    """Why a general analysis has no ``name``."""
+def _no_legs(name: str, instead: str = "") -> PkmError:
+    """Why a general analysis has no ``name`` (``instead``: what answers instead)."""
     return PkmError(f"{name}: this analysis is the general elimination over the tree, "
-                    "which reads no legs; where a base–legs–platform machine is detected "
-                    "in the model, mech.legs_mechanism.analyze(...) reads it per leg")
+                    "which reads no legs; " + (f"{instead}; " if instead else "")
+                    + "where a base–legs–platform machine is detected in the model, "
+                    "mech.legs_mechanism.analyze(...) reads it per leg")
 
 
 def classify(type_I, type_II, tol: float = SINGULAR_TOL):

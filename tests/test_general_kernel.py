@@ -112,7 +112,7 @@ def assert_same_velocities(a, b, rng) -> None:
             a.forward_velocity(qd)
         return
     np.testing.assert_allclose(a.forward_velocity(qd), t, atol=1e-9)
-    np.testing.assert_allclose(a.passive_rates(qd), b.passive_rates(qd), atol=1e-9)
+    np.testing.assert_allclose(a.joint_rates(qd), b.joint_rates(qd), atol=1e-9)
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))

@@ -90,7 +90,7 @@ def test_four_bar_forward_kinematics_and_velocity_closed_form():
     np.testing.assert_allclose(t, [0, 0, ratio, 0, -GROUND * ratio, 0], atol=1e-10)
     T, V = fd_velocity(link, a)
     np.testing.assert_allclose(t, T[:, 0], atol=1e-7)
-    np.testing.assert_allclose(an.passive_rates([1.0]), V[:, 0], atol=1e-7)
+    np.testing.assert_allclose(an.joint_rates([1.0]), V[:, 0], atol=1e-7)
     np.testing.assert_allclose(an.inverse_velocity(t), [1.0], atol=1e-10)
     np.testing.assert_allclose(an.A @ screws.DELTA @ t, an.B @ [1.0], atol=1e-10)
 
@@ -172,7 +172,7 @@ def test_five_bar_mobility_and_velocity(kind, redundant):
     T, V = fd_velocity(link, a)
     for k, qd in enumerate(np.eye(2)):
         np.testing.assert_allclose(an.forward_velocity(qd), T[:, k], atol=1e-7)
-        np.testing.assert_allclose(an.passive_rates(qd), V[:, k], atol=1e-7)
+        np.testing.assert_allclose(an.joint_rates(qd), V[:, k], atol=1e-7)
         np.testing.assert_allclose(an.inverse_velocity(T[:, k]), qd, atol=1e-6)
 
 

@@ -170,3 +170,25 @@ def test_a_per_leg_assembly_without_its_view_is_refused_by_the_engine():
     general = mech.general.home_assembly
     with pytest.raises(pkm_pin.InvalidAssembly, match="no per-leg view"):
         LegsAnalysis(Assembly(mech, general.pose, None))
+
+
+@pytest.mark.parametrize("name", ["mechanisms/stewart.toml", "loops/delta_loops.urdf"])
+def test_joint_rates_are_the_trees_velocity_for_the_actuated_rates_on_both_backends(name):
+    """joint_rates(q̇_a) of either analysis: a velocity of the mechanism's tree that keeps
+    every closure (J_c v = 0), moves the actuated joints at q̇_a and the output at
+    forward_velocity(q̇_a); the per-leg and the general one agree to 1e-9. A general
+    analysis refuses passive_rates (per leg) and says what answers instead."""
+    legs, general = _load(name, "legs"), _load(name, "general")
+    la, ga = legs.analyze(), general.analyze()
+    qd = np.random.default_rng(2).normal(size=la.A.shape[0])
+    kin = legs.model.kinematics(la.q)
+    for an in (la, ga):
+        v = an.joint_rates(qd)
+        assert v.shape == (legs.model.tree.nv,)
+        np.testing.assert_allclose(kin.closure_jacobian @ v, 0.0, atol=1e-9)
+        np.testing.assert_allclose(v[list(legs.model.actuated_v)], qd, atol=1e-9)
+        np.testing.assert_allclose(kin.output_jacobian @ v, an.forward_velocity(qd),
+                                   atol=1e-9)
+    np.testing.assert_allclose(la.joint_rates(qd), ga.joint_rates(qd), atol=1e-9)
+    with pytest.raises(pkm_pin.PkmError, match="passive_rates: .*joint_rates"):
+        ga.passive_rates(la.forward_velocity(qd))
