@@ -70,6 +70,7 @@ tol``; II: ``min(type_II, forward) < tol``; III: both.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import math
 from collections.abc import Callable, Mapping
@@ -101,6 +102,7 @@ from .model.closure_model import (
 from .model.structure import detect_platform, legs_length
 from .screws import from_homogenised, homogenised_about, svd_rank
 from .solve import (
+    POSE_COORDINATES,
     TreeSolution,
     iter_tree_starts,
     pose_coordinates,
@@ -1105,11 +1107,14 @@ class Linkage:
                            tol: float = CLOSURE_TOL) -> Assembly:
         """The assembly whose output frame reaches ``pose`` (``pin.SE3``, world).
 
-        When the output has 6 DOF the whole pose is targeted. Otherwise only the
-        components of the pose error ``log6(pose⁻¹ · oMo)`` (output axes, ``(θ; ρ /
-        L)``) along the output's twist system at the guess (its assembly; homogenised,
-        output axes) are targeted: the output reaches the pose as far as it can move
-        towards it, the other components are what the mechanism imposes.
+        When the output has 6 DOF the whole pose is targeted. Otherwise the whole pose is
+        tried first (least squares on every component: a pose on the output's motion is
+        met exactly); where that does not converge, only the components of the pose
+        error ``log6(pose⁻¹ · oMo)`` (output axes, ``(θ; ρ / L)``) along the output's
+        twist system at the guess (its assembly; homogenised, output axes) are targeted:
+        the output reaches the pose as far as it can move towards it, the other
+        components are what the mechanism imposes. A point output targets its
+        position.
 
         A partial pose (a mapping of some of x, y, z, roll, pitch, yaw to values, the
         others solved for: :meth:`Mechanism.complete_pose`) is solved leg by leg through
@@ -1130,12 +1135,37 @@ class Linkage:
         model = self._model
         home = self.assemble(guess, starts=starts, seed=seed, tol=tol)
         rows = pose_rows(model, model.kinematics(home.q))
-        sol, iterations = solve_tree_starts(
+        iterations = 0
+        if len(rows) < 6 and not model.output_point:  # the whole pose first: one on the
+            # output's motion is met exactly (the rows chosen at the guess may vanish
+            # at another pose of that motion)
+            sol, iterations = solve_tree_starts(
+                model, iter_tree_starts(model, home.q, count=0), pose=pose, nearest=home.q,
+                tol=tol)
+            if sol.converged:
+                return self._assembly(sol, iterations + home.iterations)
+        sol, more = solve_tree_starts(
             model, iter_tree_starts(model, home.q, count=int(starts), seed=seed), pose=pose,
             pose_rows=rows, nearest=home.q, tol=tol)
+        iterations += more
         if not sol.converged:
             raise self._failure(sol, starts + 4, None, "output pose")
         return self._assembly(sol, iterations + home.iterations)
+
+    def complete_pose(self, guess=None, **coords) -> pin.SE3:
+        """The output frame's full pose at a partial pose (``coords``: some of x, y, z
+        [m], roll, pitch, yaw [rad]), the other coordinates solved for nearest ``guess``
+        (default home): the output pose of :meth:`inverse_kinematics` of that mapping
+        (:meth:`pkm_pin.Mechanism.complete_pose` of a machine read per leg).
+
+        Raises:
+            InputError: no coordinate given, or a name that is not one.
+            LoopClosureError: the partial pose cannot be reached.
+        """
+        if not coords:
+            raise InputError("complete_pose takes some of x, y, z, roll, pitch, yaw, e.g. "
+                             "complete_pose(x=0.1)")
+        return self.inverse_kinematics(dict(coords), guess).output_pose
 
     def _partial_pose(self, pose: Mapping, guess, *, starts: int, seed: int, tol: float
                       ) -> Assembly:
@@ -1193,7 +1223,9 @@ class Linkage:
                                         condition=condition)
 
     def sweep(self, q_actuated, guess=None, *, tol: float = CLOSURE_TOL,
-              about: str = "output", transmission: bool = False) -> LinkageSweep:
+              about: str = "output", transmission: bool = False, progress: bool = False,
+              rtol: float | None = None, singular_tol: float = CLOSENESS_SINGULAR_TOL,
+              chunk_size: int = 2000, checkpoint=None, executor=None) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×
         actuated), each warm-started from the previous assembly (continuation: the
         branch of ``guess``). A point that does not close is recorded as not converged
@@ -1205,7 +1237,24 @@ class Linkage:
         mappings of some of x, y, z, roll, pitch, yaw, as :meth:`Mechanism.sweep` takes
         them): the output's inverse kinematics at each (:meth:`assembly_at`), warm-started
         from the previous assembly the same way; ``q_actuated`` of the result are then
-        the values found."""
+        the values found.
+
+        The keywords of :meth:`Mechanism.sweep`: ``progress`` (a bar), ``rtol`` and
+        ``singular_tol`` (of each analysis), ``checkpoint`` (a
+        :class:`~pkm_pin.checkpoint.Checkpoint` or one of its stages, stage ``sweep``:
+        the rows are recorded in chunks of ``chunk_size`` in order, an interrupt writes
+        them and raises :class:`~pkm_pin.checkpoint.Interrupted`, a resume continues from
+        the last row recorded with its configuration: the same arrays, bit for bit).
+        ``executor`` is refused: the rows follow one branch, each from the last, so they
+        run one after the other in this process."""
+        if executor is not None:
+            raise InputError("executor: a general sweep follows one branch row after row "
+                             "(each row warm-started from the last), so it runs in this "
+                             "process; leave executor out")
+        if int(chunk_size) < 1:
+            raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
+        rtol = RANK_RTOL if rtol is None else screws.as_fraction(rtol, "rtol")
+        singular_tol = screws.as_fraction(singular_tol, "singular_tol")
         poses = _poses_of(q_actuated)
         if poses is None:
             Q = screws.as_float_array(q_actuated, "q_actuated")
@@ -1215,28 +1264,118 @@ class Linkage:
                                  f"mappings of pose coordinates), got {Q.shape}")
         else:
             Q = np.full((len(poses), len(self.actuated)), np.nan)
-        warm = self._guess_q(guess)
         out = _SweepRows(Q, self._model.nq)
-        generic = None
-        for i in range(len(Q)):
-            try:
-                starts = 0 if warm is not None else 16
-                a = self.assemble(warm, q_actuated=Q[i], starts=starts, tol=tol) \
-                    if poses is None else \
-                    self.inverse_kinematics(poses[i], warm, starts=starts, tol=tol)
-            except AssemblyError as e:
-                out.failures.append((i, str(e)))
-                continue
-            warm = a.q
-            an = self.analyze(a.q, about=about, generic=generic, nearby=0)
-            generic = generic or an
-            out.record(i, a, an)
-            if poses is not None:
-                Q[i] = a.q_actuated
-            if transmission:
-                tr = self.transmission(a, analysis=an if about == "output" else None)
-                out.lti[i], out.cti[i] = tr.lti, tr.cti
+        chunks = [np.arange(a, min(a + int(chunk_size), len(Q)))
+                  for a in range(0, len(Q), int(chunk_size))]
+        stage = _sweep_stage(checkpoint)
+        done = [False] * len(chunks)
+        if stage is not None:
+            fingerprint = Q if poses is None else np.array([_pose_key(p) for p in poses])
+            parts = stage.begin(fingerprint, chunks, {
+                "tol": tol, "about": about, "transmission": bool(transmission),
+                "rtol": rtol, "singular_tol": singular_tol, "guess": self._guess_q(guess)},
+                out.fields())
+            done = [p is not None for p in parts]
+            out.restore(stage)
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(Q), unit="row", desc="sweep", leave=False)
+            bar.update(sum(len(c) for c, d in zip(chunks, done) if d))
+        track = _Track(self, poses, out, self._guess_q(guess), tol, about, transmission,
+                       rtol, singular_tol)
+        running = stage.cp.running() if stage is not None else contextlib.nullcontext()
+        try:
+            with running:
+                for chunk, was_done in zip(chunks, done):
+                    if was_done:
+                        track.resume_after(chunk)
+                        continue
+                    for i in chunk:
+                        track.row(int(i))
+                        if bar is not None:
+                            bar.update(1)
+                    if stage is not None:
+                        stage.record(chunk, out.part(chunk))
+        except BaseException as e:  # Ctrl-C, SIGTERM: keep the chunks recorded
+            if stage is not None:
+                stage.cp.interrupted(e)
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+        if stage is not None:
+            stage.end()
         return out.result()
+
+
+class _Track:
+    """The state of :meth:`Linkage.sweep` along its rows: the configuration the next row
+    starts from and the analysis the constraint singularities are compared with (the
+    first converged row's)."""
+
+    def __init__(self, link: Linkage, poses, out: _SweepRows, warm, tol, about,
+                 transmission, rtol, singular_tol):
+        self.link, self.poses, self.out, self.warm = link, poses, out, warm
+        self.tol, self.about, self.transmission = tol, about, transmission
+        self.rtol, self.singular_tol = rtol, singular_tol
+        self.generic = None
+
+    def row(self, i: int) -> None:
+        link, out, warm = self.link, self.out, self.warm
+        try:
+            starts = 0 if warm is not None else 16
+            a = link.assemble(warm, q_actuated=out.qa[i], starts=starts, tol=self.tol) \
+                if self.poses is None else \
+                link.inverse_kinematics(self.poses[i], warm, starts=starts, tol=self.tol)
+        except AssemblyError as e:
+            out.failures.append((i, str(e)))
+            return
+        self.warm = a.q
+        an = link.analyze(a.q, about=self.about, generic=self.generic, nearby=0,
+                          rtol=self.rtol, singular_tol=self.singular_tol)
+        self.generic = self.generic or an
+        out.record(i, a, an)
+        if self.poses is not None:
+            out.qa[i] = a.q_actuated
+        if self.transmission:
+            tr = link.transmission(a, analysis=an if self.about == "output" else None)
+            out.lti[i], out.cti[i] = tr.lti, tr.cti
+
+    def resume_after(self, chunk: np.ndarray) -> None:
+        """The state after the recorded rows ``chunk``: its last converged configuration
+        (and the first converged row's analysis, analysed again: the same numbers)."""
+        ok = chunk[self.out.ok[chunk]]
+        if not len(ok):
+            return
+        if self.generic is None:
+            self.generic = self.link.analyze(self.out.q[ok[0]], about=self.about,
+                                             nearby=0, rtol=self.rtol,
+                                             singular_tol=self.singular_tol)
+        self.warm = self.out.q[ok[-1]].copy()
+
+
+def _sweep_stage(checkpoint):
+    """The checkpoint stage of a general sweep: a Checkpoint's ``"sweep"``, or the
+    stage given."""
+    if checkpoint is None:
+        return None
+    from .checkpoint import Checkpoint
+
+    return checkpoint.stage("sweep") if isinstance(checkpoint, Checkpoint) else checkpoint
+
+
+def _pose_key(pose) -> np.ndarray:
+    """Numbers that identify a pose of a sweep (a checkpoint's fingerprint): the 4×4
+    matrix of a ``pin.SE3``, or a partial pose's six coordinates, nan where not given."""
+    if isinstance(pose, pin.SE3):
+        return pose.homogeneous.reshape(-1)
+    out = np.full(16, np.inf)
+    for k, name in enumerate(POSE_COORDINATES):
+        if name in pose:
+            out[k] = float(pose[name])
+    return out
 
 
 @dataclass
@@ -2001,7 +2140,41 @@ class _SweepRows:
         for k in self._INDICES:
             self.idx[k][i] = an.indices[k]
 
+    def fields(self) -> dict:
+        """The per-row arrays a checkpoint keeps (views of this object's arrays)."""
+        return {"ok": self.ok, "q": self.q, "poses": self.poses, "dof": self.dof,
+                "output_dof": self.odof, "singularity": self.cls_fixed, "q_actuated": self.qa,
+                "lti": self.lti, "cti": self.cti, **self.idx}
+
+    @property
+    def cls_fixed(self) -> np.ndarray:
+        """The classes as a fixed-width string array (what a checkpoint file holds)."""
+        return self.cls.astype("<U4")
+
+    def part(self, rows: np.ndarray) -> dict:
+        """The checkpoint's part of ``rows`` (failures by position in ``rows``)."""
+        where = {int(i): k for k, i in enumerate(rows)}
+        part = {key: value[rows] for key, value in self.fields().items()}
+        part["failures"] = [(where[i], why) for i, why in self.failures if i in where]
+        return part
+
+    def restore(self, stage) -> None:
+        """The rows recorded in ``stage`` (a resume), copied in."""
+        if not stage.done.any():
+            return
+        d = stage.done
+        v = stage.values
+        self.ok[d], self.q[d], self.poses[d] = v["ok"][d], v["q"][d], v["poses"][d]
+        self.dof[d], self.odof[d], self.qa[d] = v["dof"][d], v["output_dof"][d], \
+            v["q_actuated"][d]
+        self.cls[d] = v["singularity"][d]
+        self.lti[d], self.cti[d] = v["lti"][d], v["cti"][d]
+        for k in self._INDICES:
+            self.idx[k][d] = v[k][d]
+        self.failures = sorted((int(i), why) for i, why in stage.failures.items())
+
     def result(self) -> SweepResult:
+        self.failures.sort()
         idx = self.idx
         return SweepResult(self.poses, self.ok, self.dof, self.cls.astype(str),
                            idx["type_I"], idx["type_II"], idx["condition_A"],

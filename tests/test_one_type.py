@@ -192,3 +192,47 @@ def test_joint_rates_are_the_trees_velocity_for_the_actuated_rates_on_both_backe
     np.testing.assert_allclose(la.joint_rates(qd), ga.joint_rates(qd), atol=1e-9)
     with pytest.raises(pkm_pin.PkmError, match="passive_rates: .*joint_rates"):
         ga.passive_rates(la.forward_velocity(qd))
+
+
+def test_complete_pose_on_a_general_mechanism():
+    """complete_pose on mechanisms read over their tree (the five-bar's point, Cassie's
+    knee): the given coordinate is met, the pose is the output pose of the assembly that
+    inverse kinematics of the partial pose finds, which closes (forward kinematics at its
+    actuated values gives the pose back to 1e-9); no coordinate or a
+    wrong name is refused in a sentence."""
+    for name, key, step in (("loops/five_bar.urdf", "x", 0.01),
+                            ("loops/cassie_knee.urdf", "z", 0.01)):
+        mech = _load(name)
+        assert mech.backend == "general"
+        home = mech.home_assembly
+        k = "xyz".index(key)
+        given = {key: home.pose.translation[k] + step}
+        pose = mech.complete_pose(**given)
+        assert pose.translation[k] == pytest.approx(given[key], abs=1e-9)
+        asm = mech.inverse_kinematics(given)
+        assert asm.pose.isApprox(pose, 1e-12)
+        assert max(asm.closure_residuals.values()) < 1e-9
+        back = mech.forward_kinematics(asm.q_actuated, asm)
+        np.testing.assert_allclose(back.pose.translation, pose.translation, atol=1e-9)
+    with pytest.raises(pkm_pin.InputError, match="complete_pose takes some of x"):
+        mech.complete_pose()
+    with pytest.raises(pkm_pin.InputError, match="x, y, z, roll, pitch, yaw"):
+        mech.complete_pose(q=1.0)
+
+
+def test_inverse_kinematics_meets_a_reachable_pose_of_a_lower_mobility_output():
+    """Cassie's knee (a body output with 2 DOF): the inverse kinematics of a full pose on
+    the output's motion (completed from z) reaches that pose to 1e-9, not another pose
+    where the components along the home twist system happen to vanish (6 mm off before);
+    a pose off the motion is still reached as far as the output can move (converged,
+    closures closed)."""
+    mech = _load("loops/cassie_knee.urdf")
+    home = mech.home_assembly
+    pose = mech.complete_pose(z=home.pose.translation[2] + 0.01)
+    asm = mech.inverse_kinematics(pose)
+    np.testing.assert_allclose(asm.pose.translation, pose.translation, atol=1e-9)
+    np.testing.assert_allclose(asm.pose.rotation, pose.rotation, atol=1e-9)
+    off = pin.SE3(pose.rotation, pose.translation + np.array([0.0, 0.002, 0.0]))
+    near = mech.inverse_kinematics(off)
+    assert max(near.closure_residuals.values()) < 1e-9
+    assert abs(near.pose.translation[1] - off.translation[1]) > 1e-3  # y is not a motion

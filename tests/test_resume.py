@@ -357,3 +357,38 @@ def _volumes(text: str) -> dict:
 
     data = json.loads(text)
     return {k: v for k, v in data["volumes"].items()}
+
+
+def test_a_general_sweep_takes_the_sweep_keywords_and_resumes_to_identical_arrays(tmp_path):
+    """A general mechanism's sweep takes Mechanism.sweep's keywords: progress, rtol,
+    singular_tol, chunk_size and a checkpoint; interrupted after three chunks of seven
+    rows (along a path that leaves the workspace and comes back, so that rows fail in
+    between) and resumed, it ends with the uninterrupted sweep's arrays and failures, bit
+    for bit: the rows after the resume start from the last recorded configuration. An
+    executor is refused in a sentence (the rows follow one branch)."""
+    import pkm_pin
+
+    mech = pkm_pin.load_mechanism(FIVE_BAR)
+    h = mech.home_assembly.q_actuated
+    s = np.r_[np.linspace(0.0, 0.6, 25), np.linspace(0.6, 0.0, 25)]
+    Q = h + s[:, None] * np.array([1.0, -0.7])
+    ref = mech.sweep(Q, transmission=True)
+    assert 0 < ref.ok.sum() < len(Q) and ref.ok[-1]
+    plain = mech.sweep(Q, transmission=True, progress=False, chunk_size=7,
+                       rtol=1e-9, singular_tol=1e-3)
+    for key, value in ref.arrays().items():
+        assert _same(plain.arrays()[key], value), key
+    with pytest.raises(Interrupted):
+        mech.sweep(Q, transmission=True, chunk_size=7,
+                   checkpoint=Checkpoint(tmp_path / "s", on_chunk=_stop_at("sweep", 3)))
+    with np.load(tmp_path / "s.partial.npz") as z:
+        assert int(z["sweep.done"].sum()) == 21
+    again = mech.sweep(Q, transmission=True, chunk_size=7,
+                       checkpoint=Checkpoint(tmp_path / "s", resume=True))
+    for key, value in ref.arrays().items():
+        assert _same(again.arrays()[key], value), key
+    assert again.failures == ref.failures and again.ok.sum() == ref.ok.sum()
+    with np.load(tmp_path / "s.partial.npz") as z:  # a sweep leaves it to its caller
+        assert bool(z["sweep.done"].all())
+    with pytest.raises(InputError, match="executor: a general sweep follows one branch"):
+        mech.sweep(Q, executor=object())
