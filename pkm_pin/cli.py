@@ -1005,9 +1005,12 @@ def _map_linkage(args, link, per_leg=None) -> int:
     if args.plane is not None:
         raise InputError("--plane is for platform mechanisms; a linkage is mapped over "
                          "actuated coordinates (--actuated NAME [NAME], --range)")
-    if args.resume is not None:
-        raise InputError("--resume is for platform mechanisms (a linkage's map follows its "
-                         "branch from cell to cell and is not checkpointed)")
+    from .checkpoint import graceful_stop
+
+    if args.jobs > 1:
+        raise InputError("--jobs: a map over actuated coordinates follows one branch from "
+                         "grid point to grid point, so it runs in one process; leave "
+                         "--jobs out")
     prefix = _map_prefix(args, "q")
     args.reference = link.assemble()
     varied, base, grids = _map_axes(args, link)
@@ -1019,7 +1022,16 @@ def _map_linkage(args, link, per_leg=None) -> int:
     if len(varied) == 2:
         Q[:, varied[1]] = V.ravel()
     order = _snake(u.size, v.size)
-    swept = link.sweep(Q[order], guess=args.reference)
+    cp = _checkpoint(args, prefix, {
+        "study": "linkage map", "varied": [link.actuated[k] for k in varied], "base": base,
+        "u": u, "v": v, "chunk_size": int(args.chunk_size)}, len(Q), len(link.actuated))
+    try:  # the rows follow one branch: recorded in order, resumed from the last one
+        with graceful_stop(_stopping):
+            swept = link.sweep(Q[order], guess=args.reference, progress=not args.quiet,
+                               chunk_size=args.chunk_size, checkpoint=cp.stage("sweep"))
+    except KeyboardInterrupt as e:
+        _attach(e, cp)
+        raise
     data = {}
     for key in ("q_actuated", "converged", "q", "output_poses", "dof", "output_dof",
                 "singularity", "type_I", "type_II", "condition", "forward", "inverse"):
@@ -1037,6 +1049,7 @@ def _map_linkage(args, link, per_leg=None) -> int:
         data["v"] = v
     npz = _save_npz(prefix, data)
     pngs = save_linkage_maps(data, prefix, title=link.name)
+    cp.remove()  # the outputs are written: the partial results are not needed any more
     ok, cls = data["converged"], data["singularity"]
     print(f"mechanism  {link.name}  (output {link.output})")
     print("grid       " + ", ".join(f"{n} in [{g[0]:g}, {g[-1]:g}]" for n, g in zip(names, grids))

@@ -187,7 +187,10 @@ def _run_until_partial(argv: list[str], partial: Path, signum: int):
                       "--chunk-size", "200"]),
     # a general mechanism's workspace: its cell analyses are checkpointed too
     (signal.SIGINT, ["workspace", str(ROOT / "models" / "loops" / "five_bar.urdf"), "--n",
-                     "40", "--chunk-size", "40"])])
+                     "40", "--chunk-size", "40"]),
+    # and its map over actuated coordinates: the rows of its sweep, resumed from the last
+    (signal.SIGTERM, ["map", str(ROOT / "models" / "loops" / "five_bar.urdf"), "--n", "40",
+                      "--chunk-size", "100"])])
 def test_the_cli_signalled_after_its_first_chunk_resumes_to_identical_arrays(
         tmp_path, capsys, signum, command):
     """pkm-pin sent SIGINT (workspace) or SIGTERM (map) after its first chunk is written
@@ -204,7 +207,8 @@ def test_the_cli_signalled_after_its_first_chunk_resumes_to_identical_arrays(
     continue_with = line.split("continue with: ")[1]
     assert continue_with.endswith(f"--resume {tmp_path / 'run'}")
     with np.load(tmp_path / "run.partial.npz") as z:
-        assert 0 < z["cells.done"].sum() < z["cells.done"].size  # stopped part way
+        done = z["cells.done"] if "cells.done" in z.files else z["sweep.done"]
+        assert 0 < done.sum() < done.size  # stopped part way
     assert not (tmp_path / "run.npz").exists()
     argv = shlex.split(continue_with)[1:]
     assert cli.main(argv) == 0
@@ -392,3 +396,14 @@ def test_a_general_sweep_takes_the_sweep_keywords_and_resumes_to_identical_array
         assert bool(z["sweep.done"].all())
     with pytest.raises(InputError, match="executor: a general sweep follows one branch"):
         mech.sweep(Q, executor=object())
+
+
+def test_a_map_over_actuated_coordinates_refuses_jobs_in_a_sentence(tmp_path, capsys):
+    """map over actuated coordinates with --jobs 2: one error line (status 2) saying that
+    the map follows one branch and runs in one process; nothing written."""
+    argv = ["map", str(FIVE_BAR), "--n", "5", "--jobs", "2", "--quiet",
+            "--out", str(tmp_path / "m")]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "follows one branch" in err
+    assert list(tmp_path.iterdir()) == []
