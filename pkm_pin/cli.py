@@ -758,10 +758,13 @@ def cmd_map(args) -> int:
     from .plots import save_maps
 
     mech, per_leg = _map_reading(args, _load(args))
+    if _is_linkage(mech) and (args.axes is not None or args.plane is not None
+                              or args.at is not None):
+        if args.actuated is not None or args.sub is not None:
+            raise InputError("--actuated/--sub map over actuated coordinates; --axes/--plane/"
+                             "--at over pose coordinates: give one or the other")
+        return _map_linkage_poses(args, mech)
     if _is_linkage(mech):
-        if args.axes is not None or args.at is not None:
-            raise InputError("--axes/--at are for platform mechanisms; a linkage is mapped "
-                             "over actuated coordinates (--actuated NAME [NAME], --fixed)")
         subs = _submechanisms_or_why(mech, args.sub)
         if args.sub is not None:
             return _map_linkage(args, _pick_sub(mech, subs, args.sub), None if len(subs) > 1
@@ -1056,6 +1059,75 @@ def _map_linkage(args, link, per_leg=None) -> int:
           + f", {Q.shape[0]} points (snake order)")
     print(f"assembled  {int(ok.sum())} of {ok.size}; singular grid points: "
           + ", ".join(f"class {c} {int(np.sum(ok & (cls == c)))}" for c in ("I", "II", "III")))
+    for path in [npz, *pngs]:
+        print(f"wrote      {path}")
+    return 0
+
+
+def _map_linkage_poses(args, mech) -> int:
+    """``map --axes A B`` (or ``--plane``) of a mechanism read by the general backend: its
+    output's inverse kinematics at each grid point of the two pose coordinates (a
+    partial pose: those two, ``--at``/``--fixed`` ones, the others solved for nearest
+    the last point, :meth:`~pkm_pin.linkage.Linkage.sweep`), walked in a snake from home;
+    the classes and the forward/inverse indices drawn as an actuated map's
+    (:func:`~pkm_pin.report_linkage.save_linkage_maps`); checkpointed (``--resume``)."""
+    from .checkpoint import graceful_stop
+    from .report_linkage import save_linkage_maps
+    from .solve import pose_coordinates
+
+    if args.jobs > 1:
+        raise InputError("--jobs: a map of a mechanism read over its tree follows one "
+                         "branch from grid point to grid point, so it runs in one "
+                         "process; leave --jobs out")
+    axes = _map_axes_names(args)
+    tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
+    prefix = _map_prefix(args, tag)
+    if args.range is not None and len(args.range) != 4:
+        raise InputError(f"--range takes 4 bounds A B C D for two coordinates, got "
+                         f"{len(args.range)}")
+    at = at_values(args.fixed, "--fixed")
+    for name, value in at_values(args.at).items():
+        if name in at:
+            raise InputError(f"{name} is given by both --at and --fixed")
+        at[name] = value
+    both = [k for k in axes if k in at]
+    if both:
+        raise InputError(f"--at/--fixed {both[0]}: {both[0]} is varied over the map")
+    home = mech.home_assembly
+    i, j = (POSE_NAMES.index(a) for a in axes)
+    c = pose_coordinates(home.output_pose)
+    mech.inverse_kinematics({axes[0]: c[i], axes[1]: c[j], **at}, home)  # dependent: refused
+    u, v = _grid_axes(mech, (i, j), c, args.range, args.n)
+    V, U = np.meshgrid(v, u, indexing="ij")
+    poses = [{axes[0]: float(a), axes[1]: float(b), **at} for a, b in zip(U.ravel(),
+                                                                         V.ravel())]
+    order = _snake(u.size, v.size)
+    cp = _checkpoint(args, prefix, {
+        "study": "map", "axes": list(axes), "at": {k: float(x) for k, x in sorted(at.items())},
+        "u": u, "v": v, "chunk_size": int(args.chunk_size)}, len(poses), mech.n_actuated)
+    try:  # the points follow one branch: recorded in order, resumed from the last one
+        with graceful_stop(_stopping):
+            swept = mech.sweep([poses[k] for k in order], guess=home, progress=not args.quiet,
+                               chunk_size=args.chunk_size, checkpoint=cp.stage("sweep"))
+    except KeyboardInterrupt as e:
+        _attach(e, cp)
+        raise
+    result = swept.unordered(order)
+    shape = (v.size, u.size)
+    data = {k: a.reshape(shape + a.shape[1:]) for k, a in result.arrays().items()}
+    units = ["m"] * 3 + ["rad"] * 3
+    data.update(u=u, v=v, plane=np.array("".join(axes) if args.axes is None else tag),
+                axes=np.array(axes),
+                labels=np.array([f"{POSE_NAMES[i]} [{units[i]}]", f"{POSE_NAMES[j]} [{units[j]}]"]),
+                mechanism=np.array(mech.name), actuated=np.array(mech.actuated_names),
+                output=np.array(mech.output),
+                failure_index=np.array([f[0] for f in result.failures], dtype=int),
+                failure_reason=np.array([f[1] for f in result.failures], dtype=str))
+    data["converged"] = data["ok"]
+    npz = _save_npz(prefix, data)
+    pngs = save_linkage_maps(data, prefix, title=mech.name)  # classes and the tree's indices
+    cp.remove()  # the outputs are written: the partial results are not needed any more
+    _print_map(mech, axes, u, v, at, {}, result, True)
     for path in [npz, *pngs]:
         print(f"wrote      {path}")
     return 0

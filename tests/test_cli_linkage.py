@@ -351,11 +351,12 @@ def test_map_of_one_actuated_coordinate(tmp_path, capsys):
 
 
 def test_map_options_of_a_linkage_are_checked(tmp_path, capsys):
-    """--plane, a wrong --actuated or a wrong number of bounds are one error line."""
+    """Dependent pose coordinates (either reading), a wrong --actuated or a wrong number
+    of bounds are one error line, before any grid point is solved."""
     out = str(tmp_path / "x")
     assert main(["map", str(FIVE_BAR_XML), "--plane", "xz", "--out", out,
                  "--backend", "general"]) == 2
-    assert "--plane" in one_error_line(capsys)
+    assert "x, z are not independent coordinates" in one_error_line(capsys)
     assert main(["map", str(FIVE_BAR_XML), "--plane", "xz", "--out", out]) == 2  # per leg
     assert "x, z are not independent coordinates" in one_error_line(capsys)
     assert main(["map", str(FIVE_BAR_XML), "--actuated", "nope", "--out", out]) == 2
@@ -469,3 +470,36 @@ def test_map_default_of_a_per_leg_machine_follows_its_motion(tmp_path, capsys):
     assert "slice      x in [" in capsys.readouterr().out
     data = np.load(tmp_path / "g.npz")
     assert [str(a) for a in data["axes"]] == ["x", "z"]
+
+
+def test_map_of_a_general_mechanism_over_its_output_coordinates(tmp_path, capsys):
+    """map --axes x y of the five-bar read over its tree (a point output): the output's
+    inverse kinematics at every grid point, walked from home; every point that assembles
+    has its output at the grid values (1e-9), the classes and the forward/inverse
+    indices are those of analyze at that point's configuration; the singularity and
+    indices maps are written; --jobs and --actuated with --axes are refused."""
+    path = MODELS / "loops" / "five_bar.urdf"
+    out = tmp_path / "m"
+    assert main(["map", str(path), "--axes", "x", "y", "--n", "9", "--quiet",
+                 "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "slice      x in" in text and "assembled" in text
+    assert (tmp_path / "m_singularity.png").exists() and (tmp_path / "m_indices.png").exists()
+    data = np.load(tmp_path / "m.npz")
+    ok = data["ok"]
+    assert ok.shape == (9, 9) and 10 < ok.sum() < 81
+    U, V = np.meshgrid(data["u"], data["v"])
+    np.testing.assert_allclose(data["poses"][ok][:, 0], U[ok], atol=1e-9)
+    np.testing.assert_allclose(data["poses"][ok][:, 1], V[ok], atol=1e-9)
+    mech = load_mechanism(path)
+    for idx in list(zip(*np.nonzero(ok)))[::7]:
+        an = mech.analyze(data["q"][idx])
+        assert data["singularity"][idx] == an.singularity
+        for key in ("forward", "inverse"):
+            assert data[key][idx] == pytest.approx(an.indices[key], rel=1e-9, abs=1e-12)
+    assert main(["map", str(path), "--axes", "x", "y", "--jobs", "2",
+                 "--out", str(out)]) == 2
+    assert "follows one branch" in one_error_line(capsys)
+    assert main(["map", str(path), "--axes", "x", "y", "--actuated", "mot1",
+                 "--out", str(out)]) == 2
+    assert "give one or the other" in one_error_line(capsys)
