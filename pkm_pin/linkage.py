@@ -1228,8 +1228,10 @@ class Linkage:
               chunk_size: int = 2000, checkpoint=None, executor=None) -> LinkageSweep:
         """Forward kinematics and analysis along the rows of ``q_actuated`` (N ×
         actuated), each warm-started from the previous assembly (continuation: the
-        branch of ``guess``). A point that does not close is recorded as not converged
-        (NaN results) and the next starts again from the last good one. With
+        branch of ``guess``). A point that does not close from the last good one is solved
+        again from ``guess`` (as a per-leg sweep solves a miss again from home: the last
+        good point may lie across a fold); one that does not close either is recorded as
+        not converged (NaN results) and the next starts again from the last good one. With
         ``transmission``, the ``lti`` and ``cti`` columns too (:meth:`transmission`:
         a few ms a point; nan otherwise).
 
@@ -1321,17 +1323,29 @@ class _Track:
         self.tol, self.about, self.transmission = tol, about, transmission
         self.rtol, self.singular_tol = rtol, singular_tol
         self.generic = None
+        self.start = warm
+
+    def _solve(self, i: int, warm) -> Assembly:
+        starts = 0 if warm is not None else 16
+        if self.poses is None:
+            return self.link.assemble(warm, q_actuated=self.out.qa[i], starts=starts,
+                                      tol=self.tol)
+        return self.link.inverse_kinematics(self.poses[i], warm, starts=starts, tol=self.tol)
 
     def row(self, i: int) -> None:
         link, out, warm = self.link, self.out, self.warm
         try:
-            starts = 0 if warm is not None else 16
-            a = link.assemble(warm, q_actuated=out.qa[i], starts=starts, tol=self.tol) \
-                if self.poses is None else \
-                link.inverse_kinematics(self.poses[i], warm, starts=starts, tol=self.tol)
+            a = self._solve(i, warm)
         except AssemblyError as e:
-            out.failures.append((i, str(e)))
-            return
+            a = None
+            if self.start is not None and warm is not self.start:
+                # a miss is solved again from the guess (as a per-leg sweep solves it
+                # again from home): the last good row may lie across a fold
+                with contextlib.suppress(AssemblyError):
+                    a = self._solve(i, self.start)
+            if a is None:
+                out.failures.append((i, str(e)))
+                return
         self.warm = a.q
         an = link.analyze(a.q, about=self.about, generic=self.generic, nearby=0,
                           rtol=self.rtol, singular_tol=self.singular_tol)

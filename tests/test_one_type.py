@@ -236,3 +236,37 @@ def test_inverse_kinematics_meets_a_reachable_pose_of_a_lower_mobility_output():
     near = mech.inverse_kinematics(off)
     assert max(near.closure_residuals.values()) < 1e-9
     assert abs(near.pose.translation[1] - off.translation[1]) > 1e-3  # y is not a motion
+
+
+def test_a_general_sweep_solves_a_miss_again_from_its_guess(monkeypatch):
+    """Linkage.sweep: a row that does not close from the last good row is solved again
+    from the sweep's guess (a per-leg sweep's rule); the row then holds that solution,
+    and a row that closes from neither is a failure. The five-bar's point at y = −0.05
+    from x = −0.117 to x = −0.076: the second row closes (from the last good row or,
+    failing that, from home) and its loops close."""
+    from pkm_pin.errors import AssemblyError
+    from pkm_pin.linkage import Linkage
+
+    mech = _load("loops/five_bar.urdf")
+    home = mech.home_assembly
+    A, B = {"x": -0.11724137931034483, "y": -0.05}, {"x": -0.07586206896551724, "y": -0.05}
+    real = mech.sweep([A, B], guess=home)
+    assert real.ok.all()
+    assert max(mech.general.residuals_at(real.q[1]).values()) < 1e-9
+    guesses = []
+    ik = Linkage.inverse_kinematics
+
+    def missing_from_a(self, pose, guess=None, **kw):
+        guesses.append(guess)
+        if len(guesses) == 2:  # row B from row A's configuration
+            raise AssemblyError("five_bar", 1.0, "made to miss")
+        return ik(self, pose, guess, **kw)
+
+    monkeypatch.setattr(Linkage, "inverse_kinematics", missing_from_a)
+    r = mech.sweep([A, B], guess=home)
+    assert r.ok.all() and len(guesses) == 3
+    np.testing.assert_array_equal(guesses[2], home.q)
+    monkeypatch.setattr(Linkage, "inverse_kinematics", ik)
+    np.testing.assert_allclose(r.q[1], mech.inverse_kinematics(B, home).q, atol=1e-12)
+    far = mech.sweep([A, {"x": 1.0, "y": 1.0}], guess=home)
+    assert far.ok.tolist() == [True, False] and far.failures[0][0] == 1
