@@ -776,17 +776,7 @@ def cmd_map(args) -> int:
                   "the others' motors do not move (type I); --sub K maps one with its own "
                   "output")
         return _map_linkage(args, mech, per_leg)
-    axes = _map_axes_names(args)
-    tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
-    prefix = _map_prefix(args, tag)
-    if args.range is not None and len(args.range) != 4:
-        raise InputError(f"--range takes 4 bounds A B C D for two coordinates, got "
-                         f"{len(args.range)}")
-    at = at_values(args.fixed, "--fixed")
-    for name, value in at_values(args.at).items():
-        if name in at:
-            raise InputError(f"{name} is given by both --at and --fixed")
-        at[name] = value
+    axes, tag, prefix, at = _pose_map_options(args)
     u, v, poses, held = map_poses(mech, axes, args.range, args.n, at)
     cp = _checkpoint(args, prefix, {
         "study": "map", "axes": list(axes), "at": {k: float(x) for k, x in sorted(at.items())},
@@ -809,6 +799,24 @@ def cmd_map(args) -> int:
     for path in [npz, *pngs]:
         print(f"wrote      {path}")
     return 0
+
+
+def _pose_map_options(args) -> tuple:
+    """``(axes, tag, prefix, at)`` of a map over two pose coordinates: their names, the
+    tag of the output files, the output prefix, and the coordinates given by ``--fixed``
+    and ``--at`` ({name: value})."""
+    axes = _map_axes_names(args)
+    tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
+    prefix = _map_prefix(args, tag)
+    if args.range is not None and len(args.range) != 4:
+        raise InputError(f"--range takes 4 bounds A B C D for two coordinates, got "
+                         f"{len(args.range)}")
+    at = at_values(args.fixed, "--fixed")
+    for name, value in at_values(args.at).items():
+        if name in at:
+            raise InputError(f"{name} is given by both --at and --fixed")
+        at[name] = value
+    return axes, tag, prefix, at
 
 
 def _sweep_map(mech, args, poses, n_u: int, n_v: int, cp=None):
@@ -1079,17 +1087,7 @@ def _map_linkage_poses(args, mech) -> int:
         raise InputError("--jobs: a map of a mechanism read over its tree follows one "
                          "branch from grid point to grid point, so it runs in one "
                          "process; leave --jobs out")
-    axes = _map_axes_names(args)
-    tag = args.plane or "".join(axes) if args.axes is None else "_".join(axes)
-    prefix = _map_prefix(args, tag)
-    if args.range is not None and len(args.range) != 4:
-        raise InputError(f"--range takes 4 bounds A B C D for two coordinates, got "
-                         f"{len(args.range)}")
-    at = at_values(args.fixed, "--fixed")
-    for name, value in at_values(args.at).items():
-        if name in at:
-            raise InputError(f"{name} is given by both --at and --fixed")
-        at[name] = value
+    axes, tag, prefix, at = _pose_map_options(args)
     both = [k for k in axes if k in at]
     if both:
         raise InputError(f"--at/--fixed {both[0]}: {both[0]} is varied over the map")

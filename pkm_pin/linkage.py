@@ -1257,15 +1257,7 @@ class Linkage:
             raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
         rtol = RANK_RTOL if rtol is None else screws.as_fraction(rtol, "rtol")
         singular_tol = screws.as_fraction(singular_tol, "singular_tol")
-        poses = _poses_of(q_actuated)
-        if poses is None:
-            Q = screws.as_float_array(q_actuated, "q_actuated")
-            if Q.ndim != 2 or Q.shape[1] != len(self.actuated):
-                raise InputError(f"q_actuated must have shape (N, {len(self.actuated)}) "
-                                 f"({', '.join(self.actuated)}), or give poses (pin.SE3 or "
-                                 f"mappings of pose coordinates), got {Q.shape}")
-        else:
-            Q = np.full((len(poses), len(self.actuated)), np.nan)
+        poses, Q = self._sweep_rows(q_actuated)
         out = _SweepRows(Q, self._model.nq)
         chunks = [np.arange(a, min(a + int(chunk_size), len(Q)))
                   for a in range(0, len(Q), int(chunk_size))]
@@ -1287,29 +1279,21 @@ class Linkage:
             bar.update(sum(len(c) for c, d in zip(chunks, done) if d))
         track = _Track(self, poses, out, self._guess_q(guess), tol, about, transmission,
                        rtol, singular_tol)
-        running = stage.cp.running() if stage is not None else contextlib.nullcontext()
-        try:
-            with running:
-                for chunk, was_done in zip(chunks, done):
-                    if was_done:
-                        track.resume_after(chunk)
-                        continue
-                    for i in chunk:
-                        track.row(int(i))
-                        if bar is not None:
-                            bar.update(1)
-                    if stage is not None:
-                        stage.record(chunk, out.part(chunk))
-        except BaseException as e:  # Ctrl-C, SIGTERM: keep the chunks recorded
-            if stage is not None:
-                stage.cp.interrupted(e)
-            raise
-        finally:
-            if bar is not None:
-                bar.close()
-        if stage is not None:
-            stage.end()
+        track.run(chunks, done, stage, bar)
         return out.result()
+
+    def _sweep_rows(self, q_actuated) -> tuple:
+        """``(poses, Q)`` of :meth:`sweep`'s rows: the poses (None for actuated values)
+        and the (N × actuated) values (nan rows for poses, filled as they are solved)."""
+        poses = _poses_of(q_actuated)
+        if poses is not None:
+            return poses, np.full((len(poses), len(self.actuated)), np.nan)
+        Q = screws.as_float_array(q_actuated, "q_actuated")
+        if Q.ndim != 2 or Q.shape[1] != len(self.actuated):
+            raise InputError(f"q_actuated must have shape (N, {len(self.actuated)}) "
+                             f"({', '.join(self.actuated)}), or give poses (pin.SE3 or "
+                             f"mappings of pose coordinates), got {Q.shape}")
+        return None, Q
 
 
 class _Track:
@@ -1356,6 +1340,33 @@ class _Track:
         if self.transmission:
             tr = link.transmission(a, analysis=an if self.about == "output" else None)
             out.lti[i], out.cti[i] = tr.lti, tr.cti
+
+    def run(self, chunks: list, done: list, stage, bar) -> None:
+        """Every row, chunk after chunk (those ``done`` in the checkpoint ``stage``
+        skipped, the state carried over them), each chunk recorded in ``stage``; an
+        interrupt keeps the chunks recorded (:meth:`Checkpoint.interrupted`)."""
+        running = stage.cp.running() if stage is not None else contextlib.nullcontext()
+        try:
+            with running:
+                for chunk, was_done in zip(chunks, done):
+                    if was_done:
+                        self.resume_after(chunk)
+                        continue
+                    for i in chunk:
+                        self.row(int(i))
+                        if bar is not None:
+                            bar.update(1)
+                    if stage is not None:
+                        stage.record(chunk, self.out.part(chunk))
+        except BaseException as e:  # Ctrl-C, SIGTERM: keep the chunks recorded
+            if stage is not None:
+                stage.cp.interrupted(e)
+            raise
+        finally:
+            if bar is not None:
+                bar.close()
+        if stage is not None:
+            stage.end()
 
     def resume_after(self, chunk: np.ndarray) -> None:
         """The state after the recorded rows ``chunk``: its last converged configuration

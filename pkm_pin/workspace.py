@@ -902,10 +902,9 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
             inside when it is followed (continuation) from the configuration of its
             cell, or of the nearest solved neighbour (diagonals included); the other
             kinds' volumes are cell counts.
-        executor, chunk_size: The analyses of the cells reached (the costly part: the
-            classes, the carried determinant, the transmission) in chunks of
-            ``chunk_size`` cells, on ``executor`` when given (processes: the linkage is
-            pickled to them); the continuation that reaches the cells is sequential.
+        executor, chunk_size: The cells reached are analysed (classes, carried
+            determinant, transmission) in chunks of ``chunk_size`` cells, on ``executor``
+            when given; the continuation that reaches them is sequential.
         checkpoint, resume: As :func:`workspace`: each chunk of cell analyses is
             recorded (stage ``cells``) and an interrupt writes what is done and raises
             :class:`~pkm_pin.checkpoint.Interrupted`; a resume follows the cells again
@@ -917,21 +916,18 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
 
     if sampling != "grid":
         raise InputError("a linkage's workspace grows from cell to cell: sampling='grid'")
+    if int(chunk_size) < 1:
+        raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
     t0 = time.perf_counter()
     kinds = _kinds(kinds)
     threshold = GOOD_LTI if threshold is None else float(threshold)
     ref = link.assemble()
     dom = _linkage_domain(link, ref, coords, bounds)
     axes, shape, points = _samples(dom.bounds, "grid", n, None, seed)
-    start = _home_cell(axes, dom.bounds, dom.home)
-    if start is None:
-        raise InputError(f"the reference {np.round(dom.home, 6).tolist()} is outside the "
-                         f"bounds {dom.bounds.tolist()}: a linkage's workspace grows from it")
+    start = _start_cell(axes, dom)
     solve_at = _linkage_solver(link, ref, dom, max_iter)
     follow = _continuation(link, dom, solve_at)
     sub = _default_subsamples(1 if subsamples is None else subsamples, len(dom.coords))
-    if int(chunk_size) < 1:
-        raise InputError(f"chunk_size must be a positive integer, got {chunk_size}")
     cp = _begin_checkpoint(checkpoint, resume, {
         "study": "linkage workspace", "mechanism": link.name, "coords": list(dom.coords),
         "bounds": dom.bounds, "n": np.broadcast_to(np.asarray(n), (len(dom.coords),)).tolist(),
@@ -939,6 +935,35 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
         "chunk_size": int(chunk_size), "subsamples": sub}, int(np.prod(shape)),
         len(link.actuated))
     t1 = time.perf_counter()
+    Q, home_an, values = _linkage_cells(link, ref, dom, points, shape, start, solve_at,
+                                        follow, kinds, progress, executor, int(chunk_size),
+                                        cp)
+    t2 = time.perf_counter()
+    ws = _finish(link.name, dom.coords, dom.units, dom.bounds, "grid", axes, shape, points,
+                 dom.fixed, dom.home, values, home_an.dof,
+                 _carried_det(home_an, home_an.platform_twists), kinds, threshold,
+                 centre, dom.method, t0, t1, t2, int((~values["ok"]).sum()), sub,
+                 (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
+                                                                     sub, follow)}))
+    if cp is not None:
+        cp.finish()
+    return ws
+
+
+def _start_cell(axes, dom) -> tuple:
+    """The cell of the reference, where a linkage's workspace grows from."""
+    start = _home_cell(axes, dom.bounds, dom.home)
+    if start is None:
+        raise InputError(f"the reference {np.round(dom.home, 6).tolist()} is outside the "
+                         f"bounds {dom.bounds.tolist()}: a linkage's workspace grows from it")
+    return start
+
+
+def _linkage_cells(link, ref, dom, points, shape, start, solve_at, follow, kinds, progress,
+                   executor, chunk_size: int, cp) -> tuple:
+    """``(Q, home_an, values)`` of :func:`linkage_workspace`: the cells reached from the
+    start cell by continuation ({flat index: q}), the reference's analysis, and the
+    cells' analyses (checkpointed in ``cp``'s stage ``cells``)."""
     q_start = _first_configuration(link.model, ref, dom.home,
                                    points[np.ravel_multi_index(start, shape)], solve_at,
                                    follow)
@@ -946,17 +971,8 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
               follow, progress)
     home_an = link.analyze(ref.q)
     values = _linkage_values(link, Q, shape, len(kinds) > 1, "transmission" in kinds,
-                             home_an, executor, int(chunk_size), cp and cp.stage("cells"))
-    t2 = time.perf_counter()
-    home_det = _carried_det(home_an, home_an.platform_twists)
-    ws = _finish(link.name, dom.coords, dom.units, dom.bounds, "grid", axes, shape, points,
-                 dom.fixed, dom.home, values, home_an.dof, home_det, kinds, threshold,
-                 centre, dom.method, t0, t1, t2, int((~values["ok"]).sum()), sub,
-                 (("reachable",), lambda P: {"reachable": _followed(P, Q, points, shape,
-                                                                     sub, follow)}))
-    if cp is not None:
-        cp.finish()
-    return ws
+                             home_an, executor, chunk_size, cp and cp.stage("cells"))
+    return Q, home_an, values
 
 
 class _LinkageDomain(NamedTuple):
