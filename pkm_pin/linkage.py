@@ -837,8 +837,12 @@ class Linkage:
         if isinstance(q, (Mapping, pin.SE3)) or np.shape(q) in ((4, 4), (6,)) \
                 and self._model.nq != 6:
             q = self.assembly_at(q)
+        given = q if isinstance(q, Assembly) and q.leg_q is None else None
         q = self._model.check_q(q.q if isinstance(q, Assembly) else q)
-        return _analyse(self, q, about, generic, rtol, singular_tol, nearby)
+        an = _analyse(self, q, about, generic, rtol, singular_tol, nearby)
+        if given is not None:  # the assembly analysed is the one given
+            an.__dict__["assembly"] = given
+        return an
 
     # ---------------------------------------------------- position problems
     def forward_kinematics(self, q_actuated, guess=None, *, starts: int = 16, seed: int = 0,

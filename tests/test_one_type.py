@@ -103,6 +103,8 @@ def test_an_assembly_of_either_backend_is_taken_by_the_other():
     np.testing.assert_allclose(back.q, per_leg.q, atol=1e-12)
     assert type(Analysis(per_leg)) is LegsAnalysis
     assert type(Analysis(general)) is TreeAnalysis
+    assert Analysis(general).assembly is general
+    assert mech.general.analyze(general).assembly is general
     assert Analysis(general).indices["type_II"] == pytest.approx(back.indices["type_II"],
                                                                  rel=1e-7)
     # a guess of the other backend warm-starts the per-leg solver
