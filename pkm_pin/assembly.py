@@ -127,6 +127,10 @@ class Assembly:
         backend and :meth:`Mechanism.inverse_dynamics` take ``q``."""
         q = self.__dict__.get("_tree_q")
         if q is None:
+            if self.leg_q is None:
+                raise InvalidAssembly("the assembly has neither leg configurations (leg_q) "
+                                      "nor the tree's configuration; make it with the "
+                                      "mechanism (assemble, assembly_at)")
             q = self.__dict__["_tree_q"] = self.mechanism.tree_configuration(self)
         return q
 

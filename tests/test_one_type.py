@@ -167,11 +167,14 @@ def test_general_analysis_refuses_what_only_legs_have_in_a_sentence():
 
 def test_a_per_leg_assembly_without_its_view_is_refused_by_the_engine():
     """An Assembly with no per-leg view analysed by the per-leg engine directly
-    (LegsAnalysis) says how to read it per leg."""
+    (LegsAnalysis) says how to read it per leg; one made by hand with neither legs nor
+    the tree's q says so when its q is asked for."""
     mech = _load("mechanisms/stewart.toml")
     general = mech.general.home_assembly
     with pytest.raises(pkm_pin.InvalidAssembly, match="no per-leg view"):
         LegsAnalysis(Assembly(mech, general.pose, None))
+    with pytest.raises(pkm_pin.InvalidAssembly, match="neither leg configurations"):
+        Assembly(mech, general.pose).q  # noqa: B018 - the property raises
 
 
 @pytest.mark.parametrize("name", ["mechanisms/stewart.toml", "loops/delta_loops.urdf"])
