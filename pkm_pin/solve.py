@@ -1090,12 +1090,12 @@ POSE_COORDINATES = ("x", "y", "z", "roll", "pitch", "yaw")
 
 def pose_coordinates(pose: pin.SE3) -> np.ndarray:
     """x, y, z [m], roll, pitch, yaw [rad] of a platform placement (world)."""
-    return np.r_[pose.translation, pin.rpy.matrixToRpy(pose.rotation)]
+    return np.concatenate((pose.translation, pin.rpy.matrixToRpy(pose.rotation)))
 
 
 def coordinate_scales(length: float) -> np.ndarray:
     """Unit of each pose coordinate: ``length`` for x, y, z, 1 rad for the angles."""
-    return np.r_[[length] * 3, 1.0, 1.0, 1.0]
+    return np.array([length, length, length, 1.0, 1.0, 1.0])
 
 
 def coordinate_rates(pose: pin.SE3, length: float) -> np.ndarray:
@@ -1212,7 +1212,7 @@ def _apply(legs, pose: pin.SE3, leg_q: list, dq: np.ndarray, xi, coords, units,
         size += float(q @ q) if leg.nq != leg.nv else float(np.sum((q / u) ** 2))
         new_q.append(new)
     if xi is not None:
-        pose = screws.exp(np.r_[xi[:3], length * xi[3:]]) * pose
+        pose = screws.exp(np.concatenate((xi[:3], length * xi[3:]))) * pose
     return pose, new_q, step, size
 
 
