@@ -168,7 +168,7 @@ def report_data(subject, assembly=None, plots: Sequence[str | Path] = (), *,
             the per-leg :class:`~pkm_pin.analysis.Analysis` of one (its mechanism at its
             assembly).
         assembly: The mechanism's assembly (an :class:`~pkm_pin.assembly.Assembly` or a
-            general linkage's ``LinkageAssembly``).
+            general backend's ``Assembly``).
         plots: Image files the report links.
         analysis: The mechanism's analysis at ``assembly``, when already made.
 
@@ -345,7 +345,7 @@ def output_hint(model, q) -> tuple[list[str], list[str]]:
 
 
 def assembly_data(link, assembly) -> dict:
-    """Plain data of a :class:`~pkm_pin.linkage.LinkageAssembly`: ``mechanism``,
+    """Plain data of an :class:`~pkm_pin.assembly.Assembly`: ``mechanism``,
     ``output``, ``output_is_point``, ``pose`` (the output frame's), ``actuated``,
     ``q_actuated``, ``q`` (the whole tree, Pinocchio's joint order, full precision),
     ``joint_names``, ``joints`` (:func:`joint_values`), ``actuator_matches`` (each

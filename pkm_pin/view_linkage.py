@@ -69,8 +69,9 @@ import numpy as np
 import pinocchio as pin
 
 from . import screws
+from .assembly import Assembly
 from .errors import InputError
-from .linkage import Linkage, LinkageAssembly, LoopClosureError, _body_points
+from .linkage import Linkage, LoopClosureError, _body_points
 from .model.closure_model import NullSpace
 from .report import optional, readable_basis
 from .scene import (
@@ -111,7 +112,7 @@ class LinkageScene(Scene):
 
     Attributes:
         linkage: The linkage (also :attr:`mechanism`, for the page title).
-        assembly: The :class:`~pkm_pin.linkage.LinkageAssembly` drawn (for an open
+        assembly: The :class:`~pkm_pin.assembly.Assembly` drawn (for an open
             drawing, :meth:`Linkage.reached`: its loops do not all close).
         analysis: Its :class:`~pkm_pin.linkage.LinkageAnalysis` (None when open).
         idle_motions: The idle motions drawn, in words (none when open).
@@ -130,7 +131,7 @@ class LinkageScene(Scene):
     """
 
     def __init__(self, visualizer, recorder: SceneRecorder, link: Linkage,  # noqa: D107
-                 assembly: LinkageAssembly, analysis, root: str,
+                 assembly: Assembly, analysis, root: str,
                  error: LoopClosureError | None = None):
         self.visualizer = visualizer
         self.recorder = recorder
@@ -155,7 +156,7 @@ def idle_velocities(link: Linkage, q) -> np.ndarray:
     return (ns.units[:, None] * ns.idle(RANK_RTOL)).T
 
 
-def _assembly(link: Linkage, where) -> LinkageAssembly | LoopClosureError:
+def _assembly(link: Linkage, where) -> Assembly | LoopClosureError:
     """The assembly drawn, or the error of a linkage that does not assemble (when it
     carries the best configuration reached: drawn open)."""
     if isinstance(where, LoopClosureError) and where.q is not None:
@@ -167,7 +168,7 @@ def _assembly(link: Linkage, where) -> LinkageAssembly | LoopClosureError:
             if e.q is None:
                 raise
             return e
-    if isinstance(where, LinkageAssembly):
+    if isinstance(where, Assembly):
         return where
     from .assembly import as_pose
 
@@ -182,7 +183,7 @@ def view_linkage(link: Linkage, where=None, *, visualizer=None,
 
     Args:
         link: The linkage.
-        where: A :class:`~pkm_pin.linkage.LinkageAssembly`, or an output pose
+        where: A :class:`~pkm_pin.assembly.Assembly`, or an output pose
             (``pin.SE3``, 4×4 matrix or x, y, z, roll, pitch, yaw: inverse kinematics),
             or a :class:`~pkm_pin.linkage.LoopClosureError` (drawn open at its best
             configuration); default: assembled from the reference configuration, drawn
