@@ -1404,10 +1404,6 @@ def cmd_workspace(args) -> int:
     if args.sobol is not None:
         options.update(sampling="sobol", samples=args.sobol)
     if args.at:
-        if _is_linkage(mech):
-            raise InputError("--at holds pose coordinates of a machine read per leg; a "
-                             "general mechanism's workspace holds its other coordinates "
-                             "at the reference assembly's (its fixed line says which)")
         options.update(at=at_values(args.at))
     options.update(chunk_size=args.chunk_size, checkpoint=Checkpoint(
         prefix, resume=args.resume is not None, keep=True,

@@ -873,8 +873,8 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
                       kinds: Sequence[str] | None = None, threshold: float | None = None,
                       centre=None, max_iter: int = 10, progress: bool = False,
                       subsamples: int | None = None, executor: Executor | None = None,
-                      chunk_size: int = 2000, checkpoint=None,
-                      resume: bool = False) -> Workspace:
+                      chunk_size: int = 2000, checkpoint=None, resume: bool = False,
+                      at: Mapping | None = None) -> Workspace:
     """The reachable, singularity-free and good-transmission workspaces of a general
     linkage (module docstring), on a grid, on the working mode of the reference
     assembly.
@@ -905,6 +905,9 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
         executor, chunk_size: The cells reached are analysed (classes, carried
             determinant, transmission) in chunks of ``chunk_size`` cells, on ``executor``
             when given; the continuation that reaches them is sequential.
+        at: Over the output point's coordinates, values of the others (``{"z": …}``:
+            a slice; default the reference's), reached from the reference by
+            continuation before the slice grows.
         checkpoint, resume: As :func:`workspace`: each chunk of cell analyses is
             recorded (stage ``cells``) and an interrupt writes what is done and raises
             :class:`~pkm_pin.checkpoint.Interrupted`; a resume follows the cells again
@@ -922,7 +925,7 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     kinds = _kinds(kinds)
     threshold = GOOD_LTI if threshold is None else float(threshold)
     ref = link.assemble()
-    dom = _linkage_domain(link, ref, coords, bounds)
+    dom = _linkage_domain(link, ref, coords, bounds, at)
     axes, shape, points = _samples(dom.bounds, "grid", n, None, seed)
     start = _start_cell(axes, dom)
     solve_at = _linkage_solver(link, ref, dom, max_iter)
@@ -932,7 +935,8 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
         "study": "linkage workspace", "mechanism": link.name, "coords": list(dom.coords),
         "bounds": dom.bounds, "n": np.broadcast_to(np.asarray(n), (len(dom.coords),)).tolist(),
         "kinds": list(kinds), "threshold": threshold, "max_iter": int(max_iter),
-        "chunk_size": int(chunk_size), "subsamples": sub}, int(np.prod(shape)),
+        "chunk_size": int(chunk_size), "subsamples": sub, "at": dom.fixed},
+        int(np.prod(shape)),
         len(link.actuated))
     t1 = time.perf_counter()
     Q, home_an, values = _linkage_cells(link, ref, dom, points, shape, start, solve_at,
@@ -964,7 +968,7 @@ def _linkage_cells(link, ref, dom, points, shape, start, solve_at, follow, kinds
     """``(Q, home_an, values)`` of :func:`linkage_workspace`: the cells reached from the
     start cell by continuation ({flat index: q}), the reference's analysis, and the
     cells' analyses (checkpointed in ``cp``'s stage ``cells``)."""
-    q_start = _first_configuration(link.model, ref, dom.home,
+    q_start = _first_configuration(link.model, _on_slice(link, ref, dom), dom.home,
                                    points[np.ravel_multi_index(start, shape)], solve_at,
                                    follow)
     Q = _grow(shape, start, q_start, lambda cell: points[np.ravel_multi_index(cell, shape)],
@@ -995,13 +999,17 @@ class _LinkageDomain(NamedTuple):
     scale: np.ndarray
 
 
-def _linkage_domain(link, ref, coords, bounds) -> _LinkageDomain:
+def _linkage_domain(link, ref, coords, bounds, at=None) -> _LinkageDomain:
     """The :class:`_LinkageDomain` of :func:`linkage_workspace`'s arguments."""
     model = link.model
     out_xyz = ref.output_pose.translation.copy()
     if coords is None:
         coords = _default_linkage_coords(link, ref)
     coords = (coords,) if isinstance(coords, str) else tuple(coords)
+    if at and all(c in link.actuated for c in coords):
+        raise InputError("at: over actuated joints the other actuated joints are held at "
+                         "the reference's values; at gives output coordinates (x, y, z) "
+                         "of a workspace over the output point")
     if all(c in link.actuated for c in coords):
         coords = _check_coords(coords, link.actuated)
         idx = [link.actuated.index(c) for c in coords]
@@ -1021,6 +1029,12 @@ def _linkage_domain(link, ref, coords, bounds) -> _LinkageDomain:
     coords = _check_coords(coords, COORDINATES[:3])
     idx = [COORDINATES.index(c) for c in coords]
     home = out_xyz[idx]
+    for name, value in dict(at or {}).items():
+        if name in coords or name not in COORDINATES[:3]:
+            raise InputError(f"at: {name} is {'varied' if name in coords else 'not one of'}"
+                             f" the output point's coordinates"
+                             + ("" if name in coords else " x, y, z"))
+        out_xyz[COORDINATES.index(name)] = float(value)
     fixed = {c: float(out_xyz[k]) for k, c in enumerate(COORDINATES[:3]) if c not in coords}
     return _LinkageDomain(coords, idx, False, home,
                           _bounds(bounds, coords, home, np.full(len(coords), model.length)),
@@ -1078,6 +1092,31 @@ def _continuation(link, dom: _LinkageDomain, solve_at):
         return _follow(solve_at, jump, starts, p0, q0, p1)
 
     return follow
+
+
+def _on_slice(link, ref, dom):
+    """The reference's assembly moved onto the slice the ``at`` values give (the output
+    point's held coordinates), by continuation in :data:`SLICE_STEPS` steps; the
+    reference itself when it is on it (or the continuation fails: the start cell is
+    then solved from the solver's global starts)."""
+    from .solve import solve_tree
+
+    held = ref.output_pose.translation
+    if dom.actuated or np.allclose(held, dom.out_xyz, rtol=0.0, atol=1e-12 * dom.scale[0]):
+        return ref
+    q = ref.q
+    for k in range(1, SLICE_STEPS + 1):
+        xyz = held + k / SLICE_STEPS * (dom.out_xyz - held)
+        xyz[dom.idx] = dom.home
+        sol = solve_tree(link.model, q, pose=pin.SE3(np.eye(3), xyz), pose_rows=dom.rows)
+        if not sol.converged:
+            return ref
+        q = sol.q
+    return link.assembly_at(q)
+
+
+#: Steps of the continuation that moves the reference onto a workspace slice (``at``).
+SLICE_STEPS = 8
 
 
 def _first_configuration(model, ref, home, p, solve_at, follow):

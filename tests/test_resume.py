@@ -333,8 +333,8 @@ def test_a_general_workspace_on_processes_gives_the_same_arrays(five_bar):
 def test_the_cli_workspace_of_a_general_mechanism_takes_jobs(tmp_path, capsys):
     """pkm-pin workspace on a general mechanism: --jobs 2 gives the plain run's volumes
     (the signalled run resumed: above); a partial file of the API's study is not the
-    CLI's (its identity holds the file); --at, which holds pose coordinates of a machine
-    read per leg, is refused in one line saying where the other coordinates are held."""
+    CLI's (its identity holds the file); --at naming a varied coordinate is refused in
+    one line (a slice at a held coordinate: test_workspace)."""
     base = ["workspace", str(FIVE_BAR), "--n", "12", "--chunk-size", "20", "--quiet",
             "--json"]
     assert cli.main(base + ["--out", str(tmp_path / "plain")]) == 0
@@ -351,9 +351,9 @@ def test_the_cli_workspace_of_a_general_mechanism_takes_jobs(tmp_path, capsys):
                             str(tmp_path / "cut")]) == 2  # another study: the CLI's identity
     err = capsys.readouterr().err
     assert "another study" in err and err.count("\n") == 1
-    assert cli.main(base + ["--at", "z=0", "--out", str(tmp_path / "at")]) == 2
+    assert cli.main(base + ["--at", "x=0.01", "--out", str(tmp_path / "at")]) == 2
     err = capsys.readouterr().err
-    assert "--at holds pose coordinates of a machine read per leg" in err
+    assert "at: x is varied" in err and err.count("\n") == 1
 
 
 def _volumes(text: str) -> dict:

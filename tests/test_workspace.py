@@ -457,3 +457,36 @@ def test_actuated_range_is_the_joint_limits_or_a_turn_or_a_length():
         tree.lowerPositionLimit[joint.idx_q], tree.upperPositionLimit[joint.idx_q] = -np.inf, np.inf
         assert actuated_range(link, name, 0.25) == pytest.approx((0.25 - np.pi, 0.25 + np.pi))
         tree.lowerPositionLimit[joint.idx_q], tree.upperPositionLimit[joint.idx_q] = lo, hi
+
+
+def test_a_general_workspace_slice_at_a_held_output_coordinate(tmp_path, capsys):
+    """The pinned Delta's point (read over its tree) over x, y at z = −0.7 (its reference
+    is at z ≈ −0.76): every cell reached holds its output at (x, y, −0.7) to 1e-9, and
+    without at the slice is the reference's; at naming a varied coordinate, or with
+    actuated coordinates, is refused in a sentence; the CLI's --at gives the same."""
+    from pathlib import Path
+
+    from pkm_pin import load_mechanism
+    from pkm_pin.cli import main
+
+    path = Path(__file__).resolve().parents[1] / "models" / "pinned" / "delta_point.toml"
+    mech = load_mechanism(path)
+    assert mech.backend == "general"
+    ws = mech.workspace(("x", "y"), at={"z": -0.7}, n=9, kinds=("reachable",))
+    ok = ws.masks["reachable"]
+    assert ok.sum() > 10 and ws.fixed == {"z": -0.7}
+    Q = ws.values["q"][ok]
+    points = ws.points.reshape(ok.shape + (2,))[ok]
+    for q, p in zip(Q, points):
+        xyz = mech.model.kinematics(q).output_placement.translation
+        np.testing.assert_allclose(xyz, [p[0], p[1], -0.7], atol=1e-9)
+    plain = mech.workspace(("x", "y"), n=9, kinds=("reachable",))
+    z_ref = mech.home_assembly.output_pose.translation[2]
+    assert plain.fixed["z"] == pytest.approx(z_ref) and abs(z_ref + 0.7) > 0.05
+    with pytest.raises(InputError, match="at: x is varied"):
+        mech.workspace(("x", "y"), at={"x": 0.1}, n=5)
+    with pytest.raises(InputError, match="at: over actuated joints"):
+        mech.workspace(tuple(mech.actuated_names[:2]), at={"z": -0.7}, n=5)
+    assert main(["workspace", str(path), "--coords", "x", "y", "--at", "z=-0.7", "--n", "9",
+                 "--kind", "reachable", "--quiet", "--out", str(tmp_path / "w")]) == 0
+    assert "fixed      z=-0.7" in capsys.readouterr().out
