@@ -931,12 +931,8 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     solve_at = _linkage_solver(link, ref, dom, max_iter)
     follow = _continuation(link, dom, solve_at)
     sub = _default_subsamples(1 if subsamples is None else subsamples, len(dom.coords))
-    cp = _begin_checkpoint(checkpoint, resume, {
-        "study": "linkage workspace", "mechanism": link.name, "coords": list(dom.coords),
-        "bounds": dom.bounds, "n": np.broadcast_to(np.asarray(n), (len(dom.coords),)).tolist(),
-        "kinds": list(kinds), "threshold": threshold, "max_iter": int(max_iter),
-        "chunk_size": int(chunk_size), "subsamples": sub, "at": dom.fixed},
-        int(np.prod(shape)),
+    cp = _begin_checkpoint(checkpoint, resume, _linkage_study(
+        link, dom, n, kinds, threshold, max_iter, chunk_size, sub), int(np.prod(shape)),
         len(link.actuated))
     t1 = time.perf_counter()
     Q, home_an, values = _linkage_cells(link, ref, dom, points, shape, start, solve_at,
@@ -952,6 +948,16 @@ def linkage_workspace(link, coords=None, *, bounds=None, n=30, sampling: str = "
     if cp is not None:
         cp.finish()
     return ws
+
+
+def _linkage_study(link, dom, n, kinds, threshold, max_iter, chunk_size, sub) -> dict:
+    """What identifies a linkage workspace in its checkpoint (a resume of another study
+    is refused)."""
+    return {"study": "linkage workspace", "mechanism": link.name, "coords": list(dom.coords),
+            "bounds": dom.bounds,
+            "n": np.broadcast_to(np.asarray(n), (len(dom.coords),)).tolist(),
+            "kinds": list(kinds), "threshold": threshold, "max_iter": int(max_iter),
+            "chunk_size": int(chunk_size), "subsamples": sub, "at": dom.fixed}
 
 
 def _start_cell(axes, dom) -> tuple:
