@@ -30,6 +30,24 @@ from pkm_pin import load_mechanism, position, sweep
 STEWART = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "stewart.toml"
 
 
+def with_and_without(module, name: str, off, run, rounds: int) -> tuple[dict, dict]:
+    """Best time of ``run()`` with ``module.name`` as it is ("with") and replaced by
+    ``off`` ("without"), in interleaved rounds; returns the best times and the last
+    result of each."""
+    original = getattr(module, name)
+    best, last = {"with": np.inf, "without": np.inf}, {}
+    for _ in range(rounds):
+        for key in ("with", "without"):
+            setattr(module, name, original if key == "with" else off)
+            try:
+                t = time.perf_counter()
+                last[key] = run()
+                best[key] = min(best[key], time.perf_counter() - t)
+            finally:
+                setattr(module, name, original)
+    return best, last
+
+
 def main(n: int = 20, rounds: int = 2, name: str = "stewart") -> dict:
     """Time the workspace with and without the reach test; return the figures."""
     mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
@@ -40,21 +58,13 @@ def main(n: int = 20, rounds: int = 2, name: str = "stewart") -> dict:
         refused.extend(original(legs, Ts, length)[1])
         return np.ones(Ts.shape[1], bool), []
 
-    best = {"with": np.inf, "without": np.inf}
-    for _ in range(rounds):
-        for key in ("with", "without"):
-            sweep.out_of_reach = original if key == "with" else solve_them_all
-            refused.clear()
-            try:
-                t = time.perf_counter()
-                ws = mech.workspace(n=n)
-                best[key] = min(best[key], time.perf_counter() - t)
-            finally:
-                sweep.out_of_reach = original
-            if key == "with":
-                reach_with = ws.masks["reachable"]
-            else:
-                reach_without, caught = ws.masks["reachable"], len(refused)
+    def run():
+        refused.clear()
+        return mech.workspace(n=n)
+
+    best, last = with_and_without(sweep, "out_of_reach", solve_them_all, run, rounds)
+    caught = len(refused)  # of the last run, one without the test
+    reach_with, reach_without = (last[k].masks["reachable"] for k in ("with", "without"))
     unreachable = int((~reach_without).sum())
     same = bool(np.array_equal(reach_with, reach_without))
     print(f"{name} workspace, {n}^3 poses (x, y, z; transmission and boundary refinement "
@@ -71,24 +81,15 @@ def main(n: int = 20, rounds: int = 2, name: str = "stewart") -> dict:
 def partial(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> dict:
     """Time the workspaces over partial poses with and without the completion's limit
     stop; return {name: figures}."""
-    original = position._against_a_limit
     out = {}
     for name in names:
         mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
         mech.workspace(n=2)  # compile and cache before timing
-        best, masks = {"with": np.inf, "without": np.inf}, {}
-        for _ in range(rounds):
-            for key in ("with", "without"):
-                position._against_a_limit = original if key == "with" else \
-                    (lambda mech, leg_q: False)
-                try:
-                    t = time.perf_counter()
-                    ws = mech.workspace(n=n)
-                    best[key] = min(best[key], time.perf_counter() - t)
-                finally:
-                    position._against_a_limit = original
-                masks[key] = ws.masks
-        same = all(np.array_equal(masks["with"][k], masks["without"][k]) for k in masks["with"])
+        best, last = with_and_without(position, "_against_a_limit",
+                                      lambda mech, leg_q: False,
+                                      lambda: mech.workspace(n=n), rounds)
+        ws, other = last["with"], last["without"]
+        same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
         ratio = best["with"] / best["without"]
         print(f"{mech.name} workspace over {', '.join(ws.coords)} (partial poses completed), "
               f"{n}^3 cells, best of {rounds}: without the limit stop {best['without']:.2f} s, "

@@ -423,7 +423,13 @@ class LegsAnalysis(Analysis):
         the order of :attr:`q`) for the actuated rates [rad/s or m/s]: the general
         elimination's at this configuration (:meth:`TreeAnalysis.joint_rates`), so both
         analyses of one machine give the same rates."""
-        return self.mechanism.general.analyze(self.q, nearby=0).joint_rates(qdot_actuated)
+        return self._tree_analysis.joint_rates(qdot_actuated)
+
+    @cached_property
+    def _tree_analysis(self) -> TreeAnalysis:
+        """The general elimination at this configuration (made once, for
+        :meth:`joint_rates`)."""
+        return self.mechanism.general.analyze(self.q, nearby=0)
 
     def passive_rates(self, twist) -> list[np.ndarray]:
         """Every leg's joint rates (all joints, velocity order) for a platform twist."""

@@ -470,6 +470,25 @@ class _Stage:
         return out
 
 
+@contextlib.contextmanager
+def recording(stage: _Stage | None):
+    """The chunk loop of a checkpointed study, around which it runs (``stage`` None: no
+    checkpoint, nothing done): a signal caught by :func:`graceful_stop` stops it after
+    the current chunk (:meth:`Checkpoint.running`); any exception leaving it writes the
+    chunks recorded (:meth:`Checkpoint.interrupted`: a ``KeyboardInterrupt`` becomes
+    :class:`Interrupted`); a loop that ends writes the file (:meth:`_Stage.end`)."""
+    if stage is None:
+        yield
+        return
+    try:
+        with stage.cp.running():
+            yield
+    except BaseException as e:  # Ctrl-C, SIGTERM, a failed chunk: keep the chunks done
+        stage.cp.interrupted(e)
+        raise
+    stage.end()
+
+
 def checkpoint_of(checkpoint, resume: bool = False) -> Checkpoint | None:
     """A :class:`Checkpoint` from an API's ``checkpoint`` argument: None, a Checkpoint, or
     an output prefix (``resume``: continue the study saved there)."""
@@ -529,7 +548,7 @@ def interrupt_line(error: Interrupted, command: str | None) -> str:
 
 __all__ = ["Checkpoint", "CheckpointError", "Interrupted", "atomic_savez", "atomic_write",
            "check_writable", "checkpoint_of", "file_digest",
-           "graceful_stop", "stop_requested", "study_json"]
+           "graceful_stop", "recording", "stop_requested", "study_json"]
 
 
 def _version() -> str:

@@ -84,6 +84,7 @@ from . import dynamics as _dynamics
 from . import general_kernel, screws
 from .analysis import LinkageAnalysis, Mobility, TreeAnalysis, classify
 from .assembly import Assembly, LinkageAssembly, as_pose
+from .checkpoint import recording
 from .closure_gaps import Diagnosis, diagnose
 from .errors import (
     AssemblyError,
@@ -1349,9 +1350,8 @@ class _Track:
         """Every row, chunk after chunk (those ``done`` in the checkpoint ``stage``
         skipped, the state carried over them), each chunk recorded in ``stage``; an
         interrupt keeps the chunks recorded (:meth:`Checkpoint.interrupted`)."""
-        running = stage.cp.running() if stage is not None else contextlib.nullcontext()
         try:
-            with running:
+            with recording(stage):
                 for chunk, was_done in zip(chunks, done):
                     if was_done:
                         self.resume_after(chunk)
@@ -1362,15 +1362,9 @@ class _Track:
                             bar.update(1)
                     if stage is not None:
                         stage.record(chunk, self.out.part(chunk))
-        except BaseException as e:  # Ctrl-C, SIGTERM: keep the chunks recorded
-            if stage is not None:
-                stage.cp.interrupted(e)
-            raise
         finally:
             if bar is not None:
                 bar.close()
-        if stage is not None:
-            stage.end()
 
     def resume_after(self, chunk: np.ndarray) -> None:
         """The state after the recorded rows ``chunk``: its last converged configuration
@@ -2169,21 +2163,19 @@ class _SweepRows:
         for k in self._INDICES:
             self.idx[k][i] = an.indices[k]
 
-    def fields(self) -> dict:
-        """The per-row arrays a checkpoint keeps (views of this object's arrays)."""
-        return {"ok": self.ok, "q": self.q, "poses": self.poses, "dof": self.dof,
-                "output_dof": self.odof, "singularity": self.cls_fixed, "q_actuated": self.qa,
-                "lti": self.lti, "cti": self.cti, **self.idx}
-
-    @property
-    def cls_fixed(self) -> np.ndarray:
-        """The classes as a fixed-width string array (what a checkpoint file holds)."""
-        return self.cls.astype("<U4")
+    def fields(self, rows=slice(None)) -> dict:
+        """The per-row arrays a checkpoint keeps, of ``rows`` (default all), the classes
+        as fixed-width strings (what a checkpoint file holds)."""
+        return {"ok": self.ok[rows], "q": self.q[rows], "poses": self.poses[rows],
+                "dof": self.dof[rows], "output_dof": self.odof[rows],
+                "singularity": self.cls[rows].astype("<U4"), "q_actuated": self.qa[rows],
+                "lti": self.lti[rows], "cti": self.cti[rows],
+                **{k: v[rows] for k, v in self.idx.items()}}
 
     def part(self, rows: np.ndarray) -> dict:
         """The checkpoint's part of ``rows`` (failures by position in ``rows``)."""
         where = {int(i): k for k, i in enumerate(rows)}
-        part = {key: value[rows] for key, value in self.fields().items()}
+        part = self.fields(rows)
         part["failures"] = [(where[i], why) for i, why in self.failures if i in where]
         return part
 

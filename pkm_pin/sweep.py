@@ -25,7 +25,6 @@ Without kernels (a leg with a continuous or multi-DOF joint) the legs are solved
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import os
 import pickle
@@ -529,25 +528,19 @@ def sweep(mech, poses, *, executor: Executor | None = None, chunk_size: int = 20
     bar = _progress_bar(len(X)) if progress else None
     if bar is not None and len(todo) < len(chunks):
         bar.update(len(X) - sum(len(chunks[k]) for k in todo))
-    running = stage.cp.running() if stage is not None else contextlib.nullcontext()
-    try:
-        with running:
-            if executor is None:
-                tick = bar.update if bar is not None else None
-                for k in todo:
-                    parts[k] = evaluate_chunk(mech, X[chunks[k]], reference, rtol,
-                                              singular_tol, tick, transmission=transmission)
-                    if stage is not None:
-                        stage.record(chunks[k], parts[k])
-            else:
-                _run_on(executor, mech, X, chunks, todo, parts, stage, bar, reference, rtol,
-                        singular_tol, transmission)
-    except BaseException as e:  # Ctrl-C, SIGTERM, a failed chunk: keep the chunks done
-        if stage is not None:
-            stage.cp.interrupted(e)
-        raise
-    if stage is not None:
-        stage.end()
+    from .checkpoint import recording
+
+    with recording(stage):
+        if executor is None:
+            tick = bar.update if bar is not None else None
+            for k in todo:
+                parts[k] = evaluate_chunk(mech, X[chunks[k]], reference, rtol,
+                                          singular_tol, tick, transmission=transmission)
+                if stage is not None:
+                    stage.record(chunks[k], parts[k])
+        else:
+            _run_on(executor, mech, X, chunks, todo, parts, stage, bar, reference, rtol,
+                    singular_tol, transmission)
     if bar is not None:
         bar.close()
     return _gather(X, chunks, parts, mech.n_actuated, singular_tol)

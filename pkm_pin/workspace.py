@@ -52,7 +52,6 @@ restarts where they fail: the workspace found is the one connected to home.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time
 from collections import deque
@@ -65,6 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import screws
+from .checkpoint import recording
 from .errors import InputError, PkmError
 from .model.closure_model import pose_rows
 from .solve import POSE_COORDINATES
@@ -1351,32 +1351,22 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, gen
                             {"analyse": analyse, "transmission": transmission},
                             _cells_unanalysed(len(cells)))
     todo = [k for k, p in enumerate(parts) if p is None]
-    running = stage.cp.running() if stage is not None else contextlib.nullcontext()
-    try:
-        with running:
-            if executor is None:
-                for k in todo:
-                    parts[k] = _linkage_chunk(link, qs[chunks[k]], analyse, transmission,
-                                              generic)
-                    if stage is not None:
-                        stage.record(chunks[k], parts[k])
-            else:
-                futures = {executor.submit(_linkage_chunk, link, qs[chunks[k]], analyse,
-                                           transmission, generic): k for k in todo}
-                for f in as_completed(futures):
-                    k = futures[f]
-                    parts[k] = f.result()
-                    if stage is not None:
-                        stage.record(chunks[k], parts[k])
-    except BaseException as e:  # Ctrl-C, SIGTERM, a failed chunk: keep the chunks done
-        if stage is not None:
-            stage.cp.interrupted(e)
-        raise
-    if stage is not None:
-        stage.end()
-    out = {"ok": np.zeros(N, bool), "singularity": np.full(N, "", dtype="<U4"),
-           "det": np.full(N, np.nan), "lti": np.full(N, np.nan), "cti": np.full(N, np.nan),
-           "dof": np.full(N, -1)}
+    with recording(stage):
+        if executor is None:
+            for k in todo:
+                parts[k] = _linkage_chunk(link, qs[chunks[k]], analyse, transmission,
+                                          generic)
+                if stage is not None:
+                    stage.record(chunks[k], parts[k])
+        else:
+            futures = {executor.submit(_linkage_chunk, link, qs[chunks[k]], analyse,
+                                       transmission, generic): k for k in todo}
+            for f in as_completed(futures):
+                k = futures[f]
+                parts[k] = f.result()
+                if stage is not None:
+                    stage.record(chunks[k], parts[k])
+    out = _cells_unanalysed(N)
     for c, part in zip(chunks, parts):
         for key, column in out.items():
             column[cells[c]] = part[key]
@@ -1388,7 +1378,7 @@ def _linkage_values(link, Q: dict, shape, analyse: bool, transmission: bool, gen
 
 
 def _cells_unanalysed(M: int) -> dict:
-    """The per-cell arrays of M reached cells not analysed yet."""
+    """The per-cell arrays of M cells not analysed yet (nothing reached)."""
     return {"ok": np.zeros(M, bool), "singularity": np.full(M, "", dtype="<U4"),
             "det": np.full(M, np.nan), "lti": np.full(M, np.nan), "cti": np.full(M, np.nan),
             "dof": np.full(M, -1)}
