@@ -11,7 +11,8 @@ Then the same for the partial poses of lower-mobility machines (:func:`partial`:
 shipped 3-RPS and 3-PRS over their default coordinates z, roll, pitch, each cell's
 parasitic coordinates completed): with and without the completion's limit stop (a
 completion whose Newton stops with a joint on its limit is not continued,
-``position._against_a_limit``); every mask must be the same.
+``position._against_a_limit``); every mask must be the same. And the same workspaces
+with the completion compiled and with its Python driver (:func:`compiled_completion`).
 
 Run: ``python benchmarks/bench_reach.py [n] [rounds]`` (default a 20³ grid, 2 rounds;
 the partial poses on a 9³ grid).
@@ -25,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pkm_pin import load_mechanism, position, sweep
+from pkm_pin import load_mechanism, position, solve, sweep
 
 STEWART = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "stewart.toml"
 
@@ -98,7 +99,35 @@ def partial(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> dict:
     return out
 
 
+def compiled_completion(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> dict:
+    """Time the workspaces over partial poses with the completion compiled (the legs'
+    kernels, :func:`pkm_pin.solve.solve_coordinates_system`) and with the Python driver
+    (Pinocchio's legs, numpy's SVD); return {name: figures}. The masks must be the same,
+    the indices equal to rounding."""
+    plain = solve.prefer_compiled
+    python_only = (solve.solve_coordinates_system, solve.closure_matrix)
+
+    def python_driver(dispatcher):
+        return False if dispatcher in python_only else plain(dispatcher)
+
+    out = {}
+    for name in names:
+        mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
+        mech.workspace(n=2)  # compile and cache before timing
+        best, last = with_and_without(solve, "prefer_compiled", python_driver,
+                                      lambda: mech.workspace(n=n), rounds)
+        ws, other = last["with"], last["without"]
+        same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
+        ratio = best["with"] / best["without"]
+        print(f"{mech.name} workspace over {', '.join(ws.coords)} (partial poses completed), "
+              f"{n}^3 cells, best of {rounds}: Python driver {best['without']:.2f} s, "
+              f"compiled {best['with']:.2f} s, ratio x{ratio:.2f}; same masks: {same}")
+        out[name] = {"with": best["with"], "without": best["without"], "same": same}
+    return out
+
+
 if __name__ == "__main__":
     args = [int(a) for a in sys.argv[1:3]]
     main(*args)
     partial(rounds=args[1] if len(args) > 1 else 1)
+    compiled_completion(rounds=args[1] if len(args) > 1 else 1)

@@ -93,7 +93,8 @@ __all__ = ["ACTUATED", "LEGS", "PLATFORM", "POSE_COORDINATES", "ClosureSolution"
            "CoordinateSolution", "CoordinateSystem", "LegSolution", "Mask", "closure_error",
            "closure_iteration", "coordinate_errors", "coordinate_rates", "coordinate_scales",
            "pose_coordinates", "solve_chain", "solve_closure", "solve_coordinates",
-           "solve_from", "solve_kernel", "solve_leg", "solve_system", "start_configurations",
+           "solve_coordinates_system", "solve_from", "solve_kernel", "solve_leg",
+           "solve_system", "start_configurations",
            "track"]
 
 
@@ -607,6 +608,200 @@ def solve_system(chains, mask, pose, Q, target, tol, max_iter, residual, out):
 
 #: :func:`solve_system` as :func:`solve_kernel` calls it (its arguments keep their types)
 _solve_system = SameTypes(solve_system, key=0)
+
+
+# ===================================================== pose-coordinate rows, compiled
+@register_jitable
+def coordinate_rows(M, length, c, C):
+    """The compiled :func:`pose_coordinates` and :func:`coordinate_rates` of a placement
+    ``M`` (4 × 4): ``c`` (6) receives x, y, z [m], roll, pitch, yaw [rad] (the closed
+    form; away from pitch = ±π/2 it is Pinocchio's ``matrixToRpy`` up to 2π, which the
+    wrapped errors and the rates do not see), ``C`` (6 × 6) the scaled coordinate rates
+    per unit of ``ξ = (ω; v_O / length)``."""
+    px, py, pz = M[0, 3] / length, M[1, 3] / length, M[2, 3] / length
+    for k in range(3):
+        c[k] = M[k, 3]
+    c[4] = math.atan2(-M[2, 0], math.sqrt(M[0, 0] * M[0, 0] + M[1, 0] * M[1, 0]))
+    c[5] = math.atan2(M[1, 0], M[0, 0])
+    c[3] = math.atan2(M[2, 1], M[2, 2])
+    for a in range(6):
+        for b in range(6):
+            C[a, b] = 0.0
+    C[0, 1], C[0, 2], C[1, 0], C[1, 2], C[2, 0], C[2, 1] = pz, -py, -pz, px, py, -px
+    C[0, 3] = C[1, 4] = C[2, 5] = 1.0
+    cp, tp = math.cos(c[4]), math.tan(c[4])
+    sy, cy = math.sin(c[5]), math.cos(c[5])
+    C[3, 0], C[3, 1] = cy / cp, sy / cp
+    C[4, 0], C[4, 1] = -sy, cy
+    C[5, 0], C[5, 1], C[5, 2] = cy * tp, sy * tp, 1.0
+
+
+@register_jitable
+def _coordinate_errors(M, rows, values, length, c, C, d):
+    """``d`` ← :func:`coordinate_errors` at ``M`` (``c``, ``C`` filled on the way);
+    returns ``max |d|``."""
+    coordinate_rows(M, length, c, C)
+    worst = 0.0
+    for j in range(rows.shape[0]):
+        k = rows[j]
+        x = values[j] - c[k]
+        if k >= 3:
+            x = -((-x + np.pi) % (2 * np.pi) - np.pi)
+            d[j] = x
+        else:
+            d[j] = x / length
+        worst = max(worst, abs(d[j]))
+    return worst
+
+
+@register_jitable
+def _closure_matrix(chains, pose, Q, ws, residual, A):
+    """Evaluate the legs (``ws``) at ``pose`` and ``Q`` and fill ``A`` (6 legs × Σ nv +
+    6): the rows ``H_i Δq_i − X_i ξ = e_i`` of :class:`CoordinateSystem`. Returns the
+    closure (largest leg residual)."""
+    coords, lengths, units = chains.coords, chains.lengths, chains.units
+    ntot = coords[coords.shape[0] - 1]
+    closure = 0.0
+    for i in range(coords.shape[0] - 1):
+        c0, c1 = coords[i], coords[i + 1]
+        _compose(pose, chains.anchors[i], ws.Ws[i])
+        _fk(chain_of(chains, i), Q[c0:c1], ws.Ts[i], ws.Js[i])
+        r = closure_error(ws.Ts[i], ws.Ws[i], lengths[i], ws.e[i])
+        residual[i] = r
+        closure = max(closure, r)
+        leg_rows(ws.Ts[i], ws.Js[i], units[c0:c1], lengths[i], c1 - c0, ws.H[i])
+        platform_rows(ws.Ws[i], lengths[i], chains.length, ws.X[i])
+        for a in range(6):
+            for b in range(c1 - c0):
+                A[6 * i + a, c0 + b] = ws.H[i, a, b]
+            for b in range(6):
+                A[6 * i + a, ntot + b] = -ws.X[i, a, b]
+    return closure
+
+
+@register_jitable
+def coordinate_step(A, e, C, rows, d, lam, rank_rtol, W, V, sv, z):
+    """:meth:`CoordinateSystem.step` in compiled code: ``z`` ← the closure rows ``A z =
+    e`` solved by the damped pseudo-inverse (rank: singular values above ``rank_rtol``
+    times the largest), then the coordinate rows ``C_rows ξ = d`` by damped least squares
+    on the null space of ``A``. The SVD is the engine's one-sided Jacobi
+    (:func:`pkm_pin.engine.linalg.jacobi`: ``A V = W``, ``W_j = σ_j u_j``), ``V`` (in/out,
+    orthogonal) warm-started from the last step's. Returns ``max |C_rows ξ|`` (the
+    coordinate change the step makes)."""
+    m = A.shape[1]
+    ntot = m - 6
+    jacobi(A, A.shape[0], m, W, V, sv)
+    top = 0.0
+    for j in range(m):
+        top = max(top, sv[j])
+    for a in range(m):
+        z[a] = 0.0
+    free = np.empty(m, np.int64)
+    f = 0
+    for j in range(m):
+        if top > 0 and sv[j] > rank_rtol * top:
+            w = 0.0
+            for a in range(e.shape[0]):
+                w += W[a, j] * e[a]
+            w /= sv[j] * sv[j] + lam
+            for a in range(m):
+                z[a] += V[a, j] * w
+        else:
+            free[f] = j
+            f += 1
+    k = rows.shape[0]
+    if k > 0 and f > 0:
+        G = np.zeros((k, f))
+        rhs = np.empty(k)
+        for i in range(k):
+            x = d[i]
+            for b in range(6):
+                x -= C[rows[i], b] * z[ntot + b]
+                for j in range(f):
+                    G[i, j] += C[rows[i], b] * V[ntot + b, free[j]]
+            rhs[i] = x
+        N = G.T @ G
+        for j in range(f):
+            N[j, j] += lam
+        y = np.linalg.solve(N, G.T @ rhs)
+        for j in range(f):
+            for a in range(m):
+                z[a] += V[a, free[j]] * y[j]
+    worst = 0.0
+    for i in range(k):
+        x = 0.0
+        for b in range(6):
+            x += C[rows[i], b] * z[ntot + b]
+        worst = max(worst, abs(x))
+    return worst
+
+
+@njit(cache=True, nogil=True)
+def solve_coordinates_system(chains, pose, Q, rows, values, rank_rtol, tol, max_iter,
+                             residual, out):
+    """:func:`solve_coordinates` compiled on a mechanism's
+    :class:`~pkm_pin.kernels.Chains` (legs evaluated by :func:`pkm_pin.kernels._fk`): the
+    same rows, step (:func:`coordinate_step`), damping and stopping rules, in place on
+    ``pose`` (4 × 4) and ``Q`` (the start projected onto the limits). ``residual``
+    receives each leg's closure error, ``out`` (closure, coordinates, iterations)."""
+    coords, units, lower, upper = chains.coords, chains.units, chains.lower, chains.upper
+    n = coords.shape[0] - 1
+    ntot = coords[n]
+    mv = 0
+    for i in range(n):
+        mv = max(mv, coords[i + 1] - coords[i])
+    ws = system_workspace(n, mv, ntot)
+    A = np.zeros((6 * n, ntot + 6))
+    e = ws.e[:n].reshape(6 * n)  # a view: filled by each evaluation
+    z = np.empty(ntot + 6)
+    c, C, d = np.empty(6), np.empty((6, 6)), np.empty(rows.shape[0])
+    W, V, sv = np.empty((6 * n, ntot + 6)), np.eye(ntot + 6), np.empty(ntot + 6)
+    E, tmp = np.empty((4, 4)), np.empty((4, 4))
+    for a in range(ntot):
+        Q[a] = min(upper[a], max(lower[a], Q[a]))
+    it, best, slow, stalled = 0, np.inf, 0, False
+    while True:
+        closure = _closure_matrix(chains, pose, Q, ws, residual, A)
+        worst = _coordinate_errors(pose, rows, values, chains.length, c, C, d)
+        if stalled:
+            break
+        change = coordinate_step(A, e, C, rows, d, lm_damping(max(closure, worst)),
+                                 rank_rtol, W, V, sv, z)
+        stop, best, slow = stop_rule(max(closure, change), tol, it, max_iter, best, slow)
+        if stop or not all_finite(z):
+            break
+        it += 1
+        ws.dq[:] = z[:ntot]
+        ws.xi[:] = z[ntot:]
+        step, size = _move(Q, pose, coords, units, lower, upper, chains.length, ws, E, tmp)
+        stalled = step < 1e-30 * (1.0 + size)
+    out[0], out[1], out[2] = closure, worst, it
+
+
+#: :func:`solve_coordinates_system` as :func:`solve_coordinates` calls it
+_solve_coordinates_system = SameTypes(solve_coordinates_system, key=0)
+
+
+@njit(cache=True, nogil=True)
+def closure_matrix(chains, pose, Q, residual, A, e):
+    """:class:`CoordinateSystem`'s rows in compiled code: ``A`` (6 legs × Σ nv + 6) and
+    ``e`` (6 legs) at ``pose`` (4 × 4) and ``Q``, ``residual`` each leg's closure error;
+    returns the closure."""
+    coords = chains.coords
+    n = coords.shape[0] - 1
+    mv = 0
+    for i in range(n):
+        mv = max(mv, coords[i + 1] - coords[i])
+    ws = system_workspace(n, mv, coords[n])
+    closure = _closure_matrix(chains, pose, Q, ws, residual, A)
+    for i in range(n):
+        for a in range(6):
+            e[6 * i + a] = ws.e[i, a]
+    return closure
+
+
+#: :func:`closure_matrix` as :class:`CoordinateSystem` calls it
+_closure_matrix_compiled = SameTypes(closure_matrix, key=0)
 
 
 # =============================================================== Python driver
@@ -1136,8 +1331,10 @@ class CoordinateSolution(ClosureSolution):
 
 
 class CoordinateSystem:
-    """The closure rows and the pose-coordinate rates of a mechanism at one state (the
-    Python driver's evaluation, :func:`closure_iteration` compiled once ready).
+    """The closure rows and the pose-coordinate rates of a mechanism at one state: the
+    legs evaluated by their kernels (:func:`closure_matrix`) where every leg has one
+    (``compiled``: None, when its code is ready), else by Pinocchio (the Python driver's
+    evaluation, :func:`closure_iteration` compiled once ready; ``compiled=False``).
 
     Attributes:
         A: (6 legs, Σ nv + 6) the closure rows per dimensionless unknown ``[Δq; ξ]``
@@ -1151,10 +1348,24 @@ class CoordinateSystem:
             the mechanism (platform motions and the legs' idle motions) to first order.
     """
 
-    def __init__(self, mech, pose: pin.SE3, leg_q: list, ws=None):
+    def __init__(self, mech, pose: pin.SE3, leg_q: list, ws=None,
+                 compiled: bool | None = None):
         legs = mech.legs
         coords = np.asarray(mech.leg_frames.coords, dtype=np.int64)
         n, ntot, L = len(legs), int(coords[-1]), mech.characteristic_length
+        self.C = np.zeros((6, ntot + 6))
+        self.C[:, ntot:] = coordinate_rates(pose, L)
+        kernel = mech.kernel if compiled is not False else None
+        if kernel is not None and (compiled or prefer_compiled(closure_matrix)):
+            self.A, self.e, self.residuals = np.zeros((6 * n, ntot + 6)), np.empty(6 * n), \
+                np.empty(n)
+            self.closure = _closure_matrix_compiled(
+                kernel.chains, pose.homogeneous, np.concatenate(leg_q).astype(float),
+                self.residuals, self.A, self.e)
+            self.coords, self.length, self.ws = coords, L, None
+            self.units = np.concatenate([leg._velocity_units for leg in legs])
+            self._decompose()
+            return
         ws = system_workspace(n, int(max(np.diff(coords))), ntot) if ws is None else ws
         _evaluate(legs, mech.anchors, pose, leg_q, ws)
         lengths = np.array([leg.characteristic_length for leg in legs], dtype=float)
@@ -1173,10 +1384,12 @@ class CoordinateSystem:
             A[6 * i:6 * i + 6, ntot:] = -ws.X[i]
         self.A, self.e = A, ws.e[:n].reshape(-1).copy()
         self.residuals, self.closure = residual, float(closure)
-        self.C = np.zeros((6, ntot + 6))
-        self.C[:, ntot:] = coordinate_rates(pose, L)
         self.coords, self.units, self.length, self.ws = coords, units, L, ws
-        rank, U, s, Vt = screws.svd_rank(A, RANK_RTOL)
+        self._decompose()
+
+    def _decompose(self) -> None:
+        """The SVD of :attr:`A`: its row space for the closure step, :attr:`free`."""
+        rank, U, s, Vt = screws.svd_rank(self.A, RANK_RTOL)
         self._U, self._s, self._V = U[:, :rank], s[:rank], Vt[:rank].T
         self.free = Vt[rank:].T
 
@@ -1217,7 +1430,7 @@ def _apply(legs, pose: pin.SE3, leg_q: list, dq: np.ndarray, xi, coords, units,
 
 
 def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = CLOSURE_TOL,
-                      max_iter: int = 50) -> CoordinateSolution:
+                      max_iter: int = 50, compiled: bool | None = None) -> CoordinateSolution:
     """The closure solver with rows fixing pose coordinates (Python driver, Pinocchio's
     legs): every leg's joints and the platform from ``pose`` and ``leg_q``, the closure
     of every leg to ``tol`` and the coordinates ``rows`` (indices into
@@ -1229,14 +1442,30 @@ def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = 
 
     Stops when ``r = max(closure, |C z|∞) ≤ tol`` (``C z``: the coordinate change the
     next step wants, which is the coordinate error when it can be reached), on
-    :func:`stop_rule` otherwise, or when a step stalls (a joint limit)."""
+    :func:`stop_rule` otherwise, or when a step stalls (a joint limit).
+
+    ``compiled``: the compiled driver (:func:`solve_coordinates_system`) when every leg
+    has a kernel (default: when its code is ready,
+    :func:`pkm_pin.compiling.prefer_compiled`); else the Python driver, Pinocchio's legs
+    (the same steps to rounding: a test)."""
     rows = np.asarray(rows, dtype=int)
     values = np.asarray(values, dtype=float)
+    kernel = mech.kernel if compiled is not False else None
+    if kernel is not None and (compiled or prefer_compiled(solve_coordinates_system)):
+        M, Q = pose.homogeneous.copy(), np.concatenate(leg_q).astype(float)
+        residual, out = np.empty(len(kernel.lengths)), np.empty(3)
+        _solve_coordinates_system(kernel.chains, M, Q, rows.astype(np.int64), values,
+                                  float(RANK_RTOL), float(tol), int(max_iter), residual, out)
+        c = kernel.coords
+        return CoordinateSolution(pin.SE3(M), [Q[c[i]:c[i + 1]].copy()
+                                               for i in range(len(c) - 1)],
+                                  residual, float(out[0]), 0.0, int(out[2]),
+                                  coordinates=float(out[1]))
     leg_q = [leg.clip(np.array(q, dtype=float)) for leg, q in zip(mech.legs, leg_q)]
     L = mech.characteristic_length
     it, best, slow, ws = 0, np.inf, 0, None
     while True:
-        system = CoordinateSystem(mech, pose, leg_q, ws)
+        system = CoordinateSystem(mech, pose, leg_q, ws, compiled=False)
         ws = system.ws
         d = coordinate_errors(pose, rows, values, L)
         z = system.step(rows, d, lm_damping(max(system.closure, float(np.abs(d).max(
@@ -1250,7 +1479,7 @@ def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = 
         pose, leg_q, step, size = _apply(mech.legs, pose, leg_q, z[:ntot], z[ntot:],
                                          system.coords, system.units, L)
         if step < NEWTON_STALL_RTOL * (1.0 + size):
-            system = CoordinateSystem(mech, pose, leg_q, ws)
+            system = CoordinateSystem(mech, pose, leg_q, ws, compiled=False)
             d = coordinate_errors(pose, rows, values, L)
             break
     return CoordinateSolution(pose, leg_q, system.residuals.copy(), system.closure, 0.0, it,

@@ -127,3 +127,12 @@ def test_bench_reach_times_partial_poses_with_and_without_the_limit_stop(capsys)
     figures = bench_reach.partial(n=4, names=("prs3",))["prs3"]
     assert figures["with"] > 0 and figures["without"] > 0 and figures["same"]
     assert "same masks: True" in capsys.readouterr().out
+
+
+def test_bench_reach_times_the_completion_compiled_and_in_python(capsys):
+    """bench_reach.compiled_completion times the 3-RPS workspace over partial poses (a
+    4³ grid) with the compiled completion and with its Python driver: both positive,
+    the same masks."""
+    figures = bench_reach.compiled_completion(n=4, names=("rps3",))["rps3"]
+    assert figures["with"] > 0 and figures["without"] > 0 and figures["same"]
+    assert "same masks: True" in capsys.readouterr().out
