@@ -184,12 +184,6 @@ def _load(args, spec: str | None = None):
                 getattr(args, "backend", None))
 
 
-def _is_linkage(mech) -> bool:
-    """Whether ``mech`` is read by the general backend (:attr:`Mechanism.backend`): its
-    report, view and studies are the general elimination's."""
-    return mech.backend == "general"
-
-
 def _pose_dict(pose) -> dict:
     import pinocchio as pin
 
@@ -406,8 +400,7 @@ def cmd_fk(args) -> int:
     every assembly mode found (``--all``); with several independent sub-mechanisms (a
     biped's legs) each one's output pose too, and ``--sub K``: the values are
     sub-mechanism K's alone (:func:`_fk_sub`)."""
-    from .report import optional
-    from .report_linkage import fk_submechanisms_data, fk_text
+    from .report import fk_submechanisms_data, fk_text, optional
 
     mech = _load(args)
     failed: dict = {}
@@ -582,7 +575,7 @@ def cmd_ik(args) -> int:
     default the home pose), its actuated values, every joint and the output pose; every
     working mode with ``--all``."""
     from .assembly import as_pose
-    from .report_linkage import fk_text, pose_dict
+    from .report import fk_text, pose_dict
 
     mech = _load(args)
     given = _platform_pose(args)
@@ -692,19 +685,29 @@ def map_poses(mech, axes, ranges, n: int, at=None):
 
 
 def _map_reading(args, mech) -> tuple:
-    """``(mechanism, per_leg)``: what ``map`` sweeps. A general-backend mechanism over
-    its actuated coordinates (``per_leg`` None). A per-leg one over pose coordinates
-    (``--axes``/``--plane``, default :func:`_default_axes`), or over actuated
-    coordinates (``--actuated``, ``--sub K``, or fewer than two independent pose
-    coordinates) through its tree (:func:`pkm_pin.io.general_reading`), ``per_leg``
-    then the mechanism whose own classes and indices the map gives."""
+    """``(what, mechanism, per_leg)``: what ``map`` sweeps, decided here only.
+
+    * ``"actuated"``: the tree's sweep over actuated coordinates (``--actuated``,
+      ``--sub K``, a mechanism read over its tree without pose options, or one with fewer
+      than two independent pose coordinates); a per-leg mechanism is swept through its
+      tree (:func:`pkm_pin.io.general_reading`) and ``per_leg`` is that mechanism, whose
+      own classes and indices the map gives (else None);
+    * ``"poses"``: pose coordinates (``--axes``/``--plane``/``--at``, default
+      :func:`_default_axes`) through the mechanism's own sweep: the per-leg engine's
+      chunks (partial poses completed on the motion), or, on a mechanism read over its
+      tree, the output's inverse kinematics walked from grid point to grid point
+      (:func:`_map_tree_poses`)."""
     from .io import general_reading
 
-    if _is_linkage(mech):
-        return mech, None
     actuated = args.actuated is not None or args.sub is not None
-    if not actuated and args.axes is None and args.plane is None and args.at is None \
-            and not args.fixed:
+    pose_options = args.axes is not None or args.plane is not None or args.at is not None
+    if actuated and pose_options:
+        option = "--actuated" if args.actuated is not None else "--sub K"
+        raise InputError(f"{option} maps over actuated coordinates; --axes/--plane/--at "
+                         "over pose coordinates: give one or the other")
+    if mech.backend == "general":
+        return ("poses" if pose_options else "actuated"), mech, None
+    if not actuated and not pose_options and not args.fixed:
         axes = _default_axes(mech)
         if axes is None:
             print(f"note       {mech.name} has fewer than 2 independent pose coordinates: "
@@ -713,12 +716,8 @@ def _map_reading(args, mech) -> tuple:
         elif axes != ("x", "y"):
             args.axes = list(axes)
     if not actuated:
-        return mech, None
-    if args.axes is not None or args.at is not None or args.plane is not None:
-        option = "--actuated" if args.actuated is not None else "--sub K"
-        raise InputError(f"{option} maps over actuated coordinates; --axes/--plane/--at "
-                         "over pose coordinates: give one or the other")
-    return general_reading(mech), mech  # over actuated coordinates: the whole tree
+        return "poses", mech, None
+    return "actuated", general_reading(mech), mech  # over actuated coordinates: the tree
 
 
 def _default_axes(mech) -> tuple[str, str] | None:
@@ -757,17 +756,13 @@ def cmd_map(args) -> int:
     mechanism's motion); write PREFIX.npz and the two PNG maps."""
     from .plots import save_maps
 
-    mech, per_leg = _map_reading(args, _load(args))
-    if _is_linkage(mech) and (args.axes is not None or args.plane is not None
-                              or args.at is not None):
-        if args.actuated is not None or args.sub is not None:
-            raise InputError("--actuated/--sub map over actuated coordinates; --axes/--plane/"
-                             "--at over pose coordinates: give one or the other")
-        return _map_linkage_poses(args, mech)
-    if _is_linkage(mech):
+    what, mech, per_leg = _map_reading(args, _load(args))
+    if what == "poses" and mech.backend == "general":
+        return _map_tree_poses(args, mech)
+    if what == "actuated":
         subs = _submechanisms_or_why(mech, args.sub)
         if args.sub is not None:
-            return _map_linkage(args, _pick_sub(mech, subs, args.sub), None if len(subs) > 1
+            return _map_actuated(args, _pick_sub(mech, subs, args.sub), None if len(subs) > 1
                                 else per_leg)
         if len(subs) > 1:
             words = "; ".join(f"{k}: {s.name}, output {s.output}" for k, s in enumerate(subs))
@@ -775,7 +770,7 @@ def cmd_map(args) -> int:
                   f"the classes below are those of the one output {mech.output!r}, which "
                   "the others' motors do not move (type I); --sub K maps one with its own "
                   "output")
-        return _map_linkage(args, mech, per_leg)
+        return _map_actuated(args, mech, per_leg)
     axes, tag, prefix, at = _pose_map_options(args)
     u, v, poses, held = map_poses(mech, axes, args.range, args.n, at)
     cp = _checkpoint(args, prefix, {
@@ -1005,13 +1000,13 @@ def _snake(n_u: int, n_v: int) -> np.ndarray:
     return np.concatenate([r if j % 2 == 0 else r[::-1] for j, r in enumerate(rows)])
 
 
-def _map_linkage(args, link, per_leg=None) -> int:
+def _map_actuated(args, link, per_leg=None) -> int:
     """``map`` of a linkage over one or two actuated coordinates (grid walked in a snake
     from the reference assembly's branch, :meth:`Linkage.sweep`); writes PREFIX.npz and
     the PNG maps. For a mechanism read per leg (``per_leg``), the classes, the type I/II
     indices and the condition of ``A`` at each grid point are its own
     (:func:`_per_leg_classes`), as ``analyze`` reports them."""
-    from .report_linkage import save_linkage_maps
+    from .plots import save_class_maps
 
     if args.plane is not None:
         raise InputError("--plane is for platform mechanisms; a linkage is mapped over "
@@ -1059,7 +1054,7 @@ def _map_linkage(args, link, per_leg=None) -> int:
     if len(varied) == 2:
         data["v"] = v
     npz = _save_npz(prefix, data)
-    pngs = save_linkage_maps(data, prefix, title=link.name)
+    pngs = save_class_maps(data, prefix, title=link.name)
     cp.remove()  # the outputs are written: the partial results are not needed any more
     ok, cls = data["converged"], data["singularity"]
     print(f"mechanism  {link.name}  (output {link.output})")
@@ -1072,15 +1067,15 @@ def _map_linkage(args, link, per_leg=None) -> int:
     return 0
 
 
-def _map_linkage_poses(args, mech) -> int:
+def _map_tree_poses(args, mech) -> int:
     """``map --axes A B`` (or ``--plane``) of a mechanism read by the general backend: its
     output's inverse kinematics at each grid point of the two pose coordinates (a
     partial pose: those two, ``--at``/``--fixed`` ones, the others solved for nearest
     the last point, :meth:`~pkm_pin.linkage.Linkage.sweep`), walked in a snake from home;
     the classes and the forward/inverse indices drawn as an actuated map's
-    (:func:`~pkm_pin.report_linkage.save_linkage_maps`); checkpointed (``--resume``)."""
+    (:func:`~pkm_pin.plots.save_class_maps`); checkpointed (``--resume``)."""
     from .checkpoint import graceful_stop
-    from .report_linkage import save_linkage_maps
+    from .plots import save_class_maps
     from .solve import pose_coordinates
 
     if args.jobs > 1:
@@ -1123,7 +1118,7 @@ def _map_linkage_poses(args, mech) -> int:
                 failure_reason=np.array([f[1] for f in result.failures], dtype=str))
     data["converged"] = data["ok"]
     npz = _save_npz(prefix, data)
-    pngs = save_linkage_maps(data, prefix, title=mech.name)  # classes and the tree's indices
+    pngs = save_class_maps(data, prefix, title=mech.name)  # classes and the tree's indices
     cp.remove()  # the outputs are written: the partial results are not needed any more
     _print_map(mech, axes, u, v, at, {}, result, True)
     for path in [npz, *pngs]:

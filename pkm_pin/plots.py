@@ -15,6 +15,11 @@ They come from :meth:`Mechanism.sweep <pkm_pin.sweep>` through ``pkm-pin map``, 
 Type II loci are the zero level of ``det`` (where its sign changes); type I loci, where
 ``det`` does not change sign, are drawn as the level ``type_I_level`` of the type I
 index (an iso-line near the locus) and as markers on the grid points classified I/III.
+
+:func:`save_class_maps` draws the maps of a sweep whose ``det`` is not defined (a map
+over actuated coordinates, or over pose coordinates of a mechanism read over its tree):
+the classes with the iso-lines of the general elimination's forward and inverse indices
+(:attr:`Analysis.motion_indices`), and the two indices.
 """
 
 from __future__ import annotations
@@ -214,6 +219,84 @@ def save_maps(data: Mapping, prefix: str | Path, title: str = "") -> list[Path]:
 
 
 # ------------------------------------------------------------------- workspaces
+# ------------------------------------------------ class and index maps
+#: Colours of the singularity classes in :func:`save_class_maps`.
+CLASS_COLOURS = {"none": "#ffffff", "I": "#f4a582", "II": "#92c5de", "III": "#b2abd2"}
+#: Level of the forward and inverse indices drawn as iso-lines on the class map.
+ISO_LEVEL = 0.05
+
+
+def save_class_maps(data: Mapping, prefix: str | Path, title: str = "") -> list[Path]:
+    """PNG maps of the classes and the forward and inverse indices of a sweep over two
+    coordinates (``pkm-pin map`` over actuated coordinates, or over pose coordinates of a
+    mechanism read over its tree: the general elimination's indices).
+
+    Two varied coordinates (``u``, ``v`` and arrays shaped (n_v, n_u)): writes
+    ``PREFIX_singularity.png`` (the class of each grid point, grey where it does not
+    assemble, with the iso-lines :data:`ISO_LEVEL` of the forward and inverse indices) and
+    ``PREFIX_indices.png`` (the forward and inverse indices). One coordinate (``u`` and
+    arrays (n_u,)): ``PREFIX_indices.png`` only, the two indices along it.
+
+    Returns:
+        The paths written.
+    """
+    prefix = Path(prefix)
+    labels = [str(x) for x in data["labels"]]
+    head = f"{title}: " if title else ""
+    indices = prefix.with_name(prefix.name + "_indices.png")
+    if "v" not in data:
+        fig, ax = _figure(f"{head}forward and inverse indices", [labels[0], "index"])
+        ax.set_facecolor("white")
+        for key, colour in (("forward", "#2166ac"), ("inverse", "#b2182b")):
+            ax.plot(data["u"], data[key], color=colour, label=f"{key} index")
+        ax.legend(fontsize=8)
+        fig.savefig(indices)
+        return [indices]
+    sing = prefix.with_name(prefix.name + "_singularity.png")
+    _class_map(data, labels, f"{head}singularity classes", sing)
+    _index_maps(data, labels, head, indices)
+    return [sing, indices]
+
+
+def _class_map(data: Mapping, labels: list, title: str, path: Path) -> None:
+    u, v, ok = data["u"], data["v"], np.asarray(data["converged"], bool)
+    cls = np.asarray(data["singularity"]).astype(str)
+    names = list(CLASS_COLOURS)
+    codes = np.full(cls.shape, np.nan)
+    for k, name in enumerate(names):
+        codes[ok & (cls == name)] = k
+    fig, ax = _figure(title, labels)
+    ax.pcolormesh(u, v, np.ma.masked_invalid(codes), cmap=ListedColormap(list(
+        CLASS_COLOURS.values())), vmin=-0.5, vmax=len(names) - 0.5, shading="nearest")
+    handles = [Patch(facecolor=c, edgecolor="0.5", label=f"class {n}")
+               for n, c in CLASS_COLOURS.items() if np.any(ok & (cls == n))]
+    for key, colour in (("forward", "k"), ("inverse", "#b2182b")):
+        if _contour(ax, u, v, np.where(ok, data[key], np.nan), ISO_LEVEL, colors=colour,
+                    linewidths=1.2):
+            handles.append(Line2D([], [], color=colour, lw=1.2,
+                                  label=f"{key} index = {ISO_LEVEL:g}"))
+    handles.append(Patch(color="0.82", label="does not assemble"))
+    ax.legend(handles=handles, loc="upper right", fontsize=8, framealpha=0.85)
+    fig.savefig(path)
+
+
+def _index_maps(data: Mapping, labels: list, head: str, path: Path) -> None:
+    fig = Figure(figsize=(11.0, 4.8), dpi=110, layout="constrained")
+    FigureCanvasAgg(fig)
+    ok = np.asarray(data["converged"], bool)
+    for k, key in enumerate(("forward", "inverse")):
+        ax = fig.add_subplot(1, 2, k + 1)
+        ax.set_facecolor("0.82")
+        mesh = ax.pcolormesh(data["u"], data["v"],
+                             np.ma.masked_invalid(np.where(ok, data[key], np.nan)),
+                             vmin=0.0, vmax=1.0, cmap="viridis", shading="nearest")
+        fig.colorbar(mesh, ax=ax)
+        ax.set_xlabel(labels[0])
+        ax.set_ylabel(labels[1])
+        ax.set_title(f"{head}{key} index (0: singular)")
+    fig.savefig(path)
+
+
 def _workspace_codes(ws) -> tuple[np.ndarray, list[str]]:
     """Per cell, the index of the smallest kind it belongs to (nan: not reachable)."""
     codes, kinds = ws.smallest_kind()

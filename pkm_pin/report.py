@@ -824,3 +824,52 @@ def _list(v) -> str:
 
 def _row(v) -> str:
     return " ".join(f"{x:10.5f}" for x in np.asarray(v, dtype=float) + 0.0)
+
+
+# --------------------------------------------------------- fk and ik text
+def fk_text(r: dict) -> str:
+    """Text of ``pkm-pin fk`` / ``ik`` for a linkage from :func:`assembly_data` (and,
+    for several independent sub-mechanisms, the ``submechanisms`` of
+    :func:`fk_submechanisms_data`: each one's actuated values and output pose)."""
+    out = [f"mechanism  {r['mechanism']}",
+           f"actuated   {_actuated_words(r)}",
+           f"output     {r['output']}{' (point)' if r['output_is_point'] else ''}: "
+           f"xyz {_list(r['pose']['xyz'])}  rpy {_list(r['pose']['rpy'])}"]
+    subs = r.get("submechanisms") or []
+    if subs:
+        out.append(f"sub-mechanisms  {len(subs)} independent, each with its own output "
+                   "(fk --sub K Q…: the actuated values of sub-mechanism K alone, the "
+                   "others held at the reference assembly):")
+        for k, s in enumerate(subs):
+            out += [f"    [{k}] {s['name']}: {_actuated_words(s)}",
+                    f"        output {s['output']}: xyz {_list(s['pose']['xyz'])}  "
+                    f"rpy {_list(s['pose']['rpy'])}"]
+    out.append("joints (q):")
+    return "\n".join(out + joints_lines(r) + [f"residual   {r['residual']:.2g}"]
+                     + failed_lines(r))
+
+
+def _actuated_words(r: dict) -> str:
+    """``a, b = [values]``, or that there is no actuator."""
+    if not r["actuated"]:
+        return "none (no actuator: the assembly from the reference configuration)"
+    return f"{', '.join(r['actuated'])} = {_list(r['q_actuated'])}"
+
+
+def fk_submechanisms_data(link, subs, assembly) -> list:
+    """For ``fk`` of a linkage with several independent sub-mechanisms ``subs``
+    (:meth:`Linkage.submechanisms`), at the whole linkage's ``assembly``: each one's
+    ``{"name", "actuated", "q_actuated", "output", "pose"}`` (its actuated values and its
+    output frame's pose, read in the whole tree); ``[]`` for one mechanism."""
+    if len(subs) <= 1:
+        return []
+    model = link.model
+    kin = model.kinematics(assembly.q)
+    values = dict(zip(link.actuated, assembly.q_actuated))
+    out = []
+    for sub in subs:
+        M = kin.frame_placements[model.tree.getFrameId(sub.output)]
+        out.append({"name": sub.name, "actuated": list(sub.actuated),
+                    "q_actuated": [float(values[n]) for n in sub.actuated],
+                    "output": sub.output, "pose": pose_dict(M)})
+    return out

@@ -58,7 +58,7 @@ LAYERS: dict[int, tuple[str, tuple[str, ...]]] = {
         ("mechanism", "io")),
     8: ("outputs and applications of the facades: reports, scenes, plots, the CLI, the "
         "cross-check, the example builders, the package's public names",
-        ("report", "report_linkage", "scene", "view", "view_linkage", "plots", "cli",
+        ("report", "scene", "view", "view_linkage", "plots", "cli",
          "crosscheck", "builders", "builders.__main__", "builders.design",
          "builders.dietmaier", "builders.loops", "builders.orthoglide", "builders.pinned",
          "builders.planar", "builders.serial_chains", "builders.spatial",

@@ -317,7 +317,7 @@ def test_linkage_cti_of_planar_loops_is_one(five):
     imposed by the other side, or the output's own support, as well, so no output twist
     appears when one side's constraints are removed: CTI 1 per side (not nan), and the
     linkage report carries it."""
-    from pkm_pin.report_linkage import linkage_report_data
+    from pkm_pin.report import linkage_report_data
 
     bar = load_mechanism(ROOT / "models" / "loops" / "four_bar.urdf")
     for link in (five, bar):

@@ -127,7 +127,8 @@ def test_closure_of_a_body_onto_itself_is_refused_and_duplicates_are_named(capsy
     from pkm_pin.linkage import Linkage
     from pkm_pin.model import Closure, ClosureModel
     from pkm_pin.model.closure_model import duplicate_closures
-    from pkm_pin.report_linkage import linkage_report_data, linkage_text
+    from pkm_pin.report import linkage_report_data
+    from pkm_pin.report import text as linkage_text
 
     base = four_bar()
     with pytest.raises(InputError, match="closure 'x' of the tree joins frame 'crank_body' to "
