@@ -797,7 +797,9 @@ class Mechanism:
         "pitch": …}``, or one mapping of coordinate names to equal-length sequences (or
         scalars, repeated), e.g. ``{"z": zs, "roll": rolls, "pitch": 0.0}``. Partial poses
         are completed in the order given, each warm-started from the last one completed
-        (from home for the first): order them along a path or a
+        (from home for the first), the coordinates' plan (which are held when fewer than
+        the DOF are given, :func:`pkm_pin.position.coordinate_plan`) made at the first
+        completion and kept: order them along a path or a
         snake for a continuous branch. A partial pose that cannot be completed is a
         failure of the result (its pose row holds the given coordinates, nan elsewhere).
 
@@ -810,10 +812,10 @@ class Mechanism:
         partial = _partial_poses(poses)
         if partial is None:
             return _sweep.sweep(self, poses, **options)
-        full, failures, previous = np.full((len(partial), 6), np.nan), [], None
+        full, failures, previous, plan = np.full((len(partial), 6), np.nan), [], None, None
         for i, coords in enumerate(partial):
-            try:
-                done = position.complete(self, coords, previous)
+            try:  # the coordinates' plan made at the first completion, then kept
+                done = position.complete(self, coords, previous, plan=plan)
             except PkmError as e:
                 failures.append((i, f"not completed: {e}"))
                 for name, value in position.partial_pose(coords).items():
@@ -822,7 +824,7 @@ class Mechanism:
             full[i] = position.pose_coordinates(done.pose)
             for name, value in done.info["given"].items():  # exactly as given
                 full[i, POSE_COORDINATES.index(name)] = value
-            previous = done
+            previous, plan = done, done.info["plan"]
         done_idx = np.flatnonzero(np.isfinite(full).all(axis=1))
         if not len(done_idx):
             return _failed_sweep(self, full, failures, singular_tol)

@@ -974,14 +974,23 @@ def _motion_type(mech) -> str:
 
 
 def complete(mech, coords, guess=None, *, tol: float = CLOSURE_TOL,
-             max_iter: int = 50) -> Assembly:
+             max_iter: int = 50, plan=None) -> Assembly:
     """The assembly at a partial pose (see :func:`complete_pose`), its ``info`` holding
     ``given`` (the coordinates given), ``held`` (coordinates held at the guess's values
-    because fewer than the DOF were given), ``dof`` and ``iterations``."""
+    because fewer than the DOF were given), ``dof``, ``iterations`` and ``plan``.
+
+    ``plan``: the ``info["plan"]`` of an earlier completion; when it is for the same
+    coordinate names, its choice of coordinates (:func:`coordinate_plan`: which are
+    held, the DOF) is kept instead of being made again at the guess (a sweep of partial
+    poses makes it once: the rows and the SVD at each guess cost a third of a
+    completion). The held coordinates still take the guess's values."""
     given = partial_pose(coords)
     pose0, leg_q0 = _start_state(mech, guess)
-    system = CoordinateSystem(mech, pose0, leg_q0)
-    rows, held, dof = coordinate_plan(mech, system, list(given))
+    if plan is not None and plan[0] == tuple(given):
+        rows, held, dof = list(plan[1]), list(plan[2]), plan[3]
+    else:
+        system = CoordinateSystem(mech, pose0, leg_q0)
+        rows, held, dof = coordinate_plan(mech, system, list(given))
     start_values = pose_coordinates(pose0)
     all_rows = rows + held
     values = np.r_[list(given.values()), start_values[held]]
@@ -989,7 +998,8 @@ def complete(mech, coords, guess=None, *, tol: float = CLOSURE_TOL,
     asm = _checked_completion(mech, sol, given, tol)
     asm.info.update(given=dict(given), held={POSE_COORDINATES[k]: float(start_values[k])
                                              for k in held},
-                    dof=dof, iterations=sol.iterations)
+                    dof=dof, iterations=sol.iterations,
+                    plan=(tuple(given), tuple(rows), tuple(held), dof))
     return asm
 
 

@@ -128,3 +128,27 @@ def test_coordinate_rows_are_pinocchios(seed):
         d = (up - down) / (2 * h)
         d[:3] /= L
         assert d == pytest.approx(C[:, k], abs=1e-6)
+
+
+def test_a_sweep_of_partial_poses_keeps_the_first_plan():
+    """A sweep of partial poses makes the coordinates' plan once: its poses are those of
+    completions made one by one, each with its own plan, from the same guesses (1e-12),
+    and the plan is in each completion's ``info``; a plan for other names is not used."""
+    from pkm_pin.position import complete
+
+    mech = load_mechanism(MODELS / "rps3.toml")
+    z0 = mech.home.translation[2]
+    partial = [dict(z=z0 + dz, roll=r, pitch=0.05) for dz, r in
+               [(0.0, 0.0), (0.02, 0.05), (0.04, 0.1), (0.06, 0.15)]]
+    swept = mech.sweep(partial)
+    previous = None
+    for k, coords in enumerate(partial):
+        done = complete(mech, coords, previous)
+        assert done.info["plan"] == (("z", "roll", "pitch"), (2, 3, 4), (), 3)
+        assert np.abs(pose_coordinates(done.pose) - swept.poses[k]).max() <= 1e-12
+        previous = done
+    # fewer names than the DOF: the plan of (z, roll) holds pitch, not reused for (z,)
+    two = complete(mech, dict(z=z0, roll=0.1))
+    assert two.info["plan"][2] == (4,)
+    one = complete(mech, dict(z=z0 + 0.01), plan=two.info["plan"])
+    assert one.info["plan"][0] == ("z",) and len(one.info["held"]) == 2
