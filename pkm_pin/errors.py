@@ -8,6 +8,7 @@ re-raised as one of these, chained with ``raise ... from``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 
 #: Longest echo of a value from an input in an error message [characters]: a hostile
@@ -166,18 +167,23 @@ class AssemblyError(PkmError):
         leg: Name of the leg.
         residual: Remaining pose error of the leg's best attempt (norm of the log6
             error, angular part in rad and linear part divided by the characteristic
-            length).
+            length); nan when no attempt measures it (the ``detail`` then is the whole
+            reason, and the message prints no nan).
     """
 
     def __init__(self, leg: str, residual: float, detail: str = ""):
         self.leg = leg
         self.residual = float(residual)
-        message = (
-            f"leg {leg!r} cannot reach the pose: the best configuration found within the "
-            f"joint limits leaves a relative pose error of {self.residual:.3g}"
-        )
-        if detail:
-            message += f" ({detail})"
+        if not math.isfinite(self.residual):
+            who = "the output" if leg == "output pose" else f"leg {leg!r}"
+            message = f"{who} cannot reach the pose" + (f": {detail}" if detail else "")
+        else:
+            message = (
+                f"leg {leg!r} cannot reach the pose: the best configuration found within "
+                f"the joint limits leaves a relative pose error of {self.residual:.3g}"
+            )
+            if detail:
+                message += f" ({detail})"
         super().__init__(message)
 
 

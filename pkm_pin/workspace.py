@@ -1319,12 +1319,16 @@ def _grow(shape, start, q_start, point, follow, progress) -> dict:
 def _carried_det(an, P0_world: np.ndarray) -> float:
     """``det(A_n Δ P̃ᵀ)`` of a linkage analysis: actuation wrenches normalised, the
     reference's output twists ``P0_world`` projected on the current twist system (both
-    homogenised about the analysis' reference point); nan when not square."""
+    homogenised about the analysis' reference point); nan when not square, 0 when an
+    actuator's wrench on the output vanishes (it transmits nothing: ``A`` is singular)."""
     p, L = an.reference_point, an.length
     if an.A.shape[0] != an.output_dof or an.output_dof == 0:
         return np.nan
     A = screws.homogenised_about(an.A, p, L)
-    A = A / np.linalg.norm(A, axis=1, keepdims=True)
+    norms = np.linalg.norm(A, axis=1, keepdims=True)
+    if not (norms > 0.0).all():
+        return 0.0
+    A = A / norms
     P = screws.homogenised_about(an.platform_twists, p, L)
     P0 = screws.homogenised_about(P0_world, p, L)
     carried = (P0 @ P.T) @ P

@@ -350,3 +350,34 @@ def test_iti_of_a_regular_leg_is_zero_only_where_its_actuator_moves_nothing(path
     if path.startswith("gepetto/cassie_like"):
         assert tr.iti[2:4] == pytest.approx([0.795, 0.954], abs=1e-3)
         assert tr.lti == pytest.approx(0.783, abs=1e-3) and tr.lti >= GOOD_LTI
+
+
+def test_disney_like_workspace_reports_a_dead_actuator_without_a_numpy_warning():
+    """Gepetto's ``disney_like`` assembles at home with two actuators whose wrenches on
+    the foot vanish (class III): its workspace's carried determinant there is 0 (``A``
+    singular), not nan, and no numpy warning reaches the user."""
+    import warnings
+
+    from pkm_pin import load_mechanism
+
+    mech = load_mechanism(Path(__file__).resolve().parent / "data" / "gepetto" / "disney_like"
+                          / "robot.urdf")
+    norms = np.linalg.norm(mech.home_analysis.A, axis=1)
+    assert mech.home_analysis.singularity == "III" and np.sum(norms == 0.0) == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ws = mech.workspace(n=3)
+    ok = np.asarray(ws.values["ok"], bool)
+    assert ok.any()
+    assert np.all(np.asarray(ws.values["det"])[ok] == 0.0)
+
+
+def test_ik_all_of_a_continuum_says_so_without_nan():
+    """An error with no measured residual (inverse_kinematics_all where the assemblies
+    form a continuum) gives the reason alone: no "relative pose error of nan"."""
+    from pkm_pin.errors import AssemblyError
+
+    e = AssemblyError("output pose", float("nan"), "the assemblies do not settle")
+    assert str(e) == "the output cannot reach the pose: the assemblies do not settle"
+    assert "nan" not in str(AssemblyError("3", float("inf")))
+    assert "relative pose error of 0.5" in str(AssemblyError("3", 0.5))
