@@ -13,6 +13,9 @@ parasitic coordinates completed): with and without the completion's limit stop (
 completion whose Newton stops with a joint on its limit is not continued,
 ``position._against_a_limit``); every mask must be the same. And the same workspaces
 with the completion compiled and with its Python driver (:func:`compiled_completion`).
+And a workspace of a mechanism read over its tree, the pinned Delta over its point, with
+the tree solver's output pose rows compiled and on the Pinocchio driver
+(:func:`tree_pose_rows`).
 
 Run: ``python benchmarks/bench_reach.py [n] [rounds]`` (default a 20³ grid, 2 rounds;
 the partial poses on a 9³ grid).
@@ -29,6 +32,7 @@ import numpy as np
 from pkm_pin import load_mechanism, position, solve, sweep
 
 STEWART = Path(__file__).resolve().parents[1] / "models" / "mechanisms" / "stewart.toml"
+PINNED_DELTA = STEWART.parents[1] / "pinned" / "delta_point.toml"
 
 
 def with_and_without(module, name: str, off, run, rounds: int) -> tuple[dict, dict]:
@@ -126,8 +130,35 @@ def compiled_completion(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> 
     return out
 
 
+def tree_pose_rows(n: int = 12, rounds: int = 1) -> dict:
+    """Time the pinned Delta's workspace over its output point (a mechanism read over its
+    tree: each cell reached by the tree solver with output pose rows, from a neighbour)
+    with those rows compiled (:func:`pkm_pin.tree_kernel.output_pose_rows`) and with
+    the Pinocchio driver for every solve that has pose rows (the path before); return
+    the figures. The masks must be the same."""
+    plain = solve.solve_tree
+
+    def pinocchio_for_pose_rows(model, q0, *args, pose=None, **kwargs):
+        if pose is not None:
+            kwargs["compiled"] = False
+        return plain(model, q0, *args, pose=pose, **kwargs)
+
+    mech = load_mechanism(PINNED_DELTA)
+    mech.workspace(n=3)  # compile and cache before timing
+    best, last = with_and_without(solve, "solve_tree", pinocchio_for_pose_rows,
+                                  lambda: mech.workspace(n=n), rounds)
+    ws, other = last["with"], last["without"]
+    same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
+    ratio = best["with"] / best["without"]
+    print(f"{mech.name} (read over its tree) workspace over its point, {n}^3 cells, best of "
+          f"{rounds}: pose rows on the Pinocchio driver {best['without']:.2f} s, compiled "
+          f"{best['with']:.2f} s, ratio x{ratio:.2f}; same masks: {same}")
+    return {"with": best["with"], "without": best["without"], "same": same}
+
+
 if __name__ == "__main__":
     args = [int(a) for a in sys.argv[1:3]]
     main(*args)
     partial(rounds=args[1] if len(args) > 1 else 1)
     compiled_completion(rounds=args[1] if len(args) > 1 else 1)
+    tree_pose_rows(rounds=args[1] if len(args) > 1 else 1)

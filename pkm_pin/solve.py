@@ -1095,21 +1095,23 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
     of ``r = max(closure, actuated, pose)``; stops on :func:`stop_rule` (``r ≤ tol``,
     ``max_iter``, slow progress) or a step below ``NEWTON_STALL_RTOL`` (stalled).
 
-    Drivers: without ``pose``, a tree whose joints :mod:`pkm_pin.tree_kernel` represents
-    is solved by its compiled loop (the same steps, the rows evaluated in compiled code)
+    Drivers: a tree whose joints :mod:`pkm_pin.tree_kernel` represents is solved by its
+    compiled loop (the same steps, every row block, closures, actuated and output pose,
+    evaluated in compiled code)
     when ``compiled`` is true or, by default, when that code is ready
     (:func:`pkm_pin.compiling.prefer_compiled`: a one-off call on a fresh installation
     does not wait for a compilation); otherwise one Pinocchio pass a step."""
     q = model.check_q(q0).copy()
-    if pose is None and compiled is not False:
+    pose_rows = _EYE6 if pose_rows is None else np.asarray(pose_rows, float)
+    if compiled is not False:
         tk = _TREE_KERNEL or _tree_kernel_module()
         kern = tk.tree_kernel(model) if tk.ENABLED or compiled else None
         if kern is not None and (compiled or prefer_compiled(tk.solve_tree_kernel)):
-            return _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter)
+            return _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter, pose,
+                                        pose_rows, model.output_point)
     free = None if free is None else np.asarray(free, bool)
     if free is not None and free.all():
         free = None
-    pose_rows = np.eye(6) if pose_rows is None else np.asarray(pose_rows, float)
     lo, up = tree_limits(model)
     q = np.clip(q, lo, up)
     best, slow, it, at_q = np.inf, 0, 0, True
@@ -1133,6 +1135,8 @@ def solve_tree(model, q0, free=None, targets=None, pose: pin.SE3 | None = None, 
 
 
 _NO_TARGETS = np.zeros(0)
+_NO_ROWS = np.zeros((0, 6))
+_EYE4, _EYE6 = np.eye(4), np.eye(6)
 _FLOAT = np.dtype(np.float64)
 _TREE_KERNEL = None
 
@@ -1146,7 +1150,8 @@ def _tree_kernel_module():
     return tree_kernel
 
 
-def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolution:
+def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter, pose=None,
+                         pose_rows=None, point=False) -> TreeSolution:
     """:func:`solve_tree` by :func:`pkm_pin.tree_kernel.solve_tree_kernel` (``q``: a
     checked copy of the start, solved in place)."""
     if free is None:
@@ -1161,10 +1166,18 @@ def _solve_tree_compiled(tk, kern, q, free, targets, tol, max_iter) -> TreeSolut
         np.ascontiguousarray(targets, dtype=np.float64) if has else _NO_TARGETS
     if has and t.shape != kern.act_q.shape:
         raise ValueError(f"targets must have one value per actuated joint ({len(kern.act_q)})")
-    norms, oMo, info = np.empty(kern.ckind.shape[0]), np.empty((4, 4)), np.empty(6)
-    tk.SOLVE(kern, q, free, has, t, float(tol), int(max_iter), norms, oMo, info)
-    r, closure, actuated, iterations, converged, at_q = info.tolist()
-    return _tree_solution(q, r, closure, actuated, 0.0, int(iterations), converged == 1.0,
+    if pose is None:
+        target, P = _EYE4, _NO_ROWS
+    else:
+        target = np.ascontiguousarray(pose.homogeneous, dtype=np.float64)
+        P = np.ascontiguousarray(pose_rows, dtype=np.float64)
+        if P.ndim != 2 or P.shape[1] != 6:
+            raise ValueError("pose_rows must be a (k, 6) array")
+    norms, oMo, info = np.empty(kern.ckind.shape[0]), np.empty((4, 4)), np.empty(7)
+    tk.SOLVE(kern, q, free, has, t, target, bool(point), P, float(tol), int(max_iter), norms,
+             oMo, info)
+    r, closure, actuated, iterations, converged, at_q, perr = info.tolist()
+    return _tree_solution(q, r, closure, actuated, perr, int(iterations), converged == 1.0,
                           norms if at_q else None, pin.SE3(oMo) if at_q else None)
 
 

@@ -621,6 +621,69 @@ def closure_rows_compiled(k, q, e, H, norms, oMo):
     return closure_rows(k, q, workspace(k), e, H, norms, oMo)
 
 
+@register_jitable
+def output_pose_rows(k, ws, target, point, ep, Hp):
+    """The output frame's pose error against ``target`` (4 × 4, world) into ``ep`` (6)
+    and its Jacobian per unit of each velocity coordinate into ``Hp`` (6 × nv), at the
+    placements :func:`closure_rows` left in ``ws`` (the output frame: ``ws.F[2C]``),
+    exactly :func:`pkm_pin.solve.pose_error_rows`: ``log6(target⁻¹ · oMo)`` axis-first
+    ``(θ; ρ / L)`` with its Jacobian through ``Jlog6``; for a point output (``point``)
+    zero rotation rows and ``(p − p_target) / L`` in world axes."""
+    C = k.ckind.shape[0]
+    F, W = ws.F, ws.W
+    o = 2 * C
+    nv = k.nv
+    _relative_columns(k.iv, k.kind, k.parent, 0, k.fjoint[o], ws.S, W)
+    px, py, pz = F[o, 0, 3], F[o, 1, 3], F[o, 2, 3]
+    for col in range(nv):  # W[3:] ← v_O + ω × p: the origin's velocity
+        wx, wy, wz = W[0, col], W[1, col], W[2, col]
+        W[3, col] += wy * pz - wz * py
+        W[4, col] += wz * px - wx * pz
+        W[5, col] += wx * py - wy * px
+    iL = 1.0 / k.length
+    if point:
+        for a in range(3):
+            ep[a] = 0.0
+            ep[3 + a] = (F[o, a, 3] - target[a, 3]) * iL
+            for col in range(nv):
+                Hp[a, col] = 0.0
+                Hp[3 + a, col] = W[3 + a, col] * iL
+        return
+    Rrel, prel, lg, Jl, nu = ws.Rrel, ws.prel, ws.lg, ws.Jl, ws.nu
+    for a in range(3):
+        for b in range(3):
+            Rrel[a, b] = (target[0, a] * F[o, 0, b] + target[1, a] * F[o, 1, b]
+                          + target[2, a] * F[o, 2, b])
+        prel[a] = (target[0, a] * (px - target[0, 3]) + target[1, a] * (py - target[1, 3])
+                   + target[2, a] * (pz - target[2, 3]))
+    log6_jlog6(Rrel, prel, lg, Jl, ws.w, ws.A, ws.Cm)
+    for a in range(3):
+        ep[a] = lg[a]
+        ep[3 + a] = lg[3 + a] * iL
+    for col in range(nv):
+        for a in range(3):  # the output's body twist, Pinocchio's (v; ω)
+            nu[a] = F[o, 0, a] * W[3, col] + F[o, 1, a] * W[4, col] + F[o, 2, a] * W[5, col]
+            nu[3 + a] = F[o, 0, a] * W[0, col] + F[o, 1, a] * W[1, col] \
+                + F[o, 2, a] * W[2, col]
+        for a in range(3):
+            lin, ang = 0.0, 0.0
+            for b in range(6):
+                lin += Jl[a, b] * nu[b]
+                ang += Jl[3 + a, b] * nu[b]
+            Hp[a, col] = ang
+            Hp[3 + a, col] = lin * iL
+
+
+@njit(cache=True, nogil=True)
+def output_pose_rows_compiled(k, q, target, point, ep, Hp):
+    """:func:`output_pose_rows` at ``q`` compiled (for tests)."""
+    ws = workspace(k)
+    C = k.ckind.shape[0]
+    n = k.rows[C]
+    closure_rows(k, q, ws, np.empty(n), np.empty((n, k.nv)), np.empty(C), np.empty((4, 4)))
+    output_pose_rows(k, ws, target, point, ep, Hp)
+
+
 # ============================================================ the compiled solver
 @register_jitable
 def _quat_times_exp(q, i, wx, wy, wz):
@@ -763,23 +826,47 @@ def _moved(kind, iq, iv, units, q, q_new, dv) -> float:
     return moved
 
 
+@register_jitable
+def _selected_rows(P, ep, Hp, n1, e, H):
+    """Rows ``n1 …`` of ``e`` and ``H``: ``P ep`` and ``P Hp`` (the targeted components
+    of the output pose error); returns their norm."""
+    s = 0.0
+    for i in range(P.shape[0]):
+        x = 0.0
+        for a in range(6):
+            x += P[i, a] * ep[a]
+        e[n1 + i] = x
+        s += x * x
+        for col in range(H.shape[1]):
+            y = 0.0
+            for a in range(6):
+                y += P[i, a] * Hp[a, col]
+            H[n1 + i, col] = y
+    return math.sqrt(s)
+
+
 @njit(cache=True, nogil=True)
-def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oMo, info):
-    """:func:`pkm_pin.solve.solve_tree` without pose rows, compiled: damped Newton on the
-    closure rows (and the actuated rows when ``has_targets``) from ``q`` (solved in
+def solve_tree_kernel(k, q, free, has_targets, targets, pose, point, P, tol, max_iter, norms,
+                      oMo, info):
+    """:func:`pkm_pin.solve.solve_tree` compiled: damped Newton on the closure rows (and
+    the actuated rows when ``has_targets``; the output pose rows ``P`` (r × 6, no rows:
+    none) times :func:`output_pose_rows` against ``pose`` (4 × 4), ``point`` for a point
+    output) from ``q`` (solved in
     place), the unknowns the velocity coordinates where ``free`` is true. The same
     steps as the Pinocchio driver (:func:`~pkm_pin.solve.tree_step`): dimensionless
     columns, :func:`lm_damping`, ``L D Lᵀ`` of the normal equations, the step shortened
     to :data:`~pkm_pin.newton.TREE_MAX_STEP`, projected onto the limits; stops on
     :func:`stop_rule`, a non-finite step or a stalled one. ``info`` receives ``(r,
-    closure, actuated, iterations, converged, at_q)``; ``norms`` and ``oMo`` the last
-    evaluation's closure norms and output placement (at ``q`` when ``at_q``)."""
+    closure, actuated, iterations, converged, at_q, pose)``; ``norms`` and ``oMo`` the
+    last evaluation's closure norms and output placement (at ``q`` when ``at_q``)."""
     units, lower, upper, rows = k.units, k.lower, k.upper, k.rows
     kind, iq, iv = k.kind, k.iq, k.iv
     act_q, act_two, act_scales, act_v = k.act_q, k.act_two, k.act_scales, k.act_v
     nv, nq = k.nv, k.nq
     n0 = rows[rows.shape[0] - 1]
-    m = n0 + (act_q.shape[0] if has_targets else 0)
+    n1 = n0 + (act_q.shape[0] if has_targets else 0)
+    m = n1 + P.shape[0]
+    ep, Hp = np.empty(6), np.empty((6, nv))
     ws = workspace(k)
     cols = np.empty(nv, np.int64)
     nf = 0
@@ -795,12 +882,15 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     for a in range(nq):
         q[a] = min(upper[a], max(lower[a], q[a]))
     best, slow, it, at_q = np.inf, 0, 0, True
-    closure, act, r = 0.0, 0.0, 0.0
+    closure, act, r, perr = 0.0, 0.0, 0.0, 0.0
     while True:
         closure = closure_rows(k, q, ws, e, H, norms, oMo)
         if has_targets:
             act = _actuated_rows(n0, act_q, act_two, act_scales, act_v, q, targets, e, H)
-        r = max(closure, act)
+        if P.shape[0]:
+            output_pose_rows(k, ws, pose, point, ep, Hp)
+            perr = _selected_rows(P, ep, Hp, n1, e, H)
+        r = max(closure, act, perr)
         stop, best, slow = stop_rule(r, tol, it, max_iter, best, slow)
         if stop or nf == 0:
             break
@@ -825,6 +915,7 @@ def solve_tree_kernel(k, q, free, has_targets, targets, tol, max_iter, norms, oM
     info[0], info[1], info[2], info[3] = r, closure, act, it
     info[4] = 1.0 if r <= tol else 0.0
     info[5] = 1.0 if at_q else 0.0
+    info[6] = perr
 
 
 #: :func:`solve_tree_kernel` called by :func:`pkm_pin.solve.solve_tree`: a model's kernel

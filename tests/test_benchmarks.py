@@ -136,3 +136,12 @@ def test_bench_reach_times_the_completion_compiled_and_in_python(capsys):
     figures = bench_reach.compiled_completion(n=4, names=("rps3",))["rps3"]
     assert figures["with"] > 0 and figures["without"] > 0 and figures["same"]
     assert "same masks: True" in capsys.readouterr().out
+
+
+def test_bench_reach_times_the_tree_pose_rows_compiled_and_on_pinocchio(capsys):
+    """bench_reach.tree_pose_rows times the pinned Delta's workspace over its point (a 4³
+    grid) with the tree solver's pose rows compiled and on the Pinocchio driver: both
+    positive, the same masks."""
+    figures = bench_reach.tree_pose_rows(n=4)
+    assert figures["with"] > 0 and figures["without"] > 0 and figures["same"]
+    assert "same masks: True" in capsys.readouterr().out
