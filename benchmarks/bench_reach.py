@@ -138,10 +138,10 @@ def tree_pose_rows(n: int = 12, rounds: int = 1) -> dict:
     the figures. The masks must be the same."""
     plain = solve.solve_tree
 
-    def pinocchio_for_pose_rows(model, q0, *args, pose=None, **kwargs):
-        if pose is not None:
+    def pinocchio_for_pose_rows(*args, **kwargs):
+        if kwargs.get("pose") is not None or (len(args) > 4 and args[4] is not None):
             kwargs["compiled"] = False
-        return plain(model, q0, *args, pose=pose, **kwargs)
+        return plain(*args, **kwargs)
 
     mech = load_mechanism(PINNED_DELTA)
     mech.workspace(n=3)  # compile and cache before timing
