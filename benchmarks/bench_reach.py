@@ -83,24 +83,30 @@ def main(n: int = 20, rounds: int = 2, name: str = "stewart") -> dict:
             "refused": caught}
 
 
+def workspaces_with_and_without(path, n: int, rounds: int, module, name: str, off,
+                                words: tuple[str, str]) -> dict:
+    """:func:`with_and_without` on the workspace (n³ cells) of the mechanism in ``path``;
+    prints both times (``words``: what "without" and "with" are), their ratio and
+    whether every mask is the same; returns the figures."""
+    mech = load_mechanism(path)
+    mech.workspace(n=2 if mech.backend == "legs" else 3)  # compile and cache first
+    best, last = with_and_without(module, name, off, lambda: mech.workspace(n=n), rounds)
+    ws, other = last["with"], last["without"]
+    same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
+    ratio = best["with"] / best["without"]
+    print(f"{mech.name} workspace over {', '.join(ws.coords)}, {n}^3 cells, best of "
+          f"{rounds}: {words[0]} {best['without']:.2f} s, {words[1]} {best['with']:.2f} s, "
+          f"ratio x{ratio:.2f}; same masks: {same}")
+    return {"with": best["with"], "without": best["without"], "same": same}
+
+
 def partial(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> dict:
-    """Time the workspaces over partial poses with and without the completion's limit
-    stop; return {name: figures}."""
-    out = {}
-    for name in names:
-        mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
-        mech.workspace(n=2)  # compile and cache before timing
-        best, last = with_and_without(position, "_against_a_limit",
-                                      lambda mech, leg_q: False,
-                                      lambda: mech.workspace(n=n), rounds)
-        ws, other = last["with"], last["without"]
-        same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
-        ratio = best["with"] / best["without"]
-        print(f"{mech.name} workspace over {', '.join(ws.coords)} (partial poses completed), "
-              f"{n}^3 cells, best of {rounds}: without the limit stop {best['without']:.2f} s, "
-              f"with it {best['with']:.2f} s, ratio x{ratio:.2f}; same masks: {same}")
-        out[name] = {"with": best["with"], "without": best["without"], "same": same}
-    return out
+    """Time the workspaces over partial poses (each cell's parasitic coordinates
+    completed) with and without the completion's limit stop; return {name: figures}."""
+    return {name: workspaces_with_and_without(
+        STEWART.with_name(f"{name}.toml"), n, rounds, position, "_against_a_limit",
+        lambda mech, leg_q: False, ("without the limit stop", "with it"))
+        for name in names}
 
 
 def compiled_completion(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> dict:
@@ -114,20 +120,9 @@ def compiled_completion(n: int = 9, rounds: int = 1, names=("rps3", "prs3")) -> 
     def python_driver(dispatcher):
         return False if dispatcher in python_only else plain(dispatcher)
 
-    out = {}
-    for name in names:
-        mech = load_mechanism(STEWART.with_name(f"{name}.toml"))
-        mech.workspace(n=2)  # compile and cache before timing
-        best, last = with_and_without(solve, "prefer_compiled", python_driver,
-                                      lambda: mech.workspace(n=n), rounds)
-        ws, other = last["with"], last["without"]
-        same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
-        ratio = best["with"] / best["without"]
-        print(f"{mech.name} workspace over {', '.join(ws.coords)} (partial poses completed), "
-              f"{n}^3 cells, best of {rounds}: Python driver {best['without']:.2f} s, "
-              f"compiled {best['with']:.2f} s, ratio x{ratio:.2f}; same masks: {same}")
-        out[name] = {"with": best["with"], "without": best["without"], "same": same}
-    return out
+    return {name: workspaces_with_and_without(
+        STEWART.with_name(f"{name}.toml"), n, rounds, solve, "prefer_compiled",
+        python_driver, ("Python driver", "compiled")) for name in names}
 
 
 def tree_pose_rows(n: int = 12, rounds: int = 1) -> dict:
@@ -143,17 +138,9 @@ def tree_pose_rows(n: int = 12, rounds: int = 1) -> dict:
             kwargs["compiled"] = False
         return plain(*args, **kwargs)
 
-    mech = load_mechanism(PINNED_DELTA)
-    mech.workspace(n=3)  # compile and cache before timing
-    best, last = with_and_without(solve, "solve_tree", pinocchio_for_pose_rows,
-                                  lambda: mech.workspace(n=n), rounds)
-    ws, other = last["with"], last["without"]
-    same = all(np.array_equal(m, other.masks[k]) for k, m in ws.masks.items())
-    ratio = best["with"] / best["without"]
-    print(f"{mech.name} (read over its tree) workspace over its point, {n}^3 cells, best of "
-          f"{rounds}: pose rows on the Pinocchio driver {best['without']:.2f} s, compiled "
-          f"{best['with']:.2f} s, ratio x{ratio:.2f}; same masks: {same}")
-    return {"with": best["with"], "without": best["without"], "same": same}
+    return workspaces_with_and_without(PINNED_DELTA, n, rounds, solve, "solve_tree",
+                                       pinocchio_for_pose_rows,
+                                       ("pose rows on the Pinocchio driver", "compiled"))
 
 
 if __name__ == "__main__":

@@ -518,6 +518,47 @@ def workspace(k):
 
 
 @register_jitable
+def about_point(W, px, py, pz):
+    """``W[3:] ← v_O + ω × p``: the columns' velocities of the point ``p`` (world), from
+    axis-first world twists ``W`` (6 × nv)."""
+    for col in range(W.shape[1]):
+        wx, wy, wz = W[0, col], W[1, col], W[2, col]
+        W[3, col] += wy * pz - wz * py
+        W[4, col] += wz * px - wx * pz
+        W[5, col] += wx * py - wy * px
+
+
+@register_jitable
+def log6_rows(Fa, Fb, W, ws, iL, r0, e, H):
+    """Rows ``r0 … r0 + 5`` of ``e`` and ``H``: ``log6(Fa⁻¹ Fb)`` axis-first ``(θ; ρ / L)``
+    (``iL = 1 / L``) and its Jacobian through ``Jlog6`` (Pinocchio's formulas), ``W``
+    the relative columns of frame b against frame a, their linear rows about ``p_b``
+    (:func:`about_point`): a weld closure's rows, and the output's pose error against a
+    fixed target (``Fa`` the target, ``W`` the output's own columns)."""
+    Rrel, prel, lg, Jl, nu = ws.Rrel, ws.prel, ws.lg, ws.Jl, ws.nu
+    dx, dy, dz = Fb[0, 3] - Fa[0, 3], Fb[1, 3] - Fa[1, 3], Fb[2, 3] - Fa[2, 3]
+    for a in range(3):
+        for b in range(3):
+            Rrel[a, b] = Fa[0, a] * Fb[0, b] + Fa[1, a] * Fb[1, b] + Fa[2, a] * Fb[2, b]
+        prel[a] = Fa[0, a] * dx + Fa[1, a] * dy + Fa[2, a] * dz
+    log6_jlog6(Rrel, prel, lg, Jl, ws.w, ws.A, ws.Cm)
+    for a in range(3):
+        e[r0 + a] = lg[a]
+        e[r0 + 3 + a] = lg[3 + a] * iL
+    for col in range(W.shape[1]):
+        for a in range(3):  # body twist in frame b, Pinocchio's (v; ω)
+            nu[a] = Fb[0, a] * W[3, col] + Fb[1, a] * W[4, col] + Fb[2, a] * W[5, col]
+            nu[3 + a] = Fb[0, a] * W[0, col] + Fb[1, a] * W[1, col] + Fb[2, a] * W[2, col]
+        for a in range(3):
+            lin, ang = 0.0, 0.0
+            for b in range(6):
+                lin += Jl[a, b] * nu[b]
+                ang += Jl[3 + a, b] * nu[b]
+            H[r0 + a, col] = ang
+            H[r0 + 3 + a, col] = lin * iL
+
+
+@register_jitable
 def closure_rows(k, q, ws, e, H, norms, oMo):
     """The closure rows at ``q``: residual ``e[:n]`` and Jacobian ``H[:n]`` (per unit of
     each velocity coordinate), each closure's norm in ``norms``, the output frame's
@@ -544,12 +585,7 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
         r0 = rows[c]
         pbx, pby, pbz = F[cb, 0, 3], F[cb, 1, 3], F[cb, 2, 3]
         dx, dy, dz = pbx - F[ca, 0, 3], pby - F[ca, 1, 3], pbz - F[ca, 2, 3]
-        # W[:3] relative ω (world), W[3:] ← v_O + ω × p_b
-        for col in range(nv):
-            wx, wy, wz = W[0, col], W[1, col], W[2, col]
-            W[3, col] += wy * pbz - wz * pby
-            W[4, col] += wz * pbx - wx * pbz
-            W[5, col] += wx * pby - wy * pbx
+        about_point(W, pbx, pby, pbz)  # W[:3] relative ω (world), W[3:] about p_b
         kind = ckind[c]
         if kind != WELD:
             for a in range(3):
@@ -567,29 +603,7 @@ def closure_rows(k, q, ws, e, H, norms, oMo):
                                               + F[ca, 1, a] * (wz * zx - wx * zz)
                                               + F[ca, 2, a] * (wx * zy - wy * zx))
         else:
-            Rrel, prel, lg, Jl, nu = ws.Rrel, ws.prel, ws.lg, ws.Jl, ws.nu
-            for a in range(3):
-                for b in range(3):
-                    Rrel[a, b] = (F[ca, 0, a] * F[cb, 0, b] + F[ca, 1, a] * F[cb, 1, b]
-                                  + F[ca, 2, a] * F[cb, 2, b])
-                prel[a] = F[ca, 0, a] * dx + F[ca, 1, a] * dy + F[ca, 2, a] * dz
-            log6_jlog6(Rrel, prel, lg, Jl, ws.w, ws.A, ws.Cm)
-            for a in range(3):
-                e[r0 + a] = lg[a]
-                e[r0 + 3 + a] = lg[3 + a] * iL
-            for col in range(nv):
-                for a in range(3):  # body twist in C_b, Pinocchio's (v; ω)
-                    nu[a] = (F[cb, 0, a] * W[3, col] + F[cb, 1, a] * W[4, col]
-                             + F[cb, 2, a] * W[5, col])
-                    nu[3 + a] = F[cb, 0, a] * W[0, col] + F[cb, 1, a] * W[1, col] \
-                        + F[cb, 2, a] * W[2, col]
-                for a in range(3):
-                    lin, ang = 0.0, 0.0
-                    for b in range(6):
-                        lin += Jl[a, b] * nu[b]
-                        ang += Jl[3 + a, b] * nu[b]
-                    H[r0 + a, col] = ang
-                    H[r0 + 3 + a, col] = lin * iL
+            log6_rows(F[ca], F[cb], W, ws, iL, r0, e, H)
         s = 0.0
         for r in range(r0, rows[c + 1]):
             s += e[r] * e[r]
@@ -634,12 +648,7 @@ def output_pose_rows(k, ws, target, point, ep, Hp):
     o = 2 * C
     nv = k.nv
     _relative_columns(k.iv, k.kind, k.parent, 0, k.fjoint[o], ws.S, W)
-    px, py, pz = F[o, 0, 3], F[o, 1, 3], F[o, 2, 3]
-    for col in range(nv):  # W[3:] ← v_O + ω × p: the origin's velocity
-        wx, wy, wz = W[0, col], W[1, col], W[2, col]
-        W[3, col] += wy * pz - wz * py
-        W[4, col] += wz * px - wx * pz
-        W[5, col] += wx * py - wy * px
+    about_point(W, F[o, 0, 3], F[o, 1, 3], F[o, 2, 3])  # W[3:]: the origin's velocity
     iL = 1.0 / k.length
     if point:
         for a in range(3):
@@ -649,29 +658,7 @@ def output_pose_rows(k, ws, target, point, ep, Hp):
                 Hp[a, col] = 0.0
                 Hp[3 + a, col] = W[3 + a, col] * iL
         return
-    Rrel, prel, lg, Jl, nu = ws.Rrel, ws.prel, ws.lg, ws.Jl, ws.nu
-    for a in range(3):
-        for b in range(3):
-            Rrel[a, b] = (target[0, a] * F[o, 0, b] + target[1, a] * F[o, 1, b]
-                          + target[2, a] * F[o, 2, b])
-        prel[a] = (target[0, a] * (px - target[0, 3]) + target[1, a] * (py - target[1, 3])
-                   + target[2, a] * (pz - target[2, 3]))
-    log6_jlog6(Rrel, prel, lg, Jl, ws.w, ws.A, ws.Cm)
-    for a in range(3):
-        ep[a] = lg[a]
-        ep[3 + a] = lg[3 + a] * iL
-    for col in range(nv):
-        for a in range(3):  # the output's body twist, Pinocchio's (v; ω)
-            nu[a] = F[o, 0, a] * W[3, col] + F[o, 1, a] * W[4, col] + F[o, 2, a] * W[5, col]
-            nu[3 + a] = F[o, 0, a] * W[0, col] + F[o, 1, a] * W[1, col] \
-                + F[o, 2, a] * W[2, col]
-        for a in range(3):
-            lin, ang = 0.0, 0.0
-            for b in range(6):
-                lin += Jl[a, b] * nu[b]
-                ang += Jl[3 + a, b] * nu[b]
-            Hp[a, col] = ang
-            Hp[3 + a, col] = lin * iL
+    log6_rows(target, F[o], W, ws, iL, 0, ep, Hp)
 
 
 @njit(cache=True, nogil=True)
