@@ -26,9 +26,9 @@ from numba.extending import register_jitable
 from .compiling import SameTypes
 from .newton import lm_damping
 from .tree_kernel import (
-    _newton_step,
     _relative_columns,
     closure_rows,
+    newton_step,
     stepped_within,
     workspace,
 )
@@ -109,7 +109,7 @@ def solve_output_kernel(k, q, sel, target, scales, lower, upper, tol, max_iter, 
         for row in range(m):
             for b in range(nv):
                 Hf[row, b] = H[row, b] * units[b]
-        if not _newton_step(Hf, e, m, nv, lm_damping(r), N, g, inv, dx):
+        if not newton_step(Hf, e, m, nv, lm_damping(r), N, g, inv, dx):
             break
         for a in range(nv):
             dv[a] = units[a] * dx[a]

@@ -346,3 +346,43 @@ def test_solve_tree_with_pose_rows_compiled_equals_the_pinocchio_driver(path):
         assert np.abs(pin.difference(model.tree, a.q, b.q)).max() <= 1e-8
         assert b.pose == pytest.approx(a.pose, abs=1e-10)
         assert b.residual == pytest.approx(a.residual, abs=1e-10)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_profile_ldl_and_sparse_normal_equations_equal_the_dense_ones(seed):
+    """The tree solver's normal equations summed over each row's nonzero columns and
+    factored within their profile (:func:`pkm_pin.newton.ldl_profile`) give the dense
+    sums' and :func:`pkm_pin.newton.ldl`'s step to the last bit, on a sparse Jacobian
+    shaped like a two-legged robot's (two blocks of local loops, columns in between that
+    no row touches)."""
+    from pkm_pin.newton import ldl, ldl_solve
+
+    rng = np.random.default_rng(seed)
+    m, nf = 40, 60
+    Hf = np.zeros((m, nf))
+    for row in range(m):
+        base = rng.integers(0, 25) + (30 if row >= m // 2 else 0)
+        cols = base + rng.choice(6, size=rng.integers(2, 6), replace=False)
+        Hf[row, cols] = rng.standard_normal(len(cols))
+    e = rng.standard_normal(m)
+    lam = 1e-3
+    N, g, inv, dx = np.empty((nf, nf)), np.empty(nf), np.empty(nf), np.empty(nf)
+    assert tree_kernel.newton_step(Hf, e, m, nf, lam, N, g, inv, dx)
+    Nd = np.zeros((nf, nf))
+    for a in range(nf):
+        for b in range(a + 1):
+            s = 0.0
+            for row in range(m):
+                s += Hf[row, a] * Hf[row, b]
+            Nd[a, b] = s
+        Nd[a, a] += lam
+    gd = np.array([sum(Hf[row, a] * e[row] for row in range(m)) for a in range(nf)])
+    invd, xd = np.empty(nf), np.empty(nf)
+    assert ldl(Nd, nf, invd)
+    ldl_solve(Nd, nf, invd, gd, xd)
+    xd = -xd
+    big = np.abs(xd).max()
+    if big > tree_kernel.TREE_MAX_STEP:
+        xd *= tree_kernel.TREE_MAX_STEP / big
+    assert np.array_equal(dx, xd)
+    assert np.array_equal(np.tril(N), np.tril(Nd))
