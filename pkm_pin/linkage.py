@@ -1100,13 +1100,9 @@ class Linkage:
     def _signature(self, q) -> np.ndarray:
         """Every joint origin and the output placement at ``q``, divided by the length:
         what tells two assembly modes apart (idle motions leave it unchanged)."""
-        tree = self._model.tree
-        data = tree.createData()
-        pin.framesForwardKinematics(tree, data, np.asarray(q, dtype=float))
-        oMo = data.oMf[tree.getFrameId(self._model.output)]
-        points = [data.oMi[j].translation for j in range(1, tree.njoints)]
-        return np.concatenate(points + [oMo.translation, oMo.rotation.ravel()
-                                        * self._model.length]) / self._model.length
+        points, oMo = self._model.origins(np.asarray(q, dtype=float))
+        return np.concatenate([points.ravel(), oMo.translation, oMo.rotation.ravel()
+                               * self._model.length]) / self._model.length
 
     def inverse_kinematics(self, pose, guess=None, *, starts: int = 16, seed: int = 0,
                            tol: float = CLOSURE_TOL) -> Assembly:

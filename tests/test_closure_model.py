@@ -426,3 +426,26 @@ def test_bad_input():
     other = mechanism("rrr3").home_assembly
     with pytest.raises(InputError):
         configuration(mechanism("stewart"), other)
+
+
+def test_origins_are_pinocchios_forward_kinematics():
+    """ClosureModel.origins: every joint's world origin and the output placement equal
+    a fresh Data's framesForwardKinematics, to the last bit, at two configurations in
+    turn (the working data is reused)."""
+    from pathlib import Path
+
+    from pkm_pin import load_mechanism
+
+    loops = Path(__file__).resolve().parents[1] / "models" / "loops"
+    model = load_mechanism(loops / "cassie_knee.urdf", backend="general").model
+    rng = np.random.default_rng(3)
+    for _ in range(2):
+        q = rng.uniform(-1.0, 1.0, model.nq)
+        data = model.tree.createData()
+        pin.framesForwardKinematics(model.tree, data, q)
+        P, oMo = model.origins(q)
+        assert P.shape == (model.tree.njoints - 1, 3)
+        assert np.array_equal(P, np.array([data.oMi[j].translation
+                                           for j in range(1, model.tree.njoints)]))
+        assert np.array_equal(oMo.homogeneous,
+                              data.oMf[model.tree.getFrameId(model.output)].homogeneous)
