@@ -905,7 +905,9 @@ class Linkage:
                 f"the assemblies of {self.name!r} at the actuated values "
                 f"{np.round(target, 6)} do not settle into modes: {n} distinct ones after "
                 f"{tried} starts, new ones still appearing (a continuum: see mobility()'s "
-                "idle motions); forward_kinematics gives the one nearest a guess")
+                "idle motions; or more modes than a list can hold: each loop that closes "
+                "two ways can double them); forward_kinematics gives the one nearest a "
+                "guess")
 
         run = self._multistart(lambda q0: solve_tree(model, q0, targets=target, tol=tol),
                                model.reference, starts, seed, patience, too_many,
