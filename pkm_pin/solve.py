@@ -1462,7 +1462,7 @@ def solve_coordinates(mech, pose: pin.SE3, leg_q, rows, values, *, tol: float = 
     :func:`pkm_pin.compiling.prefer_compiled`); else the Python driver, Pinocchio's legs
     (the same steps to rounding: a test)."""
     rows = np.asarray(rows, dtype=int)
-    values = np.asarray(values, dtype=float)
+    values = np.ascontiguousarray(values, dtype=float)  # as the machine code reads it
     kernel = mech.kernel if compiled is not False else None
     if kernel is not None and (compiled or prefer_compiled(solve_coordinates_system)):
         M, Q = pose.homogeneous.copy(), np.concatenate(leg_q).astype(float)
