@@ -4,7 +4,7 @@
 * :func:`lm_damping`: the Levenberg–Marquardt damping of a relative residual;
 * :func:`stop_rule`: when to stop before a step (converged, out of iterations, stalled);
 * :func:`ldl`, :func:`ldl_solve`: ``L D Lᵀ`` of the normal equations, no square roots
-  (:func:`ldl_profile`: the same within a sparse matrix's profile);
+  (dense, or within a sparse matrix's profile);
 * :data:`TREE_MAX_STEP`: the cap on one step of the tree solver.
 
 Plain functions compiled into their callers (``register_jitable``); each can be called
@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba.extending import register_jitable
 
-__all__ = ["TREE_MAX_STEP", "ldl", "ldl_profile", "ldl_solve", "lm_damping", "stop_rule"]
+__all__ = ["TREE_MAX_STEP", "ldl", "ldl_solve", "lm_damping", "stop_rule"]
 
 #: Largest dimensionless step of the tree solver (infinity norm: rad, or lengths ``L``
 #: for translations): a longer Newton step is shortened to it, which keeps a start far
@@ -46,39 +46,25 @@ def stop_rule(r, tol, it, max_iter, best, slow):
 
 
 @register_jitable
-def ldl(A, n, inv):
+def ldl(A, n, inv, first=None):
     """``A[:n, :n] = L D Lᵀ`` for the symmetric positive definite ``A``, in place on its
     lower triangle: the unit factor ``L`` below the diagonal, ``D`` on it; ``inv``
     receives ``1 / D``. No square roots (one division per column, off the critical
-    path of the substitutions). False if ``A`` is not positive definite."""
-    for j in range(n):
-        d = A[j, j]
-        for k in range(j):
-            d -= A[j, k] * A[j, k] * A[k, k]
-        if not 0.0 < d < np.inf:
-            return False
-        A[j, j] = d
-        f = 1.0 / d
-        inv[j] = f
-        for i in range(j + 1, n):
-            s = A[i, j]
-            for k in range(j):
-                s -= A[i, k] * A[j, k] * A[k, k]
-            A[i, j] = s * f
-    return True
+    path of the substitutions). False if ``A`` is not positive definite.
 
-
-@register_jitable
-def ldl_profile(A, n, inv, first):
-    """:func:`ldl` of a sparse ``A`` within its profile: ``first[i]`` is the first column
+    ``first`` (optional): the profile of a sparse ``A``, ``first[i]`` the first column
     of row ``i`` of the lower triangle that is not zero (``i`` when none before the
     diagonal). ``L`` keeps that profile (no fill before ``first[i]``), so the sums run
     from the later of the two rows' ``first``: the terms they skip are exact zeros, and
-    the factors equal :func:`ldl`'s to the last bit at a fraction of the cost for the
-    normal equations of a tree whose loops are local (a humanoid's legs)."""
+    the factors equal the dense ones to the last bit at a fraction of the cost for the
+    normal equations of a tree whose loops are local (a humanoid's legs). Without it
+    (compiled away), every sum starts at column 0."""
     for j in range(n):
+        fj = 0
+        if first is not None:
+            fj = first[j]
         d = A[j, j]
-        for k in range(first[j], j):
+        for k in range(fj, j):
             d -= A[j, k] * A[j, k] * A[k, k]
         if not 0.0 < d < np.inf:
             return False
@@ -86,10 +72,13 @@ def ldl_profile(A, n, inv, first):
         f = 1.0 / d
         inv[j] = f
         for i in range(j + 1, n):
-            if first[i] > j:
-                continue
+            fi = 0
+            if first is not None:
+                fi = first[i]
+                if fi > j:
+                    continue
             s = A[i, j]
-            for k in range(max(first[i], first[j]), j):
+            for k in range(max(fi, fj), j):
                 s -= A[i, k] * A[j, k] * A[k, k]
             A[i, j] = s * f
     return True

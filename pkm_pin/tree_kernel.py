@@ -40,7 +40,7 @@ from numba.extending import register_jitable
 from . import screws
 from .compiling import SameTypes
 from .kernels import log3
-from .newton import TREE_MAX_STEP, ldl_profile, ldl_solve, lm_damping, stop_rule
+from .newton import TREE_MAX_STEP, ldl, ldl_solve, lm_damping, stop_rule
 from .tolerances import NEWTON_STALL_RTOL
 
 #: Joint kinds of the compiled tree.
@@ -795,13 +795,13 @@ def newton_step(Hf, e, m, nf, lam, N, g, inv, dx) -> bool:
                 N[a, nz[j]] += ha * Hf[row, nz[j]]
     for a in range(nf):
         N[a, a] += lam
-        first = a  # the profile of N's lower triangle, for ldl_profile
+        first = a  # the profile of N's lower triangle, for ldl
         for b in range(a):
             if N[a, b] != 0.0:
                 first = b
                 break
         nz[a] = first
-    if not ldl_profile(N, nf, inv, nz):
+    if not ldl(N, nf, inv, nz):
         return False
     ldl_solve(N, nf, inv, g, dx)
     big = 0.0

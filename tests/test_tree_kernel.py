@@ -351,8 +351,8 @@ def test_solve_tree_with_pose_rows_compiled_equals_the_pinocchio_driver(path):
 @pytest.mark.parametrize("seed", range(4))
 def test_profile_ldl_and_sparse_normal_equations_equal_the_dense_ones(seed):
     """The tree solver's normal equations summed over each row's nonzero columns and
-    factored within their profile (:func:`pkm_pin.newton.ldl_profile`) give the dense
-    sums' and :func:`pkm_pin.newton.ldl`'s step to the last bit, on a sparse Jacobian
+    factored within their profile (:func:`pkm_pin.newton.ldl` given ``first``) give the
+    dense sums' and the dense factors' step to the last bit, on a sparse Jacobian
     shaped like a two-legged robot's (two blocks of local loops, columns in between that
     no row touches)."""
     from pkm_pin.newton import ldl, ldl_solve
