@@ -246,12 +246,27 @@ def out_of_reach(legs, Ts: np.ndarray, length: float) -> tuple[np.ndarray, list]
     ``length`` (a leg whose joints all meet at one point reaches that point alone, to
     rounding), ``ok`` false and the reason recorded; the other poses ``ok``."""
     ok, failures = np.ones(Ts.shape[1], bool), []
-    for leg, targets in zip(legs, Ts):
+    bounds = []  # per leg: (r_min, r_max, margin), None where no bound is claimed
+    for leg in legs:
         r_min, r_max = leg.reach
-        if r_min == 0.0 and not np.isfinite(r_max):
+        bounds.append(None if r_min == 0.0 and not np.isfinite(r_max)
+                      else (r_min, r_max, REACH_MARGIN * (r_max + length)))
+    if all(b is None for b in bounds):
+        return ok, failures
+    # one vectorised test of every leg's squared distance first; the messages only
+    # where some pose fails it
+    base = np.array([leg.base.translation for leg in legs])
+    offsets = Ts[:, :, :3, 3] - base[:, None]
+    d2 = np.einsum("lni,lni->ln", offsets, offsets)
+    lo = np.array([0.0 if b is None else max(b[0] - b[2], 0.0) for b in bounds])
+    hi = np.array([np.inf if b is None else b[1] + b[2] for b in bounds])
+    if not ((d2 > (hi * hi)[:, None]) | (d2 < (lo * lo)[:, None])).any():
+        return ok, failures
+    for leg, targets, b in zip(legs, Ts, bounds):
+        if b is None:
             continue
+        r_min, r_max, margin = b
         d = np.linalg.norm(targets[:, :3, 3] - leg.base.translation, axis=1)
-        margin = REACH_MARGIN * (r_max + length)
         for i in np.flatnonzero(ok & ((d > r_max + margin) | (d < r_min - margin))):
             failures.append((int(i), f"leg {leg.name!r} cannot reach the pose: its tip "
                              f"would be {d[i]:.6g} from its base, outside its reach "
@@ -318,20 +333,21 @@ def _evaluate_chunk_compiled(mech, kernel, X, layout, progress, restarts,
     Ts = np.empty((len(legs), N, 4, 4))  # where each leg's tip must be
     anchor_targets(poses, kernel.anchors, Ts)
     ok, failures = out_of_reach(legs, Ts, mech.characteristic_length)  # not solved
-    # the runs of poses between them, each tracked from home (as a miss is solved again)
-    runs = np.split(np.flatnonzero(ok), np.flatnonzero(np.diff(np.flatnonzero(ok)) > 1) + 1)
+    # the runs of consecutive poses between them (slices: no copies), each tracked from
+    # home (as a miss is solved again)
+    kept = np.flatnonzero(ok)
+    cuts = np.flatnonzero(np.diff(kept) > 1) + 1
+    runs = [(int(r[0]), int(r[-1]) + 1) for r in np.split(kept, cuts) if len(r)]
     for leg, lk, targets, q_home in zip(legs, kernel.legs, Ts, home.leg_q):
         Q = np.full((N, leg.nq), np.nan)
         res = np.full(N, np.inf)
         misses = 0
-        for run in (r for r in runs if len(r)):
-            Qr, rr = np.empty((len(run), leg.nq)), np.empty(len(run))
+        for a, b in runs:
             # a last Newton step taken from a residual below TRUST is checked by Pinocchio
-            steps = along[run]
+            steps = along[a:b].copy()
             steps[0] = False  # the run's first pose starts from home
-            misses += track(lk.chain, np.ascontiguousarray(targets[run]),
-                            q_home.astype(float), steps, SWEEP_TOL, 50, TRUST, Qr, rr)
-            Q[run], res[run] = Qr, rr
+            misses += track(lk.chain, targets[a:b], q_home.astype(float), steps,
+                            SWEEP_TOL, 50, TRUST, Q[a:b], res[a:b])
         # a miss: neither converged (0 ≤ r ≤ tol) nor trusted (r < 0), as track counts
         miss = np.flatnonzero(~(res <= SWEEP_TOL) & ok) if misses else ()
         if len(miss):
