@@ -7,7 +7,7 @@ Pinocchio loop (issue 24).
    ±0.3 rad about home (seeded); each solve warm-started from the previous one, to a
    relative closure residual of 1e-10 and the motors to 1e-10 rad:
 
-   * pkm_pin: ``Linkage.forward_kinematics(q_a, previous, starts=0, tol=1e-10)`` (the
+   * pkm_pin: ``Mechanism.forward_kinematics(q_a, previous, starts=0, tol=1e-10)`` (the
      compiled tree solver, :mod:`pkm_pin.tree_kernel`), and the same loop with the
      Pinocchio driver (``tree_kernel.ENABLED = False``: the path before issue 24);
    * PlaCo: ``RobotWrapper`` + ``KinematicsSolver`` (floating base masked), a hard
@@ -176,7 +176,7 @@ def five_bar(placo: str | None, repeat: int) -> dict:
                                         for m in MOTORS]] - targets).max())
     print(f"PlaCo's planar 5-bar, {N_TARGETS} targets in ±{SPAN} rad, warm-started, "
           f"tol {TOL:g}; time per solve [µs], best of {repeat} interleaved rounds:")
-    print(f"  pkm_pin Linkage.forward_kinematics (compiled tree solver) {1e6 * t_ours:8.1f}"
+    print(f"  pkm_pin Mechanism.forward_kinematics (compiled tree solver) {1e6 * t_ours:8.1f}"
           f"   closure ≤ {res_ours:.1e}, motors ≤ {act_ours:.1e}")
     print(f"  pkm_pin, Pinocchio driver (before issue 24)              {1e6 * t_pin:8.1f}"
           f"   x{t_pin / t_ours:.1f} the compiled path; same solutions to "

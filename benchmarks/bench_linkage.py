@@ -5,11 +5,11 @@ closures, two motors), along a closed path of motor values around home, each pos
 warm-started from the previous one. Three figures per pose:
 
   * assembly: close every loop from an open configuration (the previous solution with
-    the motors moved to the new values; nothing pinned): ``Linkage.assemble(q_open)``;
+    the motors moved to the new values; nothing pinned): ``Mechanism.assemble(q_open)``;
   * forward kinematics: motor values → every joint, warm-started from the previous
-    solution: ``Linkage.forward_kinematics(q_a, previous)``;
+    solution: ``Mechanism.forward_kinematics(q_a, previous)``;
   * analysis: mobility, idle motions, output twists, A, B, indices, class at the
-    solution: ``Linkage.analyze(q)``;
+    solution: ``Mechanism.analyze(q)``;
 
 against the same computed with Pinocchio calls in a hand-written Python loop: a plain
 damped Newton on the closure (``computeJointJacobians`` + ``updateFramePlacements``,
