@@ -121,6 +121,7 @@ from .tolerances import (
     FK_FOLD_REACH,
     GIMBAL_LOCK_RTOL,
     JOINT_LIMIT_SLACK,
+    MODES_ESTIMATE_FROM,
     MODES_MAX,
     MODES_MAX_BATCHES,
     MODES_PATIENCE,
@@ -458,10 +459,11 @@ class Linkage:
         model, home = self._model, self.home_assembly
         rows = pose_rows(model, model.kinematics(home.q))
 
-        def too_many(n: int, tried: int) -> PkmError:
+        def too_many(n: int, tried: int, estimate: float) -> PkmError:
             return AssemblyError("output pose", float("nan"), (
                 f"the assemblies of {self.name!r} at this output pose do not settle into "
-                f"working modes: {n} distinct ones after {tried} starts (a continuum: the "
+                f"working modes: {n} distinct ones after {tried} starts, "
+                f"{_estimate_words(n, estimate)} (a continuum: the "
                 "actuators move with the output held); inverse_kinematics gives the one "
                 "nearest a guess"))
 
@@ -900,11 +902,11 @@ class Linkage:
         target = self.check_actuated(q_actuated)
         model = self._model
 
-        def too_many(n: int, tried: int) -> PkmError:
+        def too_many(n: int, tried: int, estimate: float) -> PkmError:
             return ForwardKinematicsError(
                 f"the assemblies of {self.name!r} at the actuated values "
                 f"{np.round(target, 6)} do not settle into modes: {n} distinct ones after "
-                f"{tried} starts, new ones still appearing (a continuum: see mobility()'s "
+                f"{tried} starts, {_estimate_words(n, estimate)} (a continuum: see mobility()'s "
                 "idle motions; or more modes than a list can hold: each loop that closes "
                 "two ways can double them); forward_kinematics gives the one nearest a "
                 "guess")
@@ -937,7 +939,7 @@ class Linkage:
         quiet = 0
         while quiet < patience:
             if run.batches >= MODES_MAX_BATCHES or len(run.found) > MODES_MAX:
-                raise too_many(len(run.found), run.tried)
+                raise too_many(len(run.found), run.tried, run.estimate())
             new = False
             for q0 in tree_starts(self._model, None if run.batches else warm, count=starts,
                                   seed=seed + run.batches):
@@ -948,14 +950,20 @@ class Linkage:
                         run.best = sol
                     continue
                 sig = self._signature(sol.q)
-                if any(np.abs(s - sig).max() <= SAME_CONFIGURATION_TOL for s in run.signatures):
+                seen = next((k for k, s in enumerate(run.signatures)
+                             if np.abs(s - sig).max() <= SAME_CONFIGURATION_TOL), None)
+                if seen is not None:
+                    run.hits[seen] += 1
                     continue
                 if not run.found and first is not None:
                     first(sol.q)
                 run.signatures.append(sig)
                 run.found.append(self._assembly(sol, sol.iterations))
+                run.hits.append(1)
                 new = True
             run.batches += 1
+            if new and run.batches >= MODES_ESTIMATE_FROM and run.estimate() > MODES_MAX:
+                raise too_many(len(run.found), run.tried, run.estimate())
             quiet = 0 if new else quiet + 1
         return run
 
@@ -1410,6 +1418,17 @@ class _Multistart:
     tried: int
     batches: int
     best: TreeSolution | None
+    hits: list = field(default_factory=list)  # per assembly: the starts that found it
+
+    def estimate(self) -> float:
+        """How many distinct assemblies the starts would find in all, from how often
+        each was found: the bias-corrected Chao1 estimate ``S + f₁(f₁ − 1) / (2 (f₂ +
+        1))`` (``S`` found, ``f₁`` of them once, ``f₂`` twice; Chao, Biometrics 61,
+        2005): many found only once mean many not found yet. A lower bound in
+        expectation."""
+        h = np.asarray(self.hits)
+        f1, f2 = int((h == 1).sum()), int((h == 2).sum())
+        return len(h) + f1 * (f1 - 1) / (2 * (f2 + 1))
 
     def nearest(self, reference: np.ndarray) -> list:
         """The assemblies found, the one whose signature is nearest ``reference``
@@ -1417,6 +1436,15 @@ class _Multistart:
         order = np.argsort([np.linalg.norm(s - reference) for s in self.signatures],
                            kind="stable")
         return [self.found[k] for k in order]
+
+
+def _estimate_words(n: int, estimate: float) -> str:
+    """The multistart's estimate of the assemblies it would find in all
+    (:meth:`_Multistart.estimate`), in words."""
+    if estimate > 10 * max(n, 1):
+        return "new ones still appearing (most found once: far more remain unseen)"
+    return f"new ones still appearing (about {estimate:.0f} in all, from how often each " \
+           "was found again)"
 
 
 def _poses_of(points) -> list | None:

@@ -198,6 +198,50 @@ def test_every_mode_of_an_underactuated_mechanism_is_refused_in_a_sentence():
     assert len(modes) == 2 and modes.counts["batches"] <= 10
 
 
+def test_the_multistart_estimate_is_chao1_bias_corrected():
+    """The estimate of the assemblies a multistart would find in all, from how often each
+    was found: S + f1 (f1 − 1) / (2 (f2 + 1)), by hand on three cases."""
+    from pkm_pin.linkage import _Multistart
+
+    def estimate(hits):
+        return _Multistart([], [], 0, 0, None, list(hits)).estimate()
+
+    assert estimate([]) == 0.0
+    assert estimate([5, 7, 9]) == 3.0  # each found many times: all seen
+    # 28 found, 26 once, 1 twice (kangaroo_like_2legs after 8 batches): 28 + 26·25/4
+    assert estimate([1] * 26 + [2] + [4]) == pytest.approx(28 + 26 * 25 / 4)
+
+
+KANGAROO_2LEGS = ROOT / "tests" / "data" / "gepetto" / "kangaroo_like_2legs" / "robot.urdf"
+
+
+def test_a_multistart_that_keeps_finding_new_assemblies_stops_early():
+    """kangaroo_like_2legs at home: about five new assemblies a batch, almost each found
+    once (two legs of twelve closures: hundreds of modes). The multistart refuses after
+    the estimate of those still unseen passes MODES_MAX (9 batches of 32 starts + the
+    reference), not after 60 batches as before, and its sentence says why. Gepetto's
+    battobot_6d (four loops closing two ways each) still lists its 16 modes, each found
+    many times."""
+    import re
+
+    from pkm_pin.errors import ForwardKinematicsError
+    from pkm_pin.tolerances import MODES_ESTIMATE_FROM
+
+    kangaroo = load_mechanism(KANGAROO_2LEGS)
+    with pytest.raises(ForwardKinematicsError, match="do not settle into modes") as many:
+        kangaroo.forward_kinematics_all(kangaroo.home_assembly.q_actuated,
+                                        method="multistart")
+    message = " ".join(str(many.value).split())
+    found, tried = map(int, re.search(r"(\d+) distinct ones after (\d+) starts",
+                                      message).groups())
+    assert 32 * MODES_ESTIMATE_FROM < tried <= 32 * (MODES_ESTIMATE_FROM + 4) + 1
+    assert 10 <= found < 100
+    assert "most found once" in message or "in all, from how often" in message
+    batto = load_mechanism(ROOT / "tests" / "data" / "gepetto" / "battobot_6d" / "robot.urdf")
+    modes = batto.forward_kinematics_all(batto.home_assembly.q_actuated, method="multistart")
+    assert len(modes) == 16 and modes.counts["batches"] < MODES_ESTIMATE_FROM
+
+
 def test_a_general_backend_mechanism_lists_what_it_answers():
     """dir() of a general-backend mechanism holds the general backend's public names
     (idle motions, partial poses, the tree's sensitivity) besides the facade's."""
