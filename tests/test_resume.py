@@ -241,7 +241,9 @@ def test_a_dask_worker_killed_mid_sweep_costs_time_not_the_result(stewart, tmp_p
         ws = mech.workspace(("x", "y", "z"), **STUDY, executor=client.get_executor(),
                             checkpoint=Checkpoint(tmp_path / "dask",
                                                   on_chunk=kill_a_busy_worker))
-        assert time.perf_counter() - t0 < 30  # the lost chunks' time, not a stall
+        # the lost chunks' time, not a stall (a stall never ends; the bound leaves room
+        # for a loaded machine: 44 s seen with two other jobs on two cores)
+        assert time.perf_counter() - t0 < 120
     assert killed
     with pytest.raises(ProcessLookupError):
         os.kill(killed[0], 0)
