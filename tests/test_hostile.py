@@ -17,6 +17,7 @@ from pkm_pin.cli import main
 from pkm_pin.errors import ClosureFileError, MechanismFileError, UrdfError
 from pkm_pin.io import load_mechanism
 from pkm_pin.model import read_extended_urdf, read_mjcf
+from pkm_pin.model.mjcf import parse_mjcf
 from pkm_pin.urdf import read
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -370,6 +371,56 @@ def test_menagerie_style_scene_analyses_like_its_robot(tmp_path, name, capsys):
     robot_report = capsys.readouterr().out.splitlines()
     assert scene_report[0].replace(" scene", "") == robot_report[0]
     assert scene_report[1:] == robot_report[1:]
+
+
+DEFAULTS_ROBOT = """<mujoco model="robot">
+  <default>
+    <joint damping="0.1"/>
+    <default class="visual"><geom group="2" contype="0" conaffinity="0"/></default>
+  </default>
+  <worldbody>
+    <body name="crank">
+      <joint name="j" axis="0 0 1"/>
+      <geom class="visual" type="box" size="0.1 0.01 0.01"/>
+      <body name="tip" pos="0.2 0 0"><joint name="k" axis="0 0 1" class="{joint_class}"/>
+        <geom class="visual" type="box" size="0.1 0.01 0.01"/></body>
+    </body>
+  </worldbody>
+  <actuator><motor joint="j"/><motor joint="k"/></actuator>
+</mujoco>
+"""
+DEFAULTS_SCENE = """<mujoco model="scene">
+  <include file="robot.xml"/>
+  <default>
+    <joint armature="0.01"/>
+    <default class="frame"><geom group="1" type="box"/></default>
+    <default class="stiff"><joint stiffness="1"/></default>
+  </default>
+  <worldbody><geom class="frame" size="0.1 0.1 0.1" pos="0 0 -1"/></worldbody>
+</mujoco>
+"""
+
+
+def test_a_scene_with_its_own_defaults_reads_like_its_robot(tmp_path):
+    """Menagerie's aloha scene adds a second top-level <default> to its robot's: MuJoCo
+    merges them (classes of both, the main class's element defaults combined); Pinocchio
+    4.1 kept one and failed on a class of the other ('unordered_map::at'). Merged, the
+    scene gives the robot's tree, closures and actuators, the robot's joint using the
+    scene's class; a class no <default> defines gets a sentence naming the likely cause."""
+    (tmp_path / "robot.xml").write_text(DEFAULTS_ROBOT.format(joint_class="stiff"))
+    (tmp_path / "scene.xml").write_text(DEFAULTS_SCENE)
+    scene = read_mjcf(tmp_path / "scene.xml")
+    assert list(scene.tree.names) == ["universe", "j", "k"]
+    assert scene.actuated == ("j", "k") and scene.output == "tip"
+    root = parse_mjcf(tmp_path / "scene.xml")
+    (default,) = root.findall("default")
+    assert {d.get("class") for d in default.findall("default")} == {"visual", "frame",
+                                                                    "stiff"}
+    assert default.find("joint").attrib == {"damping": "0.1", "armature": "0.01"}
+    (tmp_path / "alone.xml").write_text(DEFAULTS_ROBOT.format(joint_class="nowhere"))
+    with pytest.raises(ClosureFileError, match="a class= that no <default class=...> "
+                       "defines"):
+        read_mjcf(tmp_path / "alone.xml")
 
 
 @pytest.mark.parametrize("files,main_file,where,reason", [

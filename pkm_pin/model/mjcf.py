@@ -285,14 +285,30 @@ def _inline_includes(main: Path, root: ET.Element, budget: list) -> list[Path]:
 
 
 def _merge_worldbodies(root: ET.Element) -> bool:
-    """Move the children of every ``<worldbody>`` after the first into the first (MuJoCo
-    merges repeated sections; Pinocchio 4.1 builds the tree once per ``<worldbody>``: a
-    scene that includes its robot and adds a floor has two). Returns whether it did."""
+    """Merge repeated top-level sections as MuJoCo does, where Pinocchio 4.1 does not
+    (returns whether it did):
+
+    * every ``<worldbody>`` after the first moves its children into the first (Pinocchio
+      builds the tree once per ``<worldbody>``: a scene that includes its robot and adds
+      a floor has two);
+    * every ``<default>`` after the first moves its classes into the first, and its
+      element defaults (``<geom>``, ``<joint>`` … of the main class) into the first's,
+      attributes given later winning (Pinocchio keeps one ``<default>``, then fails on
+      a ``class=`` of the other: Menagerie's aloha scene adds its own)."""
     worlds = root.findall("worldbody")
     for world in worlds[1:]:
         worlds[0].extend(list(world))
         root.remove(world)
-    return len(worlds) > 1
+    defaults = root.findall("default")
+    for default in defaults[1:]:
+        for child in list(default):
+            same = defaults[0].find(child.tag) if child.tag != "default" else None
+            if same is None:
+                defaults[0].append(child)
+            else:
+                same.attrib.update(child.attrib)
+        root.remove(default)
+    return len(worlds) > 1 or len(defaults) > 1
 
 
 def _check_inlined_size(label: str, root: ET.Element) -> None:
@@ -544,7 +560,12 @@ def _pinocchio_model(filename: str, label: str) -> pin.Model:
         try:
             return pin.buildModelFromMJCF(filename)
         except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
-            raise ClosureFileError(label, "", f"Pinocchio cannot build a model: {e}") from e
+            hint = ("" if "unordered_map::at" not in str(e) else
+                    " (a name it looked up is not defined: most often a class= that no "
+                    "<default class=...> defines, or a mesh, material or texture not in "
+                    "<asset>; check the names the file refers to)")
+            raise ClosureFileError(label, "", f"Pinocchio cannot build a model: {e}{hint}"
+                                   ) from e
 
 
 # -------------------------------------------------------------------------- closures
