@@ -550,6 +550,10 @@ class TreeAnalysis(Analysis):
     mechanism: object = field(repr=False)
     rtol: float = field(repr=False)
     about: str = field(repr=False)
+    #: Kinematic redundancy: independent actuators beyond the output's directions of
+    #: motion (:func:`pkm_pin.linkage.kinematic_redundancy`); where positive, the type I
+    #: and inverse indices are 0 and the class I at every configuration.
+    redundancy: int = 0
 
     def __init__(self, assembly, **options):
         done = assembly.mechanism.analyze(assembly, **options)

@@ -65,7 +65,12 @@ twists ``P``; 0 with fewer actuators than output DOF) and ``"condition_A"`` are 
 (internal motions that move neither removed), ``forward = min |X z| / |(X; Y) z|`` (0:
 the output moves with the actuators locked) and ``inverse = min |Y z| / |(X; Y) z|`` (0:
 an actuator moves without moving the output). Class I: ``min(type_I, inverse) <
-tol``; II: ``min(type_II, forward) < tol``; III: both.
+tol``; II: ``min(type_II, forward) < tol``; III: both. A kinematically redundant
+mechanism (more independent actuators than its output has directions of motion: a 7R
+arm, a biped read with one foot as the output; :func:`kinematic_redundancy`) moves its
+actuators with the output held everywhere: its type I and inverse indices are 0 and its
+class I at every configuration, which marks the redundancy, not a singular pose; the
+analysis's ``redundancy`` counts those self-motions (at least) and the report says so.
 """
 
 from __future__ import annotations
@@ -2030,6 +2035,7 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
            "forward": core.forward, "inverse": core.inverse}
     singularity = classify(_smaller(core.type_I, core.inverse),
                            _smaller(core.type_II, core.forward), singular_tol)
+    redundancy = kinematic_redundancy(len(mob.independent_actuators), model.output_point)
     d = core.d
     csing = None if generic is None else bool(mob.dof != generic.dof
                                               or d != generic.output_dof)
@@ -2039,7 +2045,18 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
         indices=idx, singularity=singularity, constraint_singular=csing,
         reference_point=core.p, length=model.length, singular_tol=singular_tol,
         _maps=(core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
-        actuated_prismatic=core.translating, mechanism=link, rtol=rtol, about=about)
+        actuated_prismatic=core.translating, mechanism=link, rtol=rtol, about=about,
+        redundancy=redundancy)
+
+
+def kinematic_redundancy(independent: int, output_point: bool) -> int:
+    """How many more independent actuators a mechanism has than its output can have
+    directions of motion (6 for a body, 3 for a point output): that many self-motions
+    (the actuators moving with the output held: class I) at every configuration, at
+    least. 0 when
+    it has no more (a redundancy the output's rank hides, a planar 4R arm's, is not
+    counted: it would need the generic rank of the output twists)."""
+    return max(int(independent) - (3 if output_point else 6), 0)
 
 
 def _smaller(a: float, b: float) -> float:

@@ -427,6 +427,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "independent_actuators": list(mob.independent_actuators),
         "output_dof": an.output_dof,
         "motion_type": an.motion_type,
+        "redundancy": int(getattr(an, "redundancy", 0)),
         "platform_twists": [b.screw.tolist() for b in motion],
         "motion_basis": [b.as_dict() for b in motion],
         "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
@@ -757,6 +758,15 @@ def text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] | None = Non
     out += [f"    {m}" for m in r["idle_motions"]]
     if r.get("singular_words"):
         out += [f"singular           {r['singular_words']}"]
+    if r.get("redundancy"):
+        n = r["redundancy"]
+        out += [f"redundancy         kinematically redundant: "
+                f"{len(r['independent_actuators'])} independent actuators for an output that "
+                f"moves in at most {6 if not r.get('output_is_point') else 3} directions: at "
+                f"least {n} self-motion{'s' * (n > 1)} (actuators moving with the output "
+                "held) at every configuration, so the type I and inverse indices are 0 and "
+                "the class I everywhere: it marks the redundancy, not a singular pose "
+                "(analyse one output per sub-mechanism, or fewer actuators, to find those)"]
     out += submechanism_lines(r)
     out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
             for a, b in r.get("duplicate_closures", [])]

@@ -161,7 +161,8 @@ def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.Pat
     Args:
         urdf_path: The URDF file.
         closures_path: The closures file (YAML, or TOML by its ``.toml`` suffix); default:
-            :func:`find_closures_file`.
+            :func:`find_closures_file`; ``"none"`` (:data:`NO_CLOSURES`): the URDF's tree
+            without closures, every movable joint actuated.
         output: Output frame (overrides the file's ``output`` and the default).
         free_flyer: Put a free-flyer joint ``root_joint`` under the root link.
 
@@ -170,6 +171,8 @@ def read_extended_urdf(urdf_path: str | os.PathLike, closures_path: str | os.Pat
             and how to fix it.
     """
     urdf = Path(urdf_path)
+    if closures_path is not None and str(closures_path) == NO_CLOSURES:
+        return _read_tree(urdf, output, free_flyer)
     path = Path(closures_path) if closures_path is not None else find_closures_file(urdf)
     spec = read_closures_file(path)
     tree, notes = _build_tree(urdf, spec, free_flyer)
@@ -186,14 +189,47 @@ def find_closures_file(urdf_path: str | os.PathLike) -> Path:
     """The closures file of ``urdf_path``: the same stem with ``.yaml``, ``.yml`` or
     ``.toml``, else ``robot.yaml`` in the same folder (the toolbox's name)."""
     urdf = Path(urdf_path)
-    candidates = [urdf.with_suffix(s) for s in (".yaml", ".yml", ".toml")]
-    candidates.append(urdf.parent / "robot.yaml")
-    for c in candidates:
-        if _is_file(c):
-            return c
-    raise ClosureFileError(_clip(str(urdf)), "", "no closures file beside it (looked for "
-                           + ", ".join(_clip(c.name, 80) for c in candidates)
-                           + "); write one or pass closures_path=")
+    found = _closures_file_beside(urdf)
+    if found is None:
+        raise ClosureFileError(_clip(str(urdf)), "", "no closures file beside it (looked for "
+                               + ", ".join(_clip(c.name, 80) for c in _candidates(urdf))
+                               + "); write one, name it with --closures FILE "
+                               "(closures= in Python), or give --closures none to read "
+                               "the URDF as a tree without closures (a serial arm)")
+    return found
+
+
+def _candidates(urdf: Path) -> list[Path]:
+    """Where :func:`find_closures_file` looks, in order (each path once)."""
+    out = [urdf.with_suffix(s) for s in (".yaml", ".yml", ".toml")]
+    return out + [p for p in [urdf.parent / "robot.yaml"] if p not in out]
+
+
+def _closures_file_beside(urdf: Path) -> Path | None:
+    """The first of :func:`_candidates` that is a file, or ``None``."""
+    return next((c for c in _candidates(urdf) if _is_file(c)), None)
+
+
+#: The closures "file" that reads a URDF as a tree without closures (``--closures
+#: none``): a serial arm, a hand, a legged robot's tree.
+NO_CLOSURES = "none"
+
+
+def _read_tree(urdf: Path, output: str | None, free_flyer: bool) -> ClosureModel:
+    """A URDF read without closures (:data:`NO_CLOSURES`): its tree, every movable joint
+    actuated (a serial arm, a hand, a legged robot's tree), with a note saying so."""
+    label = _clip(str(urdf))
+    tree, notes = _build_tree(urdf, ClosureSpec(label, (), (), (), joint_name_given=True),
+                              free_flyer)
+    movable = tuple(tree.names[j] for j in range(1, tree.njoints) if tree.joints[j].nv > 0)
+    spec = ClosureSpec(label, (), (), movable, joint_name_given=True)
+    out = output if output is not None else _output_frame(tree, spec)
+    actuated, matches = _actuated(tree, spec)
+    note = ("--closures none: read as a tree without closures, every movable joint "
+            "actuated; a closures file (closed_loop, type, name_mot; --closures FILE) "
+            "closes loops and chooses the actuated joints")
+    return ClosureModel(tree, (), actuated, out, name=tree.name, actuator_matches=matches,
+                        output_named=output is not None, notes=notes + (note,))
 
 
 # ----------------------------------------------------------------------- closures file

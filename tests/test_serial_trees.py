@@ -1,0 +1,112 @@
+"""Trees without closures read from published-style files: a plain URDF without a
+closures file (a serial arm) and kinematically redundant arms (more independent actuators
+than the output's directions of motion)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pkm_pin import load_mechanism
+from pkm_pin.cli import main
+from pkm_pin.errors import ClosureFileError
+
+LINK = """<body name="l{k}" pos="0 0 0.1" euler="0.3 0.2 0.1">
+<joint name="j{k}" axis="{axis}"/><geom type="sphere" size="0.01"/>{inner}</body>"""
+
+
+def arm_mjcf(n: int) -> str:
+    """An nR arm with alternating z / y axes, every joint actuated (MJCF)."""
+    inner = ""
+    for k in range(n, 0, -1):
+        inner = LINK.format(k=k, axis="0 0 1" if k % 2 else "0 1 0", inner=inner)
+    motors = "".join(f'<motor joint="j{k}"/>' for k in range(1, n + 1))
+    return (f'<mujoco model="arm{n}"><worldbody>{inner}</worldbody>'
+            f"<actuator>{motors}</actuator></mujoco>")
+
+
+@pytest.fixture
+def arm(tmp_path):
+    def write(n: int) -> Path:
+        path = tmp_path / f"arm{n}.xml"
+        path.write_text(arm_mjcf(n))
+        return path
+    return write
+
+
+Q7 = np.array([0.3, -0.7, 0.4, 1.1, -0.5, 0.8, 0.2])
+
+
+def test_a_7r_arm_reports_its_redundancy(arm, capsys):
+    """Seven actuated revolutes for a body output (six directions): a self-motion at
+    every configuration (the output Jacobian's null space, checked here), so the type I
+    and inverse indices are 0 by their definitions and the class is I at a generic
+    configuration too, which the report explains as a redundancy of 1 (4 for the
+    output's origin as a point), not a singular pose. The 6R arm made of its first six
+    joints has no redundancy and positive type I and inverse indices there."""
+    mech = load_mechanism(arm(7))
+    an = mech.analyze(mech.assemble(Q7))
+    J = an.joint_twists[list(mech.model.actuated_v)]  # (7, 6): the output's twists
+    assert np.linalg.matrix_rank(J.T, tol=1e-9) == 6  # 6 directions, 7 rates: one null
+    assert (an.dof, an.output_dof, an.redundancy) == (7, 6, 1)
+    assert an.indices["type_I"] == 0.0 and an.indices["inverse"] < 1e-9
+    assert an.singularity == "I" and an.indices["forward"] > 0.1
+    assert main(["analyze", str(arm(7))]) == 0
+    text = capsys.readouterr().out
+    assert "kinematically redundant: 7 independent actuators" in text
+    assert "at least 1 self-motion" in text and "not a singular pose" in text
+    six = load_mechanism(arm(6))
+    an6 = six.analyze(six.assemble(Q7[:6]))
+    assert an6.redundancy == 0 and an6.singularity == "none"
+    assert an6.indices["type_I"] > 1e-3 and an6.indices["inverse"] > 1e-3
+    assert main(["analyze", str(arm(6))]) == 0
+    assert "redundancy" not in capsys.readouterr().out
+
+
+def test_the_redundancy_of_a_point_output_counts_three_directions(arm, capsys):
+    """The 7R arm's last body origin as a point output: 7 − 3 = 4 self-motions at
+    least."""
+    assert main(["analyze", str(arm(7)), "--point"]) == 0
+    assert "at least 4 self-motions" in capsys.readouterr().out
+
+
+PLANAR_2R = """<?xml version="1.0"?>
+<robot name="planar2r">
+  <link name="base"/>
+  <link name="upper"/>
+  <link name="fore"/>
+  <link name="hand"/>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+    <axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/>
+    <origin xyz="0.3 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="wrist_fixed" type="fixed"><parent link="fore"/><child link="hand"/>
+    <origin xyz="0.25 0 0"/></joint>
+</robot>
+"""
+
+
+def test_a_urdf_read_without_closures_is_its_tree(tmp_path, capsys):
+    """A plain URDF has no closures file: refused with a sentence that offers
+    `--closures none`; with it, the URDF's tree, every movable joint actuated, with a
+    note saying so; the elbow's twist is the closed form's (ω; p × ω), p its axis
+    point 0.3 m along the upper arm."""
+    urdf = tmp_path / "planar2r.urdf"
+    urdf.write_text(PLANAR_2R)
+    with pytest.raises(ClosureFileError, match="no closures file beside it.*--closures FILE"
+                       ".*--closures none to read the URDF as a tree"):
+        load_mechanism(urdf)
+    mech = load_mechanism(urdf, closures="none")
+    assert mech.actuated == ("shoulder", "elbow") and not mech.model.closures
+    assert any("read as a tree without closures" in n for n in mech.model.notes)
+    an = mech.analyze(mech.assemble(np.array([0.4, 0.9])))
+    assert an.dof == 2 and an.singularity == "none" and an.redundancy == 0
+    p = 0.3 * np.array([np.cos(0.4), np.sin(0.4), 0.0])
+    omega = np.array([0.0, 0.0, 1.0])
+    np.testing.assert_allclose(an.joint_twists[1], np.r_[omega, np.cross(p, omega)],
+                               atol=1e-12)
+    assert main(["analyze", str(urdf), "--closures", "none", "--q", "0.4", "0.9"]) == 0
+    assert "read as a tree without closures" in capsys.readouterr().out
