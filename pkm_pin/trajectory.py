@@ -572,13 +572,53 @@ def _carry_idle(model: ClosureModel, system, q, v, a, previous, driven_rhs, grav
                                              idle=system.idle)
     v_prev, a_prev, dt = previous
     v0 = v
-    for pred in (v_prev + a_prev * dt, None):
-        if pred is None:
-            pred = v_prev + 0.5 * (a_prev + a) * dt
-        v = system.carry(v0, pred)
-        a = dynamics.idle_acceleration(model, q, v, system.acceleration(v, driven_rhs(v)),
-                                       gravity=gravity, idle=system.idle)
+    with np.errstate(over="ignore", invalid="ignore"):
+        for pred in (v_prev + a_prev * dt, None):
+            if pred is None:
+                pred = v_prev + 0.5 * (a_prev + a) * dt
+            v = system.carry(v0, pred)
+            if not np.isfinite(v).all():
+                break
+            a = dynamics.idle_acceleration(model, q, v, system.acceleration(
+                v, driven_rhs(v)), gravity=gravity, idle=system.idle)
+        _check_idle_step(model, system, v, dt)
     return v, a
+
+
+#: The most an idle motion may move a joint in one sample (rad, or the characteristic
+#: length for a translation) before its carried dynamics is refused as running away: 16
+#: turns between two samples follow nothing (a rod spinning about its own axis reaches
+#: 4.6 rad a sample in the tests; Robotiq's 2F-85 fingers pass 100 at 0.25 s on their way
+#: to 1e31 rad/s, then nan).
+IDLE_STEP_MAX = 100.0
+
+
+def _check_idle_step(model: ClosureModel, system, v: np.ndarray, dt: float) -> None:
+    """An :class:`InconsistentMotion` (``kind="idle"``) when the idle motions' velocity
+    carried by :func:`_carry_idle` is not finite or moves a joint by more than
+    :data:`IDLE_STEP_MAX` in one sample: the explicit steps no longer follow their own
+    dynamics (no spring nor damper is modelled; Robotiq's 2F-85 fingers under gravity),
+    and the rest of the motion would be numbers without meaning (the velocities grew to
+    1e31 rad/s, then nan, before this check)."""
+    idle = np.abs(system.idle).max(axis=1) > 1e-9 * np.abs(system.idle).max()
+    step = np.abs(v / model.velocity_units) * dt
+    if np.isfinite(step[idle]).all() and not (step[idle] > IDLE_STEP_MAX).any():
+        return
+    tree = model.tree
+    joints = tuple(dict.fromkeys(
+        tree.names[j] for j in range(1, tree.njoints)
+        for k in range(tree.joints[j].idx_v, tree.joints[j].idx_v + tree.joints[j].nv)
+        if idle[k]))
+    worst = float(np.nanmax(np.where(np.isfinite(step), step, np.inf)[idle]))
+    raise InconsistentMotion(
+        f"the idle motions ({', '.join(joints[:8])}{' …' if len(joints) > 8 else ''} move "
+        "with every actuator locked) move too fast for the samples to follow: one sample "
+        f"moves them by {'more than any bound' if not np.isfinite(worst) else f'{worst:.3g}'}"
+        f" (rad, or L for a translation; at most {IDLE_STEP_MAX:g}): their own dynamics, "
+        "followed without springs or dampers (a file's stiffness is not modelled), "
+        "diverges or is faster than the samples; actuate or lock those joints (a closures "
+        "file's name_mot, an MJCF actuator), or, for a fast but bounded motion, sample it "
+        "finer (--samples)", kind="idle", joints=joints)
 
 
 def _output_states(model: ClosureModel, motion, times, q0, gravity, tol) -> tuple:

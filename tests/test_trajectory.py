@@ -359,3 +359,24 @@ def test_pose_motion_and_coordinate_csv(tmp_path):
     cm, q0 = model("5bar_linkage")
     with pytest.raises(InputError, match=r"x, z are not independent .* moves in 2 dimensions"):
         tr.motion_states(cm, tr.OutputMotion(t, np.c_[t, t], ("x", "z")), t, q0)
+
+
+def test_idle_motions_that_run_away_are_refused_with_their_joints(capsys):
+    """Robotiq's 2F-85 (Menagerie; its spring links' stiffness not modelled): the fingers'
+    idle motions, followed by their own dynamics under gravity, run away (1e31 rad/s,
+    then nan and numpy's overflow warnings, before the check). `pkm-pin dynamics` now
+    stops at the first sample that moves them by more than IDLE_STEP_MAX, in one line
+    naming those joints; no numpy warning reaches the user (warnings are errors here)."""
+    import warnings
+
+    from pkm_pin.cli import main
+    from pkm_pin.trajectory import IDLE_STEP_MAX
+
+    path = Path(__file__).parent / "data" / "menagerie" / "robotiq_2f85" / "2f85.xml"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert main(["dynamics", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "the idle motions (right_coupler_joint, right_spring_link_joint" in err
+    assert f"at most {IDLE_STEP_MAX:g}" in err and "actuate or lock those joints" in err
