@@ -1466,17 +1466,37 @@ def _workspace_text(name: str, ws, files: list) -> str:
     if ws.fixed:
         out.append("fixed      " + ", ".join(f"{k}={v:g}" for k, v in ws.fixed.items()))
     for kind, v in ws.volumes.items():
-        s = ws.inscribed[kind]
+        shapes = _inscribed_words(ws.inscribed[kind], len(ws.coords))
         out.append(f"{kind:<18} volume {v.value:.6g} ± {v.error:.2g} {v.unit} ({v.cells} "
-                   f"cells); cube half side {s.cube:.4g}, cylinder r "
-                   f"{s.cylinder_radius:.4g} h/2 {s.cylinder_half_height:.4g} "
-                   f"(± {s.error:.2g})")
+                   f"cells){'; ' + shapes if shapes else ''}")
     if ws.counts["on_bounds"]:
         out.append(f"note       {ws.counts['on_bounds']} reachable cells on the box's faces: "
                    "the workspace extends beyond --range")
     out.append(f"time       {ws.timing['total']:.3g} s, {ws.timing['poses_per_s']:.0f} poses/s")
     out += [f"wrote      {path}" for path in files]
     return "\n".join(out)
+
+
+def _inscribed_words(s, k: int) -> str:
+    """The inscribed shapes of a workspace summary in words, by the number ``k`` of
+    coordinates (a cube, square or half length; a cylinder or disc), each left out where
+    it is not defined (coordinates of different units: nan); sizes below a billionth of
+    the resolution are 0 (rounding)."""
+    def size(x: float) -> str:
+        return f"{0.0 if abs(x) <= 1e-9 * s.error else x:.4g}"
+
+    parts = []
+    if np.isfinite(s.cube):
+        name = {3: "cube half side", 2: "square half side"}.get(k, "half length")
+        parts.append(f"{name} {size(s.cube)}")
+    if k == 3 and np.isfinite(s.cylinder_radius) and np.isfinite(s.cylinder_half_height):
+        parts.append(f"cylinder r {size(s.cylinder_radius)} h/2 "
+                     f"{size(s.cylinder_half_height)}")
+    elif k == 2 and np.isfinite(s.cylinder_radius):
+        parts.append(f"disc r {size(s.cylinder_radius)}")
+    if not parts:
+        return ""
+    return ", ".join(parts) + f" (± {s.error:.2g})"
 
 
 def _write_text(path: str, text: str) -> None:

@@ -383,6 +383,7 @@ def test_cli_writes_json_plots_and_view(tmp_path, capsys):
                  str(out), "--quiet"]) == 0
     text = capsys.readouterr().out
     assert "reachable" in text and "volume" in text
+    assert "disc r" in text and "cylinder" not in text and "nan" not in text
     for name in ("five.json", "five_workspace.png", "five.html"):
         assert (tmp_path / name).stat().st_size > 0
     assert main(["workspace", "delta", "--coords", "x", "y", "z", "--range", "-0.6", "0.6",
@@ -490,3 +491,20 @@ def test_a_general_workspace_slice_at_a_held_output_coordinate(tmp_path, capsys)
     assert main(["workspace", str(path), "--coords", "x", "y", "--at", "z=-0.7", "--n", "9",
                  "--kind", "reachable", "--quiet", "--out", str(tmp_path / "w")]) == 0
     assert "fixed      z=-0.7" in capsys.readouterr().out
+
+
+def test_summary_names_the_inscribed_shapes_that_apply():
+    """The workspace summary's shapes by coordinates: cube and cylinder (3), square and
+    disc (2), half length (1); a shape of coordinates in different units (nan) is left
+    out, never printed as nan; a size below a billionth of the resolution is 0."""
+    from pkm_pin.cli import _inscribed_words
+    from pkm_pin.workspace import Inscribed
+
+    def shapes(cube, r, h, k):
+        return _inscribed_words(Inscribed(np.zeros(k), cube, r, h, "z", 0.01), k)
+
+    assert shapes(0.2, 0.3, 0.1, 3) == "cube half side 0.2, cylinder r 0.3 h/2 0.1 (± 0.01)"
+    assert shapes(1.665e-16, 0.3, np.nan, 2) == "square half side 0, disc r 0.3 (± 0.01)"
+    assert shapes(np.nan, np.nan, np.nan, 2) == ""  # x in m, roll in rad
+    assert shapes(np.nan, 0.3, 0.1, 3) == "cylinder r 0.3 h/2 0.1 (± 0.01)"
+    assert shapes(0.05, 0.05, np.nan, 1) == "half length 0.05 (± 0.01)"
