@@ -688,7 +688,9 @@ class Linkage:
                  f"straight path to {np.round(targets, 6)}, the loops close up to "
                  f"{100 * path.t:.3g}% of the way (actuated {np.round(path.q_actuated, 6)}; "
                  f"{path.solves} solves), where the type II closeness index is "
-                 f"{at[1]:.3g} ({at[0]:.3g} at the guess)")
+                 f"{_number(at[1])} ({_number(at[0])} at the guess"
+                 + ("; undefined: an actuator exerts no wrench on the output, A has a zero "
+                    "row" if any(math.isnan(x) for x in at) else "") + ")")
         if path.t > 0.0 and path.t_fold <= min(1.0, path.t + FK_FOLD_REACH):
             path.fold = True
             fold = start + path.t_fold * (targets - start)
@@ -2057,6 +2059,12 @@ def kinematic_redundancy(independent: int, output_point: bool) -> int:
     it has no more (a redundancy the output's rank hides, a planar 4R arm's, is not
     counted: it would need the generic rank of the output twists)."""
     return max(int(independent) - (3 if output_point else 6), 0)
+
+
+def _number(x: float) -> str:
+    """An index in a sentence: ``.3g``, ``"undefined"`` where it is not a number, or
+    ``"infinite"``."""
+    return f"{x:.3g}" if math.isfinite(x) else ("undefined" if math.isnan(x) else "infinite")
 
 
 def _smaller(a: float, b: float) -> float:

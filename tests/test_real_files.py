@@ -381,3 +381,20 @@ def test_ik_all_of_a_continuum_says_so_without_nan():
     assert str(e) == "the output cannot reach the pose: the assemblies do not settle"
     assert "nan" not in str(AssemblyError("3", float("inf")))
     assert "relative pose error of 0.5" in str(AssemblyError("3", 0.5))
+
+
+def test_a_forward_kinematics_error_never_prints_nan(capsys):
+    """disney_like driven towards actuated values its home branch does not reach: the
+    continuation's sentence gives the type II closeness index at the stop and at the
+    guess, where an actuator exerts no wrench on the output (class III at home): it says
+    'undefined' and why, never 'nan'."""
+    import re
+
+    from pkm_pin.cli import main
+
+    path = Path(__file__).parent / "data" / "gepetto" / "disney_like" / "robot.urdf"
+    assert main(["analyze", str(path), "--q", "2.0", "-1.25", "0.4", "1.6", "0.45",
+                 "-0.1"]) == 2
+    err = capsys.readouterr().err
+    assert "undefined at the guess; undefined: an actuator exerts no wrench" in err
+    assert not re.search(r"\bnan\b", err)
