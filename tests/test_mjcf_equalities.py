@@ -364,3 +364,35 @@ def test_limits_of_a_joint_with_a_ref_are_its_range(tmp_path):
     data = tree.createData()
     pin.framesForwardKinematics(tree, data, model.reference)
     assert np.allclose(data.oMf[tree.getFrameId("t")].translation, [0.1, 0.05, 0.0])
+
+
+SPRING_COUPLED = """<mujoco model="spring_coupled">
+  <worldbody>
+    <body name="a"><joint name="j1" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/>
+      <body name="b" pos="0.1 0 0"><joint name="j2" axis="0 0 1" stiffness="1"/>
+        <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/>
+        <body name="c" pos="0.1 0 0"><joint name="j3" axis="0 0 1" stiffness="1"/>
+          <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/>
+          <body name="d" pos="0.1 0 0"><joint name="j4" axis="0 0 1" stiffness="1"/>
+            <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/></body></body></body>
+    </body>
+  </worldbody>
+  <equality><joint joint1="j2" joint2="j1" polycoef="0 1 0 0 0"/>
+    <joint joint1="j3" joint2="j2" polycoef="0 0.5 0 0 0"/></equality>
+  <actuator><position joint="j1"/></actuator>
+</mujoco>
+"""
+
+
+def test_a_spring_joint_coupled_to_a_motor_is_not_a_free_spring(tmp_path):
+    """Springs tied to the motor by joint equalities, directly (j2) or through another
+    (j3), move with it: not listed as springs (Menagerie's stretch_3 arm joints were);
+    j4, free, is, and the analysis agrees: one idle motion, body d's spin about j4's
+    axis (through (0.3, 0, 0) at home)."""
+    model = read_mjcf(_write(tmp_path, "s.xml", SPRING_COUPLED))
+    assert model.springs == ("j4",)
+    assert any(n.startswith("j4: a spring") for n in model.notes)
+    mob = pkm_pin.load_mechanism(tmp_path / "s.xml").mobility()
+    assert mob.idle_dof == 1
+    assert mob.idle_motions[0].startswith("d spins about the line through (0.3, 0, 0)")

@@ -131,9 +131,10 @@ def read_mjcf(path: str | os.PathLike, *, output: str | None = None) -> ClosureM
                   "mechanism analysed relative to it" for body in held) + notes + drive_notes
     springs = _springs(root, tree, actuated)
     if springs:
-        notes += (f"{', '.join(springs)}: a spring (stiffness) and no actuator in the file: "
-                  "they move with every motor locked (idle motions), and the default output "
-                  "is chosen as if they were held",)
+        notes += (f"{', '.join(springs)}: a spring (stiffness) and no actuator in the file "
+                  "(pkm_pin models no spring): where they move with every motor locked, "
+                  "those are idle motions, and the default output is chosen as if they "
+                  "were held",)
     return ClosureModel(tree, closures, actuated, out, name=root.get("model", path.stem),
                         reference=reference, actuator_matches=matches, notes=notes,
                         output_named=named is not None, springs=springs)
@@ -478,8 +479,30 @@ def _springs(root: ET.Element, tree: pin.Model, actuated: tuple) -> tuple[str, .
             continue
         if k > 0 and joint.get("name") and joint.get("name") not in actuated:
             stiff.add(joint.get("name"))
+    driven = _coupled_to(root, set(actuated))
     return tuple(tree.names[j] for j in range(1, tree.njoints)
-                 if tree.names[j] in stiff and tree.joints[j].nv == 1)
+                 if tree.names[j] in stiff - driven and tree.joints[j].nv == 1)
+
+
+def _coupled_to(root: ET.Element, joints: set) -> set:
+    """The joints that the file's active ``<equality><joint>`` couplings tie to any of
+    ``joints``, directly or through other couplings (those included): a spring joint
+    among them moves with its motor, not with the motors locked."""
+    edges: dict = {}
+    for equality in root.findall("equality"):
+        for el in equality.findall("joint"):
+            a, b = el.get("joint1"), el.get("joint2")
+            if el.get("active", "true").lower() == "false" or not a or not b:
+                continue
+            edges.setdefault(a, set()).add(b)
+            edges.setdefault(b, set()).add(a)
+    seen, stack = set(joints), list(joints)
+    while stack:
+        for other in edges.get(stack.pop(), ()):
+            if other not in seen:
+                seen.add(other)
+                stack.append(other)
+    return seen
 
 
 def _build_tree(path: Path, root: ET.Element, rewritten: bool = False) -> pin.Model:
