@@ -170,8 +170,14 @@ class LoopClosureError(AssemblyError):
         self.q = None if q is None else np.array(q, dtype=float)
         self.diagnosis = diagnosis
         self.continuation = None
-        message = (f"loop {loop!r} does not close: the best configuration found within the "
-                   f"joint limits leaves a relative residual of {self.residual:.3g}")
+        if loop == "output pose":  # the output's targets, not a closure
+            head = "the output cannot reach the pose"
+        elif loop == "actuated targets":
+            head = "the actuated joints cannot all take their values"
+        else:
+            head = f"loop {loop!r} does not close"
+        message = (f"{head}: the best configuration found within the joint limits leaves "
+                   f"a relative residual of {self.residual:.3g}")
         message += f" ({detail})" if detail else ""
         words = "" if diagnosis is None else diagnosis.words()
         self.args = ((f"{cause}; " if cause else "") + message
@@ -797,6 +803,10 @@ class Linkage:
         cause = self._fold_words(path, targets)
         if path is not None and path.fold and found is not None:
             found = replace(found, hint="")  # not a wrong length: the values are beyond reach
+        if found is not None and not found.gaps and (
+                not norms or max(norms) <= sol.actuated or max(norms) < sol.pose):
+            # every loop closes: the targets are out of reach, not the closures wrong
+            found = replace(found, hint="")
         if norms and max(norms) > sol.actuated and max(norms) >= sol.pose:
             k = int(np.argmax(norms))
             error = LoopClosureError(model.closures[k].name or f"closure {k}", norms[k],

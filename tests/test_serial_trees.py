@@ -110,3 +110,21 @@ def test_a_urdf_read_without_closures_is_its_tree(tmp_path, capsys):
                                atol=1e-12)
     assert main(["analyze", str(urdf), "--closures", "none", "--q", "0.4", "0.9"]) == 0
     assert "read as a tree without closures" in capsys.readouterr().out
+
+
+def test_an_unreachable_pose_is_said_so_not_a_loop_that_does_not_close(tmp_path):
+    """The planar 2R (reach 0.55 m) asked for its hand 3 m along y: the error says the
+    output cannot reach the pose, with its residual, and gives no hint about closure
+    frames (it has none: every loop closes)."""
+    import pinocchio as pin
+
+    from pkm_pin.errors import AssemblyError
+
+    urdf = tmp_path / "planar2r.urdf"
+    urdf.write_text(PLANAR_2R)
+    mech = load_mechanism(urdf, closures="none")
+    with pytest.raises(AssemblyError) as info:
+        mech.inverse_kinematics(pin.SE3(np.eye(3), np.array([0.0, 3.0, 0.0])))
+    text = str(info.value)
+    assert text.startswith("the output cannot reach the pose: the best configuration")
+    assert "closure frames" not in text and "does not close" not in text
