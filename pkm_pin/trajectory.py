@@ -201,7 +201,8 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
                    ) -> SineMotion:
     """The default motion about the assembled ``q0`` (module docstring): one period of a
     sine per actuator, phases ``2π k / n``, amplitude 0.1 rad or 0.1 L, at most 10 % of
-    the joint's range and half the distance to its nearer limit."""
+    the joint's range and half the distance to its nearer limit (0: an actuator whose
+    home is at a limit stays there)."""
     duration = float(duration)
     if not (np.isfinite(duration) and duration > 0):
         raise InputError(f"the duration must be a positive number of seconds, got {duration}")
@@ -218,7 +219,9 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
             if np.isfinite(lo[i]) and np.isfinite(up[i]):
                 A = min(A, DEFAULT_RANGE_FRACTION * (up[i] - lo[i]))
             margin = min(q0[i] - lo[i], up[i] - q0[i])
-            if 0 < margin < np.inf:
+            if margin <= 0:  # home at (or beyond) a limit: a sine about it leaves the range
+                A = 0.0
+            elif margin < np.inf:
                 A = min(A, DEFAULT_MARGIN_FRACTION * margin)
         amp[k] = A
     n = len(amp)

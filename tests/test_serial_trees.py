@@ -128,3 +128,24 @@ def test_an_unreachable_pose_is_said_so_not_a_loop_that_does_not_close(tmp_path)
     text = str(info.value)
     assert text.startswith("the output cannot reach the pose: the best configuration")
     assert "closure frames" not in text and "does not close" not in text
+
+
+def test_a_tree_whose_zero_is_outside_a_joints_range_starts_inside_it(tmp_path):
+    """A joint whose range excludes 0 (Franka Panda's joint 4: [−3.07, −0.07]): read
+    without closures, the reference puts it at the middle of its range (a note says
+    which), so home respects the limits and the default dynamics motion runs; an
+    actuator whose home sits at a limit stays there in the default motion."""
+    from pkm_pin.trajectory import default_motion
+
+    urdf = tmp_path / "planar2r.urdf"
+    urdf.write_text(PLANAR_2R.replace('<limit lower="-3" upper="3" effort="1" velocity="1"/>'
+                                      '</joint>\n  <joint name="wrist_fixed"',
+                                      '<limit lower="-3.07" upper="-0.07" effort="1" '
+                                      'velocity="1"/></joint>\n  <joint name="wrist_fixed"'))
+    mech = load_mechanism(urdf, closures="none")
+    np.testing.assert_allclose(mech.model.reference, [0.0, -1.57], atol=1e-15)
+    assert any("elbow at the middle of its range" in n for n in mech.model.notes)
+    motion = default_motion(mech.model, mech.home_assembly.q)
+    assert motion.amplitude.tolist() == pytest.approx([0.1, 0.1])
+    at_limit = default_motion(mech.model, np.array([0.0, -0.07]))
+    assert at_limit.amplitude[1] == 0.0 and at_limit.amplitude[0] > 0

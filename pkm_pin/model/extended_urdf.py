@@ -77,6 +77,7 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 import pinocchio as pin
 
 from ..errors import ClosureFileError, UrdfError, _clip, _cut, _is_file, _listing
@@ -228,8 +229,31 @@ def _read_tree(urdf: Path, output: str | None, free_flyer: bool) -> ClosureModel
     note = ("--closures none: read as a tree without closures, every movable joint "
             "actuated; a closures file (closed_loop, type, name_mot; --closures FILE) "
             "closes loops and chooses the actuated joints")
+    reference, moved = _inside_limits(tree)
+    if moved:
+        note += (f"; the reference configuration has {', '.join(moved[:6])}"
+                 f"{' …' if len(moved) > 6 else ''} at the middle of its range (0 is "
+                 "outside it)")
     return ClosureModel(tree, (), actuated, out, name=tree.name, actuator_matches=matches,
-                        output_named=output is not None, notes=notes + (note,))
+                        output_named=output is not None, notes=notes + (note,),
+                        reference=reference)
+
+
+def _inside_limits(tree: pin.Model) -> tuple[np.ndarray, list[str]]:
+    """Pinocchio's neutral configuration with each one-coordinate joint whose neutral
+    value lies outside its finite limits (Franka Panda's joint 4: [−3.07, −0.07]) moved
+    to the middle of its range, and the names of those joints."""
+    q = pin.neutral(tree)
+    lo, up = tree.lowerPositionLimit, tree.upperPositionLimit
+    moved = []
+    for j in range(1, tree.njoints):
+        joint = tree.joints[j]
+        i = joint.idx_q
+        if joint.nq == 1 and abs(lo[i]) < 1e300 and abs(up[i]) < 1e300 and lo[i] <= up[i] \
+                and not lo[i] <= q[i] <= up[i]:
+            q[i] = 0.5 * (lo[i] + up[i])
+            moved.append(tree.names[j])
+    return q, moved
 
 
 # ----------------------------------------------------------------------- closures file
