@@ -554,6 +554,11 @@ class TreeAnalysis(Analysis):
     #: motion (:func:`pkm_pin.linkage.kinematic_redundancy`); where positive, the type I
     #: and inverse indices are 0 and the class I at every configuration.
     redundancy: int = 0
+    #: Under-actuation: independent output motions with every actuated joint locked at a
+    #: configuration whose ranks are the generic ones
+    #: (:func:`pkm_pin.linkage.uncontrolled_output`; 0 where class II does not hold or
+    #: the ranks were not compared); where positive, class II holds nearby too.
+    underactuation: int = 0
 
     def __init__(self, assembly, **options):
         done = assembly.mechanism.analyze(assembly, **options)

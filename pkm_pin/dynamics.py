@@ -614,8 +614,10 @@ def _check_free(model: ClosureModel, kin: TreeKinematics, Vt: np.ndarray, sv: np
             raise SingularityError(
                 f"{model.name or 'the model'}: with every actuator still the output can "
                 f"move: a type II singularity (at or within {CLOSENESS_SINGULAR_TOL:g}), "
-                f"or fewer independent actuators ({len(model.actuated)}) than the output's "
-                "degrees of freedom; its motion is not determined by the actuated rates",
+                f"or an under-actuated mechanism (fewer independent actuators "
+                f"({len(model.actuated)}) than the output's degrees of freedom: springs or "
+                "passive joints without a motor, at every pose; `pkm-pin analyze` says "
+                "which); its motion is not determined by the actuated rates",
                 kind="type II", index=float(index))
 
 

@@ -2048,6 +2048,9 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
     singularity = classify(_smaller(core.type_I, core.inverse),
                            _smaller(core.type_II, core.forward), singular_tol)
     redundancy = kinematic_redundancy(len(mob.independent_actuators), model.output_point)
+    underactuation = 0  # decided where class II holds at ranks that are the generic ones
+    if mob.singular is False and not _smaller(core.type_II, core.forward) >= singular_tol:
+        underactuation = uncontrolled_output(core.ns, core.p, model.length, rtol)
     d = core.d
     csing = None if generic is None else bool(mob.dof != generic.dof
                                               or d != generic.output_dof)
@@ -2058,7 +2061,26 @@ def _analyse(link: Linkage, q: np.ndarray, about: str, generic, rtol: float,
         reference_point=core.p, length=model.length, singular_tol=singular_tol,
         _maps=(core.Xr, core.Yr, core.M, core.ns.units, list(model.actuated_v)),
         actuated_prismatic=core.translating, mechanism=link, rtol=rtol, about=about,
-        redundancy=redundancy)
+        redundancy=redundancy, underactuation=underactuation)
+
+
+def uncontrolled_output(ns: NullSpace, p: np.ndarray, L: float, rtol: float) -> int:
+    """How many independent motions of the output the mechanism allows with every
+    actuated joint locked (rank of the homogenised output twists, about ``p``, over the
+    allowed motions that leave the actuated rates zero; relative to the output twists'
+    largest singular value). At a configuration whose ranks are the generic ones
+    (:attr:`Mobility.singular` False) these exist at every configuration nearby: an
+    under-actuated mechanism (springs, passive joints without a motor), whose class II
+    marks that, not a singular pose."""
+    rank_x, _, _, Vt = svd_rank(ns.X, rtol)
+    if rank_x == ns.X.shape[1]:
+        return 0
+    Yh = homogenised_about(ns.Y_world.T, p, L).T
+    scale = np.linalg.norm(Yh, 2)
+    if not scale > 0:
+        return 0
+    sv = np.linalg.svd(Yh @ Vt[rank_x:].T, compute_uv=False)
+    return int(np.sum(sv > rtol * scale))
 
 
 def kinematic_redundancy(independent: int, output_point: bool) -> int:

@@ -428,6 +428,7 @@ def linkage_report_data(link, assembly, analysis=None, plots: Sequence[str | Pat
         "output_dof": an.output_dof,
         "motion_type": an.motion_type,
         "redundancy": int(getattr(an, "redundancy", 0)),
+        "underactuation": int(getattr(an, "underactuation", 0)),
         "platform_twists": [b.screw.tolist() for b in motion],
         "motion_basis": [b.as_dict() for b in motion],
         "constraint_basis": [b.as_dict(wrench=True) for b in constraints],
@@ -767,6 +768,14 @@ def text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] | None = Non
                 "held) at every configuration, so the type I and inverse indices are 0 and "
                 "the class I everywhere: it marks the redundancy, not a singular pose "
                 "(analyse one output per sub-mechanism, or fewer actuators, to find those)"]
+    if r.get("underactuation"):
+        n = r["underactuation"]
+        out += [f"under-actuated     the output moves with every actuator locked ({n} "
+                f"direction{'s' * (n > 1)}) here and at every configuration nearby (the "
+                "ranks are the generic ones): springs or passive joints without a motor "
+                "(see the idle motions); the forward and type II indices are 0 and the "
+                "class II there: it marks the under-actuation, not a singular pose (actuate "
+                "or lock those joints, or choose an output they do not move)"]
     out += submechanism_lines(r)
     out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
             for a, b in r.get("duplicate_closures", [])]

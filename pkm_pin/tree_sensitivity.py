@@ -284,7 +284,10 @@ def _check_determined(model: ClosureModel, Jo: np.ndarray, N: np.ndarray, p: np.
         raise SingularityError(
             f"the output of {model.name or 'the linkage'} moves with the actuated joints "
             f"held (a passive motion the closures allow moves it by {worst:.3g}): its error "
-            "is undetermined here (type II singularity)", "sensitivity", worst)
+            "is undetermined here: a type II singularity, or an under-actuated mechanism "
+            "(springs or passive joints without a motor, at every pose: `pkm-pin analyze` "
+            "says which); choose an output they do not move, or actuate or lock them",
+            "sensitivity", worst)
 
 
 def perturb(model: ClosureModel, errors) -> ClosureModel:

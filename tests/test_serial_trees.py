@@ -149,3 +149,34 @@ def test_a_tree_whose_zero_is_outside_a_joints_range_starts_inside_it(tmp_path):
     assert motion.amplitude.tolist() == pytest.approx([0.1, 0.1])
     at_limit = default_motion(mech.model, np.array([0.0, -0.07]))
     assert at_limit.amplitude[1] == 0.0 and at_limit.amplitude[0] > 0
+
+
+def test_an_arm_with_a_passive_joint_is_under_actuated_not_singular(arm, tmp_path, capsys):
+    """The 6R arm plus a seventh revolute without a motor, its last body as the output
+    (the default output is the sixth, which the motors move): with the six motors locked
+    the output still turns about j7's axis, at this configuration and every one nearby
+    (the ranks are generic): under-actuation 1, which the report tells from a singular
+    pose; class II holds (forward index 0). The fully actuated 6R arm has none."""
+    path = tmp_path / "passive.xml"
+    path.write_text(arm_mjcf(7).replace('<motor joint="j7"/>', ""))
+    assert load_mechanism(path).output == "l6"  # the default: the body the motors move
+    mech = load_mechanism(path, output="l7")
+    an = mech.analyze(mech.assemble(Q7))
+    assert mech.actuated == ("j1", "j2", "j3", "j4", "j5", "j6")
+    assert an.mobility.singular is False and an.idle_dof == 1
+    assert an.underactuation == 1 and an.singularity in ("II", "III")
+    assert an.indices["forward"] < 1e-9
+    assert main(["analyze", str(path), "--output", "l7"]) == 0
+    assert "under-actuated     the output moves with every actuator locked (1 direction)" \
+        in capsys.readouterr().out
+    six = load_mechanism(arm(6))
+    assert six.analyze(six.assemble(Q7[:6])).underactuation == 0
+
+
+def test_gepetto_disney_like_is_under_actuated_at_home():
+    """Gepetto's disney_like (its hip group spins with every motor locked, class III at
+    home in the corpus table): under-actuated, one output direction."""
+    path = Path(__file__).parent / "data" / "gepetto" / "disney_like" / "robot.urdf"
+    mech = load_mechanism(path)
+    an = mech.analyze(mech.home_assembly)
+    assert an.singularity == "III" and an.underactuation == 1
