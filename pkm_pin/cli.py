@@ -1452,7 +1452,9 @@ def _workspace_part(args, mech) -> tuple:
         return mech, None
     words = "; ".join(f"{k}: {s.name}, output {s.output}" for k, s in enumerate(subs))
     return mech, (f"note       {len(subs)} independent sub-mechanisms ({words}): this is the "
-                  f"workspace of the one output {mech.output!r}; --sub K studies one with "
+                  f"workspace of the one output {mech.output!r}, which the others' motors "
+                  "do not move (type I at every pose: the singularity-free workspace is "
+                  "empty for that reason, not for singular poses); --sub K studies one with "
                   "its own output")
 
 

@@ -446,6 +446,7 @@ def test_workspace_of_one_submechanism(tmp_path, capsys):
                  "--out", str(tmp_path / "whole")]) == 0
     text = capsys.readouterr().out
     assert "2 independent sub-mechanisms" in text and "--sub K" in text
+    assert "type I at every pose: the singularity-free workspace is empty for that" in text
     one, whole = (np.load(tmp_path / f"{n}.npz") for n in ("one", "whole"))
     assert np.array_equal(one["mask_reachable"], whole["mask_reachable"])
     assert np.allclose(one["points"], whole["points"], atol=1e-12)
