@@ -396,3 +396,34 @@ def test_a_spring_joint_coupled_to_a_motor_is_not_a_free_spring(tmp_path):
     mob = pkm_pin.load_mechanism(tmp_path / "s.xml").mobility()
     assert mob.idle_dof == 1
     assert mob.idle_motions[0].startswith("d spins about the line through (0.3, 0, 0)")
+
+
+ROLLING = """<mujoco model="rolling_joint">
+  <worldbody>
+    <body name="p1">
+      <joint name="a" axis="0 0 1" pos="-0.013 0 0"/>
+      <joint name="b" axis="0 0 1"/>
+      <geom type="box" size="0.01 0.01 0.005"/>
+    </body>
+  </worldbody>
+  {equality}
+  <actuator><motor joint="{motor}"/></actuator>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("equality,motor,where", [
+    ('<equality><joint joint1="a" joint2="b"/></equality>', "b", "equality/joint[0] joint1"),
+    ("", "b", "actuator/motor[0]")])
+def test_a_joint_merged_into_a_composite_names_the_fix(tmp_path, equality, motor, where):
+    """Two hinges in one body (IIT SoftFoot's rolling contacts): Pinocchio's MJCF parser
+    makes them one composite joint, so a coupling or an actuator on either cannot be
+    read; the error names the composite and the fix (one body per joint)."""
+    from pkm_pin.errors import ClosureFileError
+
+    path = _write(tmp_path, "r.xml", ROLLING.format(equality=equality, motor=motor))
+    with pytest.raises(ClosureFileError) as info:
+        read_mjcf(path)
+    assert info.value.where == where
+    assert "one composite joint ('Composite_a')" in str(info.value)
+    assert "give each of that body's joints its own body" in str(info.value)

@@ -616,7 +616,8 @@ def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray,
                 continue
             name = el.get("name") or f"{el.tag}{i}"
             if el.tag == "joint":
-                out.append(_coupling(label, where, el, name, tree, q))
+                out.append(_coupling(label, where, el, name, tree, q,
+                                     _composites(root, tree)))
             else:
                 out.append(_closure(label, where, el, name, tree, data, renamed))
     return tuple(out), tuple(notes)
@@ -627,7 +628,7 @@ _POLYCOEF = (0.0, 1.0, 0.0, 0.0, 0.0)
 
 
 def _coupling(label: str, where: str, el: ET.Element, name: str, tree: pin.Model,
-              q: np.ndarray) -> Closure:
+              q: np.ndarray, composites: dict | None = None) -> Closure:
     """The coupling closure of one ``<joint>`` equality. MuJoCo's meaning: ``y − y₀ =
     c₀ + c₁ (x − x₀) + … + c₄ (x − x₀)⁴``, ``y`` joint1, ``x`` joint2, ``y₀``, ``x₀``
     their ``qpos0`` (without joint2, ``y − y₀ = c₀``); linear (``c₂ = c₃ = c₄ = 0``),
@@ -642,8 +643,8 @@ def _coupling(label: str, where: str, el: ET.Element, name: str, tree: pin.Model
         raise ClosureFileError(label, f"{where} polycoef", f"must be at most 5 finite "
                                f"numbers, got {_cut(text)}")
     coef = np.array(given + list(_POLYCOEF[len(given):]))
-    j1 = _coupled_joint(label, f"{where} joint1", el.get("joint1"), tree)
-    j2 = _coupled_joint(label, f"{where} joint2", el.get("joint2"), tree) \
+    j1 = _coupled_joint(label, f"{where} joint1", el.get("joint1"), tree, composites)
+    j2 = _coupled_joint(label, f"{where} joint2", el.get("joint2"), tree, composites) \
         if el.get("joint2") is not None else 0
     if j2 and np.any(coef[2:] != 0):
         degree = int(np.flatnonzero(coef)[-1])
@@ -658,18 +659,44 @@ def _coupling(label: str, where: str, el: ET.Element, name: str, tree: pin.Model
                    name=name, coef=(float(coef[0] + y0 - c1 * x0), c1))
 
 
-def _coupled_joint(label: str, where: str, joint: str | None, tree: pin.Model) -> int:
+def _coupled_joint(label: str, where: str, joint: str | None, tree: pin.Model,
+                   composites: dict | None = None) -> int:
     """The tree's joint ``joint`` of a ``<joint>`` equality: one coordinate (hinge or
-    slide)."""
+    slide). ``composites``: :func:`_composites`."""
     if joint is None:
         raise ClosureFileError(label, where, "is missing")
     single = [tree.names[j] for j in range(1, tree.njoints)
               if tree.joints[j].nq == 1 and tree.joints[j].nv == 1]
     if joint not in single:
-        raise ClosureFileError(label, where, f"{_cut(joint)} is not a hinge or slide joint "
-                               "of Pinocchio's model (a body with several joints is one "
-                               f"composite joint); such joints: {_listing(single)}")
+        raise ClosureFileError(label, where, _composite_words(composites or {}, joint) or (
+            f"{_cut(joint)} is not a hinge or slide joint of Pinocchio's model; such "
+            f"joints: {_listing(single)}"))
     return tree.getJointId(joint)
+
+
+def _composites(root: ET.Element, tree: pin.Model) -> dict:
+    """``{joint: composite}``: the file's joints that Pinocchio's MJCF parser merged
+    into a composite joint (the joints of one body with several, MuJoCo's way of writing
+    a rolling contact or a planar base), with the composite's name in the tree
+    (``Composite_`` + the body's first joint)."""
+    out = {}
+    for body in root.iter("body"):
+        names = [j.get("name") for j in body.findall("joint") if j.get("name")]
+        if len(names) > 1 and tree.existJointName(f"Composite_{names[0]}"):
+            out.update({n: f"Composite_{names[0]}" for n in names})
+    return out
+
+
+def _composite_words(composites: dict, joint: str) -> str:
+    """Why ``joint`` of the file is no joint of the tree when it was merged into a
+    composite joint (:func:`_composites`), with the fix; ``""`` otherwise."""
+    if joint not in composites:
+        return ""
+    return (f"{_cut(joint)} is one of several joints of one body, which Pinocchio's MJCF "
+            f"parser merges into one composite joint ({_cut(composites[joint])}): an "
+            "actuator or a joint equality needs a joint of its own; give each of that "
+            "body's joints its own body (massless ones nested in order, the last with the "
+            "geometry)")
 
 
 def _joint_frame(tree: pin.Model, j: int) -> str:
@@ -769,9 +796,10 @@ def _actuated(label: str, root: ET.Element, tree: pin.Model, closures: tuple
                 raise ClosureFileError(label, where, f"drives {how or 'no joint'}; pkm_pin "
                                        "reads actuators on joints and on fixed tendons")
             if joint not in movable:
-                raise ClosureFileError(label, where, f"joint {_cut(joint)} is not a joint of "
-                                       f"Pinocchio's model (a body with several joints is "
-                                       f"one composite joint); joints: {_listing(movable)}")
+                raise ClosureFileError(label, where, _composite_words(
+                    _composites(root, tree), joint) or (
+                    f"joint {_cut(joint)} is not a joint of Pinocchio's model; joints: "
+                    f"{_listing(movable)}"))
             matches.append((el.get("name") or f"actuator/{el.tag}[{i}]", (joint,)))
             if joint not in out:
                 out.append(joint)
