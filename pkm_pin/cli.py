@@ -26,7 +26,8 @@ General linkages (:class:`~pkm_pin.linkage.Linkage`: an Extended URDF ``.urdf`` 
 closures file, an MJCF ``.xml`` / ``.mjcf``, or a ``.toml`` whose legs meet at a pin) work
 with every command; ``--output FRAME`` chooses the frame whose motion is analysed,
 ``--point`` / ``--body`` analyse its origin as a point or the frame as a body,
-``--closures FILE`` names the closures file of a URDF. ``analyze``, ``check`` and
+``--closures FILE`` names the closures file of a URDF (``--closures none``: its tree
+without closures, every movable joint actuated: a serial arm). ``analyze``, ``check`` and
 ``view`` assemble from the file's reference configuration (``--q``: the actuated values,
 forward kinematics first; ``--pose``: the output pose, inverse kinematics); ``map``
 sweeps two actuated coordinates (``--actuated NAME NAME``, ``--range A B C D``) in a snake
@@ -1554,7 +1555,9 @@ def _linkage_options(p, q: bool = False) -> None:
     how.add_argument("--body", dest="point", action="store_const", const=False,
                      help="analyse the output frame as a body")
     g.add_argument("--closures", metavar="FILE",
-                   help="closures file (.yaml / .toml) of a .urdf (default: found beside it)")
+                   help="closures file (.yaml / .toml) of a .urdf (default: found beside it); "
+                   "'none': the URDF's tree without closures, every movable joint actuated "
+                   "(a serial arm)")
     g.add_argument("--backend", choices=("legs", "general"),
                    help="legs: the per-leg screw engine, also for a .urdf/.xml in which a "
                    "base-legs-platform machine is detected (same numbers as TOML legs); "
