@@ -35,7 +35,7 @@ import numpy as np
 import pinocchio as pin
 
 from .solve import solve_tree, tree_limits
-from .tolerances import CLOSURE_TOL, JOINT_LIMIT_SLACK
+from .tolerances import ASSEMBLY_CHECK_RTOL, CLOSURE_TOL, JOINT_LIMIT_SLACK
 
 __all__ = ["ANGLE_CLOSED", "GAP_SHARE", "Diagnosis", "Gap", "LimitHit", "closure_gaps", "diagnose",
            "loop_joints"]
@@ -230,3 +230,55 @@ def diagnose(model, q, *, tol: float = CLOSURE_TOL, lift_limits: bool = True,
     closes = sol is not None
     return Diagnosis(gaps, tuple(hits), closes, _hint(gaps, closes),
                      tuple(getattr(model, "notes", ())))
+
+
+def reconcile(model, tol: float = CLOSURE_TOL):
+    """``model``, or a copy whose closures close exactly where the file's values leave
+    redundant closures inconsistent by rounding, with a note saying so.
+
+    A file prints its closures' points to some digits (Menagerie's ToddlerBot: two
+    site-form ``connect`` per neck loop, eight digits): where closures are redundant
+    (two points standing for a hinge), those digits can leave them inconsistent, a few
+    nanometres that no joint closes, and no configuration then closes to ``tol``.
+    Decided from the reference: when the closure solver stops at a residual between
+    ``tol`` and :data:`~pkm_pin.tolerances.ASSEMBLY_CHECK_RTOL` (relative to the
+    length) where its gradient ``J_cᵀ r`` vanishes (the least-squares closure: the
+    residual no joint motion reduces), each open closure's ``C_b`` is moved onto its
+    ``C_a`` there (a point closure's point; a weld's or revolute's frame) and that
+    configuration becomes the reference. Anything else (a closure that closes, or one
+    farther open: a wrong file) is left to the assembly and its diagnosis."""
+    if not any(c.kind != "coupling" for c in model.closures):
+        return model
+    sol = solve_tree(model, model.reference, tol=tol, max_iter=200)
+    if sol.converged or not sol.closure <= ASSEMBLY_CHECK_RTOL or sol.closure <= tol:
+        return model
+    kin = model.kinematics(sol.q)
+    H = kin.closure_jacobian * model.velocity_units
+    r = kin.residual
+    if np.linalg.norm(H.T @ r) > 1e-6 * np.linalg.norm(H, 2) * np.linalg.norm(r):
+        return model  # not the least-squares closure: a solver's failure, not rounding
+    placements = kin.frame_placements
+    closures, moved, worst = [], [], 0.0
+    for c, rows in zip(model.closures, model.closure_slices()):
+        gap = float(np.linalg.norm(r[rows])) if c.kind != "coupling" else 0.0
+        if gap <= tol:
+            closures.append(c)
+            continue
+        oMa = placements[model.frame_id(c.frame_a)] * c.placement_a
+        oMfb = placements[model.frame_id(c.frame_b)]
+        if c.kind == "point":
+            new = pin.SE3(c.placement_b.rotation, oMfb.actInv(oMa.translation))
+        else:
+            new = oMfb.actInv(oMa)
+        worst = max(worst, float(np.linalg.norm((oMfb * c.placement_b).translation
+                                                - oMa.translation)))
+        closures.append(replace(c, placement_b=new))
+        moved.append(c.name)
+    many = len(moved) > 1
+    note = (f"closure{'s' * many} {', '.join(moved[:6])}{' …' if len(moved) > 6 else ''}: "
+            f"{'their' if many else 'its'} second frame moved onto the first by at most "
+            f"{worst:.3g} m (relative residual {sol.closure:.2g}): the file's values leave "
+            "redundant closures inconsistent by rounding, which no joint closes; the "
+            "reference is their least-squares closure")
+    return replace(model, closures=tuple(closures), reference=sol.q,
+                   notes=tuple(model.notes) + (note,))

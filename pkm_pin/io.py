@@ -212,6 +212,7 @@ def _linkage_file(path: Path, suffix: str, closures, output, point):
     mechanism exists to move (:func:`pkm_pin.output_choice.designer_output`: at the
     assembly from the reference, kept as :attr:`Linkage.home_assembly`; the readers'
     default when it does not assemble)."""
+    from .closure_gaps import reconcile
     from .model import read_extended_urdf, read_mjcf
     from .output_choice import designer_output
 
@@ -224,7 +225,7 @@ def _linkage_file(path: Path, suffix: str, closures, output, point):
                 raise MechanismFileError(label, "", "an MJCF file holds its closures "
                                          "(<equality>): closures= is for a .urdf")
             model = read_mjcf(path, output=output)
-        link = Linkage(model, point=point)
+        link = Linkage(reconcile(model), point=point)
         return link if model.output_named else designer_output(link)
     except MechanismFileError:
         raise

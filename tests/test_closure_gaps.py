@@ -216,3 +216,62 @@ def test_errors_survive_pickling():
         b = pickle.loads(pickle.dumps(e))
         assert type(b) is type(e) and str(b) == str(e) and b.args == e.args
     assert pickle.loads(pickle.dumps(AssemblyError("leg 2", 0.25))).residual == 0.25
+
+
+PAIR = """<mujoco model="parallelogram_pair">
+  <worldbody>
+    <body name="crank1">
+      <joint name="q1" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.005"/>
+      <body name="coupler" pos="0 0 0.1">
+        <joint name="q2" axis="0 1 0"/>
+        <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.005"/>
+        <site name="s1" pos="0.1 0 0"/>
+        <site name="s1z" pos="0.1 0.01 0"/>
+      </body>
+    </body>
+    <body name="crank2" pos="0.1 0 0">
+      <joint name="q3" axis="0 1 0"/>
+      <geom type="capsule" fromto="0 0 0 0 0 0.1" size="0.005"/>
+      <site name="s2" pos="0 0 0.1"/>
+      <site name="s2z" pos="0 {dy} 0.1"/>
+    </body>
+  </worldbody>
+  <equality><connect site1="s1" site2="s2"/><connect site1="s1z" site2="s2z"/></equality>
+  <actuator><position joint="q1"/></actuator>
+</mujoco>
+"""
+
+
+@pytest.mark.parametrize("gap", [0.0, 5e-10, 1e-6])
+def test_redundant_closures_off_by_rounding_are_reconciled(tmp_path, gap):
+    """A parallelogram whose coupler–crank joint is written as two site-form connects
+    (two points on the hinge's axis, as Menagerie's ToddlerBot neck): the second pair of
+    sites `gap` apart along the axis, which no joint closes. Exact: loaded as is. 5e-10 m
+    (printed digits, relative 5e-9 ≤ ASSEMBLY_CHECK_RTOL): the second closure's point is
+    moved onto the first by that gap, with a note, and the mechanism assembles (DOF 1).
+    1e-6 m (a wrong file): left open, and its assembly is refused naming the loop."""
+    from pkm_pin.closure_gaps import reconcile
+    from pkm_pin.linkage import LoopClosureError
+    from pkm_pin.model import read_mjcf
+
+    path = tmp_path / "pair.xml"
+    path.write_text(PAIR.format(dy=repr(0.01 + gap)))
+    model = read_mjcf(path)
+    fixed = reconcile(model)
+    if gap == 0.0:
+        assert fixed is model
+    elif gap < 1e-8:
+        assert fixed.closures[0] == model.closures[0]
+        moved = (fixed.closures[1].placement_b.translation
+                 - model.closures[1].placement_b.translation)
+        np.testing.assert_allclose(moved, [0.0, -gap, 0.0], atol=1e-15)
+        assert float(np.linalg.norm(fixed.closure_residual(fixed.reference))) <= 1e-12
+        assert "closure connect1: its second frame moved onto the first by at most 5e-10 m" \
+            in fixed.notes[-1]
+        mech = pkm_pin.load_mechanism(path)
+        assert mech.mobility().dof == 1 and mech.model.notes[-1] == fixed.notes[-1]
+    else:
+        assert fixed is model
+        with pytest.raises(LoopClosureError, match="loop 'connect1' does not close"):
+            pkm_pin.load_mechanism(path).home_assembly
