@@ -180,3 +180,25 @@ def test_gepetto_disney_like_is_under_actuated_at_home():
     mech = load_mechanism(path)
     an = mech.analyze(mech.home_assembly)
     assert an.singularity == "III" and an.underactuation == 1
+
+
+def test_a_mimic_joint_of_a_tree_follows_its_joint(tmp_path):
+    """Read without closures, a URDF <mimic> joint (a gripper's second finger) follows
+    its joint, twice its rate here: not actuated, and its body's twist is the closed
+    form's, 2 × the elbow's rate about its own axis plus the arm's."""
+    text = PLANAR_2R.replace("</robot>", """  <link name="finger"/>
+  <joint name="finger_joint" type="revolute"><parent link="hand"/><child link="finger"/>
+    <origin xyz="0.05 0 0"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/>
+    <mimic joint="elbow" multiplier="2" offset="0"/></joint>
+</robot>""")
+    urdf = tmp_path / "mimic.urdf"
+    urdf.write_text(text)
+    mech = load_mechanism(urdf, closures="none", output="finger")
+    assert mech.actuated == ("shoulder", "elbow")
+    an = mech.analyze(mech.assemble(np.array([0.4, 0.9])))
+    assert an.dof == 2 and an.redundancy == 0
+    # the finger's angular rate per unit elbow rate: 1 (elbow) + 2 (mimic); axis-first
+    kin = mech.model.kinematics(an.q)
+    np.testing.assert_allclose(kin.output_jacobian[:3, 1], [0.0, 0.0, 3.0], atol=1e-12)
+    np.testing.assert_allclose(kin.output_jacobian[:3, 0], [0.0, 0.0, 1.0], atol=1e-12)

@@ -217,18 +217,19 @@ NO_CLOSURES = "none"
 
 
 def _read_tree(urdf: Path, output: str | None, free_flyer: bool) -> ClosureModel:
-    """A URDF read without closures (:data:`NO_CLOSURES`): its tree, every movable joint
-    actuated (a serial arm, a hand, a legged robot's tree), with a note saying so."""
+    """A URDF read without closures (:data:`NO_CLOSURES`): its tree, ``<mimic>`` joints
+    following their joint, every other movable joint actuated (a serial arm, a hand, a
+    legged robot's tree), with a note saying so."""
     label = _clip(str(urdf))
     tree, notes = _build_tree(urdf, ClosureSpec(label, (), (), (), joint_name_given=True),
-                              free_flyer)
+                              free_flyer, mimic=True)
     movable = tuple(tree.names[j] for j in range(1, tree.njoints) if tree.joints[j].nv > 0)
     spec = ClosureSpec(label, (), (), movable, joint_name_given=True)
     out = output if output is not None else _output_frame(tree, spec)
     actuated, matches = _actuated(tree, spec)
     note = ("--closures none: read as a tree without closures, every movable joint "
-            "actuated; a closures file (closed_loop, type, name_mot; --closures FILE) "
-            "closes loops and chooses the actuated joints")
+            "actuated (a <mimic> joint follows its joint); a closures file (closed_loop, "
+            "type, name_mot; --closures FILE) closes loops and chooses the actuated joints")
     reference, moved = _inside_limits(tree)
     if moved:
         note += (f"; the reference configuration has {', '.join(moved[:6])}"
@@ -446,11 +447,11 @@ def _ujoint_axes(kind: str) -> str | None:
 
 
 # -------------------------------------------------------------------------------- tree
-def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool
+def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool, mimic: bool = False
                 ) -> tuple[pin.Model, tuple[str, ...]]:
-    """Pinocchio's tree of the URDF (mimic ignored), joints replaced as ``spec`` says (or,
-    without a ``joint_name`` list, the revolutes named ``*spherical*``), and the reader's
-    notes about those joints."""
+    """Pinocchio's tree of the URDF (``<mimic>`` ignored, as the toolbox does, unless
+    ``mimic``), joints replaced as ``spec`` says (or, without a ``joint_name`` list, the
+    revolutes named ``*spherical*``), and the reader's notes about those joints."""
     try:
         src = read(urdf)
     except UrdfError as e:
@@ -458,8 +459,8 @@ def _build_tree(urdf: Path, spec: ClosureSpec, free_flyer: bool
                                ) from e
     with _captured_stderr():
         try:
-            model = (pin.buildModelFromXML(src.xml, pin.JointModelFreeFlyer(), mimic=False)
-                     if free_flyer else pin.buildModelFromXML(src.xml, mimic=False))
+            model = (pin.buildModelFromXML(src.xml, pin.JointModelFreeFlyer(), mimic=mimic)
+                     if free_flyer else pin.buildModelFromXML(src.xml, mimic=mimic))
         except Exception as e:  # Pinocchio raises RuntimeError/ValueError with C++ text
             raise ClosureFileError(src.label, "URDF", f"Pinocchio cannot build it: {e}") from e
     free_range(model, joints_without_range(src))
