@@ -1149,7 +1149,7 @@ def _per_leg_classes(mech, data: dict) -> None:
 
 def _unit(link, k: int) -> str:
     joint = link.model.tree.joints[link.model.tree.getJointId(link.actuated[k])]
-    return "rad" if link.model.velocity_units[joint.idx_v] == 1.0 else "m"
+    return "m" if link.model.translating[joint.idx_v] else "rad"
 
 
 def _slug(spec: str) -> str:

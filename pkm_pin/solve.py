@@ -1240,7 +1240,7 @@ def _random_tree_q(model, rng, lo, up) -> np.ndarray:
             continue
         if joint.nq == 1 and np.isfinite(lo[i]):
             q[i] = rng.uniform(lo[i], up[i])
-        elif joint.nq == 1 and model.velocity_units[joint.idx_v] == 1.0:
+        elif joint.nq == 1 and not model.translating[joint.idx_v]:
             q[i] = rng.uniform(-np.pi, np.pi)
         elif joint.nq == 2:
             a = rng.uniform(-np.pi, np.pi)

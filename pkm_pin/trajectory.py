@@ -860,8 +860,8 @@ def study(mech, motion=None, *, samples: int = DEFAULT_SAMPLES, times=None,
     timing = {k: x / N for k, x in clock.items()}
     timing["total"] = time.perf_counter() - start_clock
     tree = model.tree
-    units = tuple("rad" if model.velocity_units[tree.joints[tree.getJointId(j)].idx_v] == 1.0
-                  else "m" for j in model.actuated)
+    units = tuple("m" if model.translating[tree.joints[tree.getJointId(j)].idx_v]
+                  else "rad" for j in model.actuated)
     return TrajectoryStudy(
         t=times, q=q, v=v, a=a, q_actuated=Qa, speeds=Qd, accelerations=Qdd,
         efforts=efforts, payload_efforts=from_payload, actuated=tuple(model.actuated),

@@ -1191,7 +1191,7 @@ def _full_turns(model) -> np.ndarray:
         return out
     span = tree.upperPositionLimit - tree.lowerPositionLimit
     for j in tree.joints[1:]:
-        if j.nq == 1 and model.velocity_units[j.idx_v] == 1.0 \
+        if j.nq == 1 and not model.translating[j.idx_v] \
                 and span[j.idx_q] >= 2 * np.pi - 1e-9:
             out[j.idx_v] = True
     return out
@@ -1203,20 +1203,44 @@ def _scale_of(link, name: str) -> float:
     return float(model.velocity_units[model.tree.joints[model.tree.getJointId(name)].idx_v])
 
 
+def _is_length(link, name: str) -> bool:
+    """Whether an actuated joint's coordinate is a length (a prismatic joint)."""
+    model = link.model
+    return bool(model.translating[model.tree.joints[model.tree.getJointId(name)].idx_v])
+
+
 def _unit_of(link, name: str) -> str:
-    return "rad" if _scale_of(link, name) == 1.0 else "m"
+    return "m" if _is_length(link, name) else "rad"
 
 
 def _half_range(link, name: str) -> float:
     """Half the default range of an actuated joint without finite limits: π for an
-    angle, the characteristic length for a length."""
-    return np.pi if _scale_of(link, name) == 1.0 else link.model.length
+    angle; for a length, the size of its loops (the largest distance between the joint
+    origins of the loops whose tree paths hold it, at the home assembly), at most the
+    characteristic length L (L alone for a joint on no loop). L sums every offset of
+    the tree: 7.4 m for Gepetto's two-legged kangaroo, whose pistons' loops are 0.2 to
+    0.5 m across."""
+    if not _is_length(link, name):
+        return np.pi
+    from .closure_gaps import loop_joints
+
+    model = link.model
+    j = model.tree.getJointId(name)
+    loops = [c.name for c in model.closures if j in loop_joints(model, [c.name])]
+    if not loops:
+        return model.length
+    kin = model.kinematics(link.home_assembly.q)
+    joints = sorted(loop_joints(model, loops) | {model.tree.parents[j]})
+    points = np.array([kin.joint_placements[i].translation for i in joints])
+    size = float(np.max(np.linalg.norm(points[:, None] - points[None], axis=-1)))
+    return min(size, model.length) if size > 0 else model.length
 
 
 def actuated_range(link, name: str, value: float) -> tuple[float, float]:
     """The default range of the actuated joint ``name`` of a linkage: its position
     limits when finite (and narrower than 1e6 characteristic lengths), else ``value`` ±
-    π (an angle) or ± L (a length); the CLI's maps and the linkage workspace alike."""
+    π (an angle) or ± the size of its loops (a length, :func:`_half_range`); the CLI's
+    maps and the linkage workspace alike."""
     model = link.model
     joint = model.tree.joints[model.tree.getJointId(name)]
     lo = float(model.tree.lowerPositionLimit[joint.idx_q])

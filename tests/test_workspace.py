@@ -508,3 +508,49 @@ def test_summary_names_the_inscribed_shapes_that_apply():
     assert shapes(np.nan, np.nan, np.nan, 2) == ""  # x in m, roll in rad
     assert shapes(np.nan, 0.3, 0.1, 3) == "cylinder r 0.3 h/2 0.1 (± 0.01)"
     assert shapes(0.05, 0.05, np.nan, 1) == "half length 0.05 (± 0.01)"
+
+
+PISTON = """<mujoco model="piston_loop">
+  <worldbody>
+    <body name="A">
+      <joint name="ja" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.01"/>
+      <body name="arm" pos="1 0 0"><joint name="jarm" axis="0 0 1"/>
+        <geom type="sphere" size="0.01"/></body>
+      <body name="B">
+        <joint name="piston" type="slide" axis="1 0 0"/>
+        <geom type="capsule" fromto="0 0 0 0.1 0 0" size="0.005"/>
+        <site name="tip"/>
+      </body>
+    </body>
+    <body name="D" pos="0.5 0 0">
+      <joint name="jd" axis="0 0 1"/>
+      <geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.01"/>
+      <site name="end" pos="0.2 0 0"/>
+    </body>
+  </worldbody>
+  <equality><connect site1="tip" site2="end"/></equality>
+  <actuator><motor joint="piston"/></actuator>
+</mujoco>
+"""
+
+
+def test_the_default_range_of_a_piston_without_limits_is_its_loops_size(tmp_path):
+    """A piston (slide, no range) in a loop: ja at the origin, the piston's frame 0.7 m
+    out at home (closing on D's end, 0.2 m beyond D's joint at 0.5 m); a 1 m arm off the
+    loop makes the characteristic length L = 1 exactly. The piston is a length (L = 1
+    made it an angle before: ± π, 'rad') and its default range is its value ± the
+    loop's size, 0.7 m (the largest distance between the loop's joint origins at home),
+    not ± L."""
+    from pkm_pin import load_mechanism
+    from pkm_pin.workspace import _unit_of, actuated_range
+
+    path = tmp_path / "piston.xml"
+    path.write_text(PISTON)
+    link = load_mechanism(path, backend="general")
+    assert link.model.length == 1.0 and link.model.translating.tolist() == [
+        False, False, True, False]
+    np.testing.assert_allclose(link.home_assembly.q, [0.0, 0.0, 0.7, 0.0], atol=1e-12)
+    assert _unit_of(link, "piston") == "m"
+    lo, hi = actuated_range(link, "piston", 0.7)
+    assert lo == pytest.approx(0.0, abs=1e-9) and hi == pytest.approx(1.4, abs=1e-9)

@@ -269,6 +269,15 @@ class ClosureModel:
         """Number of closure rows (the sum of the closures' :attr:`Closure.dim`)."""
         return self._plan.n_rows
 
+    @cached_property
+    def translating(self) -> np.ndarray:
+        """Whether each velocity coordinate is a length (its motion a pure translation:
+        :func:`translating_coordinates`), not an angle; read-only. Decide an actuated
+        joint's unit from this, not from :attr:`velocity_units` (``L`` may be 1)."""
+        out = translating_coordinates(self.tree)
+        out.setflags(write=False)
+        return out
+
     @property
     def velocity_units(self) -> np.ndarray:
         """Unit of each velocity coordinate (read-only): :attr:`length` [m] for a
@@ -843,11 +852,18 @@ def pose_rows(model: ClosureModel, kin: TreeKinematics) -> np.ndarray:
 # ------------------------------------------------------------------- validation
 def velocity_units(tree: pin.Model, length: float) -> np.ndarray:
     """Unit of each velocity coordinate of ``tree``: ``length`` for a coordinate whose
-    motion (joint motion subspace, at the neutral configuration) is a pure translation,
-    1.0 otherwise; mimicking joints have no coordinate of their own."""
+    motion is a pure translation (:func:`translating_coordinates`), 1.0 otherwise."""
+    return np.where(translating_coordinates(tree), float(length), 1.0)
+
+
+def translating_coordinates(tree: pin.Model) -> np.ndarray:
+    """Whether each velocity coordinate's motion (joint motion subspace, at the neutral
+    configuration) is a pure translation (a prismatic joint, a free flyer's linear
+    rates): counted in lengths, not radians; mimicking joints have no coordinate of
+    their own."""
     data = tree.createData()
     pin.computeJointJacobians(tree, data, pin.neutral(tree))
-    units = np.ones(tree.nv)
+    out = np.zeros(tree.nv, bool)
     for j in range(1, tree.njoints):
         joint = tree.joints[j]
         if joint.nv == 0 or joint.shortname() == "JointModelMimic":
@@ -857,9 +873,8 @@ def velocity_units(tree: pin.Model, length: float) -> np.ndarray:
         J = _six_by(pin.getJointJacobian(tree, data, j, pin.LOCAL), tree.nv)
         S = screws.from_pinocchio(J[:, cols])
         size = np.linalg.norm(S, axis=0)
-        units[cols] = np.where(np.linalg.norm(S[:3], axis=0) <= ZERO_SCREW_RTOL * size,
-                               length, 1.0)
-    return units
+        out[cols] = np.linalg.norm(S[:3], axis=0) <= ZERO_SCREW_RTOL * size
+    return out
 
 
 def _frame_names(tree: pin.Model) -> list[str]:
