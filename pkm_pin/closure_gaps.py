@@ -166,6 +166,21 @@ def loop_joints(model, names) -> set[int]:
     return out
 
 
+def loop_size(model, q, name: str) -> float | None:
+    """The size of the loops through joint ``name`` at the configuration ``q``: the
+    largest distance between the origins of the joints on those loops' tree paths (the
+    joint's parent's included); ``None`` when the joint is on no loop. The scale of a
+    piston's motion, where the characteristic length sums every offset of the tree."""
+    j = model.tree.getJointId(name)
+    loops = [c.name for c in model.closures if j in loop_joints(model, [c.name])]
+    if not loops:
+        return None
+    kin = model.kinematics(q)
+    joints = sorted(loop_joints(model, loops) | {model.tree.parents[j]})
+    points = np.array([kin.joint_placements[i].translation for i in joints])
+    return float(np.max(np.linalg.norm(points[:, None] - points[None], axis=-1)))
+
+
 def _limit_hits(model, q, joints) -> list[tuple[int, str, float]]:
     """``(joint id, side, limit)`` of the 1-DOF joints among ``joints`` at a limit at
     ``q``."""

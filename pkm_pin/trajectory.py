@@ -64,6 +64,7 @@ import numpy as np
 import pinocchio as pin
 
 from . import dynamics, screws
+from .closure_gaps import loop_size
 from .dynamics import body_names
 from .errors import (
     ForwardKinematicsError,
@@ -88,8 +89,9 @@ from .tolerances import CLOSURE_TOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
 DEFAULT_DURATION = 2.0
 #: Samples of a study (uniform in time, both ends included).
 DEFAULT_SAMPLES = 201
-#: Amplitude of the default motion: this many rad (revolute) or characteristic lengths
-#: (prismatic).
+#: Amplitude of the default motion: this many rad (revolute), or this fraction of the
+#: size of its loops (prismatic, :func:`pkm_pin.closure_gaps.loop_size`, at most the
+#: characteristic length).
 DEFAULT_AMPLITUDE = 0.1
 #: ... at most this fraction of the joint's range,
 DEFAULT_RANGE_FRACTION = 0.1
@@ -200,7 +202,8 @@ class SineMotion:
 def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
                    ) -> SineMotion:
     """The default motion about the assembled ``q0`` (module docstring): one period of a
-    sine per actuator, phases ``2π k / n``, amplitude 0.1 rad or 0.1 L, at most 10 % of
+    sine per actuator, phases ``2π k / n``, amplitude 0.1 rad, or 0.1 of the size of its
+    loops for a length (:func:`pkm_pin.closure_gaps.loop_size`, at most L), at most 10 % of
     the joint's range and half the distance to its nearer limit (0: an actuator whose
     home is at a limit stays there)."""
     duration = float(duration)
@@ -213,7 +216,10 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
     amp = np.empty(len(model.actuated))
     for k, name in enumerate(model.actuated):
         joint = tree.joints[tree.getJointId(name)]
-        A = DEFAULT_AMPLITUDE * model.velocity_units[joint.idx_v]
+        scale = 1.0
+        if model.translating[joint.idx_v]:  # a length: its loops' size, at most L
+            scale = min(loop_size(model, q0, name) or model.length, model.length)
+        A = DEFAULT_AMPLITUDE * scale
         if joint.nq == 1:
             i = joint.idx_q
             if np.isfinite(lo[i]) and np.isfinite(up[i]):

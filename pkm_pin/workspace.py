@@ -1222,18 +1222,10 @@ def _half_range(link, name: str) -> float:
     0.5 m across."""
     if not _is_length(link, name):
         return np.pi
-    from .closure_gaps import loop_joints
+    from .closure_gaps import loop_size
 
-    model = link.model
-    j = model.tree.getJointId(name)
-    loops = [c.name for c in model.closures if j in loop_joints(model, [c.name])]
-    if not loops:
-        return model.length
-    kin = model.kinematics(link.home_assembly.q)
-    joints = sorted(loop_joints(model, loops) | {model.tree.parents[j]})
-    points = np.array([kin.joint_placements[i].translation for i in joints])
-    size = float(np.max(np.linalg.norm(points[:, None] - points[None], axis=-1)))
-    return min(size, model.length) if size > 0 else model.length
+    size = loop_size(link.model, link.home_assembly.q, name)
+    return min(size, link.model.length) if size else link.model.length
 
 
 def actuated_range(link, name: str, value: float) -> tuple[float, float]:

@@ -554,3 +554,8 @@ def test_the_default_range_of_a_piston_without_limits_is_its_loops_size(tmp_path
     assert _unit_of(link, "piston") == "m"
     lo, hi = actuated_range(link, "piston", 0.7)
     assert lo == pytest.approx(0.0, abs=1e-9) and hi == pytest.approx(1.4, abs=1e-9)
+    # the default dynamics motion moves it by a tenth of that size, not of L
+    from pkm_pin.trajectory import default_motion
+
+    motion = default_motion(link.model, link.home_assembly.q)
+    assert motion.amplitude.tolist() == pytest.approx([0.07], abs=1e-9)
