@@ -89,9 +89,9 @@ from .tolerances import CLOSURE_TOL, MOTION_CONSISTENCY_RTOL, RANK_RTOL
 DEFAULT_DURATION = 2.0
 #: Samples of a study (uniform in time, both ends included).
 DEFAULT_SAMPLES = 201
-#: Amplitude of the default motion: this many rad (revolute), or this fraction of the
-#: size of its loops (prismatic, :func:`pkm_pin.closure_gaps.loop_size`, at most the
-#: characteristic length).
+#: Amplitude of the default motion: this many rad (revolute) or characteristic lengths
+#: (prismatic; without limits, this fraction of the size of its loops,
+#: :func:`pkm_pin.closure_gaps.loop_size`, at most L).
 DEFAULT_AMPLITUDE = 0.1
 #: ... at most this fraction of the joint's range,
 DEFAULT_RANGE_FRACTION = 0.1
@@ -202,8 +202,9 @@ class SineMotion:
 def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
                    ) -> SineMotion:
     """The default motion about the assembled ``q0`` (module docstring): one period of a
-    sine per actuator, phases ``2π k / n``, amplitude 0.1 rad, or 0.1 of the size of its
-    loops for a length (:func:`pkm_pin.closure_gaps.loop_size`, at most L), at most 10 % of
+    sine per actuator, phases ``2π k / n``, amplitude 0.1 rad or 0.1 L (a length without
+    limits: 0.1 of its loops' size, :func:`pkm_pin.closure_gaps.loop_size`, at most L; L
+    sums every offset of the tree), at most 10 % of
     the joint's range and half the distance to its nearer limit (0: an actuator whose
     home is at a limit stays there)."""
     duration = float(duration)
@@ -217,8 +218,10 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
     for k, name in enumerate(model.actuated):
         joint = tree.joints[tree.getJointId(name)]
         scale = 1.0
-        if model.translating[joint.idx_v]:  # a length: its loops' size, at most L
-            scale = min(loop_size(model, q0, name) or model.length, model.length)
+        if model.translating[joint.idx_v]:  # a length: L; without limits, its loops' size
+            bounded = joint.nq == 1 and np.isfinite([lo[joint.idx_q], up[joint.idx_q]]).all()
+            scale = model.length if bounded else min(
+                loop_size(model, q0, name) or model.length, model.length)
         A = DEFAULT_AMPLITUDE * scale
         if joint.nq == 1:
             i = joint.idx_q
