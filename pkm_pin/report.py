@@ -495,6 +495,31 @@ def submechanisms_data(link, assembly) -> list:
     return out
 
 
+def everywhere_lines(r: dict) -> list[str]:
+    """The report's lines on a class that holds at every configuration
+    (``docs/indices.md``): a kinematic redundancy (``r["redundancy"]``), an
+    under-actuation (``r["underactuation"]``); none when neither."""
+    out: list[str] = []
+    if r.get("redundancy"):
+        n = r["redundancy"]
+        out += [f"redundancy         kinematically redundant: "
+                f"{len(r['independent_actuators'])} independent actuators for an output that "
+                f"moves in at most {6 if not r.get('output_is_point') else 3} directions: at "
+                f"least {n} self-motion{'s' * (n > 1)} (actuators moving with the output "
+                "held) at every configuration, so the type I and inverse indices are 0 and "
+                "the class I everywhere: it marks the redundancy, not a singular pose "
+                "(analyse one output per sub-mechanism, or fewer actuators, to find those)"]
+    if r.get("underactuation"):
+        n = r["underactuation"]
+        out += [f"under-actuated     the output moves with every actuator locked ({n} "
+                f"direction{'s' * (n > 1)}) here and at every configuration nearby (the "
+                "ranks are the generic ones): springs or passive joints without a motor "
+                "(see the idle motions); the forward and type II indices are 0 and the "
+                "class II there: it marks the under-actuation, not a singular pose (actuate "
+                "or lock those joints, or choose an output they do not move)"]
+    return out
+
+
 def submechanism_lines(r: dict) -> list[str]:
     """Two text lines per sub-mechanism (:func:`submechanisms_data`), none for one."""
     subs = r.get("submechanisms") or []
@@ -759,23 +784,7 @@ def text(r: dict, frames: Sequence[str] = (), likely: Sequence[str] | None = Non
     out += [f"    {m}" for m in r["idle_motions"]]
     if r.get("singular_words"):
         out += [f"singular           {r['singular_words']}"]
-    if r.get("redundancy"):
-        n = r["redundancy"]
-        out += [f"redundancy         kinematically redundant: "
-                f"{len(r['independent_actuators'])} independent actuators for an output that "
-                f"moves in at most {6 if not r.get('output_is_point') else 3} directions: at "
-                f"least {n} self-motion{'s' * (n > 1)} (actuators moving with the output "
-                "held) at every configuration, so the type I and inverse indices are 0 and "
-                "the class I everywhere: it marks the redundancy, not a singular pose "
-                "(analyse one output per sub-mechanism, or fewer actuators, to find those)"]
-    if r.get("underactuation"):
-        n = r["underactuation"]
-        out += [f"under-actuated     the output moves with every actuator locked ({n} "
-                f"direction{'s' * (n > 1)}) here and at every configuration nearby (the "
-                "ranks are the generic ones): springs or passive joints without a motor "
-                "(see the idle motions); the forward and type II indices are 0 and the "
-                "class II there: it marks the under-actuation, not a singular pose (actuate "
-                "or lock those joints, or choose an output they do not move)"]
+    out += everywhere_lines(r)
     out += submechanism_lines(r)
     out += [f"duplicate closure  {a!r} repeats {b!r}: its rows are redundant"
             for a, b in r.get("duplicate_closures", [])]
