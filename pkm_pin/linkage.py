@@ -1440,9 +1440,9 @@ class _Multistart:
     def estimate(self) -> float:
         """How many distinct assemblies the starts would find in all, from how often
         each was found: the bias-corrected Chao1 estimate ``S + f₁(f₁ − 1) / (2 (f₂ +
-        1))`` (``S`` found, ``f₁`` of them once, ``f₂`` twice; Chao, Biometrics 61,
-        2005): many found only once mean many not found yet. A lower bound in
-        expectation."""
+        1))`` (``S`` found, ``f₁`` of them once, ``f₂`` twice; the bias-corrected form
+        of Chao's species-richness estimator): many found only once mean many not found
+        yet. A lower bound in expectation."""
         h = np.asarray(self.hits)
         f1, f2 = int((h == 1).sum()), int((h == 2).sum())
         return len(h) + f1 * (f1 - 1) / (2 * (f2 + 1))
