@@ -216,7 +216,7 @@ class _Work:
                 row[tree.joints[jb].idx_v] -= model.closures[i].coef[1]
             self.coupling_rows[i] = row
         self.act_v = np.array(model.actuated_v, dtype=int)
-        self.names = _velocity_names(tree)
+        self.names = velocity_names(tree)
         #: per joint: mass, centre of mass (joint frame), rotational inertia by rows
         self.body = np.array([np.r_[I.mass, I.lever, I.inertia.ravel()]
                               for I in tree.inertias])
@@ -309,7 +309,7 @@ def _work(model: ClosureModel, masses: bool = False) -> _Work:
     return work
 
 
-def _velocity_names(tree: pin.Model) -> list[str]:
+def velocity_names(tree: pin.Model) -> list[str]:
     """Name of the joint of each velocity coordinate."""
     names = [""] * tree.nv
     for j in range(1, tree.njoints):

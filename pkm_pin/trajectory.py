@@ -90,8 +90,8 @@ DEFAULT_DURATION = 2.0
 #: Samples of a study (uniform in time, both ends included).
 DEFAULT_SAMPLES = 201
 #: Amplitude of the default motion: this many rad (revolute) or characteristic lengths
-#: (prismatic; without limits, this fraction of the size of its loops,
-#: :func:`pkm_pin.closure_gaps.loop_size`, at most L).
+#: (prismatic; without limits, of the size of its loops,
+#: :func:`pkm_pin.closure_gaps.loop_size`).
 DEFAULT_AMPLITUDE = 0.1
 #: ... at most this fraction of the joint's range,
 DEFAULT_RANGE_FRACTION = 0.1
@@ -203,8 +203,7 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
                    ) -> SineMotion:
     """The default motion about the assembled ``q0`` (module docstring): one period of a
     sine per actuator, phases ``2π k / n``, amplitude 0.1 rad or 0.1 L (a length without
-    limits: 0.1 of its loops' size, :func:`pkm_pin.closure_gaps.loop_size`, at most L; L
-    sums every offset of the tree), at most 10 % of
+    limits: 0.1 of its loops' size, :func:`pkm_pin.closure_gaps.loop_size`), at most 10 % of
     the joint's range and half the distance to its nearer limit (0: an actuator whose
     home is at a limit stays there)."""
     duration = float(duration)
@@ -220,8 +219,7 @@ def default_motion(model: ClosureModel, q0, duration: float = DEFAULT_DURATION
         scale = 1.0
         if model.translating[joint.idx_v]:  # a length: L; without limits, its loops' size
             bounded = joint.nq == 1 and np.isfinite([lo[joint.idx_q], up[joint.idx_q]]).all()
-            scale = model.length if bounded else min(
-                loop_size(model, q0, name) or model.length, model.length)
+            scale = model.length if bounded else loop_size(model, q0, name)
         A = DEFAULT_AMPLITUDE * scale
         if joint.nq == 1:
             i = joint.idx_q
@@ -616,11 +614,8 @@ def _check_idle_step(model: ClosureModel, system, v: np.ndarray, dt: float) -> N
     step = np.abs(v / model.velocity_units) * dt
     if np.isfinite(step[idle]).all() and not (step[idle] > IDLE_STEP_MAX).any():
         return
-    tree = model.tree
-    joints = tuple(dict.fromkeys(
-        tree.names[j] for j in range(1, tree.njoints)
-        for k in range(tree.joints[j].idx_v, tree.joints[j].idx_v + tree.joints[j].nv)
-        if idle[k]))
+    joints = tuple(dict.fromkeys(n for n, k in zip(dynamics.velocity_names(model.tree),
+                                                   idle) if k))
     worst = float(np.nanmax(np.where(np.isfinite(step), step, np.inf)[idle]))
     raise InconsistentMotion(
         f"the idle motions ({', '.join(joints[:8])}{' …' if len(joints) > 8 else ''} move "

@@ -1215,17 +1215,13 @@ def _unit_of(link, name: str) -> str:
 
 def _half_range(link, name: str) -> float:
     """Half the default range of an actuated joint without finite limits: π for an
-    angle; for a length, the size of its loops (the largest distance between the joint
-    origins of the loops whose tree paths hold it, at the home assembly), at most the
-    characteristic length L (L alone for a joint on no loop). L sums every offset of
-    the tree: 7.4 m for Gepetto's two-legged kangaroo, whose pistons' loops are 0.2 to
-    0.5 m across."""
+    angle; for a length, the size of its loops at the home assembly, at most the
+    characteristic length (:func:`pkm_pin.closure_gaps.loop_size`)."""
     if not _is_length(link, name):
         return np.pi
     from .closure_gaps import loop_size
 
-    size = loop_size(link.model, link.home_assembly.q, name)
-    return min(size, link.model.length) if size else link.model.length
+    return loop_size(link.model, link.home_assembly.q, name)
 
 
 def actuated_range(link, name: str, value: float) -> tuple[float, float]:

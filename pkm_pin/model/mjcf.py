@@ -599,6 +599,7 @@ def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray,
     data = tree.createData()
     pin.framesForwardKinematics(tree, data, q)
     out, notes, counts = [], [], {}
+    composites = _composites(root, tree)
     for equality in root.findall("equality"):
         for el in equality:
             i = counts[el.tag] = counts.get(el.tag, -1) + 1
@@ -616,8 +617,7 @@ def _closures(label: str, root: ET.Element, tree: pin.Model, q: np.ndarray,
                 continue
             name = el.get("name") or f"{el.tag}{i}"
             if el.tag == "joint":
-                out.append(_coupling(label, where, el, name, tree, q,
-                                     _composites(root, tree)))
+                out.append(_coupling(label, where, el, name, tree, q, composites))
             else:
                 out.append(_closure(label, where, el, name, tree, data, renamed))
     return tuple(out), tuple(notes)
